@@ -1,0 +1,18 @@
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+
+namespace trubal {
+
+static void run_delete(Context& ctx, Args& args) {
+  Range range = read_range(args);
+  auto n = ctx.session.delete_balls(range);
+  ctx.out << fmt::format("{} balls deleted\n", n);
+}
+
+const Command delete_command = {
+    "DELETE", {}, "DELETE [range ...]", "remove balls",
+    "Removes the balls where the range holds (all balls without a range), with their contacts.",
+    {"range"}, run_delete};
+
+}  // namespace trubal

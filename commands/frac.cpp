@@ -1,0 +1,51 @@
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+
+namespace trubal {
+
+static void run_frac(Context& ctx, Args& args) {
+  double f = args.real("f");
+  args.done();
+  if (!(f > 0)) args.fail("FRAC must be positive");
+  if (f > 1) ctx.warn(fmt::format("FRAC {} is above the critical step: the run will likely go unstable", f));
+  ctx.session.settings().frac = f;
+  ctx.session.settings().fixed_dt = 0;
+}
+
+const Command frac_command = {
+    "FRAC", {}, "FRAC f", "time step as a fraction of the critical step",
+    "The time step is f times the critical step, estimated every cycle from the stiffest ball (default "
+    "0.8). Cancels a fixed TSTEP.",
+    {}, run_frac};
+
+static void run_tstep(Context& ctx, Args& args) {
+  if (args.accept("auto")) {
+    args.done();
+    ctx.session.settings().fixed_dt = 0;
+    return;
+  }
+  double dt = args.real("dt");
+  args.done();
+  if (!(dt > 0)) args.fail("TSTEP must be positive (TSTEP auto returns to FRAC)");
+  ctx.session.settings().fixed_dt = dt;
+}
+
+const Command tstep_command = {
+    "TSTEP", {}, "TSTEP dt  |  TSTEP auto", "fix the time step",
+    "Fixes the time step to dt (the instability guard still watches the run). `TSTEP auto` goes back to "
+    "FRAC times the critical step.",
+    {"auto"}, run_tstep};
+
+static void run_grav(Context& ctx, Args& args) {
+  auto g = read_xyz(args, "gravity");
+  args.done();
+  ctx.session.settings().gravity = g;
+}
+
+const Command grav_command = {
+    "GRAV", {}, "GRAV gx gy gz", "gravity",
+    "Sets the gravitational acceleration (a body force m g on every ball). GRAV 0 0 0 turns it off.", {},
+    run_grav};
+
+}  // namespace trubal

@@ -1,0 +1,21 @@
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+
+namespace trubal {
+
+static void run_group(Context& ctx, Args& args) {
+  std::string name = to_lower(args.word("group name"));
+  if (match_keyword(name, {"range"})) args.fail("GROUP needs a name before RANGE");
+  Range range = read_range(args);
+  auto n = ctx.session.define_group(name, range);
+  ctx.out << fmt::format("group {}: {} balls\n", name, n);
+}
+
+const Command group_command = {
+    "GROUP", {}, "GROUP name [range ...]", "name a set of balls",
+    "Names the set of balls where the range holds now; later ranges can use `group name`. The set does "
+    "not change as balls move; deleted balls leave it.",
+    {"range"}, run_group};
+
+}  // namespace trubal

@@ -1,0 +1,35 @@
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+
+namespace trubal {
+
+static void run_lattice(Context& ctx, Args& args) {
+  args.expect({"fcc"}, "lattice kind");
+  double d = args.real("d (diameter)");
+  int nx = static_cast<int>(args.count("nx", 1, 100000));
+  int ny = static_cast<int>(args.count("ny", 1, 100000));
+  int nz = static_cast<int>(args.count("nz", 1, 100000));
+  std::array<double, 3> origin{0, 0, 0};
+  int type = 1;
+  while (!args.empty() && !match_keyword(args.peek(), {"range"})) {
+    auto k = args.expect({"origin", "type"}, "LATTICE option");
+    if (k == 0) origin = read_xyz(args, "origin");
+    else type = static_cast<int>(args.count("type", 1, 1000000));
+  }
+  Range range = read_range(args);
+  auto n = ctx.session.lattice_fcc(d, nx, ny, nz, origin, type, range);
+  ctx.out << fmt::format("{} balls on the fcc lattice\n", n);
+}
+
+const Command lattice_command = {
+    "LATTICE", {}, "LATTICE fcc d nx ny nz [origin x y z] [type t] [range ...]",
+    "balls on a face-centred cubic lattice (cube axis along z)",
+    "Balls of diameter d on an FCC lattice built as square layers normal to z: layer k lies at "
+    "z0 + k d/sqrt(2); even layers hold nx x ny balls at (x0 + i d, y0 + j d), odd layers (nx-1) x (ny-1) "
+    "in the hollows at (x0 + (i+1/2) d, y0 + (j+1/2) d) (nx x ny in a periodic space, so the lattice "
+    "wraps). Only balls where the range holds are kept: `range octagon x y a b` cuts Rowe's octagonal "
+    "layers.",
+    {"fcc", "origin", "type", "range"}, run_lattice};
+
+}  // namespace trubal

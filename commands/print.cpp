@@ -1,0 +1,226 @@
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+#include "io/csv.hpp"
+#include "io/save.hpp"
+#include "physics/measure.hpp"
+
+namespace trubal {
+
+static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
+                                                     "energy", "fabric", "coordination", "prop", "damp",
+                                                     "history"};
+
+// Writes text to a file through a temporary and a rename, so a failed write leaves no half file.
+static void write_file_atomically(const std::string& path, const std::string& text) {
+  std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::trunc);
+    if (!f) throw std::runtime_error(fmt::format("cannot write '{}'", path));
+    f << text;
+    f.flush();
+    if (!f) throw std::runtime_error(fmt::format("cannot write '{}'", path));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error(fmt::format("cannot write '{}'", path));
+}
+
+static void print_info(Context& ctx) {
+  const Session& s = ctx.session;
+  const Model& m = s.model();
+  auto& o = ctx.out;
+  if (!m.title.empty()) o << "title: " << m.title << '\n';
+  if (m.started) {
+    auto L = m.space.length();
+    o << fmt::format("space: {} {} x {} x {}\n", m.space.periodic ? "periodic" : "box", L[0], L[1], L[2]);
+  } else {
+    o << "space: none (START first)\n";
+  }
+  o << fmt::format("balls: {}\n", m.balls.size());
+  o << fmt::format("contacts: {}\n", contact_count(m));
+  o << fmt::format("cycle: {}\n", m.cycle);
+  o << fmt::format("time: {}\n", m.time);
+  o << fmt::format("timestep: {}\n", m.dt);
+  o << fmt::format("frac: {}\n", m.settings.frac);
+  if (m.settings.fixed_dt > 0) o << fmt::format("fixed timestep: {}\n", m.settings.fixed_dt);
+  o << fmt::format("backend: {}\n", s.backend().name());
+  o << fmt::format("threads: {}\n", s.backend().threads());
+  for (const auto& [k, v] : s.backend().info()) o << k << ": " << v << '\n';
+  o << fmt::format("physics: {}\n", scene_features(m).describe());
+  o << fmt::format("types: {}\n", m.materials.size());
+  o << fmt::format("groups: {}\n", m.groups.size());
+}
+
+static void print_balls(Context& ctx, const Range& range, const std::string& file) {
+  const Model& m = ctx.session.model();
+  const Balls& b = m.balls;
+  auto sel = ctx.session.select(range);
+  if (!file.empty()) {
+    std::ostringstream csv;
+    csv << "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz\n";
+    for (auto k : sel) {
+      csv << b.id[k] << ',' << b.type[k];
+      for (const auto* v : {&b.x, &b.y, &b.z, &b.rad, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz})
+        csv << ',' << csv_real((*v)[k]);
+      csv << '\n';
+    }
+    write_file_atomically(file, csv.str());
+    ctx.out << fmt::format("{} balls written to {}\n", sel.size(), file);
+    return;
+  }
+  ctx.out << fmt::format("{:>8} {:>4} {:>12} {:>12} {:>12} {:>10} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}\n", "id",
+                         "type", "x", "y", "z", "rad", "vx", "vy", "vz", "fx", "fy", "fz");
+  for (auto k : sel)
+    ctx.out << fmt::format("{:>8} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>10.4g} {:>11.4g} {:>11.4g} {:>11.4g} {:>11.4g} "
+                           "{:>11.4g} {:>11.4g}\n",
+                           b.id[k], b.type[k], b.x[k], b.y[k], b.z[k], b.rad[k], b.vx[k], b.vy[k], b.vz[k], b.fx[k],
+                           b.fy[k], b.fz[k]);
+}
+
+static void print_contacts(Context& ctx, const Range& range, const std::string& file) {
+  const Model& m = ctx.session.model();
+  const ContactTable& c = m.contacts;
+  std::vector<bool> in(m.balls.size(), range.empty());
+  if (!range.empty())
+    for (auto k : ctx.session.select(range)) in[k] = true;
+  std::vector<std::size_t> rows;
+  for (std::size_t p = 0; p < c.size() && p < c.state.size(); ++p)
+    if (c.state[p] != 0 && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
+  const auto& id = m.balls.id;
+  if (!file.empty()) {
+    std::ostringstream csv;
+    csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding\n";
+    for (auto p : rows) {
+      csv << id[c.i[p]] << ',' << id[c.j[p]];
+      for (const auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real((*v)[p]);
+      csv << ',' << (c.state[p] == 2 ? 1 : 0) << '\n';
+    }
+    write_file_atomically(file, csv.str());
+    ctx.out << fmt::format("{} contacts written to {}\n", rows.size(), file);
+    return;
+  }
+  ctx.out << fmt::format("{:>8} {:>8} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11} {:>7}\n", "i", "j", "nx", "ny", "nz",
+                         "overlap", "fn", "|fs|", "sliding");
+  for (auto p : rows)
+    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {:>7}\n", id[c.i[p]],
+                           id[c.j[p]], c.nx[p], c.ny[p], c.nz[p], c.overlap[p], c.fn[p],
+                           std::sqrt(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]),
+                           c.state[p] == 2 ? "yes" : "no");
+}
+
+static void print_sym(Context& ctx, const char* what, const Sym6& s) {
+  ctx.out << fmt::format("{}: xx {:.6g}  yy {:.6g}  zz {:.6g}  xy {:.6g}  xz {:.6g}  yz {:.6g}\n", what, s[0], s[1], s[2],
+                         s[3], s[4], s[5]);
+}
+
+static void print_history(Context& ctx) {
+  const auto& tables = ctx.session.history().tables();
+  if (tables.empty()) ctx.out << "no histories (HIST records them)\n";
+  for (const auto& t : tables) {
+    ctx.out << fmt::format("history every {} cycles{}: {} rows\n", t->every, t->file.empty() ? "" : " -> " + t->file,
+                           t->rows.size());
+    for (const auto& c : t->columns) ctx.out << fmt::format("{:>14}", c);
+    ctx.out << '\n';
+    for (const auto& row : t->rows) {
+      for (double v : row) ctx.out << fmt::format("{:>14.6g}", v);
+      ctx.out << '\n';
+    }
+  }
+}
+
+static void run_print(Context& ctx, Args& args) {
+  auto item = args.expect(kItems, "PRINT item");
+  std::string file;
+  if (args.accept("file")) file = args.word("file name");
+  if (!file.empty() && item != 1 && item != 2) args.fail("`file` goes with PRINT balls and PRINT contacts");
+  const Model& m = ctx.session.model();
+  switch (item) {
+    case 0: args.done(); print_info(ctx); return;
+    case 1: print_balls(ctx, read_range(args), file); return;
+    case 2: print_contacts(ctx, read_range(args), file); return;
+    case 3: {
+      double volume = 0;
+      if (args.accept("volume")) volume = args.real("volume");
+      args.done();
+      ctx.session.require_started();
+      print_sym(ctx, "stress", average_stress(m, volume > 0 ? volume : ctx.session.stress_volume()));
+      return;
+    }
+    case 4: {
+      args.done();
+      const auto& e = m.space.strain;
+      ctx.out << fmt::format("strain: xx {:.6g}  yy {:.6g}  zz {:.6g}  xy {:.6g}  xz {:.6g}  yz {:.6g}\n", e[0], e[1],
+                             e[2], e[3], e[4], e[5]);
+      return;
+    }
+    case 5: {
+      args.done();
+      EnergyReport e = energy(m);
+      ctx.out << fmt::format(
+          "kinetic (translation): {:.8g}\nkinetic (rotation): {:.8g}\nstrain: {:.8g}\npotential (gravity): "
+          "{:.8g}\nfriction work: {:.8g}\ndamping work: {:.8g}\nboundary work: {:.8g}\nbalance (should stay "
+          "constant): {:.8g}\n",
+          e.kinetic_translation, e.kinetic_rotation, e.strain, e.potential, e.friction_work, e.damping_work,
+          e.boundary_work, e.total());
+      return;
+    }
+    case 6: args.done(); print_sym(ctx, "fabric", fabric_tensor(m)); return;
+    case 7: {
+      args.done();
+      ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n",
+                             coordination_number(m), sliding_fraction(m), contact_count(m));
+      auto u = unbalanced_force(m);
+      ctx.out << fmt::format("unbalanced-force ratio: mean {:.4g}  max {:.4g}\n", u.mean_ratio, u.max_ratio);
+      return;
+    }
+    case 8: {
+      args.done();
+      if (m.materials.empty()) ctx.out << "no materials (PROP sets them)\n";
+      for (const auto& [t, p] : m.materials)
+        ctx.out << fmt::format("type {}: kn {:.6g} ks {:.6g} mu {:.6g} (fric {:.4g} deg) dens {:.6g} coh {:.6g}{}{}\n", t,
+                               p.kn, p.ks, p.friction, std::atan(p.friction) * 180 / std::numbers::pi, p.density,
+                               p.cohesion,
+                               p.hertz() ? fmt::format(" shear {:.6g} poisson {:.4g} (Hertz-Mindlin)", p.shear_modulus,
+                                                       p.poisson)
+                                         : "",
+                               p.has_restitution ? fmt::format(" rest {:.4g}", p.restitution) : "");
+      return;
+    }
+    case 9: {
+      args.done();
+      const Damping& d = m.settings.damping;
+      switch (d.kind) {
+        case DampKind::None: ctx.out << "damping: none\n"; break;
+        case DampKind::Local: ctx.out << fmt::format("damping: local {:.4g}\n", d.local); break;
+        case DampKind::Rayleigh:
+          ctx.out << fmt::format("damping: Rayleigh, mass coefficient {:.6g}, stiffness coefficient {:.6g}", d.alpha, d.beta);
+          if (d.freq > 0) ctx.out << fmt::format(" (lambda {:.4g} at {:.4g} Hz)", d.lambda, d.freq);
+          ctx.out << '\n';
+          break;
+      }
+      return;
+    }
+    case 10: args.done(); print_history(ctx); return;
+  }
+}
+
+const Command print_command = {
+    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history [file f] [range ...]",
+    "print a table or a measurement",
+    "info: a `name: value` summary (balls, contacts, cycle, time, timestep, backend, threads, active "
+    "physics). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
+    "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
+    "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
+    "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
+    "compression positive. strain: the periodic space's accumulated strain. energy: the energy terms and "
+    "their balance. fabric: the fabric tensor. coordination: coordination number, sliding fraction and "
+    "unbalanced-force ratio. prop, damp: the settings. history: the recorded histories.",
+    {"info", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp", "history",
+     "file", "volume", "range"},
+    run_print};
+
+}  // namespace trubal

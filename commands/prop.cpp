@@ -1,0 +1,61 @@
+#include <cmath>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+
+namespace trubal {
+
+static void run_prop(Context& ctx, Args& args) {
+  ctx.session.require_started();
+  int type = 1;
+  if (args.accept("type")) type = static_cast<int>(args.count("type", 1, 1000000));
+  if (args.empty()) args.fail("PROP needs at least one property (kn, ks, fric, mu, dens, coh, shear, poisson, rest)");
+  Material m = ctx.session.model().materials.count(type) ? ctx.session.model().materials.at(type) : Material{};
+  static const std::vector<std::string_view> names = {"kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson",
+                                                      "rest"};
+  while (!args.empty()) {
+    auto k = args.expect(names, "property");
+    double v = args.real(names[k]);
+    auto nonneg = [&] { if (v < 0) args.fail(fmt::format("{} must not be negative", names[k])); };
+    switch (k) {
+      case 0: nonneg(); m.kn = v; break;
+      case 1: nonneg(); m.ks = v; break;
+      case 2:
+        if (v < 0 || v >= 90) args.fail("fric is a friction angle in degrees, in [0, 90)");
+        m.friction = std::tan(v * std::numbers::pi / 180);
+        break;
+      case 3: nonneg(); m.friction = v; break;
+      case 4:
+        if (!(v > 0)) args.fail("dens must be positive");
+        m.density = v;
+        break;
+      case 5: nonneg(); m.cohesion = v; break;
+      case 6: nonneg(); m.shear_modulus = v; break;
+      case 7:
+        if (v < -1 || v >= 0.5) args.fail("poisson must be in (-1, 0.5)");
+        m.poisson = v;
+        break;
+      case 8:
+        if (!(v > 0) || v > 1) args.fail("rest (restitution) must be in (0, 1]");
+        m.restitution = v;
+        m.has_restitution = v < 1;
+        break;
+    }
+  }
+  ctx.session.edit().materials[type] = m;
+}
+
+const Command prop_command = {
+    "PROP", {}, "PROP [type t] kn v ks v fric v dens v [coh v] [shear G poisson nu] [rest e]",
+    "material properties of a ball type",
+    "Sets material properties of a type (default type 1); properties not named keep their value (0 at "
+    "first). kn, ks: normal and shear spring stiffness (force/length) of the linear law; fric: friction "
+    "angle in degrees (mu v gives the coefficient instead); dens: density; coh: cohesion, a force added to "
+    "the Coulomb limit; shear G and poisson nu select the Hertz-Mindlin law for the type; rest e adds a "
+    "contact dashpot giving restitution e in a head-on impact. Mixed types: stiffnesses in series, the "
+    "smaller friction.",
+    {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest"}, run_prop};
+
+}  // namespace trubal

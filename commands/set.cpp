@@ -1,0 +1,53 @@
+#include <cctype>
+
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+
+namespace trubal {
+
+static void run_set(Context& ctx, Args& args) {
+  std::string name = to_lower(args.word("name"));
+  if (name == "echo") {
+    auto k = args.expect({"on", "off"}, "echo setting");
+    args.done();
+    ctx.interp.echo = k == 0;
+    return;
+  }
+  if (name == "seed") {
+    ctx.session.seed = static_cast<std::uint64_t>(args.count("seed", 0));
+    args.done();
+    return;
+  }
+  if (name == "log") {
+    std::string file = args.empty() ? "" : args.word("log file");
+    if (match_keyword(file, {"off"})) file.clear();
+    args.done();
+    ctx.interp.output().set_log(file);
+    return;
+  }
+  if (name == "volume") {
+    double v = args.real("volume");
+    args.done();
+    if (v < 0) args.fail("the volume must not be negative (0: the START box or periodic cell)");
+    ctx.session.volume = v;
+    return;
+  }
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_'))
+      args.fail(fmt::format("a variable name has letters, digits and _ only, not '{}'", printable(name)));
+  if (std::isdigit(static_cast<unsigned char>(name[0]))) args.fail("a variable name must not start with a digit");
+  if (args.empty()) args.fail(fmt::format("missing the value of {}", name));
+  ctx.interp.set_variable(name, args.rest());
+}
+
+const Command set_command = {
+    "SET", {}, "SET name value  |  SET echo on|off  |  SET seed n  |  SET log file|off  |  SET volume v",
+    "a variable or a setting",
+    "`SET name value` defines a variable: $name (or ${name}) in later lines is replaced by the value. Settings: "
+    "echo (echo each command in batch mode), seed (default seed of GEN), log (copy everything shown to a "
+    "file; `SET log off` stops), volume (the volume for the average stress in free space; 0 uses the START "
+    "box).",
+    {"echo", "seed", "log", "volume", "on", "off"}, run_set};
+
+}  // namespace trubal

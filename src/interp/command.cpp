@@ -1,0 +1,116 @@
+#include "interp/command.hpp"
+
+#include <fmt/format.h>
+
+#include "interp/interpreter.hpp"
+
+namespace trubal {
+
+const std::string& Args::peek() const {
+  static const std::string none;
+  return empty() ? none : words_[pos_];
+}
+
+void Args::fail(const std::string& message) const {
+  throw InputError(fmt::format("{} (usage: {})", message, usage_));
+}
+
+std::string Args::word(std::string_view what) {
+  if (empty()) fail(fmt::format("missing {}", what));
+  return words_[pos_++];
+}
+
+double Args::real(std::string_view what) {
+  if (empty()) fail(fmt::format("missing {} (a number)", what));
+  auto v = parse_real(words_[pos_]);
+  if (!v) fail(fmt::format("expected a number for {}, got '{}'", what, printable(words_[pos_])));
+  ++pos_;
+  return *v;
+}
+
+std::int64_t Args::count(std::string_view what, std::int64_t min, std::int64_t max) {
+  if (empty()) fail(fmt::format("missing {} (a whole number)", what));
+  const std::string& w = words_[pos_];
+  auto v = parse_integer(w);
+  if (!v) {
+    if (parse_real(w)) fail(fmt::format("{} must be a whole number, got the real '{}'", what, printable(w)));
+    fail(fmt::format("expected a whole number for {}, got '{}'", what, printable(w)));
+  }
+  if (*v < min || *v > max) {
+    if (max == INT64_MAX) fail(fmt::format("{} must be at least {}, got {}", what, min, *v));
+    fail(fmt::format("{} must be between {} and {}, got {}", what, min, max, *v));
+  }
+  ++pos_;
+  return *v;
+}
+
+std::optional<std::size_t> Args::keyword(const std::vector<std::string_view>& options) {
+  if (empty()) return std::nullopt;
+  std::optional<std::size_t> hit;
+  try {
+    hit = match_keyword(words_[pos_], options);
+  } catch (const InputError& e) {
+    fail(e.what());
+  }
+  if (hit) ++pos_;
+  return hit;
+}
+
+std::size_t Args::expect(const std::vector<std::string_view>& options, std::string_view what) {
+  std::string list;
+  for (auto o : options) list += (list.empty() ? "" : ", ") + std::string(o);
+  if (empty()) fail(fmt::format("missing {} (one of: {})", what, list));
+  auto hit = keyword(options);
+  if (!hit) fail(fmt::format("unknown {} '{}' (one of: {})", what, printable(peek()), list));
+  return *hit;
+}
+
+bool Args::accept(std::string_view option) { return keyword({option}).has_value(); }
+
+std::string Args::rest() {
+  std::string r;
+  while (!empty()) r += (r.empty() ? "" : " ") + words_[pos_++];
+  return r;
+}
+
+void Args::done() const {
+  if (!empty()) fail(fmt::format("unexpected '{}' at the end of the command", printable(peek())));
+}
+
+void Context::warn(const std::string& message) const { interp.warn(message); }
+
+const Command& find_command(std::string_view keyword) {
+  const auto& table = command_table();
+  std::vector<std::string_view> names;
+  std::vector<const Command*> owner;
+  for (const Command* c : table) {
+    names.push_back(c->name);
+    owner.push_back(c);
+    for (auto a : c->aliases) names.push_back(a), owner.push_back(c);
+  }
+  std::string w = to_lower(keyword);
+  for (std::size_t k = 0; k < names.size(); ++k)
+    if (to_lower(names[k]) == w) return *owner[k];
+  if (w.size() >= 3) {
+    const Command* found = nullptr;
+    std::string candidates;
+    bool ambiguous = false;
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      if (!to_lower(names[k]).starts_with(w)) continue;
+      candidates += (candidates.empty() ? "" : ", ") + std::string(names[k]);
+      if (found && found != owner[k]) ambiguous = true;
+      found = owner[k];
+    }
+    if (ambiguous) throw InputError(fmt::format("'{}' is ambiguous: it could be {}", printable(keyword), candidates));
+    if (found) return *found;
+  }
+  if (w.size() < 3) {
+    for (std::size_t k = 0; k < names.size(); ++k)
+      if (!w.empty() && to_lower(names[k]).starts_with(w))
+        throw InputError(fmt::format("'{}' is too short: abbreviate a command to at least 3 letters ({}?)",
+                                     printable(keyword), names[k]));
+  }
+  throw InputError(fmt::format("unknown command '{}' (HELP lists the commands)", printable(keyword)));
+}
+
+}  // namespace trubal

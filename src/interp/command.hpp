@@ -1,0 +1,75 @@
+// One command table entry and the argument cursor its handler reads words with.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "interp/lexer.hpp"
+
+namespace trubal {
+
+class Session;
+class Interpreter;
+
+// The words after a keyword, read left to right. Every reader throws InputError with a message
+// that says what was expected and shows the command's usage.
+class Args {
+ public:
+  Args(std::string_view usage, std::vector<std::string> words) : usage_(usage), words_(std::move(words)) {}
+
+  bool empty() const { return pos_ >= words_.size(); }
+  std::size_t remaining() const { return words_.size() - pos_; }
+  const std::string& peek() const;
+  std::string word(std::string_view what);
+  double real(std::string_view what);
+  // A whole number in [min, max]; a real here is an error.
+  std::int64_t count(std::string_view what, std::int64_t min = 0, std::int64_t max = INT64_MAX);
+  // Matches the next word against options (keyword rules); consumes it and returns the option's
+  // index if it matches, nullopt (nothing consumed) if it does not.
+  std::optional<std::size_t> keyword(const std::vector<std::string_view>& options);
+  // As keyword(), but a missing or unknown word is an error that lists the options.
+  std::size_t expect(const std::vector<std::string_view>& options, std::string_view what);
+  // True (and consumed) if the next word is this keyword.
+  bool accept(std::string_view option);
+  // Everything left, joined by blanks.
+  std::string rest();
+  // Errors if words are left over.
+  void done() const;
+  [[noreturn]] void fail(const std::string& message) const;
+
+ private:
+  std::string_view usage_;
+  std::vector<std::string> words_;
+  std::size_t pos_ = 0;
+};
+
+// What a handler works with.
+struct Context {
+  Session& session;
+  Interpreter& interp;
+  std::ostream& out;
+  void warn(const std::string& message) const;
+};
+
+struct Command {
+  std::string_view name;                     // canonical keyword, capitals
+  std::vector<std::string_view> aliases;     // other full keywords (CREATE for BALL)
+  std::string_view usage;                    // one line: "CYCLE n"
+  std::string_view summary;                  // one line for HELP's table
+  std::string_view help;                     // paragraphs for HELP name and the man page
+  std::vector<std::string_view> words;       // argument keywords, for Tab completion
+  void (*run)(Context&, Args&);
+};
+
+// The command table (commands/table.cpp): the dispatcher, HELP, completion and the man-page test
+// all read this one list.
+const std::vector<const Command*>& command_table();
+// The command a keyword names (exact or unique prefix of 3+ letters). Throws InputError for an
+// unknown or ambiguous keyword.
+const Command& find_command(std::string_view keyword);
+
+}  // namespace trubal

@@ -1,0 +1,64 @@
+// Runs lines of the command language: decks (batch), CALL'd files, and lines typed at the prompt.
+#pragma once
+
+#include <istream>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "interp/output.hpp"
+
+namespace trubal {
+
+class Session;
+
+// Thrown after an error has been reported, to unwind nested CALLs without reporting it again.
+struct ReportedError {};
+
+class Interpreter {
+ public:
+  Interpreter(Session& session, Output& output);
+
+  // Runs a whole deck from a stream named `name` (a file name, or "<stdin>"). Returns false at the
+  // first error, which is reported as NAME:LINE: error: ... on the error stream.
+  bool run_deck(std::istream& in, const std::string& name);
+  bool run_file(const std::string& path);
+  // One line typed at the prompt: errors are reported, the session goes on. Returns false on error.
+  bool run_interactive_line(const std::string& line, int line_no);
+
+  // For CALL: runs a file as part of the current command. Throws ReportedError after reporting
+  // an error inside it.
+  void call_file(const std::string& path);
+
+  void warn(const std::string& message);
+  void set_variable(const std::string& name, const std::string& value);
+  std::optional<std::string> variable(const std::string& name) const;
+  const std::map<std::string, std::string>& variables() const { return variables_; }
+
+  bool echo = true;                // echo commands in batch mode (SET echo on/off)
+  bool interactive = false;        // lines come from the shell
+  void request_stop() { stop_ = true; }
+  bool stopped() const { return stop_; }
+  Output& output() { return output_; }
+  Session& session() { return session_; }
+
+ private:
+  struct Frame {
+    std::string name;     // as shown in messages
+    std::string canonical;
+    int line = 0;
+  };
+  // Executes one logical line (comments and continuations already handled).
+  void execute(const std::string& line);
+  bool run_frames(std::istream& in, const std::string& name, const std::string& canonical);
+  void report(const std::string& message);
+
+  Session& session_;
+  Output& output_;
+  std::vector<Frame> frames_;
+  std::map<std::string, std::string> variables_;
+  bool stop_ = false;
+};
+
+}  // namespace trubal

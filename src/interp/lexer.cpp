@@ -1,0 +1,180 @@
+#include "interp/lexer.hpp"
+
+#include <cctype>
+#include <charconv>
+#include <cstdlib>
+
+#include <fmt/format.h>
+
+namespace trubal {
+
+std::string to_lower(std::string_view s) {
+  std::string r(s);
+  for (auto& c : r) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return r;
+}
+
+std::string to_upper(std::string_view s) {
+  std::string r(s);
+  for (auto& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return r;
+}
+
+std::string printable(std::string_view s, std::size_t max_len) {
+  std::string r;
+  for (std::size_t k = 0; k < s.size() && k < max_len; ++k) {
+    auto c = static_cast<unsigned char>(s[k]);
+    if (c >= 32 && c < 127) r += static_cast<char>(c);
+    else r += fmt::format("\\x{:02x}", c);
+  }
+  if (s.size() > max_len) r += fmt::format("... ({} characters)", s.size());
+  return r;
+}
+
+std::string strip_comment(std::string_view line) {
+  if (!line.empty() && line[0] == '*') return {};
+  bool quoted = false;
+  for (std::size_t k = 0; k < line.size(); ++k) {
+    char c = line[k];
+    if (c == '"') quoted = !quoted;
+    else if (!quoted && (c == ';' || c == '#' || c == '!')) return std::string(line.substr(0, k));
+  }
+  return std::string(line);
+}
+
+static std::string_view trim_right(std::string_view s) {
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r' || s.back() == '\n'))
+    s.remove_suffix(1);
+  return s;
+}
+
+std::optional<std::string> LineReader::next() {
+  std::string logical, physical_line;
+  bool continuing = false;
+  while (std::getline(in_, physical_line)) {
+    ++physical_;
+    if (!continuing) start_line_ = physical_;
+    std::string_view body = trim_right(strip_comment(physical_line));
+    // An empty or comment line inside a continuation ends nothing: keep reading.
+    if (continuing && body.empty()) continue;
+    if (!body.empty() && (body.back() == '&' || body.back() == '\\')) {
+      body.remove_suffix(1);
+      logical.append(body);
+      logical.push_back(' ');
+      continuing = true;
+      continue;
+    }
+    logical.append(body);
+    return logical;
+  }
+  if (continuing)
+    throw InputError("the continuation (& or \\ at the end of the line) runs into the end of the input");
+  return std::nullopt;
+}
+
+static bool is_separator(char c) {
+  return c == ' ' || c == '\t' || c == ',' || c == '=' || c == '(' || c == ')' || c == '\r' || c == '\n' ||
+         c == '\v' || c == '\f';
+}
+
+std::vector<std::string> split_words(std::string_view line) {
+  std::vector<std::string> words;
+  std::size_t k = 0;
+  while (k < line.size()) {
+    if (is_separator(line[k])) { ++k; continue; }
+    if (line[k] == '"') {
+      auto end = line.find('"', k + 1);
+      if (end == std::string_view::npos) throw InputError("unterminated quoted string (a \" without its closing \")");
+      words.emplace_back(line.substr(k + 1, end - k - 1));
+      k = end + 1;
+      continue;
+    }
+    std::size_t start = k;
+    while (k < line.size() && !is_separator(line[k]) && line[k] != '"') ++k;
+    words.emplace_back(line.substr(start, k - start));
+  }
+  return words;
+}
+
+static bool is_name_char(char c, bool first) {
+  return std::isalpha(static_cast<unsigned char>(c)) || c == '_' || (!first && std::isdigit(static_cast<unsigned char>(c)));
+}
+
+std::string expand_variables(std::string_view line,
+                             const std::function<std::optional<std::string>(const std::string&)>& lookup) {
+  std::string out;
+  for (std::size_t k = 0; k < line.size(); ++k) {
+    if (line[k] != '$') { out.push_back(line[k]); continue; }
+    bool braced = k + 1 < line.size() && line[k + 1] == '{';
+    std::size_t start = k + 1 + (braced ? 1 : 0), end = start;
+    while (end < line.size() && is_name_char(line[end], end == start)) ++end;
+    if (end == start) throw InputError("a $ must be followed by a variable name (letters, digits, _)");
+    if (braced && (end >= line.size() || line[end] != '}')) throw InputError("${ without its closing }");
+    std::string name = to_lower(line.substr(start, end - start));
+    auto value = lookup(name);
+    if (!value) throw InputError(fmt::format("undefined variable ${} (define it with SET {} value)", name, name));
+    out += *value;
+    k = end - (braced ? 0 : 1);
+  }
+  return out;
+}
+
+std::optional<double> parse_real(std::string_view w) {
+  // Grammar first (strtod alone would take "inf", "nan", hex and "1e"); then convert.
+  std::size_t k = 0, n = w.size();
+  if (k < n && (w[k] == '+' || w[k] == '-')) ++k;
+  std::size_t digits = 0;
+  while (k < n && std::isdigit(static_cast<unsigned char>(w[k]))) ++k, ++digits;
+  if (k < n && w[k] == '.') {
+    ++k;
+    while (k < n && std::isdigit(static_cast<unsigned char>(w[k]))) ++k, ++digits;
+  }
+  if (digits == 0) return std::nullopt;
+  std::string text(w.substr(0, k));
+  if (k < n && (w[k] == 'e' || w[k] == 'E' || w[k] == 'd' || w[k] == 'D')) {
+    ++k;
+    text.push_back('e');
+    std::size_t exp_start = k;
+    if (k < n && (w[k] == '+' || w[k] == '-')) text.push_back(w[k++]);
+    std::size_t exp_digits = 0;
+    while (k < n && std::isdigit(static_cast<unsigned char>(w[k]))) text.push_back(w[k++]), ++exp_digits;
+    if (exp_digits == 0 || exp_start == n) return std::nullopt;
+  }
+  if (k != n) return std::nullopt;
+  char* end = nullptr;
+  double v = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size()) return std::nullopt;
+  return v;
+}
+
+std::optional<std::int64_t> parse_integer(std::string_view w) {
+  std::size_t k = (!w.empty() && (w[0] == '+' || w[0] == '-')) ? 1 : 0;
+  if (k == w.size()) return std::nullopt;
+  for (std::size_t m = k; m < w.size(); ++m)
+    if (!std::isdigit(static_cast<unsigned char>(w[m]))) return std::nullopt;
+  std::int64_t v = 0;
+  auto s = w.substr(w[0] == '+' ? 1 : 0);
+  auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || ptr != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+std::optional<std::size_t> match_keyword(std::string_view word, const std::vector<std::string_view>& candidates,
+                                         std::size_t min_prefix) {
+  std::string w = to_lower(word);
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (to_lower(candidates[k]) == w) return k;
+  if (w.size() < min_prefix) return std::nullopt;
+  std::vector<std::size_t> hits;
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (to_lower(candidates[k]).starts_with(w)) hits.push_back(k);
+  if (hits.empty()) return std::nullopt;
+  if (hits.size() > 1) {
+    std::string list;
+    for (auto h : hits) list += (list.empty() ? "" : ", ") + to_upper(candidates[h]);
+    throw InputError(fmt::format("'{}' is ambiguous: it could be {}", printable(word), list));
+  }
+  return hits[0];
+}
+
+}  // namespace trubal

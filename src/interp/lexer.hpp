@@ -1,0 +1,66 @@
+// The lexical rules of the command language (LANGUAGE.md "Lexical rules"): comments, continuation,
+// word separators, Fortran number forms, $variables, keyword abbreviation.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <istream>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace trubal {
+
+// An error in the input, reported as FILE:LINE: error: what().
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Removes a trailing comment (`;`, `#`, `!` outside double quotes). A line whose column 1 is `*`
+// is a comment as a whole and becomes empty.
+std::string strip_comment(std::string_view line);
+
+// Reads logical lines: comments stripped, `&`/`\` continuations joined. Tracks physical line
+// numbers; `line()` of the last logical line is the physical line it started on.
+class LineReader {
+ public:
+  explicit LineReader(std::istream& in) : in_(in) {}
+  // Next logical line, or nullopt at end of input. Throws InputError for a continuation that runs
+  // into the end of the input.
+  std::optional<std::string> next();
+  int line() const { return start_line_; }
+
+ private:
+  std::istream& in_;
+  int physical_ = 0;
+  int start_line_ = 0;
+};
+
+// Splits a line into words: separators are blanks, tabs, commas, `=`, `(` and `)`. A double-quoted
+// string is one word (quotes removed). Throws InputError for an unterminated quote.
+std::vector<std::string> split_words(std::string_view line);
+
+// Replaces $name and ${name} using lookup (which returns nullopt for an unknown name: an error).
+std::string expand_variables(std::string_view line,
+                             const std::function<std::optional<std::string>(const std::string&)>& lookup);
+
+// Fortran number forms: 20, 20., .5, 1.5e9, 1.5E+09, 1.5d9, 1.5D+09 (and a sign).
+std::optional<double> parse_real(std::string_view word);
+// A whole number: digits with an optional sign, nothing else.
+std::optional<std::int64_t> parse_integer(std::string_view word);
+
+// Keyword matching: case-insensitive; an exact name wins; otherwise a prefix of at least
+// `min_prefix` letters that starts exactly one candidate. Returns the index of the candidate, or
+// throws InputError ("ambiguous ... could be A, B") / returns nullopt when nothing matches.
+std::optional<std::size_t> match_keyword(std::string_view word, const std::vector<std::string_view>& candidates,
+                                         std::size_t min_prefix = 3);
+
+std::string to_lower(std::string_view s);
+std::string to_upper(std::string_view s);
+// A word made safe to print: non-printable bytes as \xNN, long words cut.
+std::string printable(std::string_view s, std::size_t max_len = 60);
+
+}  // namespace trubal

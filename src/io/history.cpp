@@ -1,0 +1,106 @@
+#include "io/history.hpp"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "io/csv.hpp"
+#include "physics/measure.hpp"
+
+namespace trubal {
+
+const std::vector<std::string_view>& History::item_names() {
+  static const std::vector<std::string_view> names = {"stress", "strain", "ratio", "axial", "platen", "energy",
+                                                      "unbal", "contacts", "time"};
+  return names;
+}
+
+static std::vector<std::string> columns_of(const std::string& item) {
+  if (item == "stress") return {"s11", "s22", "s33", "s12", "s13", "s23"};
+  if (item == "strain") return {"e11", "e22", "e33"};
+  if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work"};
+  if (item == "contacts") return {"contacts", "sliding", "coordination"};
+  if (item == "time") return {};   // cycle and time lead every row
+  return {item};
+}
+
+HistoryTable& History::add(std::vector<std::string> items, std::int64_t every, const std::string& file,
+                           Range platen_range) {
+  auto t = std::make_unique<HistoryTable>();
+  t->columns = {"cycle", "time"};
+  for (const auto& item : items)
+    for (auto& c : columns_of(item)) t->columns.push_back(c);
+  t->items = std::move(items);
+  t->every = every;
+  t->file = file;
+  t->platen_range = std::move(platen_range);
+  if (!file.empty()) {
+    t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
+    if (!*t->out) throw std::runtime_error(fmt::format("cannot write the history file '{}'", file));
+    for (std::size_t k = 0; k < t->columns.size(); ++k) *t->out << (k ? "," : "") << t->columns[k];
+    *t->out << '\n' << std::flush;
+  }
+  tables_.push_back(std::move(t));
+  return *tables_.back();
+}
+
+void History::record(HistoryTable& t, const Model& model, double volume) {
+  std::vector<double> row = {static_cast<double>(model.cycle), model.time};
+  Sym6 stress{};
+  bool have_stress = false;
+  auto get_stress = [&]() -> const Sym6& {
+    if (!have_stress) stress = volume > 0 ? average_stress(model, volume) : Sym6{}, have_stress = true;
+    return stress;
+  };
+  for (const auto& item : t.items) {
+    if (item == "stress") {
+      for (double s : get_stress()) row.push_back(s);
+    } else if (item == "strain") {
+      for (int a = 0; a < 3; ++a) row.push_back(model.space.strain[a]);
+    } else if (item == "ratio") {
+      const Sym6& s = get_stress();
+      double lateral = 0.5 * (s[0] + s[1]);
+      row.push_back(lateral != 0 ? s[2] / lateral : 0.0);
+    } else if (item == "axial") {
+      row.push_back(model.space.strain[2]);
+    } else if (item == "platen") {
+      row.push_back(reaction_force(model, select(model, t.platen_range))[2]);
+    } else if (item == "energy") {
+      EnergyReport e = energy(model);
+      for (double v : {e.kinetic_translation + e.kinetic_rotation, e.strain, e.friction_work, e.damping_work,
+                       e.boundary_work})
+        row.push_back(v);
+    } else if (item == "unbal") {
+      row.push_back(unbalanced_force(model).mean_ratio);
+    } else if (item == "contacts") {
+      row.push_back(static_cast<double>(contact_count(model)));
+      row.push_back(sliding_fraction(model));
+      row.push_back(coordination_number(model));
+    }
+  }
+  if (t.out) {
+    for (std::size_t k = 0; k < row.size(); ++k) *t.out << (k ? "," : "") << csv_real(row[k]);
+    *t.out << '\n' << std::flush;
+  }
+  t.rows.push_back(std::move(row));
+}
+
+void History::sample(const Model& model, double volume) {
+  for (auto& t : tables_)
+    if (model.cycle % t->every == 0) record(*t, model, volume);
+}
+
+void History::sample_all(const Model& model, double volume) {
+  for (auto& t : tables_) record(*t, model, volume);
+}
+
+void History::clear() { tables_.clear(); }
+
+std::pair<const HistoryTable*, std::size_t> History::find_column(const std::string& name) const {
+  for (const auto& t : tables_)
+    for (std::size_t k = 0; k < t->columns.size(); ++k)
+      if (t->columns[k] == name) return {t.get(), k};
+  return {nullptr, 0};
+}
+
+}  // namespace trubal

@@ -1,0 +1,206 @@
+#include "io/save.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <type_traits>
+
+#include <fmt/format.h>
+
+namespace trubal {
+
+namespace {
+
+constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
+constexpr std::uint32_t kVersion = 1;
+
+// FNV-1a, 64 bit: enough to tell a damaged file from a good one.
+std::uint64_t fnv1a(const std::string& data) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+class Writer {
+ public:
+  template <class T> void pod(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    buf.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  template <class T> void vec(const std::vector<T>& v) {
+    pod<std::uint64_t>(v.size());
+    if (!v.empty()) buf.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+  void str(const std::string& s) {
+    pod<std::uint64_t>(s.size());
+    buf += s;
+  }
+  std::string buf;
+};
+
+class Reader {
+ public:
+  Reader(const std::string& data, const std::string& path) : data_(data), path_(path) {}
+  template <class T> void pod(T& v) {
+    need(sizeof v);
+    std::memcpy(&v, data_.data() + pos_, sizeof v);
+    pos_ += sizeof v;
+  }
+  template <class T> void vec(std::vector<T>& v) {
+    std::uint64_t n = 0;
+    pod(n);
+    if (n > (data_.size() - pos_) / sizeof(T)) corrupt();
+    v.resize(n);
+    if (n) std::memcpy(v.data(), data_.data() + pos_, n * sizeof(T));
+    pos_ += n * sizeof(T);
+  }
+  void str(std::string& s) {
+    std::uint64_t n = 0;
+    pod(n);
+    need(n);
+    s.assign(data_.data() + pos_, n);
+    pos_ += n;
+  }
+  bool at_end() const { return pos_ == data_.size(); }
+  [[noreturn]] void corrupt() const {
+    throw std::runtime_error(fmt::format("'{}' is damaged: its contents do not add up (not restarted)", path_));
+  }
+
+ private:
+  void need(std::size_t n) const {
+    if (n > data_.size() - pos_) corrupt();
+  }
+  const std::string& data_;
+  std::string path_;
+  std::size_t pos_ = 0;
+};
+
+// One description of the layout serves both directions, so save and load cannot drift apart.
+template <class IO> void transfer(IO& io, Model& m) {
+  io.pod(m.space.periodic);
+  io.pod(m.space.lo); io.pod(m.space.hi); io.pod(m.space.boxes);
+  io.pod(m.space.strain_rate); io.pod(m.space.strain);
+  io.pod(m.space.servo_on); io.pod(m.space.servo_target);
+  io.pod(m.space.servo_gain); io.pod(m.space.servo_max_rate);
+  std::uint64_t nmat = m.materials.size();
+  io.pod(nmat);
+  if constexpr (std::is_same_v<IO, Reader>) {
+    m.materials.clear();
+    for (std::uint64_t k = 0; k < nmat; ++k) {
+      int type = 0;
+      Material mat;
+      io.pod(type);
+      io.pod(mat);
+      m.materials[type] = mat;
+    }
+  } else {
+    for (auto& [type, mat] : m.materials) {
+      int t = type;
+      io.pod(t);
+      io.pod(mat);
+    }
+  }
+  m.balls.for_each_array([&](auto& v) { io.vec(v); });
+  m.contacts.for_each_pair_array([&](auto& v) { io.vec(v); });
+  io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
+  io.pod(m.settings.damping);
+  io.pod(m.energy);
+  std::uint64_t ngroups = m.groups.size();
+  io.pod(ngroups);
+  if constexpr (std::is_same_v<IO, Reader>) {
+    m.groups.clear();
+    for (std::uint64_t k = 0; k < ngroups; ++k) {
+      std::string name;
+      io.str(name);
+      io.vec(m.groups[name]);
+    }
+  } else {
+    for (auto& [name, ids] : m.groups) {
+      std::string n = name;
+      io.str(n);
+      io.vec(ids);
+    }
+  }
+  io.pod(m.cycle); io.pod(m.time); io.pod(m.dt);
+  io.str(m.title);
+  io.pod(m.started);
+}
+
+}  // namespace
+
+void save_model(const Model& model, const std::string& path) {
+  Writer w;
+  transfer(w, const_cast<Model&>(model));
+  std::string header(kMagic, sizeof kMagic);
+  header.append(reinterpret_cast<const char*>(&kVersion), sizeof kVersion);
+  std::uint64_t size = w.buf.size(), sum = fnv1a(w.buf);
+  header.append(reinterpret_cast<const char*>(&size), sizeof size);
+  header.append(reinterpret_cast<const char*>(&sum), sizeof sum);
+
+  std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
+  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd < 0) throw std::runtime_error(fmt::format("cannot write '{}': {}", path, std::strerror(errno)));
+  auto write_all = [&](const std::string& s) {
+    std::size_t done = 0;
+    while (done < s.size()) {
+      ssize_t n = ::write(fd, s.data() + done, s.size() - done);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        return false;
+      }
+      done += static_cast<std::size_t>(n);
+    }
+    return true;
+  };
+  bool ok = write_all(header) && write_all(w.buf) && ::fsync(fd) == 0;
+  int err = errno;
+  ok = (::close(fd) == 0) && ok;
+  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (ok) err = errno;
+    std::remove(tmp.c_str());
+    throw std::runtime_error(fmt::format("cannot write '{}': {} (nothing was replaced)", path, std::strerror(err)));
+  }
+}
+
+Model load_model(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(fmt::format("cannot open the save file '{}'", path));
+  std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t header_size = sizeof kMagic + sizeof kVersion + 2 * sizeof(std::uint64_t);
+  if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0)
+    throw std::runtime_error(fmt::format("'{}' is not a trubal save file", path));
+  if (data.size() < header_size) throw std::runtime_error(fmt::format("'{}' is truncated (not restarted)", path));
+  std::uint32_t version = 0;
+  std::uint64_t size = 0, sum = 0;
+  std::memcpy(&version, data.data() + sizeof kMagic, sizeof version);
+  std::memcpy(&size, data.data() + sizeof kMagic + sizeof version, sizeof size);
+  std::memcpy(&sum, data.data() + sizeof kMagic + sizeof version + sizeof size, sizeof sum);
+  if (version != kVersion)
+    throw std::runtime_error(
+        fmt::format("'{}' was saved by save format version {}; this trubal reads version {}", path, version, kVersion));
+  std::string body = data.substr(header_size);
+  if (body.size() < size)
+    throw std::runtime_error(
+        fmt::format("'{}' is truncated: {} of {} bytes (not restarted)", path, body.size(), size));
+  if (body.size() > size || fnv1a(body) != sum)
+    throw std::runtime_error(fmt::format("'{}' is corrupted: its checksum does not match (not restarted)", path));
+  Model m;
+  Reader r(body, path);
+  transfer(r, m);
+  if (!r.at_end()) r.corrupt();
+  // Cross-checks that a checksum collision or a bug could not hide.
+  const std::size_t n = m.balls.id.size();
+  bool consistent = true;
+  m.balls.for_each_array([&](const auto& v) { consistent = consistent && v.size() == n; });
+  for (std::size_t p = 0; p < m.contacts.i.size(); ++p)
+    consistent = consistent && m.contacts.i[p] < n && m.contacts.j[p] < n;
+  if (!consistent) r.corrupt();
+  return m;
+}
+
+}  // namespace trubal

@@ -1,0 +1,53 @@
+// trubal: runs decks of TRUBAL's command language, or an interactive shell.
+#include <unistd.h>
+
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "interp/interpreter.hpp"
+#include "interp/manpage.hpp"
+#include "interp/output.hpp"
+#include "interp/shell.hpp"
+#include "interp/signals.hpp"
+#include "session.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"trubal: discrete element simulation of spheres in TRUBAL's command language.\n"
+               "Runs DECK as a batch (stops at the first error, exit status 1), or opens an interactive\n"
+               "shell when no deck is given and standard input is a terminal. `-` reads a deck from\n"
+               "standard input. See trubal(1) and HELP inside the program.",
+               "trubal"};
+  std::string deck, interactive_deck;
+  bool version = false, man_commands = false;
+  app.add_option("deck", deck, "command file to run (- for standard input)");
+  app.add_option("-i,--interactive", interactive_deck, "run this deck, then stay in the shell");
+  app.add_flag("-V,--version", version, "print the version and exit");
+  app.add_flag("--man-commands", man_commands, "print the COMMANDS section of the man page (roff)")->group("");
+  CLI11_PARSE(app, argc, argv);
+  if (man_commands) {
+    fmt::print("{}", trubal::man_commands_section());
+    return 0;
+  }
+  if (version) {
+    fmt::print("trubal {}\n", TRUBAL_VERSION);
+    return 0;
+  }
+
+  trubal::Output output(std::cout, std::cerr);
+  trubal::Session session;
+  trubal::Interpreter interp(session, output);
+  trubal::install_interrupt_handler();
+
+  if (!interactive_deck.empty()) {
+    interp.run_file(interactive_deck);   // errors are reported; the shell opens anyway
+    if (interp.stopped()) return 0;
+    trubal::run_shell(interp);
+    return 0;
+  }
+  if (deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO))) return interp.run_deck(std::cin, "<stdin>") ? 0 : 1;
+  if (!deck.empty()) return interp.run_file(deck) ? 0 : 1;
+  trubal::run_shell(interp);
+  return 0;
+}

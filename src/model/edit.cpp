@@ -1,0 +1,72 @@
+#include "model/edit.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace trubal {
+
+std::int64_t find_ball(const Model& model, std::int64_t id) {
+  const auto& ids = model.balls.id;
+  auto it = std::lower_bound(ids.begin(), ids.end(), id);
+  return (it != ids.end() && *it == id) ? it - ids.begin() : -1;
+}
+
+std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y, double z, double rad) {
+  Balls& b = model.balls;
+  if (!(rad > 0)) throw std::invalid_argument("ball radius must be positive");
+  if (id <= 0) id = b.size() ? b.id.back() + 1 : 1;
+  auto pos = std::lower_bound(b.id.begin(), b.id.end(), id) - b.id.begin();
+  if (static_cast<std::size_t>(pos) < b.size() && b.id[pos] == id)
+    throw std::invalid_argument("ball id " + std::to_string(id) + " is taken");
+  // Contact pairs refer to indices: inserting in the middle shifts them.
+  if (static_cast<std::size_t>(pos) < b.size()) {
+    for (auto& v : model.contacts.i) v += (v >= pos);
+    for (auto& v : model.contacts.j) v += (v >= pos);
+    model.contacts.gather_begin.clear();
+  }
+  model.critical_dt = 0;   // the new ball may be stiffer or lighter than any before
+  b.for_each_array([&](auto& v) { v.insert(v.begin() + pos, typename std::decay_t<decltype(v)>::value_type{}); });
+  b.id[pos] = id;
+  b.type[pos] = type;
+  b.x[pos] = x; b.y[pos] = y; b.z[pos] = z;
+  b.rad[pos] = rad;
+  return pos;
+}
+
+std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
+  Balls& b = model.balls;
+  std::vector<std::int64_t> new_index(b.size(), -1);
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < b.size(); ++k)
+    if (!remove[k]) new_index[k] = kept++;
+  const std::size_t removed = b.size() - kept;
+  if (removed == 0) return 0;
+  model.critical_dt = 0;
+  b.for_each_array([&](auto& v) {
+    std::size_t w = 0;
+    for (std::size_t k = 0; k < v.size(); ++k)
+      if (!remove[k]) v[w++] = v[k];
+    v.resize(w);
+  });
+  ContactTable& c = model.contacts;
+  std::vector<bool> keep_pair(c.size());
+  for (std::size_t p = 0; p < c.size(); ++p) keep_pair[p] = new_index[c.i[p]] >= 0 && new_index[c.j[p]] >= 0;
+  c.for_each_pair_array([&](auto& v) {
+    if (v.size() != keep_pair.size()) { v.clear(); return; }
+    std::size_t w = 0;
+    for (std::size_t k = 0; k < v.size(); ++k)
+      if (keep_pair[k]) v[w++] = v[k];
+    v.resize(w);
+  });
+  for (auto& v : c.i) v = static_cast<std::uint32_t>(new_index[v]);
+  for (auto& v : c.j) v = static_cast<std::uint32_t>(new_index[v]);
+  c.gather_begin.clear();
+  c.gather_pair.clear();
+  c.gather_sign.clear();
+  for (auto& [name, ids] : model.groups)
+    std::erase_if(ids, [&](std::int64_t id) { return find_ball(model, id) < 0; });
+  return removed;
+}
+
+}  // namespace trubal

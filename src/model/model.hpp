@@ -1,0 +1,144 @@
+// The state of a simulation as plain data: balls, materials, contacts, space and settings.
+// Nothing here computes physics; src/physics/ and src/backends/ act on it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace trubal {
+
+// Velocity components that FIX/FREE address, as bits of Balls::fixed.
+enum Dof : std::uint8_t {
+  kXVel = 1, kYVel = 2, kZVel = 4, kXSpin = 8, kYSpin = 16, kZSpin = 32,
+  kVel = kXVel | kYVel | kZVel, kSpin = kXSpin | kYSpin | kZSpin,
+};
+
+// Contact properties of one ball type (PROP). Unset values are 0.
+struct Material {
+  double kn = 0, ks = 0;          // linear springs, force per length
+  double friction = 0;            // Coulomb coefficient mu (PROP fric gives an angle)
+  double cohesion = 0;            // force added to the Coulomb limit
+  double density = 0;
+  double shear_modulus = 0;       // > 0 selects Hertz-Mindlin (with poisson)
+  double poisson = 0;
+  double restitution = 0;         // used when has_restitution (contact dashpot)
+  bool has_restitution = false;
+  bool hertz() const { return shear_modulus > 0; }
+};
+
+// Balls as structure of arrays. Invariant: sorted by id, so index order is id order
+// (forces are gathered by partner id, which is then partner index).
+struct Balls {
+  std::vector<std::int64_t> id;
+  std::vector<int> type;
+  std::vector<std::uint8_t> fixed;              // Dof bits
+  std::vector<double> rad, mass, inertia;       // mass/inertia derived from type density
+  std::vector<double> x, y, z;                  // position at t
+  std::vector<double> vx, vy, vz;               // velocity at t - dt/2
+  std::vector<double> wx, wy, wz;               // angular velocity at t - dt/2
+  std::vector<double> fx, fy, fz;               // unbalanced force of the last step
+  std::vector<double> mx, my, mz;               // unbalanced moment of the last step
+  std::vector<double> ax, ay, az;               // applied force (APPLY, MEMBRANE)
+  std::vector<double> amx, amy, amz;            // applied moment
+
+  std::size_t size() const { return id.size(); }
+
+  // Calls f(vector&) for every per-ball array, so resizing and reordering cannot miss one.
+  template <class F> void for_each_array(F&& f) {
+    f(id); f(type); f(fixed);
+    for (auto* v : {&rad, &mass, &inertia, &x, &y, &z, &vx, &vy, &vz, &wx, &wy, &wz, &fx, &fy, &fz,
+                    &mx, &my, &mz, &ax, &ay, &az, &amx, &amy, &amz})
+      f(*v);
+  }
+  template <class F> void for_each_array(F&& f) const {
+    const_cast<Balls*>(this)->for_each_array([&](auto& v) { f(static_cast<const decltype(v)&>(v)); });
+  }
+};
+
+// Pairs of balls that may touch, i < j as ball indices, sorted by (i, j). Only pairs with positive
+// overlap are contacts; the rest carry zero history. The shear force is history and survives
+// rebuilds because it is carried over by the pair of ball ids.
+struct ContactTable {
+  std::vector<std::uint32_t> i, j;
+  std::vector<std::int8_t> image_x, image_y, image_z;   // periodic image of j as seen from i
+  std::vector<double> fsx, fsy, fsz;                    // shear force on j (history)
+  // Results of the last force computation, per pair:
+  std::vector<double> nx, ny, nz;                       // unit normal from i to j
+  std::vector<double> overlap, fn;                      // overlap U, normal force (spring + dashpot)
+  std::vector<double> fx, fy, fz;                       // total force on j (on i: minus this)
+  std::vector<double> tx, ty, tz;                       // n x (shear force): moment on b is -R_b t
+  std::vector<double> kn_eff, ks_eff;                   // stiffness now, for the time step
+  std::vector<double> cn_eff;                           // restitution dashpot coefficient now (time step)
+  std::vector<double> work_friction, work_damping;      // energy dissipated this step
+  std::vector<std::uint8_t> state;                      // 0 apart, 1 touching, 2 sliding
+  // Gather index (CSR): for ball b, entries gather_begin[b] .. gather_begin[b+1] of gather_pair
+  // are its pairs in ascending partner order; gather_sign is +1 where b is j, -1 where b is i.
+  std::vector<std::uint32_t> gather_begin, gather_pair;
+  std::vector<std::int8_t> gather_sign;
+
+  std::size_t size() const { return i.size(); }
+  template <class F> void for_each_pair_array(F&& f) {
+    f(i); f(j); f(image_x); f(image_y); f(image_z); f(state);
+    for (auto* v : {&fsx, &fsy, &fsz, &nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &tx, &ty, &tz,
+                    &kn_eff, &ks_eff, &cn_eff, &work_friction, &work_damping})
+      f(*v);
+  }
+};
+
+// Where the balls live: a free region (START box) or a periodic cell (START x y z).
+struct Space {
+  bool periodic = false;
+  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};   // region, or periodic cell [lo, hi)
+  std::array<int, 3> boxes{0, 0, 0};                // contact-detection boxes asked for (0: auto)
+  // Periodic cell control (compression positive): xx yy zz xy xz yz.
+  std::array<double, 6> strain_rate{};
+  std::array<double, 6> strain{};                   // accumulated
+  std::array<bool, 3> servo_on{false, false, false};
+  std::array<double, 3> servo_target{};
+  double servo_gain = 0, servo_max_rate = 0;
+  std::array<double, 3> length() const { return {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}; }
+};
+
+enum class DampKind { None, Rayleigh, Local };
+
+struct Damping {
+  DampKind kind = DampKind::None;
+  double alpha = 0, beta = 0;      // Rayleigh: mass and stiffness coefficients
+  double lambda = 0, freq = 0;     // as given (DAMP lambda f), for PRINT damp; 0 when given as coefficients
+  double local = 0;                // local damping coefficient
+};
+
+struct Settings {
+  double frac = 0.8;               // dt = frac * critical step
+  double fixed_dt = 0;             // TSTEP: > 0 fixes the step
+  std::array<double, 3> gravity{0, 0, 0};
+  Damping damping;
+};
+
+// Energy terms accumulated since START (or the last reset), for the balance.
+struct Energy {
+  double friction_work = 0;        // dissipated by sliding
+  double damping_work = 0;         // dissipated by all damping
+  double boundary_work = 0;        // done by fixed velocities and applied forces (gravity: potential)
+};
+
+struct Model {
+  Space space;
+  std::map<int, Material> materials;      // by type number
+  Balls balls;
+  ContactTable contacts;
+  Settings settings;
+  Energy energy;
+  std::map<std::string, std::vector<std::int64_t>> groups;   // GROUP name -> ball ids
+  std::int64_t cycle = 0;
+  double time = 0;
+  double dt = 0;                          // step of the last cycle (0 before the first)
+  double critical_dt = 0;                 // critical step from the last force pass (0: estimate afresh)
+  std::string title;
+  bool started = false;                   // START given
+};
+
+}  // namespace trubal

@@ -1,0 +1,87 @@
+// The specialised loops of one time step, chosen once per CYCLE for the features a scene uses.
+// A backend calls them on ranges: first `contacts` over pair ranges (every pair), then `motion`
+// over ball ranges (gather in ascending partner order, law of motion). Ranges start on multiples of
+// kReduceBlock and each returns its block's sums; a backend adds the block sums in ascending block
+// order, so every backend and thread count rounds the totals alike.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "model/model.hpp"
+#include "physics/contact_law.hpp"
+#include "physics/engine.hpp"
+
+namespace trubal {
+
+inline constexpr std::size_t kReduceBlock = 2048;
+
+// Reductions of one step. Sums are added block by block in ascending order; min/max are exact.
+struct StepSums {
+  double friction_work = 0, damping_work = 0, boundary_work = 0;
+  double strain = 0;                        // spring energy at the start of the step
+  double kinetic = 0, potential = 0;        // at the end of the step (PHYSICS: half-step pairing)
+  double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate
+  double fastest_speed2 = -1;               // |v|^2 + |R w|^2 of the fastest ball (NaN wins)
+  std::size_t fastest_ball = 0;
+
+  void add(const StepSums& o) {
+    friction_work += o.friction_work; damping_work += o.damping_work;
+    boundary_work += o.boundary_work; strain += o.strain;
+    kinetic += o.kinetic; potential += o.potential;
+    critical_dt = std::min(critical_dt, o.critical_dt);
+    if (!(o.fastest_speed2 <= fastest_speed2)) { fastest_speed2 = o.fastest_speed2; fastest_ball = o.fastest_ball; }
+  }
+};
+
+struct StepKernels;
+using ContactLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&);
+using MotionLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&);
+
+// How the motion loop estimates the next step.
+enum class StepEstimate : unsigned { None = 0, Undamped = 1, Damped = 2 };
+
+struct StepKernels {
+  Features features;
+  StepEstimate estimate = StepEstimate::Undamped;
+  double dt = 0;                            // this step
+  double beta = 0, alpha = 0, local = 0;    // damping
+  std::array<double, 3> gravity{0, 0, 0};
+  // Contact laws by pair of compact type indices (type_count^2 entries).
+  int type_count = 1;
+  std::vector<std::uint16_t> ball_type;     // compact type index per ball
+  std::vector<PairLaw> laws;
+  // A ball without contacts counts as touching one ball of its own kind (per compact type).
+  std::vector<double> alone_kn, alone_ks, alone_xi;
+  ContactLoop contacts = nullptr;
+  MotionLoop motion = nullptr;
+
+  const PairLaw& law(std::size_t i, std::size_t j) const {
+    return type_count == 1 ? laws[0] : laws[ball_type[i] * type_count + ball_type[j]];
+  }
+};
+
+// The kernels for the model as it is now (materials, damping, fixities, loads).
+StepKernels make_kernels(const Model& model);
+
+// Upper bound on the squared highest frequency of the modes that involve one ball: Gershgorin's
+// row sums of M^-1 K over the ball's contacts, spins measured as R w with inertia 2/5 m
+// (translation row: 2 sum max(k_n, k_s) + 2 sum k_s; spin row: 4 sum k_s / (2/5)). Exact for two
+// equal balls without spin (2 k_n / m); 10 k_s / m against the true slip mode 7 k_s / m.
+inline double ball_omega2(double mass, double sum_kmax, double sum_ks, bool rotation) {
+  const double row = rotation ? std::max(2 * (sum_kmax + sum_ks), 10 * sum_ks) : 2 * sum_kmax;
+  return row / mass;
+}
+
+// Critical step of a mode with frequency omega and damping ratio xi under central differences
+// with a lagged dashpot: (2 / omega)(sqrt(1 + xi^2) - xi).
+inline double damped_critical_step(double omega, double xi) {
+  return 2.0 / omega * (std::sqrt(1 + xi * xi) - xi);
+}
+
+}  // namespace trubal

@@ -1,0 +1,36 @@
+// Measurements of the current state: stress, energy, fabric, coordination, unbalanced force.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+using Sym6 = std::array<double, 6>;   // xx yy zz xy xz yz
+
+// Average stress (1/V) sum_c f_a l_b over the contacts (compression positive).
+Sym6 average_stress(const Model& model, double volume);
+
+struct EnergyReport {
+  double kinetic_translation = 0, kinetic_rotation = 0, strain = 0;
+  double friction_work = 0, damping_work = 0, boundary_work = 0;
+  double potential = 0;            // gravity, relative to z = 0
+  double total() const;            // kinetic + strain + potential + dissipated - boundary
+};
+EnergyReport energy(const Model& model);
+
+double coordination_number(const Model& model);   // 2 * contacts / balls
+double sliding_fraction(const Model& model);
+Sym6 fabric_tensor(const Model& model);
+std::size_t contact_count(const Model& model);
+
+struct Unbalanced { double mean_ratio = 0, max_ratio = 0; };
+Unbalanced unbalanced_force(const Model& model);
+
+// Sum of the unbalanced force on the given balls (for fixed balls: the reaction force they carry).
+std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls);
+
+}  // namespace trubal

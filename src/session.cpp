@@ -1,0 +1,255 @@
+#include "session.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "interp/signals.hpp"
+#include "io/save.hpp"
+#include "model/edit.hpp"
+#include "physics/measure.hpp"
+
+namespace trubal {
+
+Session::Session() : backend_(make_backend("serial", 1)), history_(std::make_unique<History>()) {}
+Session::~Session() = default;
+
+Model& Session::edit() {
+  backend_->invalidate();
+  return model_;
+}
+
+void Session::set_backend(const std::string& name, int threads) {
+  backend_ = make_backend(name, threads);
+}
+
+void Session::require_started() const {
+  if (!model_.started) throw std::runtime_error("no model yet: START one first (START box x0 x1 y0 y1 z0 z1)");
+}
+
+void Session::start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  for (int a = 0; a < 3; ++a)
+    if (!(hi[a] > lo[a])) throw std::runtime_error(fmt::format("START box: upper bound must exceed lower bound on axis {}", "xyz"[a]));
+  Model fresh;
+  fresh.space.periodic = false;
+  fresh.space.lo = lo;
+  fresh.space.hi = hi;
+  fresh.started = true;
+  model_ = std::move(fresh);
+  history_->clear();
+  backend_->invalidate();
+}
+
+void Session::start_periodic(const std::array<double, 3>& length, const std::array<int, 3>& boxes) {
+  for (int a = 0; a < 3; ++a)
+    if (!(length[a] > 0)) throw std::runtime_error("START: the periodic cell's edge lengths must be positive");
+  Model fresh;
+  fresh.space.periodic = true;
+  fresh.space.lo = {0, 0, 0};
+  fresh.space.hi = length;
+  fresh.space.boxes = boxes;
+  fresh.started = true;
+  model_ = std::move(fresh);
+  history_->clear();
+  backend_->invalidate();
+}
+
+std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, double z, double rad) {
+  require_started();
+  const Space& s = model_.space;
+  double p[3] = {x, y, z};
+  if (!s.periodic)
+    for (int a = 0; a < 3; ++a)
+      if (p[a] < s.lo[a] || p[a] > s.hi[a])
+        throw std::runtime_error(fmt::format("ball centre {} = {} is outside the START box [{}, {}]", "xyz"[a], p[a],
+                                             s.lo[a], s.hi[a]));
+  try {
+    return trubal::add_ball(edit(), id, type, x, y, z, rad);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+}
+
+namespace {
+
+// Overlap checks for GEN: balls hashed into cubes of edge >= the largest diameter. In periodic
+// space a candidate is also checked at its images across the faces it is near.
+class PlacementGrid {
+ public:
+  PlacementGrid(const Space& space, double cell) : space_(space), cell_(cell) {}
+  void insert(double x, double y, double z, double r) {
+    pts_.push_back({x, y, z, r});
+    cells_[key(cell_of(x), cell_of(y), cell_of(z))].push_back(pts_.size() - 1);
+  }
+  bool overlaps(double x, double y, double z, double r) const {
+    if (!space_.periodic) return overlaps_here(x, y, z, r);
+    auto L = space_.length();
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        for (int k = -1; k <= 1; ++k)
+          if (overlaps_here(x + i * L[0], y + j * L[1], z + k * L[2], r)) return true;
+    return false;
+  }
+
+ private:
+  bool overlaps_here(double x, double y, double z, double r) const {
+    long cx = cell_of(x), cy = cell_of(y), cz = cell_of(z);
+    for (long i = -1; i <= 1; ++i)
+      for (long j = -1; j <= 1; ++j)
+        for (long k = -1; k <= 1; ++k) {
+          auto it = cells_.find(key(cx + i, cy + j, cz + k));
+          if (it == cells_.end()) continue;
+          for (auto q : it->second) {
+            double dx = pts_[q][0] - x, dy = pts_[q][1] - y, dz = pts_[q][2] - z, reach = pts_[q][3] + r;
+            if (dx * dx + dy * dy + dz * dz < reach * reach) return true;
+          }
+        }
+    return false;
+  }
+  long cell_of(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  static std::uint64_t key(long x, long y, long z) {
+    return (static_cast<std::uint64_t>(x & 0x1FFFFF) << 42) | (static_cast<std::uint64_t>(y & 0x1FFFFF) << 21) |
+           static_cast<std::uint64_t>(z & 0x1FFFFF);
+  }
+  const Space& space_;
+  double cell_;
+  std::vector<std::array<double, 4>> pts_;
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
+};
+
+}  // namespace
+
+std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range) {
+  require_started();
+  if (!(rlo > 0) || rhi < rlo) throw std::runtime_error("GEN: radii must satisfy 0 < rlo <= rhi");
+  const Space& s = model_.space;
+  double rmax = rhi;
+  for (double r : model_.balls.rad) rmax = std::max(rmax, r);
+  PlacementGrid grid(s, 2 * rmax);
+  const Balls& b = model_.balls;
+  for (std::size_t k = 0; k < b.size(); ++k) grid.insert(b.x[k], b.y[k], b.z[k], b.rad[k]);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::size_t placed = 0;
+  const std::size_t max_tries = 2000 * n + 10000;
+  std::vector<std::array<double, 4>> made;
+  for (std::size_t tries = 0; placed < n && tries < max_tries; ++tries) {
+    double r = rlo + (rhi - rlo) * unit(rng);
+    double p[3];
+    for (int a = 0; a < 3; ++a) {
+      double lo = s.lo[a] + (s.periodic ? 0 : r), hi = s.hi[a] - (s.periodic ? 0 : r);
+      if (hi < lo) throw std::runtime_error("GEN: the balls do not fit in the START box");
+      p[a] = lo + (hi - lo) * unit(rng);
+    }
+    if (!holds(model_, range, {0, type, p[0], p[1], p[2]})) continue;
+    if (grid.overlaps(p[0], p[1], p[2], r)) continue;
+    grid.insert(p[0], p[1], p[2], r);
+    made.push_back({p[0], p[1], p[2], r});
+    ++placed;
+  }
+  Model& m = edit();
+  for (const auto& q : made) trubal::add_ball(m, 0, type, q[0], q[1], q[2], q[3]);
+  return placed;
+}
+
+std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
+                                 const Range& range) {
+  require_started();
+  if (!(d > 0)) throw std::runtime_error("LATTICE: the diameter must be positive");
+  const bool periodic = model_.space.periodic;
+  const double layer = d / std::sqrt(2.0);
+  std::vector<std::array<double, 3>> points;
+  for (int k = 0; k < nz; ++k) {
+    bool odd = k % 2 == 1;
+    int mx = odd && !periodic ? nx - 1 : nx, my = odd && !periodic ? ny - 1 : ny;
+    double shift = odd ? 0.5 * d : 0.0;
+    for (int j = 0; j < my; ++j)
+      for (int i = 0; i < mx; ++i) {
+        std::array<double, 3> p = {origin[0] + i * d + shift, origin[1] + j * d + shift, origin[2] + k * layer};
+        if (holds(model_, range, {0, type, p[0], p[1], p[2]})) points.push_back(p);
+      }
+  }
+  const Space& s = model_.space;
+  for (const auto& p : points)
+    for (int a = 0; a < 3; ++a)
+      if (!s.periodic && (p[a] < s.lo[a] || p[a] > s.hi[a]))
+        throw std::runtime_error(fmt::format("LATTICE: a ball centre ({}, {}, {}) falls outside the START box", p[0],
+                                             p[1], p[2]));
+  Model& m = edit();
+  for (const auto& p : points) trubal::add_ball(m, 0, type, p[0], p[1], p[2], 0.5 * d);
+  return points.size();
+}
+
+std::size_t Session::delete_balls(const Range& range) {
+  require_started();
+  std::vector<bool> remove(model_.balls.size(), false);
+  for (auto k : select(range)) remove[k] = true;
+  return remove_balls(edit(), remove);
+}
+
+std::size_t Session::define_group(const std::string& name, const Range& range) {
+  require_started();
+  std::vector<std::int64_t> ids;
+  for (auto k : select(range)) ids.push_back(model_.balls.id[k]);
+  std::size_t n = ids.size();
+  model_.groups[name] = std::move(ids);
+  return n;
+}
+
+double Session::stress_volume() const {
+  if (volume > 0) return volume;
+  auto L = model_.space.length();
+  return L[0] * L[1] * L[2];
+}
+
+CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  require_started();
+  check_ready(model_);
+  update_mass(model_);
+  interrupt_requested() = false;
+  CycleControl control;
+  control.interrupt = &interrupt_requested();
+  control.progress = progress;
+  const double vol = stress_volume();
+  if (!history_->tables().empty()) control.after_step = [this, vol](const Model& m) { history_->sample(m, vol); };
+  CycleResult r = run_cycles(model_, *backend_, n, control);
+  interrupt_requested() = false;
+  return r;
+}
+
+Session::SolveResult Session::solve(double ratio, std::int64_t limit,
+                                    const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  SolveResult out;
+  std::int64_t done = 0;
+  const std::int64_t chunk = 100;
+  while (done < limit) {
+    std::int64_t n = std::min(chunk, limit - done);
+    CycleResult r = cycle(n, progress ? [&](std::int64_t d, std::int64_t) { progress(done + d, limit); }
+                                      : std::function<void(std::int64_t, std::int64_t)>{});
+    done += r.done;
+    out.run = r;
+    out.run.done = done;
+    if (r.interrupted || r.unstable) return out;
+    out.ratio = unbalanced_force(model_).mean_ratio;
+    if (out.ratio < ratio) {
+      out.converged = true;
+      return out;
+    }
+  }
+  return out;
+}
+
+void Session::save(const std::string& path) const { save_model(model_, path); }
+
+void Session::restart(const std::string& path) {
+  Model loaded = load_model(path);
+  model_ = std::move(loaded);
+  history_->clear();
+  backend_->invalidate();
+}
+
+}  // namespace trubal

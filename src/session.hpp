@@ -1,0 +1,77 @@
+// The one API through which commands reach the engine: it owns the model, the backend and the
+// history, and keeps them consistent (a change to the balls invalidates the backend's lists).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "backends/backend.hpp"
+#include "io/history.hpp"
+#include "model/model.hpp"
+#include "model/range.hpp"
+#include "physics/engine.hpp"
+
+namespace trubal {
+
+class Session {
+ public:
+  Session();
+  ~Session();
+
+  const Model& model() const { return model_; }
+  // For commands that change the balls: the backend's lists are invalidated.
+  Model& edit();
+  // For settings that do not touch the balls (damping, gravity, frac).
+  Settings& settings() { return model_.settings; }
+
+  Backend& backend() { return *backend_; }
+  const Backend& backend() const { return *backend_; }
+  void set_backend(const std::string& name, int threads);
+
+  // START: a new model (the backend choice and the interpreter's variables stay).
+  void start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi);
+  void start_periodic(const std::array<double, 3>& length, const std::array<int, 3>& boxes);
+  void require_started() const;
+
+  std::size_t add_ball(std::int64_t id, int type, double x, double y, double z, double rad);
+  // GEN: returns how many were placed (fewer than n when there is no room).
+  std::size_t generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range);
+  std::size_t lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
+                          const Range& range);
+  std::size_t delete_balls(const Range& range);
+  std::size_t define_group(const std::string& name, const Range& range);
+
+  // Selected balls (ascending index), and a check that the range selects some (warning text).
+  std::vector<std::size_t> select(const Range& range) const { return trubal::select(model_, range); }
+
+  // CYCLE / SOLVE. The interrupt flag is the process's Ctrl-C flag.
+  CycleResult cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress = {});
+  struct SolveResult { CycleResult run; double ratio = 0; bool converged = false; };
+  SolveResult solve(double ratio, std::int64_t limit,
+                    const std::function<void(std::int64_t, std::int64_t)>& progress = {});
+
+  History& history() { return *history_; }
+  const History& history() const { return *history_; }
+
+  // SAVE / RESTART (io/save.hpp does the file format).
+  void save(const std::string& path) const;
+  void restart(const std::string& path);
+
+  std::uint64_t seed = 12345;          // SET seed: default seed of GEN
+  double volume = 0;                   // SET volume: volume for stress in free space (0: the box)
+  // Volume used for the average stress: SET volume, else the periodic cell or START box.
+  double stress_volume() const;
+
+ private:
+  Model model_;
+  std::unique_ptr<Backend> backend_;
+  std::unique_ptr<History> history_;
+};
+
+}  // namespace trubal
