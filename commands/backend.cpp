@@ -1,3 +1,4 @@
+#include <cmath>
 #include <thread>
 
 #include <fmt/format.h>
@@ -11,16 +12,29 @@ static void run_backend(Context& ctx, Args& args) {
   std::vector<std::string_view> views(names.begin(), names.end());
   auto k = args.expect(views, "backend");
   int threads = 0;
-  if (args.accept("threads")) threads = static_cast<int>(args.count("threads", 1, 4096));
+  double max_memory = 0;
+  for (;;) {
+    if (args.accept("threads")) threads = static_cast<int>(args.count("threads", 1, 4096));
+    else if (args.accept("maxmem")) {
+      max_memory = args.real("maxmem");
+      if (!(max_memory >= 1 && max_memory < 1.8e19)) args.fail("maxmem is a number of bytes, at least 1");
+      if (names[k] != "allpairs") args.fail("maxmem goes with BACKEND allpairs (the memory of its pair slots)");
+    } else break;
+  }
   args.done();
   ctx.session.set_backend(names[k], threads);
+  if (max_memory > 0) ctx.session.backend().set_max_memory(static_cast<std::uint64_t>(std::floor(max_memory)));
   ctx.out << fmt::format("backend {} ({} threads)\n", ctx.session.backend().name(), ctx.session.backend().threads());
 }
 
 const Command backend_command = {
-    "BACKEND", {}, "BACKEND serial|allpairs|threaded [threads n]", "choose how contacts are found",
+    "BACKEND", {}, "BACKEND serial|allpairs|threaded [threads n] [maxmem bytes]", "choose how contacts are found",
     "Chooses the backend that finds contacts and sums forces; switching keeps balls, contacts and their shear "
-    "history, and every backend gives the same numbers. serial: TRUBAL's boxes and contact lists.",
-    {"serial", "allpairs", "threaded", "threads"}, run_backend};
+    "history, and every backend gives the same numbers, bitwise, for any thread count. serial: TRUBAL's boxes "
+    "and contact lists. threaded: the same lists, with forces and motion spread over `threads n` threads "
+    "(default: one per hardware thread). allpairs: TPM's arrangement, every pair of balls tested every cycle "
+    "(N(N-1)/2 pair slots of one byte; it cannot miss a contact); it refuses to take more than `maxmem` bytes "
+    "(default 4 GiB or half the physical memory, the smaller).",
+    {"serial", "allpairs", "threaded", "threads", "maxmem"}, run_backend};
 
 }  // namespace trubal

@@ -54,8 +54,9 @@ const Command prop_command = {
     "first). kn, ks: normal and shear spring stiffness (force/length) of the linear law; fric: friction "
     "angle in degrees (mu v gives the coefficient instead); dens: density; coh: cohesion, a force added to "
     "the Coulomb limit; shear G and poisson nu select the Hertz-Mindlin law for the type; rest e adds a "
-    "contact dashpot giving restitution e in a head-on impact. Mixed types: stiffnesses in series, the "
-    "smaller friction.",
+    "contact dashpot giving restitution e in a head-on impact. kn and ks are the stiffness of a contact "
+    "between two balls of this type; two types meet with k = 2 k1 k2 / (k1 + k2) (each ball a spring of "
+    "stiffness 2k in series), the smaller friction and the smaller cohesion.",
     {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest"}, run_prop};
 
 }  // namespace trubal

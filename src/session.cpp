@@ -20,6 +20,7 @@ Session::~Session() = default;
 
 Model& Session::edit() {
   backend_->invalidate();
+  model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
   return model_;
 }
 

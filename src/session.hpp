@@ -27,8 +27,12 @@ class Session {
   const Model& model() const { return model_; }
   // For commands that change the balls: the backend's lists are invalidated.
   Model& edit();
-  // For settings that do not touch the balls (damping, gravity, frac).
-  Settings& settings() { return model_.settings; }
+  // For settings that do not touch the balls (damping, gravity, frac); the next step is
+  // estimated afresh.
+  Settings& settings() {
+    model_.critical_dt = 0;
+    return model_.settings;
+  }
 
   Backend& backend() { return *backend_; }
   const Backend& backend() const { return *backend_; }

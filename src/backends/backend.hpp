@@ -3,6 +3,7 @@
 // (src/physics), which is what makes their answers bitwise equal.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -13,23 +14,31 @@
 
 namespace trubal {
 
-struct StepKernels;   // the per-scene specialised loops, chosen once per CYCLE (physics/engine.hpp)
+struct StepKernels;   // the per-scene specialised loops, chosen once per CYCLE (physics/kernels.hpp)
+struct StepSums;      // what one step adds up: energies, the next critical step (physics/kernels.hpp)
 
 class Backend {
  public:
   virtual ~Backend() = default;
   virtual std::string name() const = 0;
   virtual int threads() const { return 1; }
-  // One time step: find the pairs that may touch, compute contact forces, gather, move.
-  virtual void step(Model& model, const StepKernels& kernels) = 0;
+  // Brings model.contacts up to date for the current positions (pair list, carried history, gather
+  // index) without computing forces; step() does it itself. Used before estimating the first step.
+  virtual void prepare(Model& model) = 0;
+  // One time step: find the pairs that may touch, compute contact forces, gather, move. The kernels'
+  // block sums are added into `sums` in ascending block order (kReduceBlock).
+  virtual void step(Model& model, const StepKernels& kernels, StepSums& sums) = 0;
   // The balls were changed outside cycling (added, deleted, moved, resized): drop cached lists.
   virtual void invalidate() {}
+  // A limit on the memory the backend may take (allpairs: its pair slots); others refuse it.
+  virtual void set_max_memory(std::uint64_t bytes);
   // Extra lines for PRINT info ("name: value").
   virtual std::vector<std::pair<std::string, std::string>> info() const { return {}; }
 };
 
 // Backends by name (the interpreter never names a concrete one). Throws std::invalid_argument
 // with the list of names for an unknown name; options such as threads are given as words.
+// threads <= 0: the backend's default (one per hardware thread where it runs threads).
 std::unique_ptr<Backend> make_backend(std::string_view name, int threads);
 std::vector<std::string> backend_names();
 

@@ -33,6 +33,9 @@ std::int64_t Args::count(std::string_view what, std::int64_t min, std::int64_t m
   const std::string& w = words_[pos_];
   auto v = parse_integer(w);
   if (!v) {
+    const std::size_t sign = !w.empty() && (w[0] == '-' || w[0] == '+');
+    if (w.size() > sign && w.find_first_not_of("0123456789", sign) == std::string::npos)
+      fail(fmt::format("{} is out of range: {}", what, printable(w)));   // digits only, beyond int64
     if (parse_real(w)) fail(fmt::format("{} must be a whole number, got the real '{}'", what, printable(w)));
     fail(fmt::format("expected a whole number for {}, got '{}'", what, printable(w)));
   }

@@ -23,7 +23,11 @@ std::optional<std::string> Interpreter::variable(const std::string& name) const 
   return it->second;
 }
 
-void Interpreter::report(const std::string& message) {
+// Messages quote the user's words and file names: escape what a terminal would act on.
+static std::string safe(const std::string& message) { return printable(message, std::string::npos); }
+
+void Interpreter::report(const std::string& raw_message) {
+  const std::string message = safe(raw_message);
   auto& err = output_.err();
   output_.out().flush();
   if (frames_.empty()) {
@@ -36,7 +40,8 @@ void Interpreter::report(const std::string& message) {
   err.flush();
 }
 
-void Interpreter::warn(const std::string& message) {
+void Interpreter::warn(const std::string& raw_message) {
+  const std::string message = safe(raw_message);
   output_.out().flush();
   if (frames_.empty()) output_.err() << "warning: " << message << '\n';
   else output_.err() << fmt::format("{}:{}: warning: {}\n", frames_.back().name, frames_.back().line, message);
@@ -93,6 +98,11 @@ bool Interpreter::run_deck(std::istream& in, const std::string& name) {
 }
 
 bool Interpreter::run_file(const std::string& path) {
+  std::error_code dir_ec;
+  if (fs::is_directory(path, dir_ec)) {   // an ifstream opens a directory and reads nothing: no silent success
+    output_.err() << fmt::format("error: cannot open the deck '{}': it is a directory\n", path);
+    return false;
+  }
   std::ifstream in(path);
   if (!in) {
     output_.err() << fmt::format("error: cannot open the deck '{}'\n", path);

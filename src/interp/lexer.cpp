@@ -53,8 +53,10 @@ std::optional<std::string> LineReader::next() {
   bool continuing = false;
   while (std::getline(in_, physical_line)) {
     ++physical_;
+    if (physical_ == 1 && physical_line.starts_with("\xEF\xBB\xBF")) physical_line.erase(0, 3);   // UTF-8 BOM
     if (!continuing) start_line_ = physical_;
-    std::string_view body = trim_right(strip_comment(physical_line));
+    const std::string stripped = strip_comment(physical_line);   // body views it: keep it alive
+    std::string_view body = trim_right(stripped);
     // An empty or comment line inside a continuation ends nothing: keep reading.
     if (continuing && body.empty()) continue;
     if (!body.empty() && (body.back() == '&' || body.back() == '\\')) {

@@ -22,12 +22,15 @@ namespace trubal {
 namespace {
 
 volatile std::sig_atomic_t g_at_prompt = 0;
+volatile std::sig_atomic_t g_line_cancelled = 0;   // Ctrl-C at a prompt: drop any continued lines too
 
 // At the prompt Ctrl-C throws the line away and shows a fresh prompt; while a command runs it asks
 // the command to stop at the end of the current step.
 void on_sigint(int) {
   if (g_at_prompt) {
     if (write(STDOUT_FILENO, "^C\n", 3) < 0) {}
+    g_line_cancelled = 1;
+    rl_set_prompt("trubal> ");
     rl_on_new_line();
     rl_replace_line("", 0);
     rl_redisplay();
@@ -123,11 +126,17 @@ int run_shell(Interpreter& interp) {
     std::string logical;
     const char* prompt = "trubal> ";
     bool eof = false;
+    g_line_cancelled = 0;
     for (;;) {
       g_at_prompt = 1;
       char* raw = readline(prompt);
       g_at_prompt = 0;
       if (!raw) { eof = true; break; }
+      if (g_line_cancelled) {   // the lines continued before Ctrl-C are dropped with it
+        g_line_cancelled = 0;
+        logical.clear();
+        prompt = "trubal> ";
+      }
       std::string line(raw);
       std::free(raw);
       ++line_no;

@@ -126,7 +126,7 @@ template <class IO> void transfer(IO& io, Model& m) {
       io.vec(ids);
     }
   }
-  io.pod(m.cycle); io.pod(m.time); io.pod(m.dt);
+  io.pod(m.cycle); io.pod(m.time); io.pod(m.dt); io.pod(m.critical_dt);
   io.str(m.title);
   io.pod(m.started);
 }

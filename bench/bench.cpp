@@ -1,0 +1,108 @@
+// Speed of the engine on the peers' benchmark scene (shared/peers): a dense FCC block, every ball
+// touching its 12 neighbours (nearest-neighbour distance 0.99 d, jitter 0.05), R = 20,
+// kn = ks = 1.5e9, mu = 0.12278, density 2000, dt = 0.02, rotation on, no damping, no gravity.
+// Free space until periodic space exists: the outer layer of lattice cells is held fixed (a rigid
+// container), or the stored spring energy would blow the block apart.
+//
+//   trubal_bench [--backend name] [--steps k] [N ...]     N rounded to 4 n^3 (default 1680 13500 108000)
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "backends/backend.hpp"
+#include "model/edit.hpp"
+#include "physics/engine.hpp"
+#include "physics/measure.hpp"
+
+using namespace trubal;
+
+namespace {
+
+enum class Scene { Standard, NoRotation, Everything };
+
+Model fcc_block(int nx, int ny, int nz, Scene scene) {
+  const double r = 20, d = 2 * r, a = 0.99 * d * std::sqrt(2.0);
+  Model model;
+  Material m;
+  m.kn = 1.5e9;
+  m.ks = scene == Scene::NoRotation ? 0 : 1.5e9;
+  m.friction = 0.12278;
+  m.density = 2000;
+  model.materials[1] = m;
+  model.settings.fixed_dt = 0.02;
+  if (scene == Scene::Everything) {
+    model.settings.damping.kind = DampKind::Rayleigh;
+    model.settings.damping.alpha = 0.05 * M_PI;
+    model.settings.damping.beta = 1e-4;
+    model.settings.gravity = {0, 0, -9.81};
+  }
+  std::uint64_t seed = 12345;
+  auto jitter = [&] {   // deterministic, uniform in [-0.05, 0.05]
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * 0.1;
+  };
+  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  std::int64_t id = 1;
+  // Ids in lattice order, as the peers' data files number them.
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (const auto& b : basis) {
+          const double x = (i + b[0] + 0.25) * a + jitter(), y = (j + b[1] + 0.25) * a + jitter();
+          const double z = (k + b[2] + 0.25) * a + jitter();
+          const std::size_t ball = add_ball(model, id++, 1, x, y, z, r);
+          const bool shell = i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
+          if (shell) model.balls.fixed[ball] = kVel | kSpin;
+        }
+  return model;
+}
+
+struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; };
+
+Timing run(Model model, const std::string& backend_name, int steps) {
+  auto backend = make_backend(backend_name, 1);
+  run_cycles(model, *backend, 20, {});   // warm-up: pair list, caches
+  const auto t0 = std::chrono::steady_clock::now();
+  const CycleResult r = run_cycles(model, *backend, steps, {});
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (r.unstable) std::fprintf(stderr, "unstable: %s\n", r.message.c_str());
+  const std::size_t contacts = contact_count(model);
+  return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string backend = "serial";
+  int steps = 0;
+  std::vector<int> sizes;
+  for (int k = 1; k < argc; ++k) {
+    const std::string arg = argv[k];
+    if (arg == "--backend" && k + 1 < argc) backend = argv[++k];
+    else if (arg == "--steps" && k + 1 < argc) steps = std::atoi(argv[++k]);
+    else sizes.push_back(std::atoi(arg.c_str()));
+  }
+  if (sizes.empty()) sizes = {1680, 13500, 108000};
+  std::printf("dense FCC block, backend %s, dt 0.02, M = million per second\n", backend.c_str());
+  std::printf("%8s %10s %8s %6s %14s %14s %10s %10s\n", "N", "contacts", "steps", "s", "ball-steps/s",
+              "contacts/s", "no-rot x", "all-on x");
+  for (int n : sizes) {
+    // 4 n^3 balls; 1680 is the peers' 7 x 6 x 10 block.
+    int nx = static_cast<int>(std::lround(std::cbrt(n / 4.0))), ny = nx, nz = nx;
+    if (n == 1680) { nx = 7; ny = 6; nz = 10; }
+    const int k = steps > 0 ? steps : std::max(20, static_cast<int>(4e6 / (4.0 * nx * ny * nz)));
+    const Timing standard = run(fcc_block(nx, ny, nz, Scene::Standard), backend, k);
+    const Timing reduced = run(fcc_block(nx, ny, nz, Scene::NoRotation), backend, k);
+    const Timing full = run(fcc_block(nx, ny, nz, Scene::Everything), backend, k);
+    std::printf("%8d %10zu %8d %6.2f %12.2f M %12.2f M %9.2fx %9.2fx\n", 4 * nx * ny * nz, standard.contacts, k,
+                standard.seconds, standard.ball_steps / 1e6, standard.contact_steps / 1e6,
+                reduced.ball_steps / standard.ball_steps, full.ball_steps / standard.ball_steps);
+  }
+  std::printf("no-rot x: a scene without shear or rotation against the standard one; all-on x: with Rayleigh\n"
+              "damping and gravity as well.\n");
+  return 0;
+}

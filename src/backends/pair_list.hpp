@@ -1,0 +1,32 @@
+// What every backend does with a new candidate pair list: carry the history over and index the
+// gather. Shared so that backends differ only in how they find the pairs.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+// Candidate pairs i < j (ball indices), sorted by (i, j), with the periodic image of j.
+struct PairCandidates {
+  std::vector<std::uint32_t> i, j;
+  std::vector<std::int8_t> image_x, image_y, image_z;
+  void clear() { i.clear(); j.clear(); image_x.clear(); image_y.clear(); image_z.clear(); }
+  void push(std::uint32_t a, std::uint32_t b) {
+    i.push_back(a); j.push_back(b); image_x.push_back(0); image_y.push_back(0); image_z.push_back(0);
+  }
+};
+
+// Makes `pairs` the contact table's pair list. Everything the old table knew about a pair (shear
+// history above all) follows the pair: both lists are sorted by ball index, which is id order, so
+// one merge matches them by the pair of ids. New pairs start with zeros. Then indexes the gather.
+void install_pairs(ContactTable& table, const PairCandidates& pairs, std::size_t ball_count);
+
+// The gather index: for each ball its pairs in ascending partner order (PHYSICS: forces are
+// summed by partner id), +1 where the ball is j, -1 where it is i.
+void build_gather(ContactTable& table, std::size_t ball_count);
+
+}  // namespace trubal

@@ -1,0 +1,32 @@
+// Boxes (cells) over the balls' bounding box, with a linked list of balls per box (head/next, as
+// TRUBAL kept them), and the candidate pairs they give.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "backends/pair_list.hpp"
+#include "model/model.hpp"
+
+namespace trubal {
+
+class BoxGrid {
+ public:
+  // Hangs every ball on its box. Boxes are at least min_size wide so that touching candidates lie
+  // in neighbouring boxes; `asked` (Space::boxes, 0: automatic) caps the count per axis.
+  void fill(const Balls& balls, double min_size, const std::array<int, 3>& asked);
+  // Pairs i < j closer than R_i + R_j + skin, sorted by (i, j).
+  void find_pairs(const Balls& balls, double skin, PairCandidates& out) const;
+
+  const std::array<int, 3>& dims() const { return dims_; }
+  double cell_size() const { return size_[0]; }
+
+ private:
+  int cell_of(double x, int axis) const;
+
+  std::array<double, 3> lo_{0, 0, 0}, size_{1, 1, 1};
+  std::array<int, 3> dims_{1, 1, 1};
+  std::vector<int> head_, next_, cell_;   // first ball of each box; next ball in the same box
+};
+
+}  // namespace trubal

@@ -1,0 +1,268 @@
+// Cycling: what a scene needs, readiness checks, the time step, and the loop with its guard.
+#include "physics/engine.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "physics/kernels.hpp"
+
+namespace trubal {
+namespace {
+
+std::set<int> used_types(const Model& model) {
+  return std::set<int>(model.balls.type.begin(), model.balls.type.end());
+}
+
+// PHYSICS.md "Time step": a Hertz contact has no stiffness at first touch, so the step is capped
+// by the Rayleigh-wave time of the smallest Hertz ball, pi R sqrt(rho/G) / (0.1631 nu + 0.8766).
+double hertz_step_cap(const Model& model) {
+  double cap = std::numeric_limits<double>::infinity();
+  const Balls& b = model.balls;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    const auto it = model.materials.find(b.type[i]);
+    if (it == model.materials.end() || !it->second.hertz()) continue;
+    const Material& m = it->second;
+    cap = std::min(cap, M_PI * b.rad[i] * std::sqrt(m.density / m.shear_modulus) / (0.1631 * m.poisson + 0.8766));
+  }
+  return cap;
+}
+
+// Everything a failed step must be able to go back to.
+struct Snapshot {
+  Balls balls;
+  ContactTable contacts;
+  Energy energy;
+  std::int64_t cycle = 0;
+  double time = 0, dt = 0, critical_dt = 0;
+  void take(const Model& m) {
+    balls = m.balls; contacts = m.contacts; energy = m.energy;
+    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
+  }
+  void restore(Model& m) const {
+    m.balls = balls; m.contacts = contacts; m.energy = energy;
+    m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
+  }
+};
+
+constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs about one step's memory traffic
+constexpr double kProgressSeconds = 0.2;
+
+}  // namespace
+
+std::string Features::describe() const {
+  std::string s = hertz ? "hertz-mindlin" : "linear";
+  if (friction) s += " shear";
+  if (rotation) s += " rotation";
+  if (stiffness_damping) s += " dashpots";
+  if (mass_damping == DampKind::Rayleigh) s += " mass-damping";
+  if (mass_damping == DampKind::Local) s += " local-damping";
+  if (gravity) s += " gravity";
+  if (applied) s += " applied-loads";
+  if (periodic) s += " periodic";
+  return s;
+}
+
+Features scene_features(const Model& model) {
+  Features f;
+  const Balls& b = model.balls;
+  const Damping& damping = model.settings.damping;
+  bool restitution = false;
+  f.friction = f.hertz = false;
+  for (int type : used_types(model)) {
+    const auto it = model.materials.find(type);
+    if (it == model.materials.end()) continue;
+    const Material& m = it->second;
+    f.hertz = f.hertz || m.hertz();
+    f.friction = f.friction || m.ks > 0 || m.hertz();
+    restitution = restitution || m.has_restitution;
+  }
+  f.stiffness_damping = restitution || (damping.kind == DampKind::Rayleigh && damping.beta > 0);
+  if (damping.kind == DampKind::Rayleigh && damping.alpha > 0) f.mass_damping = DampKind::Rayleigh;
+  else if (damping.kind == DampKind::Local && damping.local > 0) f.mass_damping = DampKind::Local;
+  const auto& g = model.settings.gravity;
+  f.gravity = g[0] != 0 || g[1] != 0 || g[2] != 0;
+  bool free_spin = false, spinning = false, moments = false;
+  f.applied = false;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    free_spin = free_spin || (b.fixed[i] & kSpin) != kSpin;
+    spinning = spinning || b.wx[i] != 0 || b.wy[i] != 0 || b.wz[i] != 0;
+    moments = moments || b.amx[i] != 0 || b.amy[i] != 0 || b.amz[i] != 0;
+    f.applied = f.applied || moments || b.ax[i] != 0 || b.ay[i] != 0 || b.az[i] != 0;
+  }
+  f.rotation = (f.friction && free_spin) || spinning || moments;
+  f.periodic = model.space.periodic;
+  return f;
+}
+
+void check_ready(const Model& model) {
+  if (model.space.periodic)
+    throw std::runtime_error("periodic space is not implemented yet: use START with a box for now");
+  bool hertz = false, linear = false;
+  for (int type : used_types(model)) {
+    const auto it = model.materials.find(type);
+    if (it == model.materials.end())
+      throw std::runtime_error(fmt::format("type {0} has no properties (PROP type {0} kn ... ks ... dens ...)", type));
+    const Material& m = it->second;
+    if (!(m.density > 0))
+      throw std::runtime_error(fmt::format("type {0} has no density (PROP type {0} dens ...)", type));
+    if (m.hertz()) {
+      if (!(m.poisson >= 0 && m.poisson < 0.5))
+        throw std::runtime_error(fmt::format("type {0} needs a Poisson ratio in [0, 0.5) (PROP type {0} poisson ...)", type));
+      hertz = true;
+    } else if (!(m.kn > 0)) {
+      throw std::runtime_error(fmt::format(
+          "type {0} has no stiffness (PROP type {0} kn ... ks ..., or shear ... poisson ...)", type));
+    } else {
+      linear = true;
+    }
+    if (m.has_restitution && !(m.restitution > 0 && m.restitution <= 1))
+      throw std::runtime_error(fmt::format("type {0}: restitution must be in (0, 1] (PROP type {0} rest ...)", type));
+  }
+  if (hertz && linear)
+    throw std::runtime_error("the balls mix Hertz-Mindlin and linear types; give every type the same law");
+}
+
+void update_mass(Model& model) {
+  Balls& b = model.balls;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    const auto it = model.materials.find(b.type[i]);
+    const double density = it == model.materials.end() ? 0 : it->second.density;
+    const double r = b.rad[i];
+    b.mass[i] = density * 4.0 / 3.0 * M_PI * r * r * r;
+    b.inertia[i] = 0.4 * b.mass[i] * r * r;
+  }
+}
+
+double critical_timestep(const Model& model) {
+  const StepKernels k = make_kernels(model);
+  const Balls& b = model.balls;
+  const ContactTable& c = model.contacts;
+  const std::size_t n = b.size();
+  // Per-ball sums over the touching pairs, added in list order: ascending partner, as the gather.
+  std::vector<double> kmax(n, 0), ks(n, 0), cn(n, 0);
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const std::size_t i = c.i[p], j = c.j[p];
+    if (i >= n || j >= n) continue;   // a stale list: count what is still valid
+    const PairLaw& law = k.law(i, j);
+    ContactInput in{};
+    in.dx = b.x[j] - b.x[i]; in.dy = b.y[j] - b.y[i]; in.dz = b.z[j] - b.z[i];
+    in.ri = b.rad[i]; in.rj = b.rad[j];
+    if (law.rest_xi > 0) in.mstar = b.mass[i] * b.mass[j] / (b.mass[i] + b.mass[j]);
+    using namespace contact_bits;
+    const ContactResult r = k.features.hertz ? contact_force<kHertz | kDashpot>(law, in, 0, 0)
+                                             : contact_force<kDashpot>(law, in, 0, 0);
+    if (r.state == 0) continue;
+    for (std::size_t ball : {i, j}) {
+      kmax[ball] += std::max(r.kn, r.ks);
+      ks[ball] += r.ks;
+      cn[ball] += r.cn;
+    }
+  }
+  const bool rotation = k.features.rotation;
+  double step = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool held = (b.fixed[i] & kVel) == kVel && (!rotation || (b.fixed[i] & kSpin) == kSpin);
+    if (held) continue;
+    double sum_kmax = kmax[i], sum_ks = ks[i], sum_cn = cn[i];
+    if (sum_kmax == 0) {
+      const std::uint16_t t = k.type_count == 1 ? 0 : k.ball_type[i];
+      sum_kmax = std::max(k.alone_kn[t], k.alone_ks[t]);
+      sum_ks = k.alone_ks[t];
+      sum_cn = 2 * k.alone_xi[t] * std::sqrt(k.alone_kn[t] * 0.5 * b.mass[i]);
+    }
+    const double omega2 = ball_omega2(b.mass[i], sum_kmax, sum_ks, rotation);
+    if (!(omega2 > 0)) continue;
+    const double omega = std::sqrt(omega2);
+    step = std::min(step, damped_critical_step(omega, 0.5 * k.beta * omega + sum_cn / (b.mass[i] * omega)));
+  }
+  return std::min(step, hertz_step_cap(model));
+}
+
+CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const CycleControl& control) {
+  CycleResult result;
+  if (n <= 0) return result;
+  check_ready(model);
+  update_mass(model);
+  StepKernels kernels = make_kernels(model);
+  const double cap = hertz_step_cap(model);
+  backend.prepare(model);
+  if (!(model.critical_dt > 0)) model.critical_dt = critical_timestep(model);
+  // The guard: energy in must balance energy out. A step beyond the stability limit creates
+  // energy from nothing; when that is half of all the energy in play, the run stops.
+  const double friction0 = model.energy.friction_work, damping0 = model.energy.damping_work;
+  const double boundary0 = model.energy.boundary_work;
+  double balance_ref = 0, potential_ref = 0;
+  Snapshot snapshot;
+  snapshot.take(model);
+  auto last_progress = std::chrono::steady_clock::now();
+  const std::int64_t start_cycle = model.cycle;
+
+  for (std::int64_t s = 1; s <= n; ++s) {
+    const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
+    kernels.dt = dt;
+    StepSums sums;
+    backend.step(model, kernels, sums);
+    model.cycle += 1;
+    model.time += dt;
+    model.dt = dt;
+    model.energy.friction_work += sums.friction_work;
+    model.energy.damping_work += sums.damping_work;
+    model.energy.boundary_work += sums.boundary_work;
+    if (kernels.estimate != StepEstimate::None) {
+      const double estimate = std::min(sums.critical_dt, cap);
+      if (std::isfinite(estimate)) model.critical_dt = estimate;
+    }
+
+    const double dissipated = model.energy.friction_work - friction0 + model.energy.damping_work - damping0;
+    const double boundary = model.energy.boundary_work - boundary0;
+    if (s == 1) potential_ref = sums.potential;
+    const double potential = sums.potential - potential_ref;
+    const double balance = sums.kinetic + sums.strain + potential + dissipated - boundary;
+    if (s == 1) balance_ref = balance;
+    const double scale = sums.kinetic + sums.strain + std::abs(potential) + std::abs(dissipated) + std::abs(boundary);
+    if (!std::isfinite(balance) || std::abs(balance - balance_ref) > 0.5 * scale) {
+      const std::size_t ball = sums.fastest_ball < model.balls.size() ? sums.fastest_ball : 0;
+      const std::int64_t id = model.balls.size() ? model.balls.id[ball] : 0;
+      const double speed = std::sqrt(sums.fastest_speed2);
+      const std::int64_t bad_cycle = model.cycle;
+      snapshot.restore(model);
+      backend.invalidate();
+      const double frac = model.settings.frac;
+      std::string advice;
+      if (model.settings.fixed_dt > 0)
+        advice = fmt::format("try TSTEP {:.3g} (now {:.3g}; critical step about {:.3g})", 0.5 * critical_timestep(model),
+                             model.settings.fixed_dt, critical_timestep(model));
+      else
+        advice = fmt::format("try FRAC {:.3g} (now {:.3g})", std::min(0.8, 0.5 * frac), frac);
+      result.unstable = true;
+      result.done = model.cycle - start_cycle;
+      result.message = fmt::format(
+          "unstable at cycle {}: ball {} moved at {:.3g} and energy was created; the model is back at cycle {}, "
+          "its last good state; {}",
+          bad_cycle, id, speed, model.cycle, advice);
+      return result;
+    }
+    result.done = s;
+    if (control.after_step) control.after_step(model);
+    if (s % kSnapshotEvery == 0) snapshot.take(model);
+    if (control.progress && (s & 7) == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_progress).count() > kProgressSeconds) {
+        control.progress(s, n);
+        last_progress = now;
+      }
+    }
+    if (control.interrupt && control.interrupt->load(std::memory_order_relaxed)) {
+      result.interrupted = s < n;
+      break;
+    }
+  }
+  return result;
+}
+
+}  // namespace trubal

@@ -1,0 +1,143 @@
+// Measurements from the balls and the contact table's last force pass.
+#include "physics/measure.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace trubal {
+namespace {
+
+bool touching(const ContactTable& c, std::size_t p) { return c.state[p] != 0; }
+
+bool is_hertz(const Model& model, std::size_t ball) {
+  const auto it = model.materials.find(model.balls.type[ball]);
+  return it != model.materials.end() && it->second.hertz();
+}
+
+// Symmetric part of sum a (x) b, in Sym6 order.
+void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz) {
+  s[0] += ax * bx; s[1] += ay * by; s[2] += az * bz;
+  s[3] += 0.5 * (ax * by + ay * bx);
+  s[4] += 0.5 * (ax * bz + az * bx);
+  s[5] += 0.5 * (ay * bz + az * by);
+}
+
+}  // namespace
+
+Sym6 average_stress(const Model& model, double volume) {
+  Sym6 s{};
+  const ContactTable& c = model.contacts;
+  const Balls& b = model.balls;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    if (!touching(c, p)) continue;
+    // Force on j times the branch vector i -> j: positive when the pair is pushed apart, so
+    // compression comes out positive (soil-mechanics sign).
+    const double d = b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p];
+    add_dyad(s, c.fx[p], c.fy[p], c.fz[p], d * c.nx[p], d * c.ny[p], d * c.nz[p]);
+  }
+  for (double& v : s) v /= volume;
+  return s;
+}
+
+double EnergyReport::total() const {
+  return kinetic_translation + kinetic_rotation + strain + potential + friction_work + damping_work - boundary_work;
+}
+
+EnergyReport energy(const Model& model) {
+  EnergyReport e;
+  const Balls& b = model.balls;
+  const auto& g = model.settings.gravity;
+  const double half_dt = 0.5 * model.dt;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    e.kinetic_translation += 0.5 * b.mass[i] * (b.vx[i] * b.vx[i] + b.vy[i] * b.vy[i] + b.vz[i] * b.vz[i]);
+    e.kinetic_rotation += 0.5 * b.inertia[i] * (b.wx[i] * b.wx[i] + b.wy[i] * b.wy[i] + b.wz[i] * b.wz[i]);
+    // Velocities are at the half step, so the height is taken there too (free fall balances).
+    e.potential -= b.mass[i] * (g[0] * (b.x[i] - half_dt * b.vx[i]) + g[1] * (b.y[i] - half_dt * b.vy[i]) +
+                                g[2] * (b.z[i] - half_dt * b.vz[i]));
+  }
+  const ContactTable& c = model.contacts;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    if (!touching(c, p)) continue;
+    const double u = c.overlap[p];
+    // Linear: F_n^2 / (2 k_n) = k_n U^2 / 2. Hertz: 2/5 F_n U with F_n = 2/3 k_tangent U.
+    e.strain += (is_hertz(model, c.i[p]) ? 4.0 / 15.0 : 0.5) * c.kn_eff[p] * u * u;
+    if (c.ks_eff[p] > 0)
+      e.strain += (c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]) / (2 * c.ks_eff[p]);
+  }
+  e.friction_work = model.energy.friction_work;
+  e.damping_work = model.energy.damping_work;
+  e.boundary_work = model.energy.boundary_work;
+  return e;
+}
+
+std::size_t contact_count(const Model& model) {
+  std::size_t n = 0;
+  for (std::size_t p = 0; p < model.contacts.size(); ++p) n += touching(model.contacts, p);
+  return n;
+}
+
+double coordination_number(const Model& model) {
+  return model.balls.size() ? 2.0 * static_cast<double>(contact_count(model)) / static_cast<double>(model.balls.size())
+                            : 0.0;
+}
+
+double sliding_fraction(const Model& model) {
+  std::size_t sliding = 0;
+  for (auto s : model.contacts.state) sliding += s == 2;
+  const std::size_t n = contact_count(model);
+  return n ? static_cast<double>(sliding) / static_cast<double>(n) : 0.0;
+}
+
+Sym6 fabric_tensor(const Model& model) {
+  Sym6 f{};
+  const ContactTable& c = model.contacts;
+  for (std::size_t p = 0; p < c.size(); ++p)
+    if (touching(c, p)) add_dyad(f, c.nx[p], c.ny[p], c.nz[p], c.nx[p], c.ny[p], c.nz[p]);
+  const std::size_t n = contact_count(model);
+  if (n)
+    for (double& v : f) v /= static_cast<double>(n);
+  return f;
+}
+
+Unbalanced unbalanced_force(const Model& model) {
+  const ContactTable& c = model.contacts;
+  const Balls& b = model.balls;
+  double contact_sum = 0;
+  std::size_t contacts = 0;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    if (!touching(c, p)) continue;
+    contact_sum += std::sqrt(c.fx[p] * c.fx[p] + c.fy[p] * c.fy[p] + c.fz[p] * c.fz[p]);
+    ++contacts;
+  }
+  // Only free velocity components count: a fixed one's force is a reaction, not an imbalance.
+  double unbalanced_sum = 0, unbalanced_max = 0;
+  std::size_t balls = 0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    if ((b.fixed[i] & kVel) == kVel) continue;
+    const double fx = (b.fixed[i] & kXVel) ? 0 : b.fx[i];
+    const double fy = (b.fixed[i] & kYVel) ? 0 : b.fy[i];
+    const double fz = (b.fixed[i] & kZVel) ? 0 : b.fz[i];
+    const double f = std::sqrt(fx * fx + fy * fy + fz * fz);
+    unbalanced_sum += f;
+    unbalanced_max = std::max(unbalanced_max, f);
+    ++balls;
+  }
+  Unbalanced u;
+  if (contacts == 0 || balls == 0 || contact_sum == 0) return u;
+  const double mean_contact = contact_sum / static_cast<double>(contacts);
+  u.mean_ratio = unbalanced_sum / static_cast<double>(balls) / mean_contact;
+  u.max_ratio = unbalanced_max / mean_contact;
+  return u;
+}
+
+std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls) {
+  std::array<double, 3> f{0, 0, 0};
+  for (std::size_t i : balls) {
+    f[0] += model.balls.fx[i];
+    f[1] += model.balls.fy[i];
+    f[2] += model.balls.fz[i];
+  }
+  return f;
+}
+
+}  // namespace trubal

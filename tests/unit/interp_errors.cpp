@@ -1,0 +1,208 @@
+// Bad input through the real interpreter: each mistake gets its own clear message that starts with
+// NAME:LINE: error:, a batch run stops there, and nothing crashes.
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "interp/lexer.hpp"
+#include "interp_support.hpp"
+
+using namespace trubal;
+using trubal::test::Harness;
+using trubal::test::TempDir;
+
+namespace {
+
+// Runs a deck that must fail; returns the error stream's first line.
+std::string deck_error(const std::string& deck, const std::string& name = "deck.dat") {
+  Harness h;
+  bool ok = h.deck(deck, name);
+  INFO("deck:\n" << deck.substr(0, 400) << "\nstderr:\n" << h.err.str().substr(0, 2000));
+  CHECK_FALSE(ok);
+  return h.first_error_line();
+}
+
+}  // namespace
+
+TEST_CASE("interp errors: unknown command names the file and line and stops the deck", "[interp][errors]") {
+  Harness h;
+  CHECK_FALSE(h.deck("set echo off\necho before\nfrobnicate 1 2\necho after\n"));
+  CHECK(h.first_error_line() == "deck.dat:3: error: unknown command 'frobnicate' (HELP lists the commands)");
+  // The first error ends a batch run: the line after it never runs.
+  CHECK(h.out.str() == "before\n");
+  CHECK(h.err.str().find("after") == std::string::npos);
+}
+
+TEST_CASE("interp errors: an ambiguous keyword lists the candidates and a short one says so", "[interp][errors]") {
+  auto e = deck_error("\nprint str\n");
+  CHECK(e.starts_with("deck.dat:2: error: 'str' is ambiguous: it could be STRESS, STRAIN"));
+  auto s = deck_error("cy 10\n");
+  CHECK(s.starts_with("deck.dat:1: error: 'cy' is too short"));
+  CHECK_THAT(s, Catch::Contains("CYCLE"));
+}
+
+TEST_CASE("interp errors: missing and extra arguments name what is wrong and show the usage", "[interp][errors]") {
+  auto missing = deck_error("start 1 1\n");
+  CHECK(missing.starts_with("deck.dat:1: error: missing edge z (a number)"));
+  CHECK_THAT(missing, Catch::Contains("usage: START"));
+  auto extra = deck_error("frac 0.5\nfrac 0.5 7\n");
+  CHECK(extra.starts_with("deck.dat:2: error: unexpected '7' at the end of the command"));
+  CHECK_THAT(extra, Catch::Contains("usage: FRAC f"));
+  auto word = deck_error("grav 0 zero -9.81\n");
+  CHECK(word.starts_with("deck.dat:1: error: expected a number for gravity y, got 'zero'"));
+}
+
+TEST_CASE("interp errors: a real where a count is needed", "[interp][errors]") {
+  auto e = deck_error("cycle 1.5\n");
+  CHECK(e.starts_with("deck.dat:1: error: n (number of cycles) must be a whole number, got the real '1.5'"));
+  // Digits only but beyond a 64-bit count: not "a real".
+  auto huge = deck_error("cycle 99999999999999999999\n");
+  CHECK(huge.starts_with("deck.dat:1: error: n (number of cycles) is out of range: 99999999999999999999"));
+  auto negative = deck_error("cycle -3\n");
+  CHECK(negative.starts_with("deck.dat:1: error: n (number of cycles) must be at least 0, got -3"));
+}
+
+TEST_CASE("interp errors: a continuation that runs into the end of the file names the line it started on",
+          "[interp][errors]") {
+  auto e = deck_error("set echo off\n\nstart 1 1 &\n  ; only a comment follows\n\n");
+  CHECK(e.starts_with("deck.dat:3: error: the continuation"));
+  CHECK_THAT(e, Catch::Contains("end of the input"));
+  auto quote = deck_error("title \"never closed\n");
+  CHECK(quote.starts_with("deck.dat:1: error: unterminated quoted string"));
+}
+
+TEST_CASE("interp errors: CALL of a missing file", "[interp][errors]") {
+  TempDir dir;
+  std::string missing = (dir.path() / "no-such-deck.dat").string();
+  auto e = deck_error("set echo off\ncall " + missing + "\n");
+  CHECK(e.starts_with("deck.dat:2: error: cannot open the file '" + missing + "' to CALL"));
+}
+
+TEST_CASE("interp errors: an error inside a CALLed file names that file and line and where it was called",
+          "[interp][errors]") {
+  TempDir dir;
+  // inner.dat is found beside outer.dat although the working directory is elsewhere.
+  dir.write("inner.dat", "echo inside\n\nbogus command\necho not reached\n");
+  std::string outer = dir.write("outer.dat", "set echo off\ncall inner.dat\necho not reached either\n");
+  Harness h;
+  CHECK_FALSE(h.deck("set echo off\n\ncall " + outer + "\necho after\n"));
+  auto err = trubal::test::lines_of(h.err.str());
+  REQUIRE(err.size() == 3);
+  CHECK(err[0] == "inner.dat:3: error: unknown command 'bogus' (HELP lists the commands)");
+  CHECK(err[1] == outer + ":2: note: called from here");
+  CHECK(err[2] == "deck.dat:3: note: called from here");
+  CHECK(h.out.str() == "inside\n");
+}
+
+TEST_CASE("interp errors: include cycles, direct and through another file", "[interp][errors]") {
+  TempDir dir;
+  std::string self = dir.write("self.dat", "echo once\ncall self.dat\n");
+  {
+    Harness h;
+    CHECK_FALSE(h.deck("set echo off\ncall " + self + "\n"));
+    auto err = trubal::test::lines_of(h.err.str());
+    REQUIRE(err.size() == 2);
+    CHECK(err[0].starts_with(self + ":2: error: 'self.dat' calls itself (include cycle through " + self));
+    CHECK(err[1] == "deck.dat:2: note: called from here");
+    CHECK(h.out.str() == "once\n");  // stopped at the cycle, not after a thousand nested calls
+  }
+  std::string a = dir.write("a.dat", "echo in a\ncall b.dat\n");
+  dir.write("b.dat", "echo in b\n\ncall a.dat\n");
+  {
+    Harness h;
+    CHECK_FALSE(h.deck("set echo off\ncall " + a + "\n"));
+    auto err = trubal::test::lines_of(h.err.str());
+    REQUIRE(err.size() == 3);
+    CHECK(err[0].starts_with("b.dat:3: error: 'a.dat' calls itself (include cycle through " + a));
+    CHECK(err[1] == a + ":2: note: called from here");
+    CHECK(err[2] == "deck.dat:2: note: called from here");
+    CHECK(h.out.str() == "in a\nin b\n");
+  }
+  // Calling the same file twice in a row is not a cycle.
+  std::string leaf = dir.write("leaf.dat", "echo leaf\n");
+  Harness h;
+  CHECK(h.deck("set echo off\ncall " + leaf + "\ninclude " + leaf + "\n"));
+  CHECK(h.out.str() == "leaf\nleaf\n");
+}
+
+TEST_CASE("interp errors: an undefined variable", "[interp][errors]") {
+  auto e = deck_error("set n 5\necho $n $nope\n");
+  CHECK(e.starts_with("deck.dat:2: error: undefined variable $nope"));
+  CHECK_THAT(e, Catch::Contains("SET nope"));
+}
+
+TEST_CASE("interp errors: binary garbage is reported with its bytes escaped", "[interp][errors]") {
+  static const char raw[] = "\x01\x02\xff\xfe\x00zz\x7f\x80 more\x00junk\n";
+  std::string garbage(raw, sizeof raw - 1);
+  garbage += std::string("\x00\x00\x00\n", 4);
+  Harness h;
+  CHECK_FALSE(h.deck("set echo off\n" + garbage, "garbage.dat"));
+  std::string err = h.err.str();
+  CHECK(err.starts_with("garbage.dat:2: error: unknown command '\\x01\\x02\\xff\\xfe\\x00zz\\x7f\\x80'"));
+  // Nothing unprintable reaches the terminal through an error message.
+  for (char c : err) {
+    auto u = static_cast<unsigned char>(c);
+    INFO("byte " << int(u));
+    CHECK((u == '\n' || (u >= 32 && u < 127)));
+  }
+  // Random bytes, NULs included, never crash the reader: every deck ends with true or a reported error.
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::string bytes(1 + rng() % 300, '\0');
+    for (auto& b : bytes) b = static_cast<char>(rng() & 0xff);
+    Harness r;
+    bool ok = r.deck(bytes, "random.bin");
+    if (!ok) CHECK(r.first_error_line().starts_with("random.bin:"));
+  }
+}
+
+TEST_CASE("interp errors: a one-megabyte line", "[interp][errors]") {
+  const std::string huge(1 << 20, 'x');
+  // An unknown 1 MB word: one short message, the word cut.
+  auto e = deck_error("set echo off\n" + huge + "\n");
+  CHECK(e.starts_with("deck.dat:2: error: unknown command 'xxxx"));
+  CHECK_THAT(e, Catch::Contains("(1048576 characters)"));
+  CHECK(e.size() < 300);
+  // A 1 MB line that is a real command is accepted whole.
+  Harness h;
+  REQUIRE(h.deck("set echo off\nset big " + huge + "\necho ${big}y\n"));
+  CHECK(h.out.str().size() == huge.size() + 2);
+  // A 1 MB run of numbers after a command that takes one: the first extra word is named.
+  auto extra = deck_error("frac 0.5" + std::string(1 << 19, ' ') + std::string(1 << 19, '7') + "\n");
+  CHECK(extra.starts_with("deck.dat:1: error: unexpected '7777"));
+  CHECK(extra.size() < 400);
+}
+
+TEST_CASE("interp errors: warnings name the file and line and do not stop the deck", "[interp][errors]") {
+  Harness h;
+  REQUIRE(h.deck("set echo off\n\nfrac 2\necho still running\n"));
+  CHECK(h.first_error_line().starts_with("deck.dat:3: warning: FRAC 2 is above the critical step"));
+  CHECK(h.out.str() == "still running\n");
+}
+
+TEST_CASE("interp errors: at the prompt an error is reported and the session goes on", "[interp][errors]") {
+  Harness h;
+  h.interp.interactive = true;
+  CHECK_FALSE(h.line("frobnicate", 1));
+  CHECK_FALSE(h.line("cycle 1.5", 2));
+  CHECK_FALSE(h.line("echo $undefined", 3));
+  CHECK(h.line("echo alive ; a comment", 4));
+  auto err = trubal::test::lines_of(h.err.str());
+  REQUIRE(err.size() == 3);
+  CHECK(err[0].starts_with("<stdin>:1: error: unknown command 'frobnicate'"));
+  CHECK(err[1].starts_with("<stdin>:2: error: n (number of cycles) must be a whole number"));
+  CHECK(err[2].starts_with("<stdin>:3: error: undefined variable $undefined"));
+  // No echo of commands at the prompt (the user just typed them), and ECHO still works.
+  CHECK(h.out.str() == "alive\n");
+  CHECK_FALSE(h.interp.stopped());
+  CHECK(h.line("stop", 5));
+  CHECK(h.interp.stopped());
+}
+
+TEST_CASE("interp errors: batch mode echoes each command and STOP ends the deck", "[interp][errors]") {
+  Harness h;
+  h.interp.echo = true;
+  REQUIRE(h.deck("echo one ; comment\nstop\necho two\n"));
+  CHECK(h.out.str() == "trubal> echo one\none\ntrubal> stop\n");
+  CHECK(h.err.str().empty());
+}

@@ -1,0 +1,228 @@
+// The interactive shell under a real pseudo-terminal (tmux): commands run, Tab completes, Ctrl-C
+// clears the line or stops a CYCLE, errors do not end the session, history outlives the session.
+// Without tmux these tests warn and pass (CI installs it: Debian package `tmux`).
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "interp_support.hpp"
+
+using namespace trubal::test;
+
+namespace {
+
+bool have_tmux() { return shell("command -v tmux >/dev/null 2>&1") == 0; }
+
+// One trubal shell in a detached tmux session on its own server (socket), 200 x 50 characters.
+class TmuxShell {
+ public:
+  TmuxShell(const TempDir& dir, const std::string& history_file) {
+    static int counter = 0;
+    socket_ = "trubal-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+    std::string program = "cd " + quote(dir.str()) + " && exec env TRUBAL_HISTORY=" + quote(history_file) +
+                          " HOME=" + quote(dir.str()) + " INPUTRC=/dev/null " + quote(TRUBAL_EXE);
+    started_ = tmux("-f /dev/null new-session -d -s shell -x 200 -y 50 " + quote(program)) == 0;
+  }
+  ~TmuxShell() { tmux("kill-server >/dev/null 2>&1"); }
+  TmuxShell(const TmuxShell&) = delete;
+  TmuxShell& operator=(const TmuxShell&) = delete;
+
+  bool started() const { return started_; }
+  bool alive() { return tmux("has-session -t shell >/dev/null 2>&1") == 0; }
+  // Literal text, no Enter.
+  void type(const std::string& text) { tmux("send-keys -t shell -l " + quote(text)); }
+  // Named keys: Enter, Tab, C-c, C-d, C-u, Up.
+  void key(const std::string& name) { tmux("send-keys -t shell " + name); }
+  std::string screen() {
+    std::string cmd = "tmux -L " + socket_ + " capture-pane -p -t shell 2>/dev/null";
+    std::string text;
+    if (FILE* p = ::popen(cmd.c_str(), "r")) {
+      char buf[4096];
+      for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) text.append(buf, n);
+      ::pclose(p);
+    }
+    return text;
+  }
+  // Waits until the screen shows `text` (or a line equal to it, with whole_line).
+  bool wait_for(const std::string& text, bool whole_line = false, double seconds = 15) {
+    auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < until) {
+      std::string s = screen();
+      if (!whole_line && s.find(text) != std::string::npos) return true;
+      if (whole_line)
+        for (const auto& l : lines_of(s))
+          if (l == text) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  }
+  bool wait_exit(double seconds = 15) {
+    auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < until) {
+      if (!alive()) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  }
+
+ private:
+  int tmux(const std::string& args) { return shell("tmux -L " + socket_ + " " + args); }
+  std::string socket_;
+  bool started_ = false;
+};
+
+// Checks a condition on the shell's screen; shows the screen when it fails.
+#define CHECK_SCREEN(sh, cond)                                            \
+  do {                                                                    \
+    bool screen_ok_ = (cond);                                             \
+    INFO("condition: " #cond);                                            \
+    if (!screen_ok_) UNSCOPED_INFO("screen:\n" << (sh).screen());          \
+    CHECK(screen_ok_);                                                    \
+  } while (0)
+
+#define REQUIRE_TMUX()                                                  \
+  if (!have_tmux()) {                                                   \
+    WARN("tmux is not installed: the shell tests are skipped");         \
+    return;                                                             \
+  }
+
+}  // namespace
+
+TEST_CASE("interp shell: a command runs and HELP lists the commands", "[interp][shell]") {
+  REQUIRE_TMUX();
+  TempDir dir;
+  TmuxShell sh(dir, dir.str() + "/history");
+  REQUIRE(sh.started());
+  REQUIRE(sh.wait_for("trubal>"));
+  CHECK_THAT(sh.screen(), Catch::Contains("HELP lists the commands"));
+  sh.type("help");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("STOP/QUIT/END/EXIT"));
+  CHECK_SCREEN(sh, sh.wait_for("  CYCLE "));
+  CHECK(sh.alive());
+}
+
+TEST_CASE("interp shell: Tab completes keywords and the words a command takes", "[interp][shell]") {
+  REQUIRE_TMUX();
+  TempDir dir;
+  TmuxShell sh(dir, dir.str() + "/history");
+  REQUIRE(sh.started());
+  REQUIRE(sh.wait_for("trubal>"));
+  sh.type("cyc");
+  sh.key("Tab");
+  CHECK_SCREEN(sh, sh.wait_for("trubal> cycle"));
+  sh.key("C-u");
+  sh.type("print bal");
+  sh.key("Tab");
+  CHECK_SCREEN(sh, sh.wait_for("trubal> print balls"));
+  sh.key("C-u");
+  // A completed keyword runs: `hel<Tab>` then Enter is HELP.
+  sh.type("hel");
+  sh.key("Tab");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("STOP/QUIT/END/EXIT"));
+}
+
+TEST_CASE("interp shell: Ctrl-C at the prompt clears the line and the shell goes on", "[interp][shell]") {
+  REQUIRE_TMUX();
+  TempDir dir;
+  TmuxShell sh(dir, dir.str() + "/history");
+  REQUIRE(sh.started());
+  REQUIRE(sh.wait_for("trubal>"));
+  sh.type("echo leftover");
+  REQUIRE(sh.wait_for("trubal> echo leftover"));
+  sh.key("C-c");
+  CHECK_SCREEN(sh, sh.wait_for("^C"));
+  sh.type("echo fresh");
+  sh.key("Enter");
+  // Had the line not been cleared the command would have been `echo leftoverecho fresh`.
+  CHECK_SCREEN(sh, sh.wait_for("fresh", true));
+  CHECK(sh.screen().find("leftoverecho") == std::string::npos);
+  // Ctrl-C also drops lines already continued with &: only the new command runs.
+  sh.type("echo pending &");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("   ...>"));
+  sh.type("more");
+  sh.key("C-c");
+  sh.type("echo second");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("second", true));
+  CHECK(sh.screen().find("pending") == sh.screen().rfind("pending"));   // only where it was typed
+  CHECK(sh.alive());
+}
+
+TEST_CASE("interp shell: an error is reported and the session goes on", "[interp][shell]") {
+  REQUIRE_TMUX();
+  TempDir dir;
+  TmuxShell sh(dir, dir.str() + "/history");
+  REQUIRE(sh.started());
+  REQUIRE(sh.wait_for("trubal>"));
+  sh.type("frobnicate 1 2");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("<stdin>:1: error: unknown command 'frobnicate'"));
+  sh.type("cycle 1.5");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("<stdin>:2: error: n (number of cycles) must be a whole number"));
+  sh.type("echo alive");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("alive", true));
+  CHECK(sh.alive());
+  // STOP ends it.
+  sh.type("stop");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_exit());
+}
+
+TEST_CASE("interp shell: history is kept between sessions", "[interp][shell]") {
+  REQUIRE_TMUX();
+  TempDir dir;
+  const std::string history = dir.str() + "/history";
+  {
+    TmuxShell sh(dir, history);
+    REQUIRE(sh.started());
+    REQUIRE(sh.wait_for("trubal>"));
+    sh.type("echo remembered 123");
+    sh.key("Enter");
+    REQUIRE(sh.wait_for("remembered 123", true));
+    sh.key("C-d");
+    CHECK_SCREEN(sh, sh.wait_exit());
+  }
+  CHECK_THAT(slurp(history), Catch::Contains("echo remembered 123"));
+  TmuxShell again(dir, history);
+  REQUIRE(again.started());
+  REQUIRE(again.wait_for("trubal>"));
+  again.key("Up");
+  CHECK_SCREEN(again, again.wait_for("trubal> echo remembered 123"));
+}
+
+TEST_CASE("interp shell: Ctrl-C stops a running CYCLE and keeps the model", "[interp][shell]") {
+  REQUIRE_TMUX();
+  TempDir dir;
+  TmuxShell sh(dir, dir.str() + "/history");
+  REQUIRE(sh.started());
+  REQUIRE(sh.wait_for("trubal>"));
+  sh.type("start box 0 10 0 10 0 10 ; a free region");
+  sh.key("Enter");
+  sh.type("gen 500 0.2 0.3 seed 5");
+  sh.key("Enter");
+  sh.type("prop kn 1e6 ks 1e6 dens 1000");
+  sh.key("Enter");
+  sh.type("cycle 2000000000");
+  sh.key("Enter");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  sh.key("C-c");
+  CHECK_SCREEN(sh, sh.wait_for("interrupted after"));
+  CHECK(sh.alive());
+  sh.type("print info");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("backend: "));
+  // The cycles run before Ctrl-C are kept: PRINT info shows a cycle count above 0.
+  std::string screen = sh.screen();
+  auto at = screen.find("\ncycle: ");
+  REQUIRE(at != std::string::npos);
+  CHECK(std::stol(screen.substr(at + 8)) > 0);
+}

@@ -1,0 +1,105 @@
+// Two balls meeting head-on (VALIDATION.md 1 and 2): contact time, rebound, restitution, Hertz.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+
+#include "physics_helpers.hpp"
+
+using namespace trubal;
+
+namespace {
+
+struct Impact {
+  double duration = 0, rebound = 0, max_overlap = 0, dt = 0;
+};
+
+// Two equal balls approaching along x at relative speed v, starting a small gap apart; the contact
+// time comes from linear interpolation of the gap's zero crossings.
+Impact head_on(const Material& mat, double frac, double v, double r) {
+  Model model;
+  model.materials[1] = mat;
+  model.settings.frac = frac;
+  add_ball(model, 1, 1, 0, 0, 0, r);
+  add_ball(model, 2, 1, 2 * r + 3.7e-4 * r, 0, 0, r);
+  model.balls.vx[0] = 0.5 * v;
+  model.balls.vx[1] = -0.5 * v;
+  auto backend = make_backend("serial", 1);
+  Impact out;
+  double prev_gap = model.balls.x[1] - model.balls.x[0] - 2 * r, prev_t = 0, start = -1;
+  bool done = false;
+  CycleControl control;
+  control.after_step = [&](const Model& m) {
+    const double gap = m.balls.x[1] - m.balls.x[0] - 2 * r;
+    const double cross = prev_t + (m.time - prev_t) * prev_gap / (prev_gap - gap);
+    if (start < 0 && gap < 0 && prev_gap >= 0) start = cross;
+    if (start >= 0 && !done && gap >= 0 && prev_gap < 0) { out.duration = cross - start; done = true; }
+    out.max_overlap = std::max(out.max_overlap, -gap);
+    prev_gap = gap;
+    prev_t = m.time;
+  };
+  for (int k = 0; k < 100000 && !done; ++k) REQUIRE_FALSE(run_cycles(model, *backend, 1, control).unstable);
+  run_cycles(model, *backend, 2, control);   // the last force acted; the balls now fly apart
+  out.rebound = model.balls.vx[1] - model.balls.vx[0];
+  out.dt = model.dt;
+  return out;
+}
+
+const double kKn = 1e6, kDensity = 1000, kR = 1.0, kV = 0.1;
+double mstar() { return 0.5 * test::sphere_mass(kDensity, kR); }
+
+}  // namespace
+
+TEST_CASE("physics: linear head-on impact matches the closed form", "[physics]") {
+  const Material mat = test::linear_material(kKn, 0, 0, kDensity);
+  const double t_c = M_PI * std::sqrt(mstar() / kKn);
+  // FRAC 0.05: step 0.1 sqrt(m*/kn), the contact resolved in 31 steps.
+  const Impact fine = head_on(mat, 0.05, kV, kR);
+  INFO("dt " << fine.dt << " duration " << fine.duration << " closed form " << t_c);
+  CHECK(fine.duration == Approx(t_c).epsilon(0.005));
+  CHECK(fine.rebound == Approx(kV).epsilon(0.001));
+  CHECK(fine.max_overlap == Approx(kV * std::sqrt(mstar() / kKn)).epsilon(0.005));
+}
+
+TEST_CASE("physics: linear head-on impact at the default FRAC is stable and second order", "[physics]") {
+  const Material mat = test::linear_material(kKn, 0, 0, kDensity);
+  const double t_c = M_PI * std::sqrt(mstar() / kKn);
+  // The critical step of two equal balls is 2 sqrt(m*/kn); the estimate must find it, not less.
+  const Impact coarse = head_on(mat, 0.8, kV, kR);
+  CHECK(coarse.dt == Approx(0.8 * 2 * std::sqrt(mstar() / kKn)).epsilon(1e-12));
+  // Two steps per contact: stable and bounded, not accurate (0.5% needs FRAC ~0.1: about 30 steps).
+  CHECK(coarse.rebound == Approx(kV).epsilon(0.5));
+  // Second order: halving the step quarters the error in the contact time.
+  const double e1 = head_on(mat, 0.2, kV, kR).duration / t_c - 1;
+  const double e2 = head_on(mat, 0.1, kV, kR).duration / t_c - 1;
+  INFO("errors " << e1 << " " << e2);
+  CHECK(e1 / e2 == Approx(4).epsilon(0.2));
+}
+
+TEST_CASE("physics: restitution dashpot gives the set restitution (linear law)", "[physics]") {
+  for (double e : {0.9, 0.5, 0.2, 0.05}) {
+    Material mat = test::linear_material(kKn, 0, 0, kDensity);
+    mat.restitution = e;
+    mat.has_restitution = true;
+    // The dashpot sees the velocity half a step late: first-order error, so a small FRAC for 1%.
+    const Impact out = head_on(mat, 0.005, kV, kR);
+    INFO("e " << e << " dt " << out.dt);
+    CHECK(out.rebound / kV == Approx(e).epsilon(0.01));
+  }
+}
+
+TEST_CASE("physics: Hertz head-on impact matches the closed form", "[physics]") {
+  // Glass, Chung & Ooi test 1: R = 10 mm, +/-10 m/s (VALIDATION.md 3: 274.1 um, 40.34 us).
+  const Material glass = test::hertz_material(4.8e10, 0.2, 2800);
+  const double r = 0.01, v = 20;
+  const double m = 0.5 * test::sphere_mass(2800, r), rs = 0.5 * r;
+  const double e_star = glass.shear_modulus / (1 - glass.poisson);
+  const double t_c = 2.868 * std::pow(m * m / (rs * e_star * e_star * v), 0.2);
+  const double d_max = std::pow(15 * m * v * v / (16 * e_star * std::sqrt(rs)), 0.4);
+  CHECK(t_c == Approx(40.34e-6).epsilon(0.001));
+  CHECK(d_max == Approx(274.1e-6).epsilon(0.001));
+  const Impact out = head_on(glass, 0.1, v, r);
+  INFO("dt " << out.dt);
+  CHECK(out.duration == Approx(t_c).epsilon(0.01));
+  CHECK(out.max_overlap == Approx(d_max).epsilon(0.01));
+  CHECK(out.rebound == Approx(v).epsilon(0.01));
+}
