@@ -4,12 +4,15 @@
 // Free space until periodic space exists: the outer layer of lattice cells is held fixed (a rigid
 // container), or the stored spring energy would blow the block apart.
 //
-//   trubal_bench [--backend name] [--steps k] [N ...]     N rounded to 4 n^3 (default 1680 13500 108000)
+//   trubal_bench [--backend name] [--threads t] [--steps k] [N ...]   N rounded to 4 n^3 (default 1680 13500 108000)
+//   trubal_bench --compare [--steps k] [N ...]   every backend on 1 and 2 threads, speedup and efficiency
+//                                                 against the best one-thread time (default 403 1680 13500 108000)
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -63,9 +66,9 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
 
 struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; };
 
-Timing run(Model model, const std::string& backend_name, int steps) {
-  auto backend = make_backend(backend_name, 1);
-  run_cycles(model, *backend, 20, {});   // warm-up: pair list, caches
+Timing run(Model model, const std::string& backend_name, int steps, int threads = 1, int warm_up = 20) {
+  auto backend = make_backend(backend_name, threads);
+  run_cycles(model, *backend, warm_up, {});   // warm-up: pair list, caches
   const auto t0 = std::chrono::steady_clock::now();
   const CycleResult r = run_cycles(model, *backend, steps, {});
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -74,30 +77,84 @@ Timing run(Model model, const std::string& backend_name, int steps) {
   return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts};
 }
 
+// The lattice for about n balls: 4 nx ny nz (1680 is the peers' 7 x 6 x 10 block, 403 becomes 400).
+void lattice_for(int n, int& nx, int& ny, int& nz) {
+  nx = static_cast<int>(std::lround(std::cbrt(n / 4.0))); ny = nx; nz = nx;
+  if (n == 1680) { nx = 7; ny = 6; nz = 10; }
+  if (n == 403) { nx = 4; ny = 5; nz = 5; }
+}
+
+// Every backend on one and two threads, on the standard scene. Speedup Sp = T* / Tp against the
+// best one-thread time T* at that size, efficiency Ep = Sp / p. allpairs only where its pair slots
+// fit the default memory limit (it refuses the rest, and says so), and with fewer steps (it tests every pair every step).
+int compare(const std::vector<int>& sizes, int steps) {
+  struct Variant { const char* backend; int threads; };
+  const Variant variants[] = {{"serial", 1}, {"threaded", 1}, {"threaded", 2}, {"allpairs", 1}, {"allpairs", 2}};
+  std::printf("dense FCC block, dt 0.02, every backend; M = million per second, G = billion per second\n");
+  std::printf("%8s %10s %9s %2s %7s %8s %14s %16s %7s %6s\n", "N", "contacts", "backend", "p", "steps", "s",
+              "ball-cycles/s", "pair tests/s", "Sp", "Ep");
+  for (int n : sizes) {
+    int nx, ny, nz;
+    lattice_for(n, nx, ny, nz);
+    const double balls = 4.0 * nx * ny * nz, pair_slots = balls * (balls - 1) / 2;
+    std::vector<Timing> times;
+    double best_one = 0;
+    for (const Variant& v : variants) {
+      const bool all = std::string(v.backend) == "allpairs";
+      int k = steps > 0 ? steps : std::max(20, static_cast<int>(4e6 / balls));
+      if (all && steps <= 0) k = std::max(3, std::min(k, static_cast<int>(2e9 / pair_slots)));
+      Timing t;
+      try {
+        t = run(fcc_block(nx, ny, nz, Scene::Standard), v.backend, k, v.threads, all ? 2 : 20);
+      } catch (const std::exception& e) {   // allpairs above its memory limit says so
+        std::printf("%8.0f %10s %9s %2d  %s\n", balls, "", v.backend, v.threads, e.what());
+        continue;
+      }
+      const double per_step = t.seconds / k;
+      if (v.threads == 1 && (best_one == 0 || per_step < best_one)) best_one = per_step;
+      const double speedup = best_one / per_step;
+      char tests[32] = "-";
+      if (all) std::snprintf(tests, sizeof tests, "%.3f G", pair_slots / per_step / 1e9);
+      std::printf("%8.0f %10zu %9s %2d %7d %8.3f %12.2f M %16s %6.2fx %6.2f\n", balls, t.contacts, v.backend,
+                  v.threads, k, t.seconds, t.ball_steps / 1e6, tests, speedup, speedup / v.threads);
+      std::fflush(stdout);
+    }
+  }
+  std::printf("Sp = T*/Tp with T* the best one-thread time per step at that N (serial first), Ep = Sp/p.\n");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string backend = "serial";
-  int steps = 0;
+  int steps = 0, threads = 1;
+  bool comparing = false;
   std::vector<int> sizes;
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
-    if (arg == "--backend" && k + 1 < argc) backend = argv[++k];
+    if (arg == "--compare") comparing = true;
+    else if (arg == "--threads" && k + 1 < argc) threads = std::atoi(argv[++k]);
+    else if (arg == "--backend" && k + 1 < argc) backend = argv[++k];
     else if (arg == "--steps" && k + 1 < argc) steps = std::atoi(argv[++k]);
     else sizes.push_back(std::atoi(arg.c_str()));
   }
+  if (comparing) {
+    if (sizes.empty()) sizes = {403, 1680, 13500, 108000};
+    return compare(sizes, steps);
+  }
   if (sizes.empty()) sizes = {1680, 13500, 108000};
-  std::printf("dense FCC block, backend %s, dt 0.02, M = million per second\n", backend.c_str());
+  std::printf("dense FCC block, backend %s (%d threads), dt 0.02, M = million per second\n", backend.c_str(), threads);
   std::printf("%8s %10s %8s %6s %14s %14s %10s %10s\n", "N", "contacts", "steps", "s", "ball-steps/s",
               "contacts/s", "no-rot x", "all-on x");
   for (int n : sizes) {
     // 4 n^3 balls; 1680 is the peers' 7 x 6 x 10 block.
-    int nx = static_cast<int>(std::lround(std::cbrt(n / 4.0))), ny = nx, nz = nx;
-    if (n == 1680) { nx = 7; ny = 6; nz = 10; }
+    int nx, ny, nz;
+    lattice_for(n, nx, ny, nz);
     const int k = steps > 0 ? steps : std::max(20, static_cast<int>(4e6 / (4.0 * nx * ny * nz)));
-    const Timing standard = run(fcc_block(nx, ny, nz, Scene::Standard), backend, k);
-    const Timing reduced = run(fcc_block(nx, ny, nz, Scene::NoRotation), backend, k);
-    const Timing full = run(fcc_block(nx, ny, nz, Scene::Everything), backend, k);
+    const Timing standard = run(fcc_block(nx, ny, nz, Scene::Standard), backend, k, threads);
+    const Timing reduced = run(fcc_block(nx, ny, nz, Scene::NoRotation), backend, k, threads);
+    const Timing full = run(fcc_block(nx, ny, nz, Scene::Everything), backend, k, threads);
     std::printf("%8d %10zu %8d %6.2f %12.2f M %12.2f M %9.2fx %9.2fx\n", 4 * nx * ny * nz, standard.contacts, k,
                 standard.seconds, standard.ball_steps / 1e6, standard.contact_steps / 1e6,
                 reduced.ball_steps / standard.ball_steps, full.ball_steps / standard.ball_steps);

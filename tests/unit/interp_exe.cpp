@@ -32,7 +32,7 @@ Run run_trubal(const TempDir& dir, const std::string& args, const std::string& i
 
 TEST_CASE("interp exe: a deck that succeeds exits 0 and echoes its commands", "[interp][exe]") {
   TempDir dir;
-  dir.write("ok.dat", "; a comment\necho hello\nstart 10 10 10\nprint info\n");
+  dir.write("ok.dat", "; a comment\necho hello\nstart box 0 10 0 10 0 10\nprint info\n");
   auto r = run_trubal(dir, "ok.dat");
   INFO("stdout:\n" << r.out << "\nstderr:\n" << r.err);
   CHECK(r.status == 0);
@@ -43,7 +43,7 @@ TEST_CASE("interp exe: a deck that succeeds exits 0 and echoes its commands", "[
 
 TEST_CASE("interp exe: the first error stops a deck with FILE:LINE and exit status 1", "[interp][exe]") {
   TempDir dir;
-  dir.write("bad.dat", "echo first\n\nstart 10 10 10\nball 5 5 5 1\nsave kept.sav\ncycle 1.5\necho never\nsave never.sav\n");
+  dir.write("bad.dat", "echo first\n\nstart box 0 10 0 10 0 10\nball 5 5 5 1\nsave kept.sav\ncycle 1.5\necho never\nsave never.sav\n");
   auto r = run_trubal(dir, "bad.dat");
   INFO("stdout:\n" << r.out << "\nstderr:\n" << r.err);
   CHECK(r.status == 1);

@@ -30,6 +30,9 @@ std::string bytes_text(std::uint64_t bytes) {
   return u == 0 ? fmt::format("{} bytes", bytes) : fmt::format("{:.3g} {} ({} bytes)", v, unit[u], bytes);
 }
 
+// Fewer pair slots than this are tested on one thread: waking workers costs more.
+constexpr std::uint64_t kParallelSlots = 1 << 16;
+
 class AllPairsBackend final : public Backend {
  public:
   explicit AllPairsBackend(int threads)
@@ -37,7 +40,10 @@ class AllPairsBackend final : public Backend {
 
   std::string name() const override { return "allpairs"; }
   int threads() const override { return pool_.size(); }
-  void set_max_memory(std::uint64_t bytes) override { max_memory_ = bytes; }
+  void set_max_memory(std::uint64_t bytes) override {
+    max_memory_ = bytes;
+    row_split_.clear();   // check the slots against the new limit at the next step
+  }
 
   void prepare(Model& model) override {
     const std::size_t n = model.balls.size();
@@ -64,7 +70,7 @@ class AllPairsBackend final : public Backend {
   // States what the slots need before taking it, and refuses above the limit.
   void reserve(std::size_t n) {
     const std::uint64_t slots = n < 2 ? 0 : static_cast<std::uint64_t>(n) * (n - 1) / 2;
-    if (slots == slot_count_ && slots_.size() == slots) return;
+    if (n == ball_count_ && row_split_.size() == static_cast<std::size_t>(pool_.size()) + 1) return;
     const std::uint64_t need = slots * sizeof(std::uint8_t);
     if (need > max_memory_)
       throw std::runtime_error(fmt::format(
@@ -78,10 +84,12 @@ class AllPairsBackend final : public Backend {
       slots_.clear();
       slots_.shrink_to_fit();
       slot_count_ = 0;
+      row_split_.clear();
       throw std::runtime_error(fmt::format("backend allpairs: could not allocate {} for {} pair slots of {} balls",
                                            bytes_text(need), slots, n));
     }
     slot_count_ = slots;
+    ball_count_ = n;
     // Rows to threads by equal numbers of slots: the triangle's rows shorten as i grows.
     const int parts = pool_.size();
     row_split_.assign(parts + 1, n);
@@ -119,7 +127,7 @@ class AllPairsBackend final : public Backend {
         for (; k < count; ++k)
           if (slot[k]) out.push(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1 + k));
       }
-    });
+    }, slot_count_ >= kParallelSlots);
     pairs_.clear();
     for (const PairCandidates& part : found_) {
       pairs_.i.insert(pairs_.i.end(), part.i.begin(), part.i.end());
@@ -148,6 +156,7 @@ class AllPairsBackend final : public Backend {
   std::uint64_t max_memory_;
   std::vector<std::uint8_t> slots_;       // one per pair: touching at the last test
   std::uint64_t slot_count_ = 0;
+  std::size_t ball_count_ = 0;            // the balls the slots and row_split_ are laid out for
   std::vector<std::size_t> row_split_;    // rows [row_split_[t], row_split_[t+1]) go to thread t
   std::vector<PairCandidates> found_;     // touching pairs per thread, in row order
   PairCandidates pairs_;

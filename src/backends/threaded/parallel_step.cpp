@@ -13,7 +13,7 @@ void ParallelStep::phase(ThreadPool& pool, Model& model, const StepKernels& kern
     if (t >= parts) return;
     for (std::size_t b = split_point(blocks, parts, t), e = split_point(blocks, parts, t + 1); b < e; ++b)
       loop(model, kernels, b * kReduceBlock, std::min(count, (b + 1) * kReduceBlock), blocks_[b]);
-  });
+  }, parts > 1);
   for (const StepSums& block : blocks_) sums.add(block);
 }
 

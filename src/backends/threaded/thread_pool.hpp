@@ -24,6 +24,12 @@ class ThreadPool {
   // Runs task(t) for t = 0 .. size()-1 (t = 0 on the calling thread); returns when all are done,
   // rethrowing the first exception a task threw.
   void run(const std::function<void(int)>& task);
+  // The same tasks, but on the calling thread one after another when `parallel` is false: work too
+  // small to pay for waking the workers keeps the same partition, hence the same answer.
+  void run(const std::function<void(int)>& task, bool parallel) {
+    if (parallel) { run(task); return; }
+    for (int t = 0; t < size_; ++t) task(t);
+  }
 
   // The machine's thread count (at least 1): the default for `threads`.
   static int hardware_threads();

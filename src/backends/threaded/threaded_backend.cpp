@@ -6,13 +6,16 @@
 #include <string>
 
 #include "backends/pair_list.hpp"
-#include "backends/serial/box_grid.hpp"
+#include "backends/threaded/cell_pairs.hpp"
 #include "backends/threaded/parallel_step.hpp"
 #include "backends/threaded/thread_pool.hpp"
 #include "physics/kernels.hpp"
 
 namespace trubal {
 namespace {
+
+// Fewer balls than this are checked for displacement on one thread: waking workers costs more.
+constexpr std::size_t kParallelBalls = 8192;
 
 class ThreadedBackend final : public Backend {
  public:
@@ -63,7 +66,7 @@ class ThreadedBackend final : public Backend {
         moved2 = std::max(moved2, dx * dx + dy * dy + dz * dz);
       }
       moved_[t] = moved2;
-    });
+    }, n >= kParallelBalls);
     double moved2 = 0;
     for (double m : moved_) moved2 = std::max(moved2, m);
     return !(moved2 <= limit2);
@@ -75,8 +78,7 @@ class ThreadedBackend final : public Backend {
     double rad_sum = 0, rad_max = 0;
     for (double r : b.rad) { rad_sum += r; rad_max = std::max(rad_max, r); }
     skin_ = n ? 0.2 * rad_sum / static_cast<double>(n) : 0;
-    grid_.fill(b, 2 * rad_max + skin_, model.space.boxes);
-    grid_.find_pairs(b, skin_, pairs_);
+    grid_.find(pool_, b, 2 * rad_max + skin_, skin_, pairs_);
     install_pairs(model.contacts, pairs_, n);
     ref_x_ = b.x; ref_y_ = b.y; ref_z_ = b.z; ref_rad_ = b.rad;
     valid_ = true;
@@ -85,7 +87,7 @@ class ThreadedBackend final : public Backend {
 
   ThreadPool pool_;
   ParallelStep step_;
-  BoxGrid grid_;
+  CellPairs grid_;
   PairCandidates pairs_;
   std::vector<double> ref_x_, ref_y_, ref_z_, ref_rad_, moved_;
   double skin_ = 0;

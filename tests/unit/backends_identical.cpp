@@ -1,0 +1,150 @@
+// Every backend and thread count gives the serial answer bit for bit: positions, velocities,
+// spins, forces, moments and every touching contact, on scenes that exercise each feature. The
+// scenes are big enough (several kReduceBlock blocks of pairs and of balls) that the threads
+// really split the work.
+#include <catch2/catch.hpp>
+
+#include <stdexcept>
+
+#include "backends_scenes.hpp"
+
+using namespace trubal;
+using namespace trubal::test;
+
+namespace {
+
+struct Variant { const char* backend; int threads; };
+
+const Variant kVariants[] = {{"allpairs", 1}, {"allpairs", 2}, {"allpairs", 3}, {"threaded", 1},
+                             {"threaded", 2}, {"threaded", 3}, {"threaded", 4}};
+
+Model run(const Scene& scene, const std::string& backend_name, int threads, int cycles) {
+  Model model = scene.model;
+  auto backend = make_backend(backend_name, threads);
+  const CycleResult r = run_cycles(model, *backend, cycles, {});
+  REQUIRE_FALSE(r.unstable);
+  REQUIRE(r.done == cycles);
+  return model;
+}
+
+// Energies are block sums over the pair list: equal only where the list is the same (serial and
+// threaded keep the same Verlet list; allpairs lists only the touching pairs).
+void same_energy(const Model& a, const Model& b) {
+  CHECK(std::memcmp(&a.energy, &b.energy, sizeof(Energy)) == 0);
+}
+
+void check_scene(const Scene& scene, bool all_variants = true) {
+  INFO(scene.name);
+  const Model reference = run(scene, "serial", 1, scene.cycles);
+  const Picture expected = picture(reference);
+  REQUIRE(expected.contacts.size() > 0);
+  for (const Variant& v : kVariants) {
+    if (!all_variants && v.threads != 2) continue;
+    INFO(v.backend << " on " << v.threads << " threads");
+    const Model model = run(scene, v.backend, v.threads, scene.cycles);
+    CHECK(difference(expected, picture(model)) == "");
+    if (std::string(v.backend) == "threaded") same_energy(reference, model);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("backends: dense FCC under compression with friction, bitwise on every backend", "[backends]") {
+  Scene s = fcc_compression(9, 8, 8);   // 2304 balls, about 15,000 pairs: 8 pair blocks, 2 ball blocks
+  REQUIRE(s.model.balls.size() > 2 * 2048 / 2);
+  check_scene(s);
+}
+
+TEST_CASE("backends: polydisperse settling under gravity onto fixed balls, bitwise", "[backends]") {
+  check_scene(settling(14, 12, 250));   // 196 held + 2352 falling
+}
+
+TEST_CASE("backends: Hertz-Mindlin with restitution, bitwise", "[backends]") {
+  check_scene(hertz_block(7));   // 1372 balls
+}
+
+TEST_CASE("backends: Rayleigh damping, bitwise", "[backends]") {
+  check_scene(rayleigh_cloud(13));   // 2197 balls
+}
+
+TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[backends]") {
+  check_scene(settling(9, 8, 3000), false);   // 81 held + 648 falling; two threads only
+}
+
+TEST_CASE("backends: switching backend mid-run gives the same result as not switching", "[backends]") {
+  const Scene scene = settling(14, 10, 240);
+  const Picture expected = picture(run(scene, "serial", 1, scene.cycles));
+  const char* order[][2] = {{"serial", "allpairs"}, {"allpairs", "threaded"}, {"threaded", "serial"},
+                            {"threaded", "allpairs"}};
+  for (const auto& pair : order) {
+    INFO(pair[0] << " then " << pair[1] << " then " << pair[0]);
+    Model model = scene.model;
+    auto threads = [](const char* name, int n) { return std::string(name) == "serial" ? 1 : n; };
+    auto first = make_backend(pair[0], threads(pair[0], 2));
+    REQUIRE(run_cycles(model, *first, 80, {}).done == 80);
+    auto second = make_backend(pair[1], threads(pair[1], 3));
+    REQUIRE(run_cycles(model, *second, 80, {}).done == 80);
+    auto third = make_backend(pair[0], 1);
+    REQUIRE(run_cycles(model, *third, 80, {}).done == 80);
+    CHECK(difference(expected, picture(model)) == "");
+  }
+}
+
+TEST_CASE("backends: allpairs finds exactly the touching pairs, as brute force does", "[backends]") {
+  Scene scene = fcc_compression(4, 4, 5);
+  auto backend = make_backend("allpairs", 2);
+  backend->prepare(scene.model);
+  const Balls& b = scene.model.balls;
+  std::size_t touching = 0;
+  for (std::size_t i = 0; i < b.size(); ++i)
+    for (std::size_t j = i + 1; j < b.size(); ++j) {
+      const double dx = b.x[j] - b.x[i], dy = b.y[j] - b.y[i], dz = b.z[j] - b.z[i], reach = b.rad[i] + b.rad[j];
+      touching += dx * dx + dy * dy + dz * dz < reach * reach;
+    }
+  CHECK(scene.model.contacts.size() == touching);
+  CHECK(touching > 1000);
+}
+
+TEST_CASE("backends: allpairs refuses more pair slots than maxmem allows, before taking them", "[backends]") {
+  Scene scene = rayleigh_cloud(6);   // 216 balls: 23,220 pair slots of one byte
+  const Picture before = picture(scene.model);
+  auto backend = make_backend("allpairs", 2);
+  backend->set_max_memory(20000);
+  try {
+    run_cycles(scene.model, *backend, 5, {});
+    FAIL("allpairs ran above its memory limit");
+  } catch (const std::runtime_error& e) {
+    const std::string message = e.what();
+    CHECK(message.find("23220 pair slots") != std::string::npos);
+    CHECK(message.find("maxmem") != std::string::npos);
+  }
+  CHECK(difference(before, picture(scene.model)) == "");
+  backend->set_max_memory(23220);
+  CHECK(run_cycles(scene.model, *backend, 5, {}).done == 5);
+  CHECK_THROWS_AS(make_backend("serial", 1)->set_max_memory(1), std::invalid_argument);
+}
+
+TEST_CASE("backends: threads default to the machine's and are reported", "[backends]") {
+  CHECK(make_backend("threaded", 0)->threads() >= 1);
+  CHECK(make_backend("threaded", 3)->threads() == 3);
+  CHECK(make_backend("allpairs", 2)->threads() == 2);
+  CHECK(make_backend("serial", 0)->threads() == 1);
+  CHECK_THROWS_AS(make_backend("serial", 2), std::invalid_argument);
+}
+
+TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread count", "[backends]") {
+  for (Scene scene : {settling(14, 12, 0), rayleigh_cloud(17), fcc_compression(8, 8, 8)}) {   // 2548, 4913, 2048 balls
+    INFO(scene.name);
+    Model serial = scene.model;
+    make_backend("serial", 1)->prepare(serial);
+    REQUIRE(serial.contacts.size() > 500);
+    for (int threads : {1, 2, 3, 4}) {
+      INFO(threads << " threads");
+      Model model = scene.model;
+      make_backend("threaded", threads)->prepare(model);
+      CHECK(model.contacts.i == serial.contacts.i);
+      CHECK(model.contacts.j == serial.contacts.j);
+      CHECK(model.contacts.gather_pair == serial.contacts.gather_pair);
+    }
+  }
+}
