@@ -1,7 +1,6 @@
 #include "commands/common.hpp"
 
-#include <unistd.h>
-
+#include <algorithm>
 #include <chrono>
 
 #include <fmt/format.h>
@@ -68,29 +67,71 @@ std::array<double, 3> read_xyz(Args& args, std::string_view what) {
   return v;
 }
 
-std::function<void(std::int64_t, std::int64_t)> progress_reporter(Context& ctx) {
-  const bool tty = ::isatty(STDOUT_FILENO) && ctx.interp.output().log_path().empty();
-  auto start = std::chrono::steady_clock::now();
-  auto last = start;
-  return [&ctx, tty, start, last](std::int64_t done, std::int64_t total) mutable {
-    auto now = std::chrono::steady_clock::now();
-    double since = std::chrono::duration<double>(now - last).count();
-    double elapsed = std::chrono::duration<double>(now - start).count();
-    if (since < (tty ? 0.25 : 10.0) || elapsed < 1.0) return;
-    last = now;
-    double rate = done / std::max(elapsed, 1e-9);
-    double left = rate > 0 ? (total - done) / rate : 0;
-    if (tty)
-      ctx.out << fmt::format("\r  cycle {}/{} ({:.0f}%), {:.0f} cycles/s, {:.0f} s left   ", done, total,
-                             100.0 * done / std::max<std::int64_t>(total, 1), rate, left)
-              << std::flush;
-    else
-      ctx.out << fmt::format("  cycle {}/{}, {:.0f} cycles/s, {:.0f} s left\n", done, total, rate, left) << std::flush;
-  };
+namespace {
+
+// 42 s, 3 min 05 s, 2 h 07 min.
+std::string duration_text(double seconds) {
+  if (!(seconds < 1e9)) return "?";
+  const auto s = static_cast<std::int64_t>(seconds + 0.5);
+  if (s < 60) return fmt::format("{} s", s);
+  if (s < 3600) return fmt::format("{} min {:02d} s", s / 60, s % 60);
+  return fmt::format("{} h {:02d} min", s / 3600, s % 3600 / 60);
+}
+
+}  // namespace
+
+ProgressReporter::ProgressReporter(Context& ctx, bool limit)
+    : ctx_(ctx),
+      bar_(ctx.interp.interactive && ctx.interp.output().terminal && ctx.interp.output().log_path().empty()),
+      limit_(limit),
+      interval_(ctx.interp.output().progress_seconds),
+      start_(std::chrono::steady_clock::now()),
+      last_(start_) {}
+
+ProgressReporter::~ProgressReporter() {
+  try {
+    finish();
+  } catch (...) {
+  }
+}
+
+std::function<void(std::int64_t, std::int64_t)> ProgressReporter::callback() {
+  if (!bar_ && !(interval_ > 0)) return {};
+  return [this](std::int64_t done, std::int64_t total) { report(done, total); };
+}
+
+void ProgressReporter::report(std::int64_t done, std::int64_t total) {
+  const auto now = std::chrono::steady_clock::now();
+  const double since = std::chrono::duration<double>(now - last_).count();
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  // A bar appears after half a second (short runs never flicker) and is redrawn four times a second.
+  if (bar_ ? (since < 0.25 || elapsed < 0.5) : since < interval_) return;
+  last_ = now;
+  const double rate = done / std::max(elapsed, 1e-9);
+  const double left = rate > 0 ? (total - done) / rate : 0;
+  const double fraction = std::clamp(static_cast<double>(done) / static_cast<double>(std::max<std::int64_t>(total, 1)), 0.0, 1.0);
+  const std::string left_text = (limit_ ? "at most " : "") + duration_text(left) + " left";
+  if (bar_) {
+    constexpr int width = 24;
+    const int filled = static_cast<int>(fraction * width);
+    ctx_.out << fmt::format("\r[{}{}] {:3.0f}%  cycle {}/{}  {:.0f} cycles/s  {}\033[K", std::string(filled, '#'),
+                            std::string(width - filled, '.'), 100 * fraction, done, total, rate, left_text)
+             << std::flush;
+    shown_ = true;
+  } else {
+    ctx_.out << fmt::format("  cycle {}/{} ({:.0f}%), {:.0f} cycles/s, {}\n", done, total, 100 * fraction, rate,
+                            left_text)
+             << std::flush;
+  }
+}
+
+void ProgressReporter::finish() {
+  if (!shown_) return;
+  shown_ = false;
+  ctx_.out << "\r\033[K" << std::flush;
 }
 
 void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked) {
-  if (::isatty(STDOUT_FILENO)) ctx.out << "\r\033[K";
   if (r.unstable) throw std::runtime_error(r.message);
   if (r.interrupted)
     ctx.out << fmt::format("interrupted after {} of {} cycles; the model is kept (cycle {})\n", r.done, asked,

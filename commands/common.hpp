@@ -2,6 +2,8 @@
 #pragma once
 
 #include <array>
+#include <chrono>
+#include <functional>
 #include <string>
 
 #include "interp/command.hpp"
@@ -17,8 +19,28 @@ Range read_range(Args& args);
 extern const std::vector<std::string_view> kRangeWords;
 // Three numbers named prefix x, y, z in messages.
 std::array<double, 3> read_xyz(Args& args, std::string_view what);
-// Reports a long CYCLE's progress (terminal: one refreshed line; otherwise a plain line now and then).
-std::function<void(std::int64_t, std::int64_t)> progress_reporter(Context& ctx);
+// Reports a long CYCLE's or SOLVE's progress. At the interactive prompt on a terminal (and no log
+// file): one bar redrawn at most four times a second, erased by finish(). Otherwise (batch, a pipe,
+// SET log): a plain line every SET progress seconds (default 10), never a control character.
+class ProgressReporter {
+ public:
+  // `limit`: the total is an upper bound (SOLVE), so the time left is "at most".
+  explicit ProgressReporter(Context& ctx, bool limit = false);
+  ~ProgressReporter();
+  ProgressReporter(const ProgressReporter&) = delete;
+  ProgressReporter& operator=(const ProgressReporter&) = delete;
+  // For Session::cycle / solve; refers to this object.
+  std::function<void(std::int64_t, std::int64_t)> callback();
+  // Erases the bar, if one is shown, so the next line starts clean.
+  void finish();
+
+ private:
+  void report(std::int64_t done, std::int64_t total);
+  Context& ctx_;
+  bool bar_, limit_, shown_ = false;
+  double interval_;
+  std::chrono::steady_clock::time_point start_, last_;
+};
 // Prints what a CYCLE or SOLVE did (interrupted, unstable) and throws for an unstable run.
 void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked);
 

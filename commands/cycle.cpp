@@ -3,33 +3,43 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "io/summary.hpp"
 #include "physics/measure.hpp"
 
 namespace trubal {
 
-static void finish_run(Context& ctx, const CycleResult& r, std::int64_t asked, double seconds) {
+// The one-line summary of a run: where it got to, how fast, and (in batch, where nobody watches
+// the run) where the time went.
+static void finish_run(Context& ctx, ProgressReporter& progress, const CycleResult& r, std::int64_t asked,
+                       double seconds) {
+  progress.finish();
   report_cycle_result(ctx, r, asked);
   if (r.interrupted && !ctx.interp.interactive)
     throw InputError(fmt::format("interrupted by Ctrl-C at cycle {}", ctx.session.model().cycle));
   const auto& m = ctx.session.model();
   double rate = seconds > 0 ? r.done * static_cast<double>(m.balls.size()) / seconds : 0;
-  ctx.out << fmt::format("cycle {}  time {:.6g}  timestep {:.6g}  ({} cycles in {:.3f} s, {:.3g} ball-cycles/s)\n",
-                         m.cycle, m.time, m.dt, r.done, seconds, rate);
+  std::string split = r.done > 0 && !ctx.interp.interactive ? phase_split(r.times, r.seconds) : "";
+  ctx.out << fmt::format("cycle {}  time {:.6g}  timestep {:.6g}  ({} cycles in {:.3f} s, {:.3g} ball-cycles/s{}{})\n",
+                         m.cycle, m.time, m.dt, r.done, seconds, rate, split.empty() ? "" : "; ", split);
 }
 
 static void run_cycle(Context& ctx, Args& args) {
   auto n = args.count("n (number of cycles)", 0);
   args.done();
   auto start = std::chrono::steady_clock::now();
-  CycleResult r = ctx.session.cycle(n, progress_reporter(ctx));
-  finish_run(ctx, r, n, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  ProgressReporter progress(ctx);
+  CycleResult r = ctx.session.cycle(n, progress.callback());
+  finish_run(ctx, progress, r, n, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 const Command cycle_command = {
     "CYCLE", {}, "CYCLE n", "n time steps",
     "Runs n time steps. Ctrl-C stops at the end of the current step and keeps the model (in a batch run the "
     "deck then stops). A run that goes unstable stops with a message naming the cycle, a ball and a "
-    "suggested FRAC, and leaves the last good state to print or save.",
+    "suggested FRAC, and leaves the last good state to print or save. A long run shows its progress "
+    "(cycles/s, time left): a bar redrawn in place at the interactive prompt, a plain line every 10 s "
+    "otherwise (SET progress). At the end one line gives the cycle, time, step and speed, and in batch "
+    "where the time went (contact detection, forces, motion, output).",
     {}, run_cycle};
 
 static void run_solve(Context& ctx, Args& args) {
@@ -42,8 +52,9 @@ static void run_solve(Context& ctx, Args& args) {
   }
   if (!(ratio > 0)) args.fail("ratio must be positive");
   auto start = std::chrono::steady_clock::now();
-  auto r = ctx.session.solve(ratio, limit, progress_reporter(ctx));
-  finish_run(ctx, r.run, limit, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  ProgressReporter progress(ctx, true);
+  auto r = ctx.session.solve(ratio, limit, progress.callback());
+  finish_run(ctx, progress, r.run, limit, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (r.converged)
     ctx.out << fmt::format("solved: mean unbalanced-force ratio {:.3g} < {:.3g}\n", r.ratio, ratio);
   else if (!r.run.interrupted)

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include "commands/common.hpp"
+#include "physics/measure.hpp"
 
 namespace trubal {
 
@@ -18,31 +19,69 @@ static void run_hist(Context& ctx, Args& args) {
   std::vector<std::string> items;
   std::int64_t every = 10;
   std::string file;
+  double area = 0, pressure = 0;
   const auto& names = History::item_names();
   while (!args.empty() && !match_keyword(args.peek(), {"range"})) {
     if (args.accept("every")) { every = args.count("every", 1); continue; }
     if (args.accept("file")) { file = args.word("file name"); continue; }
+    if (args.accept("area")) { area = args.real("area"); continue; }
+    if (args.accept("pressure")) { pressure = args.real("pressure"); continue; }
     items.emplace_back(names[args.expect(names, "history item")]);
   }
   if (items.empty()) args.fail("name at least one quantity to record");
   Range range = read_range(args);
-  bool platen = std::find(items.begin(), items.end(), "platen") != items.end();
-  if (!range.empty() && !platen) args.fail("a RANGE goes with `platen` (the balls whose reaction is recorded)");
+  auto has = [&](const char* item) { return std::find(items.begin(), items.end(), item) != items.end(); };
+  const bool rowe = has("ratio") || has("axial");
+  if (!range.empty() && !has("platen") && !rowe)
+    args.fail("a RANGE goes with `platen`, `ratio` or `axial` (the platen balls)");
+  const Model& model = ctx.session.model();
+  std::vector<std::int64_t> ids;
+  double gap0 = 0;
+  if (!range.empty()) {
+    auto sel = ctx.session.select(range);
+    if (sel.empty()) args.fail("the range holds for no ball: name the platen balls (e.g. range group platens)");
+    for (auto k : sel) ids.push_back(model.balls.id[k]);
+    const Platens p = platens(model, sel);
+    if (rowe && !p.two)
+      args.fail("`ratio` and `axial` with a range need both platens in it (balls at two heights)");
+    gap0 = p.gap;
+    if (area == 0) area = model.membrane.area;
+    if (pressure == 0) pressure = model.membrane.pressure;
+    if (has("ratio") && !(area > 0 && pressure > 0))
+      args.fail("`ratio` with a range needs the area and the confining pressure: give MEMBRANE first, or "
+                "`area a pressure p`");
+  }
   auto& t = ctx.session.history().add(items, every, file, range);
+  t.platen_ids = std::move(ids);
+  t.platen_gap0 = gap0;
+  t.area = area;
+  t.pressure = pressure;
   ctx.out << fmt::format("recording {} every {} cycles{}\n", fmt::join(t.columns, ","), every,
                          file.empty() ? "" : " to " + file);
+  if (rowe && !t.platen_ids.empty())
+    ctx.out << fmt::format("  platens: {} balls, {:.6g} apart; area {:.6g}, confining pressure {:.6g}\n",
+                           t.platen_ids.size(), gap0, area, pressure);
 }
 
 const Command hist_command = {
-    "HIST", {}, "HIST what... [every n] [file f.csv] [range ...]  |  HIST reset",
+    "HIST", {},
+    "HIST what... [every n] [file f.csv] [area a] [pressure p] [range ...]  |  HIST reset",
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33), "
-    "ratio (s33 over the mean of s11 and s22), axial (e33), platen (z reaction force of the fixed balls in the "
-    "range), energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean unbalanced-force "
-    "ratio), contacts (contacts sliding coordination), time. With `file` the rows are written as CSV (header "
-    "cycle,time,... then one row per record, flushed as they come). `HIST reset` forgets all histories.",
-    {"stress", "strain", "ratio", "axial", "platen", "energy", "unbal", "contacts", "time", "every", "file", "reset",
-     "range"},
+    "ratio, axial, platen, energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
+    "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
+    "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
+    "range holding the top and bottom platens (the balls above and below the middle of its height): ratio "
+    "is R = sigma1/sigma2 = F1 / (A sigma2), F1 the axial force the platens carry (half the difference of "
+    "the upper and lower platens' z reactions, compression positive), A and sigma2 from the last MEMBRANE "
+    "(or `area a` and `pressure p`); axial is eps1 = 2 delta / dh, the platens' approach over their first "
+    "distance apart (delta the displacement of one platen, dh the distance between their centres when HIST "
+    "is given). Without a range, ratio is s33 over the mean of s11 and s22 and axial is the cell strain e33. "
+    "platen is the z reaction force of the balls in the range (all balls without one). With `file` the rows "
+    "are written as CSV (header cycle,time,... then one row per record, flushed as they come). `HIST reset` "
+    "forgets all histories.",
+    {"stress", "strain", "ratio", "axial", "platen", "energy", "unbal", "contacts", "time", "every", "file", "area",
+     "pressure", "reset", "range"},
     run_hist};
 
 }  // namespace trubal

@@ -26,6 +26,13 @@ static void run_set(Context& ctx, Args& args) {
     ctx.interp.output().set_log(file);
     return;
   }
+  if (name == "progress") {
+    double seconds = args.real("seconds between progress lines");
+    args.done();
+    if (seconds < 0) args.fail("the progress period must not be negative (0: no progress lines)");
+    ctx.interp.output().progress_seconds = seconds;
+    return;
+  }
   if (name == "volume") {
     double v = args.real("volume");
     args.done();
@@ -42,12 +49,13 @@ static void run_set(Context& ctx, Args& args) {
 }
 
 const Command set_command = {
-    "SET", {}, "SET name value  |  SET echo on|off  |  SET seed n  |  SET log file|off  |  SET volume v",
+    "SET", {}, "SET name value  |  SET echo on|off  |  SET seed n  |  SET log file|off  |  SET progress s  |  SET volume v",
     "a variable or a setting",
     "`SET name value` defines a variable: $name (or ${name}) in later lines is replaced by the value. Settings: "
     "echo (echo each command in batch mode), seed (default seed of GEN), log (copy everything shown to a "
-    "file; `SET log off` stops), volume (the volume for the average stress in free space; 0 uses the START "
+    "file, appending; `SET log off` stops; while a log is on, progress comes as plain lines), progress (seconds "
+    "between the plain progress lines of a long CYCLE or SOLVE, default 10; 0: none), volume (the volume for the average stress in free space; 0 uses the START "
     "box).",
-    {"echo", "seed", "log", "volume", "on", "off"}, run_set};
+    {"echo", "seed", "log", "progress", "volume", "on", "off"}, run_set};
 
 }  // namespace trubal

@@ -1,6 +1,7 @@
 // trubal: runs decks of TRUBAL's command language, or an interactive shell.
 #include <unistd.h>
 
+#include <chrono>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
@@ -11,6 +12,7 @@
 #include "interp/output.hpp"
 #include "interp/shell.hpp"
 #include "interp/signals.hpp"
+#include "io/summary.hpp"
 #include "session.hpp"
 
 int main(int argc, char** argv) {
@@ -35,19 +37,29 @@ int main(int argc, char** argv) {
     return 0;
   }
 
+  const auto start = std::chrono::steady_clock::now();
   trubal::Output output(std::cout, std::cerr);
+  output.terminal = ::isatty(STDOUT_FILENO);
   trubal::Session session;
   trubal::Interpreter interp(session, output);
   trubal::install_interrupt_handler();
 
+  int status = 0;
   if (!interactive_deck.empty()) {
     interp.run_file(interactive_deck);   // errors are reported; the shell opens anyway
-    if (interp.stopped()) return 0;
+    if (!interp.stopped()) trubal::run_shell(interp);
+  } else if (deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO))) {
+    status = interp.run_deck(std::cin, "<stdin>") ? 0 : 1;
+  } else if (!deck.empty()) {
+    status = interp.run_file(deck) ? 0 : 1;
+  } else {
     trubal::run_shell(interp);
-    return 0;
   }
-  if (deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO))) return interp.run_deck(std::cin, "<stdin>") ? 0 : 1;
-  if (!deck.empty()) return interp.run_file(deck) ? 0 : 1;
-  trubal::run_shell(interp);
-  return 0;
+  // Where the time went, when anything was cycled (to the screen and the log, if one is on).
+  const auto& t = session.totals();
+  output.out() << trubal::run_summary(t.cycles, t.ball_cycles, t.seconds,
+                                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                                      t.times)
+               << std::flush;
+  return status;
 }

@@ -42,6 +42,7 @@ void Session::start_box(const std::array<double, 3>& lo, const std::array<double
   fresh.started = true;
   model_ = std::move(fresh);
   history_->clear();
+  dumps_.reset();
   backend_->invalidate();
 }
 
@@ -56,6 +57,7 @@ void Session::start_periodic(const std::array<double, 3>& length, const std::arr
   fresh.started = true;
   model_ = std::move(fresh);
   history_->clear();
+  dumps_.reset();
   backend_->invalidate();
 }
 
@@ -158,7 +160,7 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
 }
 
 std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
-                                 const Range& range) {
+                                 const Range& range, Layers layers) {
   require_started();
   if (!(d > 0)) throw std::runtime_error("LATTICE: the diameter must be positive");
   const bool periodic = model_.space.periodic;
@@ -166,6 +168,7 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
   std::vector<std::array<double, 3>> points;
   for (int k = 0; k < nz; ++k) {
     bool odd = k % 2 == 1;
+    if ((layers == Layers::Even && odd) || (layers == Layers::Odd && !odd)) continue;
     int mx = odd && !periodic ? nx - 1 : nx, my = odd && !periodic ? ny - 1 : ny;
     double shift = odd ? 0.5 * d : 0.0;
     for (int j = 0; j < my; ++j)
@@ -216,10 +219,28 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   control.interrupt = &interrupt_requested();
   control.progress = progress;
   const double vol = stress_volume();
-  if (!history_->tables().empty()) control.after_step = [this, vol](const Model& m) { history_->sample(m, vol); };
+  const bool histories = !history_->tables().empty();
+  VtkSeries* dumps = dumps_ && dumps_->every() > 0 ? dumps_.get() : nullptr;
+  if (histories || dumps)
+    control.after_step = [this, vol, histories, dumps](const Model& m) {
+      if (histories) history_->sample(m, vol);
+      if (dumps && dumps->due(m.cycle)) dumps->write(m);
+    };
   CycleResult r = run_cycles(model_, *backend_, n, control);
   interrupt_requested() = false;
+  totals_.cycles += r.done;
+  totals_.ball_cycles += static_cast<double>(r.done) * static_cast<double>(model_.balls.size());
+  totals_.seconds += r.seconds;
+  totals_.times.add(r.times);
   return r;
+}
+
+void Session::dump_vtk(const std::string& base, std::int64_t every) {
+  require_started();
+  // The same files again continue their collection; other files start a new one.
+  if (!dumps_ || dumps_->base() != VtkSeries(base).base()) dumps_ = std::make_unique<VtkSeries>(base, every);
+  else dumps_->set_every(every);
+  dumps_->write(model_);
 }
 
 Session::SolveResult Session::solve(double ratio, std::int64_t limit,
@@ -232,8 +253,15 @@ Session::SolveResult Session::solve(double ratio, std::int64_t limit,
     CycleResult r = cycle(n, progress ? [&](std::int64_t d, std::int64_t) { progress(done + d, limit); }
                                       : std::function<void(std::int64_t, std::int64_t)>{});
     done += r.done;
+    const double seconds = out.run.seconds + r.seconds;
+    PhaseTimes times = out.run.times;
+    times.add(r.times);
     out.run = r;
     out.run.done = done;
+    out.run.seconds = seconds;
+    out.run.times = times;
+    // A chunk is often shorter than the engine's progress period: report between chunks too.
+    if (progress) progress(done, limit);
     if (r.interrupted || r.unstable) return out;
     out.ratio = unbalanced_force(model_).mean_ratio;
     if (out.ratio < ratio) {
@@ -250,6 +278,7 @@ void Session::restart(const std::string& path) {
   Model loaded = load_model(path);
   model_ = std::move(loaded);
   history_->clear();
+  dumps_.reset();
   backend_->invalidate();
 }
 

@@ -13,6 +13,7 @@
 
 #include "backends/backend.hpp"
 #include "io/history.hpp"
+#include "io/vtk.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
 #include "physics/engine.hpp"
@@ -46,8 +47,10 @@ class Session {
   std::size_t add_ball(std::int64_t id, int type, double x, double y, double z, double rad);
   // GEN: returns how many were placed (fewer than n when there is no room).
   std::size_t generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range);
+  // LATTICE: which layers to build (layer 0 is even: the nx x ny one).
+  enum class Layers { All, Even, Odd };
   std::size_t lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
-                          const Range& range);
+                          const Range& range, Layers layers = Layers::All);
   std::size_t delete_balls(const Range& range);
   std::size_t define_group(const std::string& name, const Range& range);
 
@@ -63,6 +66,21 @@ class Session {
   History& history() { return *history_; }
   const History& history() const { return *history_; }
 
+  // DUMP vtk: writes a dump now; with every > 0 also every `every` cycles from now on.
+  // START and RESTART stop periodic dumps.
+  void dump_vtk(const std::string& base, std::int64_t every);
+  void dump_off() { dumps_.reset(); }
+  const VtkSeries* dumps() const { return dumps_.get(); }
+
+  // What all CYCLE and SOLVE runs of the session took, for the summary at exit.
+  struct RunTotals {
+    std::int64_t cycles = 0;
+    double ball_cycles = 0;
+    double seconds = 0;          // wall time in the cycling loop
+    PhaseTimes times;
+  };
+  const RunTotals& totals() const { return totals_; }
+
   // SAVE / RESTART (io/save.hpp does the file format).
   void save(const std::string& path) const;
   void restart(const std::string& path);
@@ -76,6 +94,8 @@ class Session {
   Model model_;
   std::unique_ptr<Backend> backend_;
   std::unique_ptr<History> history_;
+  std::unique_ptr<VtkSeries> dumps_;
+  RunTotals totals_;
 };
 
 }  // namespace trubal

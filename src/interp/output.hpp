@@ -32,6 +32,11 @@ class Output {
   // Starts (or, with an empty path, stops) copying everything shown to a log file.
   void set_log(const std::string& path);
   const std::string& log_path() const { return log_path_; }
+  // The screen stream is a terminal (main sets it; false for captured output): progress may
+  // redraw one line there. A log file, or any other stream, gets plain lines only.
+  bool terminal = false;
+  // Seconds between plain progress lines of a long CYCLE or SOLVE (SET progress; 0: none).
+  double progress_seconds = 10;
 
  private:
   TeeBuffer out_buf_, err_buf_;

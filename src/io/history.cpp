@@ -1,5 +1,7 @@
 #include "io/history.hpp"
 
+#include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -44,6 +46,16 @@ HistoryTable& History::add(std::vector<std::string> items, std::int64_t every, c
   return *tables_.back();
 }
 
+std::vector<std::size_t> History::platen_balls(const Model& model, const HistoryTable& t) {
+  const auto& ids = model.balls.id;   // sorted: index order is id order
+  std::vector<std::size_t> out;
+  for (std::int64_t id : t.platen_ids) {
+    auto it = std::lower_bound(ids.begin(), ids.end(), id);
+    if (it != ids.end() && *it == id) out.push_back(static_cast<std::size_t>(it - ids.begin()));
+  }
+  return out;
+}
+
 void History::record(HistoryTable& t, const Model& model, double volume) {
   std::vector<double> row = {static_cast<double>(model.cycle), model.time};
   Sym6 stress{};
@@ -57,14 +69,25 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       for (double s : get_stress()) row.push_back(s);
     } else if (item == "strain") {
       for (int a = 0; a < 3; ++a) row.push_back(model.space.strain[a]);
+    } else if (item == "ratio" && !t.platen_ids.empty()) {
+      // Rowe's R = sigma1 / sigma2 = F1 / (A sigma2).
+      const double load = t.area * t.pressure;
+      row.push_back(load > 0 ? platens(model, platen_balls(model, t)).force / load
+                             : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "ratio") {
       const Sym6& s = get_stress();
       double lateral = 0.5 * (s[0] + s[1]);
       row.push_back(lateral != 0 ? s[2] / lateral : 0.0);
+    } else if (item == "axial" && !t.platen_ids.empty()) {
+      // eps1 = 2 delta / dh: the platens' approach over their first distance apart.
+      const Platens p = platens(model, platen_balls(model, t));
+      row.push_back(t.platen_gap0 > 0 && p.two ? (t.platen_gap0 - p.gap) / t.platen_gap0
+                                               : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "axial") {
       row.push_back(model.space.strain[2]);
     } else if (item == "platen") {
-      row.push_back(reaction_force(model, select(model, t.platen_range))[2]);
+      row.push_back(reaction_force(model, t.platen_ids.empty() ? select(model, t.platen_range)
+                                                               : platen_balls(model, t))[2]);
     } else if (item == "energy") {
       EnergyReport e = energy(model);
       for (double v : {e.kinetic_translation + e.kinetic_rotation, e.strain, e.friction_work, e.damping_work,

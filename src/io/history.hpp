@@ -18,7 +18,13 @@ struct HistoryTable {
   std::vector<std::string> columns;        // cycle, time, then the items' columns
   std::int64_t every = 1;
   std::string file;                        // empty: memory only
-  Range platen_range;                      // balls whose reaction is `platen`
+  Range platen_range;                      // as given (PRINT history)
+  // The platen balls: where platen_range held when HIST was given, by id, so that they stay the
+  // same balls as they move. With a range, `ratio` is F1 / (A sigma2) and `axial` is the change of
+  // the gap between the two platens over its first value (physics/measure.hpp `platens`).
+  std::vector<std::int64_t> platen_ids;
+  double platen_gap0 = 0;
+  double area = 0, pressure = 0;           // A and sigma2 of `ratio`
   std::vector<std::vector<double>> rows;
   std::unique_ptr<std::ofstream> out;
 };
@@ -30,6 +36,8 @@ class History {
   // Adds a table; opens (truncates) its file and writes the header. Throws std::runtime_error if the
   // file cannot be written.
   HistoryTable& add(std::vector<std::string> items, std::int64_t every, const std::string& file, Range platen_range);
+  // The balls of a platen id list, as ascending indices (ids that left the model are skipped).
+  static std::vector<std::size_t> platen_balls(const Model& model, const HistoryTable& table);
   // Records a row in every table whose period divides the model's cycle count.
   void sample(const Model& model, double volume);
   // Records a row in every table now, whatever the cycle.

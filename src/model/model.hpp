@@ -125,6 +125,26 @@ struct Energy {
   double boundary_work = 0;        // done by fixed velocities and applied forces (gravity: potential)
 };
 
+// Where cycling time goes, in seconds, added up by run_cycles (step, output) and by backends that
+// split their step (detect, forces, motion; all 0 from a backend that does not).
+struct PhaseTimes {
+  double detect = 0;     // pair lists and contact detection
+  double forces = 0;     // contact forces and their gather
+  double motion = 0;     // law of motion
+  double step = 0;       // the whole of Backend::step
+  double output = 0;     // histories and dumps between steps
+  void add(const PhaseTimes& o) {
+    detect += o.detect; forces += o.forces; motion += o.motion; step += o.step; output += o.output;
+  }
+};
+
+// MEMBRANE: its pressure and the cross-section area its forces are consistent with (the union of
+// the loaded layers' square cells), so that HIST ratio can form F1 / (A sigma2). 0: no membrane.
+struct Membrane {
+  double pressure = 0;
+  double area = 0;
+};
+
 struct Model {
   Space space;
   std::map<int, Material> materials;      // by type number
@@ -132,6 +152,7 @@ struct Model {
   ContactTable contacts;
   Settings settings;
   Energy energy;
+  Membrane membrane;
   std::map<std::string, std::vector<std::int64_t>> groups;   // GROUP name -> ball ids
   std::int64_t cycle = 0;
   double time = 0;
@@ -139,6 +160,7 @@ struct Model {
   double critical_dt = 0;                 // critical step from the last force pass (0: estimate afresh)
   std::string title;
   bool started = false;                   // START given
+  PhaseTimes timing;                      // of the current CYCLE (not saved)
 };
 
 }  // namespace trubal

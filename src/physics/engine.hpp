@@ -39,6 +39,8 @@ struct CycleResult {
   bool interrupted = false;
   bool unstable = false;
   std::string message;              // for an unstable run: cycle, ball, suggested FRAC
+  double seconds = 0;               // wall time of the loop
+  PhaseTimes times;                 // where it went
 };
 
 // Checks that every ball's type has density and stiffness; throws std::runtime_error naming the type.

@@ -69,12 +69,18 @@ struct StepKernels {
 // The kernels for the model as it is now (materials, damping, fixities, loads).
 StepKernels make_kernels(const Model& model);
 
-// Upper bound on the squared highest frequency of the modes that involve one ball: Gershgorin's
-// row sums of M^-1 K over the ball's contacts, spins measured as R w with inertia 2/5 m
-// (translation row: 2 sum max(k_n, k_s) + 2 sum k_s; spin row: 4 sum k_s / (2/5)). Exact for two
-// equal balls without spin (2 k_n / m); 10 k_s / m against the true slip mode 7 k_s / m.
+// Upper bound on the squared highest frequency of the modes that involve one ball: block
+// Gershgorin row sums of M^-1 K over the ball's contacts, spins measured as c R w with inertia
+// 2/5 m / c^2. Each contact couples a translation to its own and its partner's translation
+// (norm max(k_n, k_s)) and spin (k_s each, times c), and a spin to its own and its partner's spin
+// (k_s) and translation (k_s each, over c): translation row 2 sum max(k_n, k_s) + 2 c sum k_s, spin
+// row (2 + 2 / c) sum k_s / (2/5). Any c > 0 gives a bound (a diagonal similarity leaves the
+// eigenvalues alone); c = 2.5 balances the rows when k_n = k_s: 7 sum k / m, exact for the slip mode
+// of two equal balls (7 k_s / m), against 10 sum k / m with c = 1.
+inline constexpr double kSpinScale = 2.5;
 inline double ball_omega2(double mass, double sum_kmax, double sum_ks, bool rotation) {
-  const double row = rotation ? std::max(2 * (sum_kmax + sum_ks), 10 * sum_ks) : 2 * sum_kmax;
+  const double row = rotation ? std::max(2 * sum_kmax + 2 * kSpinScale * sum_ks, (2 + 2 / kSpinScale) / 0.4 * sum_ks)
+                              : 2 * sum_kmax;
   return row / mass;
 }
 

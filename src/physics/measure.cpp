@@ -140,4 +140,23 @@ std::array<double, 3> reaction_force(const Model& model, const std::vector<std::
   return f;
 }
 
+Platens platens(const Model& model, const std::vector<std::size_t>& balls) {
+  Platens out;
+  if (balls.empty()) return out;
+  const Balls& b = model.balls;
+  double lo = b.z[balls[0]], hi = lo;
+  for (std::size_t i : balls) lo = std::min(lo, b.z[i]), hi = std::max(hi, b.z[i]);
+  const double mid = 0.5 * (lo + hi);
+  double force_upper = 0, force_lower = 0, z_upper = 0, z_lower = 0;
+  std::size_t upper = 0, lower = 0;
+  for (std::size_t i : balls) {
+    if (b.z[i] > mid) force_upper += b.fz[i], z_upper += b.z[i], ++upper;
+    else force_lower += b.fz[i], z_lower += b.z[i], ++lower;
+  }
+  out.force = 0.5 * (force_upper - force_lower);
+  out.two = upper > 0 && lower > 0 && hi > lo;
+  if (out.two) out.gap = z_upper / static_cast<double>(upper) - z_lower / static_cast<double>(lower);
+  return out;
+}
+
 }  // namespace trubal

@@ -33,4 +33,13 @@ Unbalanced unbalanced_force(const Model& model);
 // Sum of the unbalanced force on the given balls (for fixed balls: the reaction force they carry).
 std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls);
 
+// Two platens among the given balls (Rowe's triaxial test): the balls above and below the middle of
+// their z extent. force: the axial force F1 they carry, (Fz_upper - Fz_lower) / 2 from their
+// reactions, compression positive; gap: mean z of the upper minus mean z of the lower.
+struct Platens {
+  double force = 0, gap = 0;
+  bool two = false;                // both platens hold balls and are apart
+};
+Platens platens(const Model& model, const std::vector<std::size_t>& balls);
+
 }  // namespace trubal

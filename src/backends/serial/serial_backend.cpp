@@ -1,6 +1,7 @@
 #include "backends/serial/serial_backend.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -21,18 +22,26 @@ class SerialBackend final : public Backend {
   }
 
   void step(Model& model, const StepKernels& kernels, StepSums& sums) override {
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
     prepare(model);
+    const auto t1 = Clock::now();
     const std::size_t pairs = model.contacts.size(), balls = model.balls.size();
     for (std::size_t begin = 0; begin < pairs; begin += kReduceBlock) {
       StepSums block;
       kernels.contacts(model, kernels, begin, std::min(pairs, begin + kReduceBlock), block);
       sums.add(block);
     }
+    const auto t2 = Clock::now();
     for (std::size_t begin = 0; begin < balls; begin += kReduceBlock) {
       StepSums block;
       kernels.motion(model, kernels, begin, std::min(balls, begin + kReduceBlock), block);
       sums.add(block);
     }
+    const auto t3 = Clock::now();
+    model.timing.detect += std::chrono::duration<double>(t1 - t0).count();
+    model.timing.forces += std::chrono::duration<double>(t2 - t1).count();
+    model.timing.motion += std::chrono::duration<double>(t3 - t2).count();
   }
 
   void invalidate() override { valid_ = false; }

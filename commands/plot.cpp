@@ -1,0 +1,55 @@
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "commands/common.hpp"
+#include "io/plot.hpp"
+
+namespace trubal {
+
+static void run_plot(Context& ctx, Args& args) {
+  ctx.session.require_started();
+  static const std::vector<std::string_view> options = {"file", "line", "title", "size"};
+  auto is_option = [](const std::string& w) {
+    const std::string l = to_lower(w);
+    return l == "file" || l == "line" || l == "title" || l == "size" || l == "vs";
+  };
+  PlotRequest request;
+  while (!args.empty() && !is_option(args.peek())) request.y.push_back(to_lower(args.word("history column")));
+  if (request.y.empty()) args.fail("name the history columns to draw (PRINT history lists them)");
+  if (args.accept("vs")) request.x = to_lower(args.word("column to plot against"));
+  while (!args.empty()) {
+    switch (args.expect(options, "PLOT option")) {
+      case 0: request.file = args.word("file name (.png or .svg)"); break;
+      case 1: {
+        args.accept("y");
+        PlotRequest::Reference line;
+        line.y = args.real("reference line's y");
+        if (!args.empty() && !is_option(args.peek())) line.label = args.word("label");
+        request.lines.push_back(line);
+        break;
+      }
+      case 2: request.title = args.word("title"); break;
+      case 3:
+        request.width = static_cast<int>(args.count("width (pixels)", 16, 10000));
+        request.height = static_cast<int>(args.count("height (pixels)", 16, 10000));
+        break;
+    }
+  }
+  if (request.file.empty()) request.file = fmt::format("{}_vs_{}.png", request.y.front(), request.x);
+  render_plot(ctx.session.history(), request);
+  ctx.out << fmt::format("plotted {} against {} to {}\n", fmt::join(request.y, ", "), request.x, request.file);
+}
+
+const Command plot_command = {
+    "PLOT", {}, "PLOT y... [vs x] [file f.png|f.svg] [line [y] v [label]] [title text] [size w h]",
+    "draw recorded histories as PNG or SVG",
+    "Draws history columns (recorded by HIST; PRINT history lists them) against another column (`vs x`, "
+    "default cycle) as a PNG or SVG picture, chosen by the file's extension (default y_vs_x.png). Several "
+    "columns give several series on one figure; each must be recorded by the same HIST as x (cycle and "
+    "time are in every table). `line y 2.56 \"theory\"` adds a dashed horizontal reference line with a "
+    "label (repeatable); `title \"...\"` a title; `size w h` the size in pixels (default 800 600). Example: "
+    "`PLOT ratio vs axial file rowe.png line y 2.56 \"Rowe\"`. Drawn by gnuplot (Debian: gnuplot-nox), run "
+    "with a generated script; the picture is written under a temporary name and renamed.",
+    {"vs", "file", "line", "title", "size"}, run_plot};
+
+}  // namespace trubal

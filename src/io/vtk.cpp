@@ -1,0 +1,201 @@
+#include "io/vtk.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace trubal {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "the VTK files are declared LittleEndian");
+
+// A PolyData piece being built: the XML header grows with each array, the raw bytes of the
+// arrays go into `appended` (each preceded by its UInt64 byte count), addressed by offset.
+class PolyDataWriter {
+ public:
+  void array(std::string_view section, std::string_view type, std::string_view name, int components,
+             const void* data, std::size_t bytes) {
+    std::string& xml = sections_[std::string(section)];
+    xml += fmt::format("        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" "
+                       "offset=\"{}\"/>\n",
+                       type, name, components, appended_.size());
+    const std::uint64_t count = bytes;
+    appended_.append(reinterpret_cast<const char*>(&count), sizeof count);
+    if (bytes) appended_.append(static_cast<const char*>(data), bytes);
+  }
+  template <class T>
+  void array(std::string_view section, std::string_view type, std::string_view name, const std::vector<T>& v,
+             int components = 1) {
+    array(section, type, name, components, v.data(), v.size() * sizeof(T));
+  }
+
+  std::string finish(std::size_t points, std::size_t verts, std::size_t lines) {
+    std::string out =
+        "<?xml version=\"1.0\"?>\n"
+        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+        "  <PolyData>\n";
+    out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" "
+                       "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n",
+                       points, verts, lines);
+    for (const char* s : {"PointData", "CellData", "Points", "Verts", "Lines"}) {
+      auto it = sections_.find(s);
+      if (it == sections_.end()) continue;
+      out += fmt::format("      <{}>\n{}      </{}>\n", s, it->second, s);
+    }
+    out += "    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
+    out += appended_;
+    out += "\n  </AppendedData>\n</VTKFile>\n";
+    return out;
+  }
+
+ private:
+  std::map<std::string, std::string> sections_;
+  std::string appended_;
+};
+
+std::vector<double> interleave(const std::vector<double>& a, const std::vector<double>& b,
+                               const std::vector<double>& c) {
+  std::vector<double> v(3 * a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) v[3 * k] = a[k], v[3 * k + 1] = b[k], v[3 * k + 2] = c[k];
+  return v;
+}
+
+// 0 .. n-1 and 1 .. n (or 2, 4, .. 2n): a cell per point, or a line per pair of points.
+std::vector<std::int64_t> iota64(std::size_t n, std::int64_t step, std::int64_t first) {
+  std::vector<std::int64_t> v(n);
+  for (std::size_t k = 0; k < n; ++k) v[k] = first + static_cast<std::int64_t>(k) * step;
+  return v;
+}
+
+// Writes through a temporary file in the same folder and a rename (no fsync: a dump is not a save).
+void write_whole_file(const std::string& path, const std::string& text) {
+  const std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    f.write(text.data(), static_cast<std::streamsize>(text.size()));
+    f.close();
+    if (!f) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error(fmt::format("cannot write '{}'", path));
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(tmp.c_str());
+    throw std::runtime_error(fmt::format("cannot write '{}': {}", path, std::strerror(err)));
+  }
+}
+
+}  // namespace
+
+void write_balls_vtp(const Model& model, const std::string& path) {
+  const Balls& b = model.balls;
+  const std::size_t n = b.size();
+  PolyDataWriter w;
+  w.array("Points", "Float64", "Points", interleave(b.x, b.y, b.z), 3);
+  w.array("Verts", "Int64", "connectivity", iota64(n, 1, 0));
+  w.array("Verts", "Int64", "offsets", iota64(n, 1, 1));
+  w.array("PointData", "Int64", "id", b.id);
+  const std::vector<std::int32_t> type(b.type.begin(), b.type.end());
+  w.array("PointData", "Int32", "type", type);
+  w.array("PointData", "Float64", "radius", b.rad);
+  w.array("PointData", "Float64", "velocity", interleave(b.vx, b.vy, b.vz), 3);
+  w.array("PointData", "Float64", "spin", interleave(b.wx, b.wy, b.wz), 3);
+  w.array("PointData", "Float64", "force", interleave(b.fx, b.fy, b.fz), 3);
+  write_whole_file(path, w.finish(n, n, 0));
+}
+
+void write_contacts_vtp(const Model& model, const std::string& path) {
+  const Balls& b = model.balls;
+  const ContactTable& c = model.contacts;
+  const auto L = model.space.length();
+  std::vector<double> points;
+  std::vector<double> fn, force;
+  std::vector<std::int64_t> id_i, id_j;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    if (p >= c.state.size() || c.state[p] == 0) continue;
+    const std::size_t i = c.i[p], j = c.j[p];
+    if (i >= b.size() || j >= b.size()) continue;
+    // j as seen from i: across the periodic cell when the contact is with an image.
+    const double shift[3] = {model.space.periodic ? c.image_x[p] * L[0] : 0.0,
+                             model.space.periodic ? c.image_y[p] * L[1] : 0.0,
+                             model.space.periodic ? c.image_z[p] * L[2] : 0.0};
+    points.insert(points.end(), {b.x[i], b.y[i], b.z[i], b.x[j] + shift[0], b.y[j] + shift[1], b.z[j] + shift[2]});
+    fn.push_back(std::abs(c.fn[p]));
+    force.insert(force.end(), {c.fx[p], c.fy[p], c.fz[p]});
+    id_i.push_back(b.id[i]);
+    id_j.push_back(b.id[j]);
+  }
+  const std::size_t lines = fn.size();
+  PolyDataWriter w;
+  w.array("Points", "Float64", "Points", points, 3);
+  w.array("Lines", "Int64", "connectivity", iota64(2 * lines, 1, 0));
+  w.array("Lines", "Int64", "offsets", iota64(lines, 2, 2));
+  w.array("CellData", "Float64", "normal_force", fn);
+  w.array("CellData", "Float64", "force", force, 3);
+  w.array("CellData", "Int64", "id_i", id_i);
+  w.array("CellData", "Int64", "id_j", id_j);
+  write_whole_file(path, w.finish(2 * lines, 0, lines));
+}
+
+VtkSeries::VtkSeries(std::string base, std::int64_t every) : base_(std::move(base)), every_(every) {
+  for (const char* ext : {".vtp", ".pvd", ".VTP", ".PVD"})
+    if (base_.size() > 4 && base_.ends_with(ext)) base_.resize(base_.size() - 4);
+  if (base_.empty()) throw std::runtime_error("DUMP needs a file name");
+}
+
+std::string VtkSeries::balls_path(std::int64_t cycle) const { return fmt::format("{}_{:06d}.vtp", base_, cycle); }
+
+std::string VtkSeries::contacts_path(std::int64_t cycle) const {
+  return fmt::format("{}_contacts_{:06d}.vtp", base_, cycle);
+}
+
+void VtkSeries::write(const Model& model) {
+  write_balls_vtp(model, balls_path(model.cycle));
+  write_contacts_vtp(model, contacts_path(model.cycle));
+  // A second dump at the same cycle replaces the first.
+  if (!entries_.empty() && entries_.back().cycle == model.cycle) entries_.pop_back();
+  entries_.push_back({model.cycle, model.time});
+  write_pvd();
+}
+
+void VtkSeries::write_pvd() const {
+  // The collection names the dumps relative to its own folder.
+  auto leaf = [](const std::string& p) {
+    auto slash = p.find_last_of('/');
+    std::string name = slash == std::string::npos ? p : p.substr(slash + 1), xml;
+    for (char ch : name) {
+      switch (ch) {
+        case '&': xml += "&amp;"; break;
+        case '<': xml += "&lt;"; break;
+        case '>': xml += "&gt;"; break;
+        case '"': xml += "&quot;"; break;
+        default: xml += ch;
+      }
+    }
+    return xml;
+  };
+  std::string xml =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "  <Collection>\n";
+  for (const Entry& e : entries_) {
+    xml += fmt::format("    <DataSet timestep=\"{}\" part=\"0\" file=\"{}\"/>\n", e.time, leaf(balls_path(e.cycle)));
+    xml += fmt::format("    <DataSet timestep=\"{}\" part=\"1\" file=\"{}\"/>\n", e.time,
+                       leaf(contacts_path(e.cycle)));
+  }
+  xml += "  </Collection>\n</VTKFile>\n";
+  write_whole_file(pvd_path(), xml);
+}
+
+}  // namespace trubal

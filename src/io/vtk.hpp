@@ -1,0 +1,53 @@
+// DUMP vtk: ParaView files. Each dump writes two VTK XML PolyData files, named by the cycle,
+//   BASE_000123.vtp           balls: points at the centres, one vertex cell each; point data id,
+//                             type, radius, velocity, spin, force
+//   BASE_contacts_000123.vtp  force chains: one line cell per touching pair, from centre to centre;
+//                             cell data normal_force (magnitude), force (vector on j), id_i, id_j
+// and rewrites BASE.pvd, the collection (part 0 balls, part 1 contacts) with each dump's time, so
+// ParaView opens the whole series at once. Arrays are binary, appended raw (little-endian, UInt64
+// byte counts). Every file is written to a temporary name and renamed, so a reader never sees
+// half a file.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+// Writes the ball and contact files of one dump. Throws std::runtime_error if a file cannot be
+// written.
+void write_balls_vtp(const Model& model, const std::string& path);
+void write_contacts_vtp(const Model& model, const std::string& path);
+
+class VtkSeries {
+ public:
+  // BASE is the file name without extension (a .vtp or .pvd given is dropped).
+  explicit VtkSeries(std::string base, std::int64_t every = 0);
+  // Writes one dump of the model now and adds it to the collection.
+  void write(const Model& model);
+  // True when periodic dumps are on and this cycle is due.
+  bool due(std::int64_t cycle) const { return every_ > 0 && cycle % every_ == 0; }
+  const std::string& base() const { return base_; }
+  std::int64_t every() const { return every_; }
+  void set_every(std::int64_t every) { every_ = every; }
+  std::string pvd_path() const { return base_ + ".pvd"; }
+  // The file names of the dump at a cycle.
+  std::string balls_path(std::int64_t cycle) const;
+  std::string contacts_path(std::int64_t cycle) const;
+  std::size_t dumps() const { return entries_.size(); }
+
+ private:
+  struct Entry {
+    std::int64_t cycle;
+    double time;
+  };
+  void write_pvd() const;
+  std::string base_;
+  std::int64_t every_;
+  std::vector<Entry> entries_;
+};
+
+}  // namespace trubal

@@ -1,0 +1,101 @@
+// PLOT: a PNG of the expected size (read from its IHDR chunk), SVG by extension, and errors that
+// name what is wrong.
+#include <cstdlib>
+
+#include "io_support.hpp"
+
+using namespace trubal;
+using namespace trubal::test;
+
+namespace {
+
+// A PNG starts with its 8-byte signature, then the IHDR chunk: length 13, "IHDR", width, height
+// (big-endian 32-bit), bit depth, colour type, ...
+struct PngSize {
+  bool valid = false;
+  std::uint32_t width = 0, height = 0;
+};
+
+PngSize png_size(const std::string& bytes) {
+  static const std::string signature = "\x89PNG\r\n\x1a\n";
+  PngSize s;
+  if (bytes.size() < 33 || bytes.compare(0, 8, signature) != 0 || bytes.compare(12, 4, "IHDR") != 0) return s;
+  auto be32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (std::size_t k = 0; k < 4; ++k) v = v << 8 | static_cast<unsigned char>(bytes[at + k]);
+    return v;
+  };
+  s.valid = be32(8) == 13 && bytes.find("IEND") != std::string::npos;
+  s.width = be32(16);
+  s.height = be32(20);
+  return s;
+}
+
+const std::string kRecorded = std::string(kPressedRow) + "hist energy unbal every 2\nhist contacts every 5\ncycle 40\n";
+
+}  // namespace
+
+TEST_CASE("io_plot: several series, a reference line and a title make a PNG of the asked size", "[io][plot]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  REQUIRE(h.deck(kRecorded + "plot ke strain_energy vs time file e.png line y 0.05 \"theory\" title \"Energy\" size 640 480\n"));
+  INFO(h.err.str());
+  const PngSize s = png_size(slurp(dir.path() / "e.png"));
+  CHECK(s.valid);
+  CHECK(s.width == 640);
+  CHECK(s.height == 480);
+  CHECK_THAT(h.out.str(), Catch::Contains("plotted ke, strain_energy against time to e.png"));
+  // The default size, the default x (cycle), and the default file name.
+  REQUIRE(h.deck("plot coordination\n"));
+  const PngSize d = png_size(slurp(dir.path() / "coordination_vs_cycle.png"));
+  CHECK(d.valid);
+  CHECK(d.width == 800);
+  CHECK(d.height == 600);
+  for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().string().find(".tmp") == std::string::npos);
+}
+
+TEST_CASE("io_plot: an .svg file name gives SVG", "[io][plot]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  REQUIRE(h.deck(kRecorded + "plot unbal vs cycle file u.SVG line 0.5\n"));
+  INFO(h.err.str());
+  const std::string svg = slurp(dir.path() / "u.SVG");
+  CHECK_THAT(svg, Catch::Contains("<svg"));
+  CHECK_THAT(svg, Catch::Contains("</svg>"));
+}
+
+TEST_CASE("io_plot: unknown columns, columns of different HISTs, other formats and a missing gnuplot", "[io][plot]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness none;
+  CHECK_FALSE(none.deck(std::string(kPressedRow) + "plot ke\n"));
+  CHECK_THAT(none.first_error_line(), Catch::Contains("nothing is recorded yet"));
+
+  Harness h;
+  REQUIRE(h.deck(kRecorded));
+  CHECK_FALSE(h.deck("plot ratio vs axial file r.png\n"));
+  CHECK_THAT(h.first_error_line(),
+             Catch::Contains("unknown history column 'ratio' (recorded: cycle, time, ke, strain_energy, friction_work, "
+                             "damping_work, boundary_work, unbal, contacts, sliding, coordination)"));
+  Harness h2;
+  REQUIRE(h2.deck(kRecorded));
+  CHECK_FALSE(h2.deck("plot ke vs coordination\n"));
+  CHECK_THAT(h2.first_error_line(), Catch::Contains("recorded by different HIST commands"));
+  Harness h3;
+  REQUIRE(h3.deck(kRecorded));
+  CHECK_FALSE(h3.deck("plot ke file k.jpg\n"));
+  CHECK_THAT(h3.first_error_line(), Catch::Contains(".png or .svg"));
+  CHECK_FALSE(fs::exists(dir.path() / "k.jpg"));
+
+  Harness h4;
+  REQUIRE(h4.deck(kRecorded));
+  const std::string saved = std::getenv("PATH") ? std::getenv("PATH") : "";
+  ::setenv("PATH", (dir.path() / "empty").c_str(), 1);
+  const bool ok = h4.deck("plot ke file k.png\n");
+  ::setenv("PATH", saved.c_str(), 1);
+  CHECK_FALSE(ok);
+  CHECK_THAT(h4.first_error_line(), Catch::Contains("PLOT needs gnuplot, which is not on PATH"));
+  CHECK_FALSE(fs::exists(dir.path() / "k.png"));
+}

@@ -1,0 +1,196 @@
+// DUMP vtk: the files are read back with VTK's own XML reader (python3-vtk9), so what ParaView
+// sees is checked, not just that a file exists.
+#include <cmath>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "io_support.hpp"
+
+using namespace trubal;
+using namespace trubal::test;
+
+namespace {
+
+// Reads a .vtp with vtkXMLPolyDataReader and prints "name value..." lines: counts, the point
+// data and cell data arrays (all components), and each line cell's two point ids.
+const char* kReadVtp = R"PY(
+import sys, vtk
+r = vtk.vtkXMLPolyDataReader()
+r.SetFileName(sys.argv[1])
+r.Update()
+if r.GetErrorCode() != 0:
+    sys.exit("vtk reader error %d" % r.GetErrorCode())
+d = r.GetOutput()
+print("points", d.GetNumberOfPoints())
+print("verts", d.GetNumberOfVerts())
+print("lines", d.GetNumberOfLines())
+for k in range(d.GetNumberOfPoints()):
+    print("p%d" % k, *("%.17g" % v for v in d.GetPoint(k)))
+for data, tag in ((d.GetPointData(), "pd"), (d.GetCellData(), "cd")):
+    for a in range(data.GetNumberOfArrays()):
+        arr = data.GetArray(a)
+        vals = [arr.GetComponent(t, c) for t in range(arr.GetNumberOfTuples()) for c in range(arr.GetNumberOfComponents())]
+        print(tag + ":" + arr.GetName(), arr.GetNumberOfComponents(), *("%.17g" % v for v in vals))
+lines = d.GetLines()
+ids = vtk.vtkIdList()
+lines.InitTraversal()
+n = 0
+while lines.GetNextCell(ids):
+    print("line%d" % n, *(ids.GetId(k) for k in range(ids.GetNumberOfIds())))
+    n += 1
+)PY";
+
+using Fields = std::map<std::string, std::vector<double>>;
+
+Fields read_vtp(const TempDir& dir, const std::string& file) {
+  const std::string py = python_with_vtk();
+  if (py.empty())
+    FAIL("these tests read the VTK files with VTK itself: install python3-vtk9 (apt-get install -y python3-vtk9; "
+         ".ci/deps lists it) so that /usr/bin/python3 can `import vtk`");
+  const std::string script = dir.write("read_vtp.py", kReadVtp);
+  const std::string out = (dir.path() / "read.txt").string();
+  const int status = shell(py + " " + quote(script) + " " + quote(file) + " >" + quote(out) + " 2>&1");
+  INFO(slurp(out));
+  REQUIRE(status == 0);
+  Fields fields;
+  for (const auto& line : lines_of(slurp(out))) {
+    std::istringstream in(line);
+    std::string name;
+    in >> name;
+    std::vector<double> values;
+    for (double v; in >> v;) values.push_back(v);
+    fields[name] = values;
+  }
+  return fields;
+}
+
+// An array's values (the component count that leads the line dropped).
+std::vector<double> array_of(const Fields& f, const std::string& name) {
+  auto it = f.find(name);
+  if (it == f.end()) FAIL("no array " << name);
+  return std::vector<double>(it->second.begin() + 1, it->second.end());
+}
+
+}  // namespace
+
+TEST_CASE("io_vtk: balls and force chains read back with VTK's reader", "[io][vtk]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  REQUIRE(h.deck(std::string(kPressedRow) + "cycle 3\ndump vtk snap\n"));
+  INFO(h.err.str());
+  const Model& m = h.session.model();
+  REQUIRE(m.cycle == 3);
+
+  // The balls: one point and one vertex each, every array exact (binary, 64-bit).
+  Fields balls = read_vtp(dir, (dir.path() / "snap_000003.vtp").string());
+  CHECK(balls["points"] == std::vector<double>{4});
+  CHECK(balls["verts"] == std::vector<double>{4});
+  CHECK(balls["lines"] == std::vector<double>{0});
+  const auto id = array_of(balls, "pd:id"), type = array_of(balls, "pd:type"), rad = array_of(balls, "pd:radius");
+  const auto vel = array_of(balls, "pd:velocity"), spin = array_of(balls, "pd:spin");
+  REQUIRE(vel.size() == 12);
+  REQUIRE(spin.size() == 12);
+  CHECK(array_of(balls, "pd:force").size() == 12);
+  for (std::size_t k = 0; k < 4; ++k) {
+    const std::string point = fmt::format("p{}", k);
+    CHECK(balls[point] == std::vector<double>{m.balls.x[k], m.balls.y[k], m.balls.z[k]});
+    CHECK(id[k] == static_cast<double>(m.balls.id[k]));
+    CHECK(type[k] == m.balls.type[k]);
+    CHECK(rad[k] == m.balls.rad[k]);
+    CHECK(vel[3 * k] == m.balls.vx[k]);
+    CHECK(vel[3 * k + 2] == m.balls.vz[k]);
+    CHECK(spin[3 * k + 1] == m.balls.wy[k]);
+  }
+  CHECK(type[2] == 2);
+  CHECK(vel[3 * 3 + 2] == 0.25);   // ball 4 moves freely at its initial speed (no gravity, no contact)
+  CHECK(vel[0] < 0);               // ball 1 is pushed away from ball 2
+
+  // The force chains: a line per touching pair (1-2, 2-3; ball 4 touches nothing) between the
+  // centres, normal force as cell data equal to the contact table's.
+  Fields chains = read_vtp(dir, (dir.path() / "snap_contacts_000003.vtp").string());
+  CHECK(chains["points"] == std::vector<double>{4});
+  CHECK(chains["lines"] == std::vector<double>{2});
+  CHECK(chains["line0"] == std::vector<double>{0, 1});
+  CHECK(chains["line1"] == std::vector<double>{2, 3});
+  CHECK(array_of(chains, "cd:id_i") == std::vector<double>{1, 2});
+  CHECK(array_of(chains, "cd:id_j") == std::vector<double>{2, 3});
+  CHECK(chains["p1"] == std::vector<double>{m.balls.x[1], m.balls.y[1], m.balls.z[1]});
+  CHECK(chains["p3"] == std::vector<double>{m.balls.x[2], m.balls.y[2], m.balls.z[2]});
+  const auto fn = array_of(chains, "cd:normal_force");
+  REQUIRE(fn.size() == 2);
+  std::vector<double> expected;
+  for (std::size_t p = 0; p < m.contacts.size(); ++p)
+    if (m.contacts.state[p] != 0) expected.push_back(std::abs(m.contacts.fn[p]));
+  CHECK(fn == expected);
+  // kn x overlap, below 1e6 x 0.1: the pressed balls spring apart (no damping), so the overlap
+  // has shrunk a little in three steps, but the contact is far from open.
+  CHECK(fn[0] > 0.8e5);
+  CHECK(fn[0] < 1e5);
+  CHECK(array_of(chains, "cd:force").size() == 6);
+}
+
+TEST_CASE("io_vtk: periodic dumps, DUMP off, and the .pvd collection with the times", "[io][vtk]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  fs::create_directory(dir.path() / "out");
+  Harness h;
+  REQUIRE(h.deck(std::string(kPressedRow) + "hist time every 5\ndump vtk out/run.vtp every 5\n"));
+  INFO(h.err.str());
+  REQUIRE(h.deck("cycle 12\ndump off\ncycle 10\n"));
+  for (const char* f : {"out/run_000000.vtp", "out/run_000005.vtp", "out/run_000010.vtp", "out/run_contacts_000010.vtp",
+                        "out/run.pvd"})
+    CHECK(fs::exists(dir.path() / f));
+  CHECK_FALSE(fs::exists(dir.path() / "out/run_000015.vtp"));   // dumps were off by then
+  CHECK_FALSE(fs::exists(dir.path() / "out/run_000020.vtp"));
+  for (const auto& e : fs::directory_iterator(dir.path() / "out")) CHECK(e.path().string().find(".tmp") == std::string::npos);
+
+  // The collection: two parts per dump, times those of HIST time at the same cycles.
+  const std::string pvd = slurp(dir.path() / "out/run.pvd");
+  const auto& rows = h.session.history().tables().front()->rows;   // cycles 5, 10, 15, 20
+  REQUIRE(rows.size() >= 2);
+  CHECK_THAT(pvd, Catch::Contains("type=\"Collection\""));
+  CHECK_THAT(pvd, Catch::Contains("<DataSet timestep=\"0\" part=\"0\" file=\"run_000000.vtp\"/>"));
+  CHECK_THAT(pvd, Catch::Contains(fmt::format("<DataSet timestep=\"{}\" part=\"1\" file=\"run_contacts_000005.vtp\"/>",
+                                              rows[0][1])));
+  CHECK_THAT(pvd, Catch::Contains(fmt::format("<DataSet timestep=\"{}\" part=\"0\" file=\"run_000010.vtp\"/>",
+                                              rows[1][1])));
+  std::size_t datasets = 0;
+  for (std::size_t at = 0; (at = pvd.find("<DataSet", at)) != std::string::npos; ++at) ++datasets;
+  CHECK(datasets == 6);
+
+  // The collection parses as XML and every file it names reads with VTK.
+  const std::string py = python_with_vtk();
+  REQUIRE_FALSE(py.empty());
+  const std::string script = dir.write("pvd.py",
+      "import sys, os, vtk, xml.etree.ElementTree as ET\n"
+      "root = ET.parse(sys.argv[1]).getroot()\n"
+      "for d in root.iter('DataSet'):\n"
+      "    r = vtk.vtkXMLPolyDataReader(); r.SetFileName(os.path.join(os.path.dirname(sys.argv[1]), d.get('file'))); r.Update()\n"
+      "    assert r.GetErrorCode() == 0, d.get('file')\n"
+      "    print(d.get('part'), r.GetOutput().GetNumberOfPoints())\n");
+  const int status = shell(py + " " + quote(script) + " out/run.pvd > pvd.txt 2>&1");
+  INFO(slurp(dir.path() / "pvd.txt"));
+  CHECK(status == 0);
+  // Chains: none before the first step computed forces (cycle 0), two lines at cycle 5, none at
+  // cycle 10 (the pressed balls, undamped, have sprung apart).
+  CHECK(slurp(dir.path() / "pvd.txt") == "0 4\n1 0\n0 4\n1 4\n0 4\n1 0\n");
+}
+
+TEST_CASE("io_vtk: DUMP errors say what is wrong", "[io][vtk]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  CHECK_FALSE(h.deck("dump vtk x\n"));
+  CHECK_THAT(h.first_error_line(), Catch::Contains("no model yet"));
+  Harness g;
+  CHECK_FALSE(g.deck(std::string(kPressedRow) + "dump vtk no/such/dir/x\n"));
+  CHECK_THAT(g.first_error_line(), Catch::Contains("cannot write 'no/such/dir/x_000000.vtp'"));
+  Harness k;
+  CHECK_FALSE(k.deck(std::string(kPressedRow) + "dump vtk x every 0\n"));
+  CHECK_THAT(k.first_error_line(), Catch::Contains("every"));
+  Harness f;
+  CHECK_FALSE(f.deck(std::string(kPressedRow) + "dump csv x\n"));
+  CHECK_THAT(f.first_error_line(), Catch::Contains("vtk"));
+}
