@@ -7,12 +7,12 @@
 namespace trubal {
 
 static void run_plot(Context& ctx, Args& args) {
-  ctx.session.require_started();
-  static const std::vector<std::string_view> options = {"file", "line", "title", "size"};
+  static const std::vector<std::string_view> options = {"file", "line", "title", "size", "from"};
   auto is_option = [](const std::string& w) {
     const std::string l = to_lower(w);
-    return l == "file" || l == "line" || l == "title" || l == "size" || l == "vs";
+    return l == "file" || l == "line" || l == "title" || l == "size" || l == "vs" || l == "from";
   };
+  History from_files;
   PlotRequest request;
   while (!args.empty() && !is_option(args.peek())) request.y.push_back(to_lower(args.word("history column")));
   if (request.y.empty()) args.fail("name the history columns to draw (PRINT history lists them)");
@@ -33,23 +33,31 @@ static void run_plot(Context& ctx, Args& args) {
         request.width = static_cast<int>(args.count("width (pixels)", 16, 10000));
         request.height = static_cast<int>(args.count("height (pixels)", 16, 10000));
         break;
+      case 4:
+        do from_files.adopt(read_history_csv(args.word("history CSV file")));
+        while (!args.empty() && !is_option(args.peek()));
+        request.every_table = true;
+        break;
     }
   }
   if (request.file.empty()) request.file = fmt::format("{}_vs_{}.png", request.y.front(), request.x);
-  render_plot(ctx.session.history(), request);
+  if (!request.every_table) ctx.session.require_started();
+  render_plot(request.every_table ? from_files : ctx.session.history(), request);
   ctx.out << fmt::format("plotted {} against {} to {}\n", fmt::join(request.y, ", "), request.x, request.file);
 }
 
 const Command plot_command = {
-    "PLOT", {}, "PLOT y... [vs x] [file f.png|f.svg] [line [y] v [label]] [title text] [size w h]",
+    "PLOT", {}, "PLOT y... [vs x] [from a.csv ...] [file f.png|f.svg] [line [y] v [label]] [title text] [size w h]",
     "draw recorded histories as PNG or SVG",
     "Draws history columns (recorded by HIST; PRINT history lists them) against another column (`vs x`, "
     "default cycle) as a PNG or SVG picture, chosen by the file's extension (default y_vs_x.png). Several "
     "columns give several series on one figure; each must be recorded by the same HIST as x (cycle and "
     "time are in every table). `line y 2.56 \"theory\"` adds a dashed horizontal reference line with a "
     "label (repeatable); `title \"...\"` a title; `size w h` the size in pixels (default 800 600). Example: "
-    "`PLOT ratio vs axial file rowe.png line y 2.56 \"Rowe\"`. Drawn by gnuplot (Debian: gnuplot-nox), run "
+    "`PLOT ratio vs axial file rowe.png line y 2.56 \"Rowe\"`. `from a.csv b.csv` draws the columns from CSV "
+    "files written by HIST ... file (one series per file, named after it) instead of this run's histories, so "
+    "runs of different decks share one figure. Drawn by gnuplot (Debian: gnuplot-nox), run "
     "with a generated script; the picture is written under a temporary name and renamed.",
-    {"vs", "file", "line", "title", "size"}, run_plot};
+    {"vs", "from", "file", "line", "title", "size"}, run_plot};
 
 }  // namespace trubal

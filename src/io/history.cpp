@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <cstdlib>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -124,6 +125,49 @@ std::pair<const HistoryTable*, std::size_t> History::find_column(const std::stri
     for (std::size_t k = 0; k < t->columns.size(); ++k)
       if (t->columns[k] == name) return {t.get(), k};
   return {nullptr, 0};
+}
+
+std::unique_ptr<HistoryTable> read_history_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(fmt::format("cannot open the history file '{}'", path));
+  auto table = std::make_unique<HistoryTable>();
+  table->file = path;
+  auto split = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::size_t start = 0;
+    for (;;) {
+      auto comma = line.find(',', start);
+      cells.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+      if (comma == std::string::npos) return cells;
+      start = comma + 1;
+    }
+  };
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    auto cells = split(line);
+    if (table->columns.empty()) {
+      table->columns = std::move(cells);
+      continue;
+    }
+    if (cells.size() != table->columns.size())
+      throw std::runtime_error(fmt::format("{}:{}: {} values where the header has {} columns", path, line_no,
+                                           cells.size(), table->columns.size()));
+    std::vector<double> row;
+    for (const auto& c : cells) {
+      char* end = nullptr;
+      double v = std::strtod(c.c_str(), &end);
+      if (c.empty() || end != c.c_str() + c.size())
+        throw std::runtime_error(fmt::format("{}:{}: '{}' is not a number", path, line_no, c));
+      row.push_back(v);
+    }
+    table->rows.push_back(std::move(row));
+  }
+  if (table->columns.empty()) throw std::runtime_error(fmt::format("'{}' is empty: no header row", path));
+  return table;
 }
 
 }  // namespace trubal

@@ -43,6 +43,8 @@ class History {
   // Records a row in every table now, whatever the cycle.
   void sample_all(const Model& model, double volume);
   void clear();
+  // Takes a table made elsewhere (read_history_csv).
+  void adopt(std::unique_ptr<HistoryTable> table) { tables_.push_back(std::move(table)); }
   const std::vector<std::unique_ptr<HistoryTable>>& tables() const { return tables_; }
   // Finds a column by name in any table: (table, column index), or (nullptr, 0).
   std::pair<const HistoryTable*, std::size_t> find_column(const std::string& name) const;
@@ -51,5 +53,9 @@ class History {
   void record(HistoryTable& table, const Model& model, double volume);
   std::vector<std::unique_ptr<HistoryTable>> tables_;
 };
+
+// Reads a CSV file written by HIST ... file (a header row, then rows of numbers) as a table whose
+// `file` is the path. Throws std::runtime_error naming the file and line of anything malformed.
+std::unique_ptr<HistoryTable> read_history_csv(const std::string& path);
 
 }  // namespace trubal

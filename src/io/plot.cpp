@@ -126,35 +126,53 @@ void render_plot(const History& history, const PlotRequest& request) {
   if (request.y.empty()) throw std::runtime_error("PLOT: name at least one history column to draw");
   const auto known = known_columns(history);
   if (known.empty()) throw std::runtime_error("PLOT: nothing is recorded yet (HIST what... first, then CYCLE)");
-  std::vector<const HistoryTable*> tables;
+  // One series per column asked for; with several tables read from files (PLOT ... from), one
+  // per file and column, each named after its file.
+  struct Series {
+    const HistoryTable* table;
+    std::string y, title;
+  };
+  std::vector<Series> series;
   for (const auto& y : request.y) {
     for (const auto& name : {y, request.x})
       if (std::find(known.begin(), known.end(), name) == known.end())
         throw std::runtime_error(fmt::format("PLOT: unknown history column '{}' (recorded: {})", name, join(known)));
+    if (request.every_table) {
+      for (const auto& t : history.tables()) {
+        if (column_index(*t, y) == t->columns.size() ||
+            column_index(*t, request.x) == t->columns.size())
+          throw std::runtime_error(fmt::format("PLOT: '{}' has no column '{}' or '{}'", t->file, y, request.x));
+        std::string stem = fs::path(t->file).stem().string();
+        series.push_back({t.get(), y, request.y.size() == 1 ? stem : stem + " " + y});
+      }
+      continue;
+    }
     const HistoryTable* t = table_with(history, request.x, y);
     if (!t)
       throw std::runtime_error(fmt::format(
           "PLOT: '{}' and '{}' are recorded by different HIST commands; record them in one to plot one against "
           "the other",
           y, request.x));
-    if (t->rows.empty()) throw std::runtime_error(fmt::format("PLOT: no rows of '{}' are recorded yet (CYCLE first)", y));
-    tables.push_back(t);
+    series.push_back({t, y, y});
   }
+  for (const auto& s : series)
+    if (s.table->rows.empty())
+      throw std::runtime_error(fmt::format("PLOT: no rows of '{}' are recorded yet (CYCLE first)", s.y));
   const std::string gnuplot = find_gnuplot();
   if (gnuplot.empty())
     throw std::runtime_error("PLOT needs gnuplot, which is not on PATH (Debian: apt-get install gnuplot-nox)");
 
   TempFolder temp;
   std::string plots;
-  for (std::size_t s = 0; s < request.y.size(); ++s) {
-    const HistoryTable& t = *tables[s];
-    const std::size_t xi = column_index(t, request.x), yi = column_index(t, request.y[s]);
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    const HistoryTable& t = *series[s].table;
+    const std::size_t xi = column_index(t, request.x), yi = column_index(t, series[s].y);
     const fs::path data = temp.path() / fmt::format("series{}.dat", s);
     std::ofstream f(data);
     for (const auto& row : t.rows) f << csv_real(row[xi]) << ' ' << csv_real(row[yi]) << '\n';
     if (!f) throw std::runtime_error("PLOT: cannot write its data file in the temporary folder");
     plots += fmt::format("{}{} using 1:2 with {} lw 2 title {}", plots.empty() ? "" : ", \\\n     ",
-                         quoted(data.string()), t.rows.size() > 1 ? "lines" : "points", quoted(request.y[s]));
+                         trubal::quoted(data.string()), t.rows.size() > 1 ? "lines" : "points", trubal::quoted(series[s].title));
   }
   for (const auto& line : request.lines)
     plots += fmt::format(", \\\n     {} with lines dashtype 2 lw 1.5 lc rgb 'black' title {}", csv_real(line.y),

@@ -12,6 +12,7 @@ namespace trubal {
 struct PlotRequest {
   std::vector<std::string> y;       // history columns, one series each
   std::string x = "cycle";
+  bool every_table = false;         // a series per table and column (tables read from CSV files)
   std::string file;                 // .png or .svg
   struct Reference {
     double y = 0;

@@ -17,7 +17,8 @@ namespace trubal {
 namespace {
 
 constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
-constexpr std::uint32_t kVersion = 1;
+// 2: the membrane's pressure and area.
+constexpr std::uint32_t kVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
 std::uint64_t fnv1a(const std::string& data) {
@@ -110,6 +111,7 @@ template <class IO> void transfer(IO& io, Model& m) {
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
   io.pod(m.settings.damping);
   io.pod(m.energy);
+  io.pod(m.membrane);
   std::uint64_t ngroups = m.groups.size();
   io.pod(ngroups);
   if constexpr (std::is_same_v<IO, Reader>) {

@@ -151,3 +151,15 @@ TEST_CASE("rowe: HIST ratio and axial follow R = F1 / (A sigma2) and eps1 = 2 de
   const auto& t2 = *h.session.history().tables().back();
   CHECK(t2.rows.back()[2] == Approx(0.5 * (top - bottom)).epsilon(0.2));
 }
+
+TEST_CASE("rowe: SAVE and RESTART keep the membrane, so HIST ratio still has its A and sigma2", "[commands][rowe]") {
+  TempDir dir;
+  WorkingDir here(dir.path());
+  Harness h;
+  REQUIRE(h.deck(std::string(kRowe1672) + "membrane 5e4\nsave m.sav\n"));
+  Harness r;
+  REQUIRE(r.deck("restart m.sav\n"));
+  CHECK(r.session.model().membrane.pressure == h.session.model().membrane.pressure);
+  CHECK(r.session.model().membrane.area == h.session.model().membrane.area);
+  CHECK(r.session.model().balls.ax == h.session.model().balls.ax);   // the membrane's forces themselves
+}

@@ -99,3 +99,26 @@ TEST_CASE("io_plot: unknown columns, columns of different HISTs, other formats a
   CHECK_THAT(h4.first_error_line(), Catch::Contains("PLOT needs gnuplot, which is not on PATH"));
   CHECK_FALSE(fs::exists(dir.path() / "k.png"));
 }
+
+TEST_CASE("io_plot: PLOT ... from draws the histories of other runs from their CSV files", "[io][plot]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  {
+    Harness a;   // two runs of different length, each writing its history file
+    REQUIRE(a.deck(std::string(kPressedRow) + "hist energy every 2 file one.csv\ncycle 20\n"));
+    Harness b;
+    REQUIRE(b.deck(std::string(kPressedRow) + "hist energy every 4 file two.csv\ncycle 40\n"));
+  }
+  Harness h;   // no model at all: the files are enough
+  REQUIRE(h.deck("plot ke vs time from one.csv two.csv file both.png size 400 300\n"));
+  INFO(h.err.str());
+  const PngSize s = png_size(slurp(dir.path() / "both.png"));
+  CHECK(s.valid);
+  CHECK(s.width == 400);
+  // A column one file lacks, and a malformed file, are named with file and line.
+  dir.write("bad.csv", "cycle,time,ke\n1,0.1,2\n2,0.2,x\n");
+  CHECK_FALSE(h.deck("plot ke vs time from one.csv bad.csv file b.png\n", "p.dat"));
+  CHECK_THAT(h.err.str(), Catch::Contains("bad.csv:3: 'x' is not a number"));
+  CHECK_FALSE(h.deck("plot contacts vs time from one.csv file c.png\n", "p.dat"));
+  CHECK_THAT(h.err.str(), Catch::Contains("unknown history column 'contacts'"));
+}
