@@ -22,8 +22,6 @@ static void run_start(Context& ctx, Args& args) {
     for (int a = 0; a < 3; ++a) boxes[a] = static_cast<int>(args.count(fmt::format("nb{}", "xyz"[a]), 1, 100000));
   args.done();
   ctx.session.start_periodic(length, boxes);
-  ctx.out << "note: this version builds and prints models in a periodic space but cannot CYCLE them yet\n"
-             "      (periodic images and strain control are not available yet); use START box to run\n";
   ctx.out << fmt::format("new model in the periodic space {} x {} x {}\n", length[0], length[1], length[2]);
 }
 
@@ -33,7 +31,9 @@ const Command start_command = {
     "Clears any model and starts a new one. `START x y z` makes a periodic space of edge lengths x, y, z "
     "(balls interact with images across every face); nbx nby nbz are the numbers of contact-detection boxes "
     "along each axis, chosen automatically if absent. `START box x0 x1 y0 y1 z0 z1` makes a free region "
-    "with no walls. (This version cannot yet CYCLE a periodic space: it says so.) Materials, damping, gravity and histories are cleared; the backend choice and variables "
+    "with no walls. Every periodic edge must stay at least twice the largest ball diameter (CYCLE refuses a "
+    "smaller cell: a ball could touch two images of another); centres are wrapped into [0, x) etc. as they "
+    "cross a face. STRAIN and SERVO deform the cell. Materials, damping, gravity and histories are cleared; the backend choice and variables "
     "stay.",
     {"box"}, run_start};
 

@@ -221,9 +221,11 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   const double vol = stress_volume();
   const bool histories = !history_->tables().empty();
   VtkSeries* dumps = dumps_ && dumps_->every() > 0 ? dumps_.get() : nullptr;
+  const bool moving_cell = !(volume > 0) && model_.space.periodic;   // STRAIN and SERVO change it
   if (histories || dumps)
-    control.after_step = [this, vol, histories, dumps](const Model& m) {
-      if (histories) history_->sample(m, vol);
+    control.after_step = [this, vol, histories, dumps, moving_cell](const Model& m) {
+      const auto L = m.space.length();
+      if (histories) history_->sample(m, moving_cell ? L[0] * L[1] * L[2] : vol);
       if (dumps && dumps->due(m.cycle)) dumps->write(m);
     };
   CycleResult r = run_cycles(model_, *backend_, n, control);

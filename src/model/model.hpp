@@ -99,6 +99,9 @@ struct Space {
   std::array<bool, 3> servo_on{false, false, false};
   std::array<double, 3> servo_target{};
   double servo_gain = 0, servo_max_rate = 0;
+  // Energy the cell control moved in and out, counted without sign (not saved): the instability
+  // guard's scale, as a servo stopping a fast cell takes much out in one step.
+  double gross_work = 0;
   std::array<double, 3> length() const { return {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}; }
 };
 

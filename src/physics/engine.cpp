@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include "backends/periodic.hpp"
+#include "physics/cell.hpp"
 #include "physics/kernels.hpp"
 
 namespace trubal {
@@ -37,14 +39,15 @@ struct Snapshot {
   Balls balls;
   ContactTable contacts;
   Energy energy;
+  Space space;
   std::int64_t cycle = 0;
   double time = 0, dt = 0, critical_dt = 0;
   void take(const Model& m) {
-    balls = m.balls; contacts = m.contacts; energy = m.energy;
+    balls = m.balls; contacts = m.contacts; energy = m.energy; space = m.space;
     cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
   }
   void restore(Model& m) const {
-    m.balls = balls; m.contacts = contacts; m.energy = energy;
+    m.balls = balls; m.contacts = contacts; m.energy = energy; m.space = space;
     m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
   }
 };
@@ -100,8 +103,7 @@ Features scene_features(const Model& model) {
 }
 
 void check_ready(const Model& model) {
-  if (model.space.periodic)
-    throw std::runtime_error("periodic space is not implemented yet: use START with a box for now");
+  check_periodic_cell(model);
   bool hertz = false, linear = false;
   for (int type : used_types(model)) {
     const auto it = model.materials.find(type);
@@ -151,6 +153,12 @@ double critical_timestep(const Model& model) {
     const PairLaw& law = k.law(i, j);
     ContactInput in{};
     in.dx = b.x[j] - b.x[i]; in.dy = b.y[j] - b.y[i]; in.dz = b.z[j] - b.z[i];
+    if (model.space.periodic && p < c.image_x.size()) {
+      const auto cell = model.space.length();
+      in.dx = image_delta(b.x[j], b.x[i], c.image_x[p], cell[0]);
+      in.dy = image_delta(b.y[j], b.y[i], c.image_y[p], cell[1]);
+      in.dz = image_delta(b.z[j], b.z[i], c.image_z[p], cell[2]);
+    }
     in.ri = b.rad[i]; in.rj = b.rad[j];
     if (law.rest_xi > 0) in.mstar = b.mass[i] * b.mass[j] / (b.mass[i] + b.mass[j]);
     using namespace contact_bits;
@@ -209,7 +217,7 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
   // The guard: energy in must balance energy out. A step beyond the stability limit creates
   // energy from nothing; when that is half of all the energy in play, the run stops.
   const double friction0 = model.energy.friction_work, damping0 = model.energy.damping_work;
-  const double boundary0 = model.energy.boundary_work;
+  const double boundary0 = model.energy.boundary_work, gross0 = model.space.gross_work;
   double balance_ref = 0, potential_ref = 0;
   // A scene at rest has almost no energy, and rounding alone then looks like a large relative
   // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
@@ -234,7 +242,9 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
     kernels.dt = dt;
     StepSums sums;
     const auto step_start = Clock::now();
+    cell_before_step(model, dt);   // periodic space: the servo's rates
     backend.step(model, kernels, sums);
+    cell_after_step(model, dt);    // periodic space: the cell's work, its new edges, the strain
     model.timing.step += std::chrono::duration<double>(Clock::now() - step_start).count();
     model.cycle += 1;
     model.time += dt;
@@ -253,7 +263,8 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
     const double potential = sums.potential - potential_ref;
     const double balance = sums.kinetic + sums.strain + potential + dissipated - boundary;
     if (s == 1) balance_ref = balance;
-    const double scale = sums.kinetic + sums.strain + std::abs(potential) + std::abs(dissipated) + std::abs(boundary);
+    const double scale = sums.kinetic + sums.strain + std::abs(potential) + std::abs(dissipated) + std::abs(boundary) +
+                         (model.space.gross_work - gross0);
     if (!std::isfinite(balance) || std::abs(balance - balance_ref) > 0.5 * scale + energy_floor) {
       const std::size_t ball = sums.fastest_ball < model.balls.size() ? sums.fastest_ball : 0;
       const std::int64_t id = model.balls.size() ? model.balls.id[ball] : 0;

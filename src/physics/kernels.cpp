@@ -2,6 +2,8 @@
 // instantiated for every combination of features and picked once per CYCLE by make_kernels.
 #include "physics/kernels.hpp"
 
+#include "backends/periodic.hpp"
+
 #include <utility>
 
 namespace trubal {
@@ -27,6 +29,12 @@ void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::si
   TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
+  // Periodic space: j's image is x_j + image L, moving at v_j + image dL/dt (backends/periodic.hpp).
+  const bool periodic = model.space.periodic;
+  const auto cell = image_lengths(model.space), cell_rate = image_rates(model.space);
+  const std::int8_t* const img_x = c.image_x.data();
+  const std::int8_t* const img_y = c.image_y.data();
+  const std::int8_t* const img_z = c.image_z.data();
   double* const out[kFieldCount] = {c.nx.data(), c.ny.data(), c.nz.data(), c.overlap.data(), c.fn.data(),
                                     c.fx.data(), c.fy.data(), c.fz.data(), c.tx.data(), c.ty.data(), c.tz.data(),
                                     c.kn_eff.data(), c.ks_eff.data(), c.cn_eff.data(), c.fsx.data(), c.fsy.data(),
@@ -43,6 +51,14 @@ void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::si
       in.dx = x[j] - x[i]; in.dy = y[j] - y[i]; in.dz = z[j] - z[i];
       in.ri = rad[i]; in.rj = rad[j];
       in.vx = vx[j] - vx[i]; in.vy = vy[j] - vy[i]; in.vz = vz[j] - vz[i];
+      if (periodic) {
+        in.dx = image_delta(x[j], x[i], img_x[p], cell[0]);
+        in.dy = image_delta(y[j], y[i], img_y[p], cell[1]);
+        in.dz = image_delta(z[j], z[i], img_z[p], cell[2]);
+        in.vx += static_cast<double>(img_x[p]) * cell_rate[0];
+        in.vy += static_cast<double>(img_y[p]) * cell_rate[1];
+        in.vz += static_cast<double>(img_z[p]) * cell_rate[2];
+      }
       if constexpr ((F & kRotation) != 0) {
         in.sx = in.ri * wx[i] + in.rj * wx[j];
         in.sy = in.ri * wy[i] + in.rj * wy[j];

@@ -12,6 +12,7 @@
 
 #include "backends/allpairs/pair_test.hpp"
 #include "backends/pair_list.hpp"
+#include "backends/periodic.hpp"
 #include "backends/threaded/parallel_step.hpp"
 #include "backends/threaded/thread_pool.hpp"
 #include "physics/kernels.hpp"
@@ -48,7 +49,13 @@ class AllPairsBackend final : public Backend {
   void prepare(Model& model) override {
     const std::size_t n = model.balls.size();
     reserve(n);
-    find_touching(model);
+    if (model.space.periodic) {
+      check_periodic_cell(model);
+      wrap_into_cell(model, nullptr, nullptr, nullptr);
+      find_touching_periodic(model);
+    } else {
+      find_touching(model);
+    }
     if (!valid_ || !same_list(model.contacts, n)) install_pairs(model.contacts, pairs_, n);
     valid_ = true;
   }
@@ -139,6 +146,42 @@ class AllPairsBackend final : public Backend {
     tests_ += slot_count_;
   }
 
+  // Periodic space: every pair against j's nearest image (with every edge at least twice the largest
+  // diameter no other image can touch), with find_periodic_pairs' arithmetic at skin 0.
+  void find_touching_periodic(const Model& model) {
+    const Balls& b = model.balls;
+    const std::size_t n = b.size();
+    const auto L = model.space.length();
+    pool_.run([&](int t) {
+      PairCandidates& out = found_[t];
+      out.clear();
+      for (std::size_t i = row_split_[t]; i < row_split_[t + 1]; ++i)
+        for (std::size_t j = i + 1; j < n; ++j) {
+          const std::int8_t ix = nearest_image(b.x[j] - b.x[i], L[0]), iy = nearest_image(b.y[j] - b.y[i], L[1]),
+                            iz = nearest_image(b.z[j] - b.z[i], L[2]);
+          const double dx = image_delta(b.x[j], b.x[i], ix, L[0]), dy = image_delta(b.y[j], b.y[i], iy, L[1]),
+                       dz = image_delta(b.z[j], b.z[i], iz, L[2]);
+          const double reach = b.rad[i] + b.rad[j] + 0.0;
+          if (dx * dx + dy * dy + dz * dz < reach * reach) {
+            out.i.push_back(static_cast<std::uint32_t>(i));
+            out.j.push_back(static_cast<std::uint32_t>(j));
+            out.image_x.push_back(ix);
+            out.image_y.push_back(iy);
+            out.image_z.push_back(iz);
+          }
+        }
+    }, slot_count_ >= kParallelSlots);
+    pairs_.clear();
+    for (const PairCandidates& part : found_) {
+      pairs_.i.insert(pairs_.i.end(), part.i.begin(), part.i.end());
+      pairs_.j.insert(pairs_.j.end(), part.j.begin(), part.j.end());
+      pairs_.image_x.insert(pairs_.image_x.end(), part.image_x.begin(), part.image_x.end());
+      pairs_.image_y.insert(pairs_.image_y.end(), part.image_y.begin(), part.image_y.end());
+      pairs_.image_z.insert(pairs_.image_z.end(), part.image_z.begin(), part.image_z.end());
+    }
+    tests_ += slot_count_;
+  }
+
   // Whether the table already holds exactly these pairs (then nothing needs carrying over).
   bool same_list(ContactTable& table, std::size_t n) const {
     const std::size_t size = pairs_.i.size();
@@ -146,7 +189,9 @@ class AllPairsBackend final : public Backend {
     table.for_each_pair_array([&](auto& v) { consistent = consistent && v.size() == size; });
     if (!consistent) return false;
     for (std::size_t p = 0; p < size; ++p)
-      if (table.image_x[p] != 0 || table.image_y[p] != 0 || table.image_z[p] != 0) return false;
+      if (table.image_x[p] != pairs_.image_x[p] || table.image_y[p] != pairs_.image_y[p] ||
+          table.image_z[p] != pairs_.image_z[p])
+        return false;
     return std::equal(pairs_.i.begin(), pairs_.i.end(), table.i.begin()) &&
            std::equal(pairs_.j.begin(), pairs_.j.end(), table.j.begin());
   }

@@ -1,12 +1,14 @@
 #include "backends/serial/serial_backend.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <string>
 
 #include "backends/pair_list.hpp"
+#include "backends/periodic.hpp"
 #include "backends/serial/box_grid.hpp"
 #include "physics/kernels.hpp"
 
@@ -18,6 +20,7 @@ class SerialBackend final : public Backend {
   std::string name() const override { return "serial"; }
 
   void prepare(Model& model) override {
+    if (model.space.periodic) wrap_into_cell(model, &ref_x_, &ref_y_, &ref_z_);
     if (needs_rebuild(model)) rebuild(model);
   }
 
@@ -67,7 +70,14 @@ class SerialBackend final : public Backend {
     if (!valid_ || ref_x_.size() != n || model.contacts.gather_begin.size() != n + 1) return true;
     if (n && std::memcmp(ref_rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return true;
     // Two balls each moving half the skin can just close it.
-    const double limit2 = 0.25 * skin_ * skin_;
+    // Periodic space: an image pair also closes by the change of the cell edge.
+    double cell_change = 0;
+    if (model.space.periodic) {
+      const auto L = model.space.length();
+      for (int a = 0; a < 3; ++a) cell_change = std::max(cell_change, std::abs(L[a] - ref_cell_[a]));
+      if (!(cell_change < skin_)) return true;
+    }
+    const double limit2 = 0.25 * (skin_ - cell_change) * (skin_ - cell_change);
     double moved2 = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const double dx = b.x[i] - ref_x_[i], dy = b.y[i] - ref_y_[i], dz = b.z[i] - ref_z_[i];
@@ -82,8 +92,15 @@ class SerialBackend final : public Backend {
     double rad_sum = 0, rad_max = 0;
     for (double r : b.rad) { rad_sum += r; rad_max = std::max(rad_max, r); }
     skin_ = n ? 0.2 * rad_sum / static_cast<double>(n) : 0;
-    grid_.fill(b, 2 * rad_max + skin_, model.space.boxes);
-    grid_.find_pairs(b, skin_, pairs_);
+    if (model.space.periodic) {
+      check_periodic_cell(model);
+      skin_ = periodic_skin(model, skin_);
+      find_periodic_pairs(model, skin_, pairs_);
+      ref_cell_ = model.space.length();
+    } else {
+      grid_.fill(b, 2 * rad_max + skin_, model.space.boxes);
+      grid_.find_pairs(b, skin_, pairs_);
+    }
     install_pairs(model.contacts, pairs_, n);
     ref_x_ = b.x; ref_y_ = b.y; ref_z_ = b.z; ref_rad_ = b.rad;
     valid_ = true;
@@ -93,6 +110,7 @@ class SerialBackend final : public Backend {
   BoxGrid grid_;
   PairCandidates pairs_;
   std::vector<double> ref_x_, ref_y_, ref_z_, ref_rad_;
+  std::array<double, 3> ref_cell_{0, 0, 0};   // periodic cell edges at the last rebuild
   double skin_ = 0;
   bool valid_ = false;
   std::size_t rebuilds_ = 0;

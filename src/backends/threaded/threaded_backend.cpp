@@ -1,11 +1,14 @@
 #include "backends/threaded/threaded_backend.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
 
 #include "backends/pair_list.hpp"
+#include "backends/periodic.hpp"
 #include "backends/threaded/cell_pairs.hpp"
 #include "backends/threaded/parallel_step.hpp"
 #include "backends/threaded/thread_pool.hpp"
@@ -25,6 +28,7 @@ class ThreadedBackend final : public Backend {
   int threads() const override { return pool_.size(); }
 
   void prepare(Model& model) override {
+    if (model.space.periodic) wrap_into_cell(model, &ref_x_, &ref_y_, &ref_z_);
     if (needs_rebuild(model)) rebuild(model);
   }
 
@@ -57,7 +61,14 @@ class ThreadedBackend final : public Backend {
     const std::size_t n = b.size();
     if (!valid_ || ref_x_.size() != n || model.contacts.gather_begin.size() != n + 1) return true;
     if (n && std::memcmp(ref_rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return true;
-    const double limit2 = 0.25 * skin_ * skin_;
+    // Periodic space: an image pair also closes by the change of the cell edge.
+    double cell_change = 0;
+    if (model.space.periodic) {
+      const auto L = model.space.length();
+      for (int a = 0; a < 3; ++a) cell_change = std::max(cell_change, std::abs(L[a] - ref_cell_[a]));
+      if (!(cell_change < skin_)) return true;
+    }
+    const double limit2 = 0.25 * (skin_ - cell_change) * (skin_ - cell_change);
     moved_.assign(pool_.size(), 0.0);
     pool_.run([&](int t) {
       double moved2 = 0;
@@ -78,7 +89,14 @@ class ThreadedBackend final : public Backend {
     double rad_sum = 0, rad_max = 0;
     for (double r : b.rad) { rad_sum += r; rad_max = std::max(rad_max, r); }
     skin_ = n ? 0.2 * rad_sum / static_cast<double>(n) : 0;
-    grid_.find(pool_, b, 2 * rad_max + skin_, skin_, pairs_);
+    if (model.space.periodic) {   // the serial backend's periodic search (backends/periodic.hpp)
+      check_periodic_cell(model);
+      skin_ = periodic_skin(model, skin_);
+      find_periodic_pairs(model, skin_, pairs_);
+      ref_cell_ = model.space.length();
+    } else {
+      grid_.find(pool_, b, 2 * rad_max + skin_, skin_, pairs_);
+    }
     install_pairs(model.contacts, pairs_, n);
     ref_x_ = b.x; ref_y_ = b.y; ref_z_ = b.z; ref_rad_ = b.rad;
     valid_ = true;
@@ -90,6 +108,7 @@ class ThreadedBackend final : public Backend {
   CellPairs grid_;
   PairCandidates pairs_;
   std::vector<double> ref_x_, ref_y_, ref_z_, ref_rad_, moved_;
+  std::array<double, 3> ref_cell_{0, 0, 0};   // periodic cell edges at the last rebuild
   double skin_ = 0;
   bool valid_ = false;
   std::size_t rebuilds_ = 0;

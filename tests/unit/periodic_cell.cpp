@@ -1,0 +1,197 @@
+// The periodic space: images across every face on every backend (bitwise equal answers), a ball
+// wrapped across a face keeps its contacts and their history, the cell-size rule, STRAIN and SERVO
+// through the interpreter, PRINT stress over the cell volume.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "backends/periodic.hpp"
+#include "backends_scenes.hpp"
+#include "interp_support.hpp"
+#include "physics/cell.hpp"
+#include "physics/measure.hpp"
+
+using namespace trubal;
+using namespace trubal::test;
+
+namespace {
+
+// A dense FCC block filling a periodic cell of n x n x n unit cells (4 n^3 balls, R = 20, every ball
+// touching its 12 neighbours, some across the faces), jittered, and compressed by the cell.
+Model periodic_fcc(int n, double jitter_size, double rate) {
+  Model m;
+  const double r = 20, a = 0.99 * 2 * r * std::sqrt(2.0);
+  m.space.periodic = true;
+  m.space.lo = {0, 0, 0};
+  m.space.hi = {n * a, n * a, n * a};
+  m.started = true;
+  m.materials[1] = scene_linear(1.5e9, 1.5e9, 0.3, 2000);
+  m.settings.fixed_dt = 0.02;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> jitter(-jitter_size, jitter_size);
+  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (const auto& b : basis)
+          add_ball(m, 0, 1, (i + b[0]) * a + jitter(rng), (j + b[1]) * a + jitter(rng), (k + b[2]) * a + jitter(rng), r);
+  update_mass(m);
+  if (rate != 0) set_strain_rates(m, {0.5 * rate, 0.25 * rate, rate});
+  return m;
+}
+
+Model run(const Model& start, const std::string& backend_name, int threads, int cycles) {
+  Model model = start;
+  auto backend = make_backend(backend_name, threads);
+  const CycleResult r = run_cycles(model, *backend, cycles, {});
+  INFO(r.message);
+  REQUIRE_FALSE(r.unstable);
+  REQUIRE(r.done == cycles);
+  return model;
+}
+
+}  // namespace
+
+TEST_CASE("periodic: a dense FCC block in a periodic cell has exactly 6N contacts on every backend", "[periodic]") {
+  const Model start = periodic_fcc(4, 0, 0);   // 256 balls, the ones at the faces touch images
+  for (const char* name : {"serial", "threaded", "allpairs"}) {
+    INFO(name);
+    const Model m = run(start, name, std::string(name) == "serial" ? 1 : 2, 1);
+    CHECK(contact_count(m) == 6 * m.balls.size());
+  }
+}
+
+TEST_CASE("periodic: images and a straining cell give bitwise equal answers on every backend", "[periodic][backends]") {
+  const Model start = periodic_fcc(5, 0.05, 2e-3);   // 500 balls, balls cross faces as the cell shrinks
+  const int cycles = 400;
+  const Model reference = run(start, "serial", 1, cycles);
+  const Picture expected = picture(reference);
+  REQUIRE(expected.contacts.size() > 2000);
+  CHECK(reference.space.strain[2] > 0);
+  struct Variant { const char* backend; int threads; };
+  for (const Variant v : {Variant{"threaded", 1}, {"threaded", 2}, {"threaded", 3}, {"threaded", 4},
+                          {"allpairs", 1}, {"allpairs", 2}, {"allpairs", 3}}) {
+    INFO(v.backend << " on " << v.threads << " threads");
+    const Model m = run(start, v.backend, v.threads, cycles);
+    CHECK(difference(expected, picture(m)) == "");
+    CHECK(std::memcmp(m.space.lo.data(), reference.space.lo.data(), sizeof(double) * 3) == 0);
+    CHECK(std::memcmp(m.space.hi.data(), reference.space.hi.data(), sizeof(double) * 3) == 0);
+  }
+}
+
+TEST_CASE("periodic: a ball wrapped across a face keeps its contact and shear history", "[periodic]") {
+  for (const char* name : {"serial", "allpairs", "threaded"}) {
+    INFO(name);
+    Model m;
+    m.space.periodic = true;
+    m.space.hi = {10, 10, 10};
+    m.started = true;
+    m.materials[1] = scene_linear(1e4, 1e4, 10, 1000);
+    m.settings.fixed_dt = 1e-3;
+    // Touching across the x face: 1 near x = 0, 2 near x = 10, overlap 0.05.
+    add_ball(m, 1, 1, 0.5, 5, 5, 0.5);
+    add_ball(m, 2, 1, 9.55, 5, 5, 0.5);
+    m.balls.vx = {-1.0, -1.0};                  // both drift across the face at x = 0
+    m.balls.vy = {0.01, -0.01};                 // and shear: the history grows steadily
+    m.balls.fixed = {kVel | kSpin, kVel | kSpin};
+    auto backend = make_backend(name, std::string(name) == "serial" ? 1 : 1);
+    double last_shear = 0;
+    bool wrapped = false;
+    for (int step = 0; step < 60; ++step) {
+      REQUIRE(run_cycles(m, *backend, 10, {}).done == 10);
+      REQUIRE(contact_count(m) == 1);
+      std::size_t p = 0;
+      while (m.contacts.state[p] == 0) ++p;
+      const double shear = std::hypot(m.contacts.fsy[p], m.contacts.fsz[p]);
+      CHECK(shear > last_shear);   // never reset to zero
+      last_shear = shear;
+      CHECK(m.contacts.overlap[p] == Approx(0.05).epsilon(1e-2));
+      wrapped = wrapped || m.balls.x[0] > 5;
+      CHECK(m.balls.x[0] > -0.02);   // wrapped at the start of each step, then moved
+      CHECK(m.balls.x[0] < 10.02);
+    }
+    CHECK(wrapped);
+  }
+}
+
+TEST_CASE("periodic: a cell shorter than twice the largest diameter is refused", "[periodic]") {
+  Model m;
+  m.space.periodic = true;
+  m.space.hi = {10, 10, 3.9};
+  m.started = true;
+  m.materials[1] = scene_linear(1e4, 1e4, 0.3, 1000);
+  add_ball(m, 1, 1, 5, 5, 1, 1);
+  auto backend = make_backend("serial", 1);
+  CHECK_THROWS_WITH(run_cycles(m, *backend, 1, {}), Catch::Contains("periodic cell too small"));
+}
+
+TEST_CASE("periodic: STRAIN deforms the cell, PRINT strain and stress use the cell", "[periodic][commands]") {
+  Harness h;
+  REQUIRE(h.deck(R"(
+start 200 200 200
+prop kn 1e6 ks 1e6 fric 0.3 dens 2000
+gen 100 8 10 seed 3
+tstep 0.01
+strain 1e-3 0 2e-3
+cycle 100
+print strain
+)"));
+  const Model& m = h.session.model();
+  const double dt = 0.01;
+  CHECK(m.space.strain[0] == Approx(100 * 1e-3 * dt));
+  CHECK(m.space.strain[2] == Approx(100 * 2e-3 * dt));
+  CHECK(m.space.strain[1] == 0);
+  CHECK(m.space.length()[2] == Approx(200 * std::pow(1 - 2e-3 * dt, 100)));
+  CHECK(h.out.str().find("strain: xx 0.001") != std::string::npos);
+  const auto L = m.space.length();
+  CHECK(h.session.stress_volume() == Approx(L[0] * L[1] * L[2]));
+  REQUIRE(h.deck("strain zz 0\nprint strain\nstrain off\n"));
+  CHECK(h.session.model().space.strain_rate[0] == 0);
+  CHECK_FALSE(h.deck("strain 0 0 1 0.5 0 0\n"));
+  CHECK(h.first_error_line().find("not available yet") != std::string::npos);
+}
+
+TEST_CASE("periodic: STRAIN and SERVO need the periodic space", "[periodic][commands]") {
+  Harness h;
+  REQUIRE(h.deck("start box 0 10 0 10 0 10\n"));
+  CHECK_FALSE(h.deck("strain 0 0 1e-3\n"));
+  CHECK(h.first_error_line().find("periodic space") != std::string::npos);
+}
+
+TEST_CASE("periodic: SERVO brings the cell's stress to the targets, each axis on its own", "[periodic][commands]") {
+  Harness h;
+  REQUIRE(h.deck(R"(
+start 200 200 200
+prop kn 1e6 ks 1e6 fric 0.3 dens 2000
+gen 400 9 11 seed 5
+damp local 0.7
+servo 1000 1100 1200
+cycle 16000
+)"));
+  const Model& m = h.session.model();
+  const auto L = m.space.length();
+  const Sym6 s = average_stress(m, L[0] * L[1] * L[2]);
+  CHECK(s[0] == Approx(1000).epsilon(0.01));
+  CHECK(s[1] == Approx(1100).epsilon(0.01));
+  CHECK(s[2] == Approx(1200).epsilon(0.01));
+  // The energy balance holds with the cell's work counted.
+  const EnergyReport e = energy(m);
+  CHECK(std::abs(e.total()) < 0.02 * std::abs(e.boundary_work));
+}
+
+TEST_CASE("periodic: a loose assembly under the servo is bitwise equal on every backend", "[periodic][backends]") {
+  auto run_deck = [](const std::string& backend) {
+    auto h = std::make_unique<Harness>();
+    REQUIRE(h->deck("start 200 200 200\nprop kn 1e6 ks 1e6 fric 0.3 dens 2000\ngen 300 9 11 seed 9\n"
+                    "damp local 0.7\nbackend " + backend + "\nservo 1000 1100 1200\ncycle 6000\n"));
+    return picture(h->session.model());
+  };
+  const Picture expected = run_deck("serial");
+  REQUIRE(expected.contacts.size() > 300);
+  for (const char* b : {"threaded threads 3", "allpairs threads 2"}) {
+    INFO(b);
+    CHECK(difference(expected, run_deck(b)) == "");
+  }
+}
