@@ -25,7 +25,7 @@ inline constexpr std::size_t kReduceBlock = 2048;
 struct StepSums {
   double friction_work = 0, damping_work = 0, boundary_work = 0;
   double strain = 0;                        // spring energy at the start of the step
-  double kinetic = 0, potential = 0;        // at the end of the step (PHYSICS: half-step pairing)
+  double kinetic = 0, potential = 0;        // at t: m v(t-dt/2).v(t+dt/2)/2 and -m g.x(t), for the guard
   double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate
   double fastest_speed2 = -1;               // |v|^2 + |R w|^2 of the fastest ball (NaN wins)
   std::size_t fastest_ball = 0;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace trubal {
 namespace {
@@ -123,7 +124,11 @@ Unbalanced unbalanced_force(const Model& model) {
     ++balls;
   }
   Unbalanced u;
-  if (contacts == 0 || balls == 0 || contact_sum == 0) return u;
+  if (balls == 0 || unbalanced_sum == 0) return u;   // nothing free, or all in balance
+  if (contacts == 0 || contact_sum == 0) {             // forces that no contact balances: SOLVE goes on
+    u.mean_ratio = u.max_ratio = std::numeric_limits<double>::infinity();
+    return u;
+  }
   const double mean_contact = contact_sum / static_cast<double>(contacts);
   u.mean_ratio = unbalanced_sum / static_cast<double>(balls) / mean_contact;
   u.max_ratio = unbalanced_max / mean_contact;
