@@ -50,7 +50,19 @@ static void print_info(Context& ctx) {
   o << fmt::format("backend: {}\n", s.backend().name());
   o << fmt::format("threads: {}\n", s.backend().threads());
   for (const auto& [k, v] : s.backend().info()) o << k << ": " << v << '\n';
-  o << fmt::format("physics: {}\n", scene_features(m).describe());
+  const Features f = scene_features(m);
+  o << fmt::format("physics: {}\n", f.describe());
+  // The loops compiled for exactly these features (the general kernel has every one on).
+  const char* damping = f.mass_damping == DampKind::Rayleigh ? ", mass damping"
+                        : f.mass_damping == DampKind::Local  ? ", local damping"
+                                                             : "";
+  const char* estimate = m.settings.fixed_dt > 0    ? "fixed step"
+                         : f.stiffness_damping     ? "damped step estimate"
+                                                   : "undamped step estimate";
+  o << fmt::format("kernel: contacts {}{}{}{}; motion {}{}{}, {}\n", f.hertz ? "hertz" : "linear",
+                   f.friction ? " shear" : " normal-only", f.rotation ? " moments" : "",
+                   f.stiffness_damping ? " dashpots" : "", f.rotation ? "translation+rotation" : "translation only",
+                   f.gravity || f.applied ? ", loads" : "", damping, estimate);
   o << fmt::format("types: {}\n", m.materials.size());
   o << fmt::format("groups: {}\n", m.groups.size());
 }

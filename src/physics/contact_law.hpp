@@ -60,9 +60,11 @@ inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, d
   const double rsum = in.ri + in.rj;
   if (!(d2 < rsum * rsum)) return r;   // U <= 0: no force, and the history is forgotten
   const double d = std::sqrt(d2);
-  const double inv_d = 1.0 / d;
   const double u = rsum - d;
-  const double nx = in.dx * inv_d, ny = in.dy * inv_d, nz = in.dz * inv_d;
+  // Coincident centres (a ball launched onto another) have no direction: push along +z rather than
+  // make NaN, and let the energy guard judge the outcome.
+  const double inv_d = d > 0 ? 1.0 / d : 0.0;
+  const double nx = in.dx * inv_d, ny = in.dy * inv_d, nz = d > 0 ? in.dz * inv_d : 1.0;
 
   // Relative velocity of j's contact point against i's: V = v_j - v_i - (R_i w_i + R_j w_j) x n.
   double vx = in.vx, vy = in.vy, vz = in.vz;

@@ -3,6 +3,9 @@
 // Without tmux these tests warn and pass (CI installs it: Debian package `tmux`).
 #include <catch2/catch.hpp>
 
+#include <fcntl.h>
+#include <stdlib.h>
+
 #include <unistd.h>
 
 #include <chrono>
@@ -16,6 +19,21 @@ using namespace trubal::test;
 namespace {
 
 bool have_tmux() { return shell("command -v tmux >/dev/null 2>&1") == 0; }
+
+// A pseudo-terminal can be opened (not in a chroot whose /dev has no devpts mounted).
+bool have_pty() {
+  int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  if (master < 0) return false;
+  bool ok = ::grantpt(master) == 0 && ::unlockpt(master) == 0;
+  if (ok) {
+    const char* name = ::ptsname(master);
+    int slave = name ? ::open(name, O_RDWR | O_NOCTTY) : -1;
+    ok = slave >= 0;
+    if (slave >= 0) ::close(slave);
+  }
+  ::close(master);
+  return ok;
+}
 
 // One trubal shell in a detached tmux session on its own server (socket), 200 x 50 characters.
 class TmuxShell {
@@ -87,6 +105,10 @@ class TmuxShell {
 #define REQUIRE_TMUX()                                                  \
   if (!have_tmux()) {                                                   \
     WARN("tmux is not installed: the shell tests are skipped");         \
+    return;                                                             \
+  }                                                                     \
+  if (!have_pty()) {                                                    \
+    WARN("no pseudo-terminal can be opened: the shell tests are skipped"); \
     return;                                                             \
   }
 

@@ -1,0 +1,250 @@
+// Numerical stability on hard cases (issue 7): each runs stably with the default settings, or stops
+// with a message naming the cause and the fix, never with NaN.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+
+#include "interp_support.hpp"
+#include "physics/kernels.hpp"
+#include "physics/measure.hpp"
+#include "physics_helpers.hpp"
+
+using namespace trubal;
+
+namespace {
+
+bool all_finite(const Model& m) {
+  const Balls& b = m.balls;
+  for (std::size_t i = 0; i < b.size(); ++i)
+    if (!(std::isfinite(b.x[i]) && std::isfinite(b.y[i]) && std::isfinite(b.z[i]) && std::isfinite(b.vx[i]) &&
+          std::isfinite(b.vy[i]) && std::isfinite(b.vz[i]) && std::isfinite(b.wx[i]) && std::isfinite(b.wy[i]) &&
+          std::isfinite(b.wz[i])))
+      return false;
+  return true;
+}
+
+// An FCC block of n^3 cells at centre spacing `squeeze` * diameter, the outer layer held, a little
+// jitter; `type_of` picks each ball's type.
+template <class TypeOf>
+Model fcc_block(int n, double squeeze, TypeOf type_of) {
+  Model model;
+  const double r = 0.01, a = squeeze * 2 * r * std::sqrt(2.0);
+  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-2e-5, 2e-5);
+  int k_ball = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (const auto& b : basis) {
+          const std::size_t ball = add_ball(model, 0, type_of(k_ball++), (i + b[0]) * a + jitter(rng),
+                                            (j + b[1]) * a + jitter(rng), (k + b[2]) * a + jitter(rng), r);
+          if (i == 0 || j == 0 || k == 0 || i == n - 1 || j == n - 1 || k == n - 1) model.balls.fixed[ball] = kVel | kSpin;
+        }
+  return model;
+}
+
+// Gives the free balls random velocities of about `speed` (and spins), so every contact works.
+void shake(Model& model, double speed) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Balls& b = model.balls;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    if (b.fixed[i]) continue;
+    b.vx[i] = speed * u(rng); b.vy[i] = speed * u(rng); b.vz[i] = speed * u(rng);
+    b.wx[i] = speed / b.rad[i] * u(rng);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("hard: a step above critical stops with a message naming FRAC or TSTEP", "[hard]") {
+  const bool fixed_step = GENERATE(false, true);
+  test::Harness h;
+  const std::string setup =
+      "start box -1 1 -1 1 -1 1\n"
+      "prop kn 1e6 ks 1e6 fric 0.3 dens 1000\n"
+      "ball -0.0099 0 0 0.01 id 1\nball 0.0099 0 0 0.01 id 2\nball 0.0297 0 0 0.01 id 3\n"
+      "fix xvel yvel zvel xspin yspin zspin range id 1\n";
+  REQUIRE(h.deck(setup));
+  // The critical step of this chain is a few 1e-5 s; 1e-3 s is far above it.
+  REQUIRE_FALSE(h.deck(std::string(fixed_step ? "tstep 1e-3\n" : "frac 3\n") + "cycle 2000\n"));
+  const std::string err = h.err.str();
+  INFO(err);
+  CHECK(err.find("unstable at cycle") != std::string::npos);
+  CHECK(err.find(fixed_step ? "try TSTEP" : "try FRAC") != std::string::npos);
+  const Model& m = h.session.model();
+  CHECK(all_finite(m));
+  CHECK(m.cycle < 2000);
+  // The last good state: balls 2 and 3 still near where they were put.
+  CHECK(std::abs(m.balls.x[2] - 0.0297) < 0.01);
+}
+
+TEST_CASE("hard: size ratio 1:20 polydisperse packing settles under gravity onto fixed balls", "[hard]") {
+  Model model;
+  model.materials[1] = test::linear_material(1e4, 1e4, 0.5, 2500);
+  model.settings.gravity = {0, 0, -9.81};
+  model.settings.damping.kind = DampKind::Local;
+  model.settings.damping.local = 0.7;
+  // A floor of fixed large balls (radius 10 mm) and above it balls of radius 0.5 .. 10 mm.
+  const double rmax = 0.01, rmin = rmax / 20;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j) {
+      const std::size_t f = add_ball(model, 0, 1, 2 * rmax * i, 2 * rmax * j, 0, rmax);
+      model.balls.fixed[f] = kVel | kSpin;
+    }
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(0, 1);
+  // Radii log-uniform in [rmin, rmax], on a grid of spacing 2 rmax so nothing overlaps at first.
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) {
+        const double rad = rmin * std::pow(20.0, u(rng));
+        add_ball(model, 0, 1, 2 * rmax * i + 0.1 * rmax * u(rng), 2 * rmax * j + 0.1 * rmax * u(rng),
+                 2.2 * rmax * (k + 1), rad);
+      }
+  // and small balls in the gaps of the floor
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) add_ball(model, 0, 1, rmax * (2 * i + 1), rmax * (2 * j + 1), 1.5 * rmax, rmin);
+  auto backend = make_backend("serial", 1);
+  const CycleResult first = run_cycles(model, *backend, 2000, {});
+  INFO(first.message);
+  REQUIRE_FALSE(first.unstable);
+  const double early = unbalanced_force(model).mean_ratio;
+  const CycleResult r = run_cycles(model, *backend, 40000, {});
+  INFO(r.message);
+  REQUIRE_FALSE(r.unstable);
+  REQUIRE(all_finite(model));
+  const double late = unbalanced_force(model).mean_ratio;
+  INFO("unbalanced ratio " << early << " -> " << late << " dt " << model.dt);
+  CHECK(late < 0.1 * early);
+  CHECK(late < 0.5);
+  CHECK(contact_count(model) > 20);
+  // (The floor is finite and has gaps: balls at its edge or smaller than its holes fall past it.)
+}
+
+TEST_CASE("hard: stiffness ratio 1e4 between two materials in one pack", "[hard]") {
+  Model model = fcc_block(4, 0.99, [](int k) { return 1 + k % 2; });
+  model.materials[1] = test::linear_material(1e4, 1e4, 0.3, 2500);
+  model.materials[2] = test::linear_material(1e8, 1e8, 0.3, 2500);
+  shake(model, 0.01);
+  auto backend = make_backend("serial", 1);
+  REQUIRE_FALSE(run_cycles(model, *backend, 1, {}).unstable);
+  const double e0 = energy(model).total();
+  const CycleResult r = run_cycles(model, *backend, 5000, {});
+  INFO(r.message);
+  REQUIRE_FALSE(r.unstable);
+  REQUIRE(all_finite(model));
+  // Undamped: friction only takes energy out, the balance holds.
+  const EnergyReport e = energy(model);
+  CHECK(e.total() == Approx(e0).epsilon(0.02));
+  CHECK(e.friction_work >= 0);
+}
+
+TEST_CASE("hard: mass ratio 1e3 (dense and light balls) in one pack", "[hard]") {
+  Model model = fcc_block(4, 0.99, [](int k) { return 1 + k % 3 % 2; });
+  model.materials[1] = test::linear_material(1e6, 1e6, 0.3, 10);
+  model.materials[2] = test::linear_material(1e6, 1e6, 0.3, 10000);
+  shake(model, 0.01);
+  auto backend = make_backend("serial", 1);
+  REQUIRE_FALSE(run_cycles(model, *backend, 1, {}).unstable);
+  const double e0 = energy(model).total();
+  const CycleResult r = run_cycles(model, *backend, 5000, {});
+  INFO(r.message);
+  REQUIRE_FALSE(r.unstable);
+  REQUIRE(all_finite(model));
+  CHECK(energy(model).total() == Approx(e0).epsilon(0.02));
+}
+
+TEST_CASE("hard: stiffness-proportional damping that dominates the step shrinks it and runs stably", "[hard]") {
+  Model model = fcc_block(4, 0.99, [](int) { return 1; });
+  model.materials[1] = test::linear_material(1e8, 1e8, 0.3, 2500);
+  shake(model, 0.01);
+  auto backend = make_backend("serial", 1);
+  update_mass(model);
+  const double undamped = critical_timestep(model);
+  // beta 100 times the undamped step: xi = beta omega / 2 around 100, the step about 1/xi^2 ... 1/(2 xi).
+  model.settings.damping.kind = DampKind::Rayleigh;
+  model.settings.damping.beta = 100 * undamped;
+  const double damped = critical_timestep(model);
+  INFO("undamped step " << undamped << " damped " << damped);
+  CHECK(damped < 0.02 * undamped);
+  CHECK(damped > 0);
+  const double k0 = energy(model).kinetic_translation;
+  const CycleResult r = run_cycles(model, *backend, 5000, {});
+  INFO(r.message);
+  REQUIRE_FALSE(r.unstable);
+  REQUIRE(all_finite(model));
+  CHECK(model.dt == Approx(0.8 * model.critical_dt).epsilon(1e-12));
+  const EnergyReport e = energy(model);
+  (void)k0;
+  CHECK(e.damping_work > 0);
+}
+
+TEST_CASE("hard: a dense pack compressed to 5% overlap is stable with forces kn * overlap", "[hard]") {
+  const double kn = 1e6;
+  Model model = fcc_block(4, 0.95, [](int) { return 1; });
+  model.materials[1] = test::linear_material(kn, kn, 0.3, 2500);
+  shake(model, 0.001);
+  auto backend = make_backend("serial", 1);
+  const CycleResult r = run_cycles(model, *backend, 3000, {});
+  INFO(r.message);
+  REQUIRE_FALSE(r.unstable);
+  REQUIRE(all_finite(model));
+  const ContactTable& c = model.contacts;
+  std::size_t touching = 0;
+  double most = 0;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    if (!(c.overlap[p] > 0)) continue;
+    ++touching;
+    most = std::max(most, c.overlap[p]);
+    REQUIRE(c.fn[p] == Approx(kn * c.overlap[p]).epsilon(1e-12));
+  }
+  INFO("touching " << touching << " largest overlap " << most);
+  CHECK(touching > 400);
+  // 5% of the diameter (0.02): 1e-3, a little more or less where the balls moved.
+  CHECK(most == Approx(0.001).epsilon(0.1));
+}
+
+TEST_CASE("hard: a ball crossing a whole contact box in one step meets the same contacts on every backend",
+          "[hard]") {
+  // A row of resting balls along x and one fast ball flying into it; at this speed it moves more than
+  // a contact box (about 2.2 diameters) per step, far more than the pair list's skin.
+  auto build = [] {
+    Model model;
+    model.materials[1] = test::linear_material(1e9, 0, 0, 2500);
+    for (int i = 0; i < 40; ++i) add_ball(model, 0, 1, 0.03 * i + 0.2, 0.0, 0, 0.01);
+    const std::size_t fast = add_ball(model, 0, 1, 0, 0.0, 0, 0.01);
+    model.settings.frac = 0.8;
+    model.balls.vx[fast] = 0;
+    return model;
+  };
+  Model probe = build();
+  update_mass(probe);
+  const double dt = 0.8 * critical_timestep(probe);
+  const double speed = 0.05 / dt;   // 0.05 m per step: 2.5 diameters
+  std::vector<Model> results;
+  for (const char* name : {"allpairs", "serial", "threaded"}) {
+    Model model = build();
+    model.balls.vx.back() = speed;
+    auto backend = make_backend(name, std::string(name) == "serial" ? 1 : 2);
+    std::size_t most_contacts = 0;
+    CycleControl control;
+    control.after_step = [&](const Model& m) { most_contacts = std::max(most_contacts, contact_count(m)); };
+    const CycleResult r = run_cycles(model, *backend, 200, control);
+    INFO(name << ": " << r.message);
+    CHECK(all_finite(model));
+    // Either the collisions were seen, or (centres landing on each other: no contact normal) the
+    // guard stopped the run with its message; never NaN.
+    CHECK((most_contacts > 0 || r.unstable));
+    results.push_back(std::move(model));
+  }
+  for (std::size_t k = 1; k < results.size(); ++k) {
+    REQUIRE(results[k].cycle == results[0].cycle);
+    for (std::size_t i = 0; i < results[0].balls.size(); ++i) {
+      REQUIRE(results[k].balls.x[i] == results[0].balls.x[i]);
+      REQUIRE(results[k].balls.vx[i] == results[0].balls.vx[i]);
+    }
+  }
+}
