@@ -10,6 +10,7 @@
 #include "backends/pair_list.hpp"
 #include "backends/periodic.hpp"
 #include "backends/serial/box_grid.hpp"
+#include "backends/verlet.hpp"
 #include "physics/kernels.hpp"
 
 namespace trubal {
@@ -20,8 +21,9 @@ class SerialBackend final : public Backend {
   std::string name() const override { return "serial"; }
 
   void prepare(Model& model) override {
-    if (model.space.periodic) wrap_into_cell(model, &ref_x_, &ref_y_, &ref_z_);
-    if (needs_rebuild(model)) rebuild(model);
+    if (model.space.periodic) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
+    const double limit2 = ref_.displacement_limit2(model);
+    if (!(limit2 >= 0) || !(ref_.max_displacement2(model.balls, 0, model.balls.size()) <= limit2)) rebuild(model);
   }
 
   void step(Model& model, const StepKernels& kernels, StepSums& sums) override {
@@ -47,73 +49,32 @@ class SerialBackend final : public Backend {
     model.timing.motion += std::chrono::duration<double>(t3 - t2).count();
   }
 
-  void invalidate() override { valid_ = false; }
+  void invalidate() override { ref_.invalidate(); }
 
   std::vector<std::pair<std::string, std::string>> info() const override {
-    const auto& d = grid_.dims();
-    return {{"contact boxes", std::to_string(d[0]) + " x " + std::to_string(d[1]) + " x " + std::to_string(d[2])},
-            {"box size", fmt_number(grid_.cell_size())},
-            {"pair list skin", fmt_number(skin_)},
-            {"pair list rebuilds", std::to_string(rebuilds_)}};
+    return ref_.info(grid_.dims(), grid_.cell_size());
   }
 
  private:
-  static std::string fmt_number(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.4g", v);
-    return buf;
-  }
-
-  bool needs_rebuild(const Model& model) const {
-    const Balls& b = model.balls;
-    const std::size_t n = b.size();
-    if (!valid_ || ref_x_.size() != n || model.contacts.gather_begin.size() != n + 1) return true;
-    if (n && std::memcmp(ref_rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return true;
-    // Two balls each moving half the skin can just close it.
-    // Periodic space: an image pair also closes by the change of the cell edge.
-    double cell_change = 0;
-    if (model.space.periodic) {
-      const auto L = model.space.length();
-      for (int a = 0; a < 3; ++a) cell_change = std::max(cell_change, std::abs(L[a] - ref_cell_[a]));
-      if (!(cell_change < skin_)) return true;
-    }
-    const double limit2 = 0.25 * (skin_ - cell_change) * (skin_ - cell_change);
-    double moved2 = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double dx = b.x[i] - ref_x_[i], dy = b.y[i] - ref_y_[i], dz = b.z[i] - ref_z_[i];
-      moved2 = std::max(moved2, dx * dx + dy * dy + dz * dz);
-    }
-    return !(moved2 <= limit2);   // NaN positions rebuild too (and then fail loudly in the guard)
-  }
-
   void rebuild(Model& model) {
     const Balls& b = model.balls;
-    const std::size_t n = b.size();
-    double rad_sum = 0, rad_max = 0;
-    for (double r : b.rad) { rad_sum += r; rad_max = std::max(rad_max, r); }
-    skin_ = n ? 0.2 * rad_sum / static_cast<double>(n) : 0;
+    double skin = VerletReference::skin_for(b), rad_max = 0;
+    for (double r : b.rad) rad_max = std::max(rad_max, r);
     if (model.space.periodic) {
       check_periodic_cell(model);
-      skin_ = periodic_skin(model, skin_);
-      find_periodic_pairs(model, skin_, pairs_);
-      ref_cell_ = model.space.length();
+      skin = periodic_skin(model, skin);
+      find_periodic_pairs(model, skin, pairs_);
     } else {
-      grid_.fill(b, 2 * rad_max + skin_, model.space.boxes);
-      grid_.find_pairs(b, skin_, pairs_);
+      grid_.fill(b, 2 * rad_max + skin, model.space.boxes);
+      grid_.find_pairs(b, skin, pairs_);
     }
-    install_pairs(model.contacts, pairs_, n);
-    ref_x_ = b.x; ref_y_ = b.y; ref_z_ = b.z; ref_rad_ = b.rad;
-    valid_ = true;
-    ++rebuilds_;
+    install_pairs(model.contacts, pairs_, b.size());
+    ref_.record(model, skin);
   }
 
   BoxGrid grid_;
   PairCandidates pairs_;
-  std::vector<double> ref_x_, ref_y_, ref_z_, ref_rad_;
-  std::array<double, 3> ref_cell_{0, 0, 0};   // periodic cell edges at the last rebuild
-  double skin_ = 0;
-  bool valid_ = false;
-  std::size_t rebuilds_ = 0;
+  VerletReference ref_;
 };
 
 }  // namespace

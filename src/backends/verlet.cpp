@@ -1,0 +1,64 @@
+#include "backends/verlet.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+namespace trubal {
+
+double VerletReference::displacement_limit2(const Model& model) const {
+  const Balls& b = model.balls;
+  const std::size_t n = b.size();
+  if (!valid_ || x.size() != n || model.contacts.gather_begin.size() != n + 1) return -1;
+  if (n && std::memcmp(rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return -1;
+  // Periodic space: an image pair also closes by the change of the cell edge.
+  double cell_change = 0;
+  if (model.space.periodic) {
+    const auto L = model.space.length();
+    for (int a = 0; a < 3; ++a) cell_change = std::max(cell_change, std::abs(L[a] - cell_[a]));
+    if (!(cell_change < skin_)) return -1;
+  }
+  return 0.25 * (skin_ - cell_change) * (skin_ - cell_change);
+}
+
+double VerletReference::max_displacement2(const Balls& b, std::size_t begin, std::size_t end) const {
+  double moved2 = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    const double dx = b.x[i] - x[i], dy = b.y[i] - y[i], dz = b.z[i] - z[i];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    moved2 = std::max(moved2, d2);   // exact in any order; a NaN is skipped (the guard catches it)
+  }
+  return moved2;
+}
+
+double VerletReference::skin_for(const Balls& b) {
+  double rad_sum = 0;
+  for (double r : b.rad) rad_sum += r;
+  return b.size() ? 0.2 * rad_sum / static_cast<double>(b.size()) : 0;
+}
+
+void VerletReference::record(const Model& model, double skin) {
+  const Balls& b = model.balls;
+  x = b.x; y = b.y; z = b.z; rad_ = b.rad;
+  cell_ = model.space.length();
+  skin_ = skin;
+  valid_ = true;
+  ++rebuilds_;
+}
+
+std::vector<std::pair<std::string, std::string>> VerletReference::info(const std::array<int, 3>& boxes,
+                                                                       double box_size) const {
+  auto number = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", v);
+    return std::string(buf);
+  };
+  return {{"contact boxes", std::to_string(boxes[0]) + " x " + std::to_string(boxes[1]) + " x " +
+                                std::to_string(boxes[2])},
+          {"box size", number(box_size)},
+          {"pair list skin", number(skin_)},
+          {"pair list rebuilds", std::to_string(rebuilds_)}};
+}
+
+}  // namespace trubal

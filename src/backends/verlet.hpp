@@ -1,0 +1,46 @@
+// When a kept pair list is stale: the rule the serial and threaded backends share, so both rebuild
+// at the same steps and keep the same pairs. The list holds every pair closer than the skin at
+// the last rebuild; two balls each moving half the skin (or the periodic cell changing by more than
+// it) can just close the gap, so then it is rebuilt.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+class VerletReference {
+ public:
+  // Positions at the last rebuild, for wrap_into_cell to move with the balls.
+  std::vector<double> x, y, z;
+
+  // The squared displacement a ball may have made since the last rebuild, or a negative number when
+  // the list must be rebuilt whatever the balls did (never built, balls added or resized, the cell
+  // changed by the skin).
+  double displacement_limit2(const Model& model) const;
+  // Largest squared displacement of balls [begin, end) since the last rebuild (NaN counts as large).
+  double max_displacement2(const Balls& balls, std::size_t begin, std::size_t end) const;
+  // The skin for a rebuild now: a fifth of the mean radius (the periodic search may cut it).
+  static double skin_for(const Balls& balls);
+  // Remembers the state the new list was built from.
+  void record(const Model& model, double skin);
+  void invalidate() { valid_ = false; }
+  double skin() const { return skin_; }
+  std::size_t rebuilds() const { return rebuilds_; }
+  // PRINT info lines of a box-grid backend.
+  std::vector<std::pair<std::string, std::string>> info(const std::array<int, 3>& boxes, double box_size) const;
+
+ private:
+  std::vector<double> rad_;
+  std::array<double, 3> cell_{0, 0, 0};   // periodic cell edges at the last rebuild
+  double skin_ = 0;
+  bool valid_ = false;
+  std::size_t rebuilds_ = 0;
+};
+
+}  // namespace trubal
