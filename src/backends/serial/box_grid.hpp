@@ -5,6 +5,7 @@
 #include <array>
 #include <vector>
 
+#include "backends/grid_shape.hpp"
 #include "backends/pair_list.hpp"
 #include "model/model.hpp"
 
@@ -18,14 +19,11 @@ class BoxGrid {
   // Pairs i < j closer than R_i + R_j + skin, sorted by (i, j).
   void find_pairs(const Balls& balls, double skin, PairCandidates& out) const;
 
-  const std::array<int, 3>& dims() const { return dims_; }
-  double cell_size() const { return size_[0]; }
+  const std::array<int, 3>& dims() const { return shape_.dims; }
+  double cell_size() const { return shape_.size[0]; }
 
  private:
-  int cell_of(double x, int axis) const;
-
-  std::array<double, 3> lo_{0, 0, 0}, size_{1, 1, 1};
-  std::array<int, 3> dims_{1, 1, 1};
+  GridShape shape_;
   std::vector<int> head_, next_, cell_;   // first ball of each box; next ball in the same box
 };
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "backends/grid_shape.hpp"
 #include "backends/pair_list.hpp"
 #include "backends/threaded/thread_pool.hpp"
 #include "model/model.hpp"
@@ -16,15 +17,13 @@ namespace trubal {
 
 class CellPairs {
  public:
-  void find(ThreadPool& pool, const Balls& balls, double min_size, double skin, PairCandidates& out);
-  const std::array<int, 3>& dims() const { return dims_; }
-  double cell_size() const { return size_[0]; }
+  void find(ThreadPool& pool, const Balls& balls, double min_size, const std::array<int, 3>& asked, double skin,
+            PairCandidates& out);
+  const std::array<int, 3>& dims() const { return shape_.dims; }
+  double cell_size() const { return shape_.size[0]; }
 
  private:
-  int cell_of(double x, int axis) const;
-
-  std::array<double, 3> lo_{0, 0, 0}, size_{1, 1, 1};
-  std::array<int, 3> dims_{1, 1, 1};
+  GridShape shape_;
   std::vector<std::uint32_t> cell_, start_, order_;   // cell of each ball; balls of cell c: order_[start_[c] ..]
   std::vector<PairCandidates> parts_;                 // per thread
 };

@@ -70,7 +70,7 @@ class ThreadedBackend final : public Backend {
       skin = periodic_skin(model, skin);
       find_periodic_pairs(model, skin, pairs_);
     } else {
-      grid_.find(pool_, b, 2 * rad_max + skin, skin, pairs_);
+      grid_.find(pool_, b, 2 * rad_max + skin, model.space.boxes, skin, pairs_);
     }
     install_pairs(model.contacts, pairs_, b.size());
     ref_.record(model, skin);

@@ -1,0 +1,29 @@
+// The boxes of a contact-detection grid (TRUBAL's boxes) over the balls' extent, shared by the
+// backends that hang balls on boxes.
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+struct GridShape {
+  std::array<double, 3> lo{0, 0, 0}, size{1, 1, 1};
+  std::array<int, 3> dims{1, 1, 1};
+
+  // Boxes at least min_size wide, so touching candidates lie in neighbouring boxes; about two per
+  // ball at most, so one far ball cannot make the grid huge; `asked` (Space::boxes, 0: automatic)
+  // caps the count per axis.
+  void fit(const Balls& balls, double min_size, const std::array<int, 3>& asked);
+  // The box index along one axis (outside or NaN: the nearest end).
+  int cell_of(double x, int axis) const;
+  // The linear box index of ball k (x fastest).
+  int box_of(const Balls& balls, std::size_t k) const {
+    return (cell_of(balls.z[k], 2) * dims[1] + cell_of(balls.y[k], 1)) * dims[0] + cell_of(balls.x[k], 0);
+  }
+  std::size_t count() const { return static_cast<std::size_t>(dims[0]) * dims[1] * dims[2]; }
+};
+
+}  // namespace trubal
