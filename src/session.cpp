@@ -32,13 +32,9 @@ void Session::require_started() const {
   if (!model_.started) throw std::runtime_error("no model yet: START one first (START box x0 x1 y0 y1 z0 z1)");
 }
 
-void Session::start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
-  for (int a = 0; a < 3; ++a)
-    if (!(hi[a] > lo[a])) throw std::runtime_error(fmt::format("START box: upper bound must exceed lower bound on axis {}", "xyz"[a]));
+void Session::start(const Space& space) {
   Model fresh;
-  fresh.space.periodic = false;
-  fresh.space.lo = lo;
-  fresh.space.hi = hi;
+  fresh.space = space;
   fresh.started = true;
   model_ = std::move(fresh);
   history_->clear();
@@ -46,19 +42,23 @@ void Session::start_box(const std::array<double, 3>& lo, const std::array<double
   backend_->invalidate();
 }
 
+void Session::start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  for (int a = 0; a < 3; ++a)
+    if (!(hi[a] > lo[a])) throw std::runtime_error(fmt::format("START box: upper bound must exceed lower bound on axis {}", "xyz"[a]));
+  Space space;
+  space.lo = lo;
+  space.hi = hi;
+  start(space);
+}
+
 void Session::start_periodic(const std::array<double, 3>& length, const std::array<int, 3>& boxes) {
   for (int a = 0; a < 3; ++a)
     if (!(length[a] > 0)) throw std::runtime_error("START: the periodic cell's edge lengths must be positive");
-  Model fresh;
-  fresh.space.periodic = true;
-  fresh.space.lo = {0, 0, 0};
-  fresh.space.hi = length;
-  fresh.space.boxes = boxes;
-  fresh.started = true;
-  model_ = std::move(fresh);
-  history_->clear();
-  dumps_.reset();
-  backend_->invalidate();
+  Space space;
+  space.periodic = true;
+  space.hi = length;
+  space.boxes = boxes;
+  start(space);
 }
 
 std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, double z, double rad) {

@@ -91,6 +91,7 @@ class Session {
   double stress_volume() const;
 
  private:
+  void start(const Space& space);   // a fresh model in this space; histories and dumps end
   Model model_;
   std::unique_ptr<Backend> backend_;
   std::unique_ptr<History> history_;
