@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
 """Speed against error (issue 7): runs the head-on impact cases of VALIDATION.md at several FRAC values,
+and the FCC-strength and Rowe examples (cycle counts scaled so each run covers the same physical time),
 measures the loop's wall time and the error against the closed form (contact time, rebound speed, peak
 overlap), and writes a CSV, a log-log PNG per case (gnuplot) and a Markdown table.
 
@@ -170,6 +171,75 @@ def run_case(trubal, c, frac, count, work):
                 peak_overlap=overlap, peak_overlap_exact=cf["overlap"], err_overlap=abs(overlap / cf["overlap"] - 1))
 
 
+# Quasi-static cases: an example deck run with its FRAC replaced, judged on its peak stress ratio.
+QUASI_STATIC = [
+    dict(name="fcc_strength", title="FCC strength, axisymmetric, f = 0.3 (VALIDATION 4)",
+         deck="fcc_axisymmetric.dat", history="fcc_axisymmetric_history.csv", exact=2 * 1.3 / 0.7),
+    dict(name="rowe403", title="Rowe triaxial test, 403 balls (VALIDATION 5)", deck="rowe403.dat",
+         history="rowe403_history.csv", exact=None),   # no closed form for the finite sample: the finest run
+]
+QUASI_FRACS = [0.1, 0.2, 0.4, 0.6, 0.8]
+
+
+def run_quasi_static(trubal, c, frac, examples, work):
+    """Peak `ratio` and the cycling wall time of an example deck at this FRAC."""
+    with open(os.path.join(examples, c["deck"])) as f:
+        source = f.readlines()
+    # The same physical run: the cycle counts grow as the step shrinks against the deck's own FRAC.
+    own = next((float(l.split()[1]) for l in source if l.strip().lower().startswith("frac ")), DEFAULT_FRAC)
+    lines = []
+    for line in source:
+        words = line.split()
+        word = words[0].lower() if words else ""
+        if word == "plot":
+            continue
+        if word == "frac":
+            line = f"frac {frac!r}\n"
+        if word == "cycle":
+            line = f"cycle {int(math.ceil(int(words[1]) * own / frac))}\n"
+        lines.append(line)
+        if word == "prop" and not any(l.strip().lower().startswith("frac ") for l in source):
+            lines.append(f"frac {frac!r}\n")   # decks without FRAC get it after their PROP
+    path = os.path.join(work, c["deck"])
+    with open(path, "w") as f:
+        f.writelines(lines)
+    out = subprocess.run([trubal, path], cwd=work, capture_output=True, text=True)
+    if out.returncode != 0:
+        return dict(case=c["name"], frac=frac, wall_s=float("nan"), peak=float("nan"), note=out.stderr.strip()[-200:])
+    wall = sum(float(t) for _, t in re.findall(r"\((\d+) cycles in ([0-9.]+) s", out.stdout))
+    with open(os.path.join(work, c["history"])) as f:
+        peak = max(float(r["ratio"]) for r in csv.DictReader(f))
+    return dict(case=c["name"], frac=frac, wall_s=wall, peak=peak, note="")
+
+
+def quasi_static_section(trubal, examples, work):
+    table = ["| case | FRAC | wall s (cycling) | peak ratio | error | against |", "|---|---|---|---|---|---|"]
+    rows_all = []
+    for c in QUASI_STATIC:
+        rows = [run_quasi_static(trubal, c, frac, examples, work) for frac in QUASI_FRACS]
+        finest = rows[0]["peak"]
+        ref, against = (c["exact"], "closed form") if c["exact"] else (finest, f"FRAC {QUASI_FRACS[0]}")
+        for r in rows:
+            r["error"] = abs(r["peak"] / ref - 1) if r["peak"] == r["peak"] else float("nan")
+            mark = " **(default)**" if abs(r["frac"] - DEFAULT_FRAC) < 1e-12 else ""
+            status = f"{r['peak']:.4f}" if not r["note"] else f"stopped: {r['note']}"
+            table.append(f"| {c['name']} | {r['frac']:g}{mark} | {r['wall_s']:.3f} | {status} | {r['error']:.2e} | "
+                         f"{against} ({ref:.4f}) |")
+            print(f"{c['name']:12s} FRAC {r['frac']:4.2f}  {r['wall_s']:.3f} s  peak {r['peak']:.4f}  "
+                  f"err {r['error']:.2e}", flush=True)
+        rows_all += rows
+    return table, rows_all
+
+
+def write_quasi_static(outdir, table, rows):
+    with open(os.path.join(outdir, "quasi_static.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    with open(os.path.join(outdir, "quasi_static.md"), "w") as f:
+        f.write("\n".join(table) + "\n")
+
+
 def slope(xs, ys):
     pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys) if y > 1e-13]
     if len(pts) < 3:
@@ -215,6 +285,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(root, "doc", "speed_vs_error"))
     ap.add_argument("--impacts", type=int, default=10000, help="identical impacts per deck (default 10000)")
     ap.add_argument("--fracs", default=",".join(str(f) for f in FRACS))
+    ap.add_argument("--quasi-static-only", action="store_true", help="only the FCC strength and Rowe rows")
     args = ap.parse_args()
     trubal = os.path.abspath(args.trubal)
     os.makedirs(args.out, exist_ok=True)
@@ -222,6 +293,12 @@ def main():
     all_rows = []
     table = ["| case | FRAC | wall s | contact time err | rebound err | peak overlap err |", "|---|---|---|---|---|---|"]
     orders = []
+    if args.quasi_static_only:
+        with tempfile.TemporaryDirectory() as work:
+            table, rows = quasi_static_section(trubal, os.path.join(root, "examples"), work)
+        write_quasi_static(args.out, table, rows)
+        print("\n".join(table))
+        return
     with tempfile.TemporaryDirectory() as work:
         for c in CASES:
             rows = []
@@ -248,7 +325,10 @@ def main():
         cf = closed_form(c)
         order_table.append(f"| {c['title']} | {cf['time'] * 1e6:.4g} us, {cf['overlap'] * 1e6:.4g} um | {st:.2f} | "
                            f"{se:.2f} | {so:.2f} |")
-    md = "\n".join(order_table) + "\n\n" + "\n".join(table) + "\n"
+    with tempfile.TemporaryDirectory() as work:
+        quasi_table, quasi_rows = quasi_static_section(trubal, os.path.join(root, "examples"), work)
+    write_quasi_static(args.out, quasi_table, quasi_rows)
+    md = "\n".join(order_table) + "\n\n" + "\n".join(table) + "\n\n" + "\n".join(quasi_table) + "\n"
     with open(os.path.join(args.out, "speed_vs_error.md"), "w") as f:
         f.write(md)
     print(md)
