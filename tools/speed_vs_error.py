@@ -181,13 +181,13 @@ QUASI_STATIC = [
 QUASI_FRACS = [0.1, 0.2, 0.4, 0.6, 0.8]
 
 
-def run_quasi_static(trubal, c, frac, examples, work):
-    """Peak `ratio` and the cycling wall time of an example deck at this FRAC."""
+def run_quasi_static(trubal, c, frac, examples, work, backend="serial"):
+    """Peak `ratio` and the cycling wall time of an example deck at this FRAC on a backend."""
     with open(os.path.join(examples, c["deck"])) as f:
         source = f.readlines()
     # The same physical run: the cycle counts grow as the step shrinks against the deck's own FRAC.
     own = next((float(l.split()[1]) for l in source if l.strip().lower().startswith("frac ")), DEFAULT_FRAC)
-    lines = []
+    lines = [f"backend {backend}\n"]
     for line in source:
         words = line.split()
         word = words[0].lower() if words else ""
@@ -205,30 +205,57 @@ def run_quasi_static(trubal, c, frac, examples, work):
         f.writelines(lines)
     out = subprocess.run([trubal, path], cwd=work, capture_output=True, text=True)
     if out.returncode != 0:
-        return dict(case=c["name"], frac=frac, wall_s=float("nan"), peak=float("nan"), note=out.stderr.strip()[-200:])
+        return dict(case=c["name"], backend=backend, frac=frac, wall_s=float("nan"), peak=float("nan"),
+                    note=out.stderr.strip()[-200:])
     wall = sum(float(t) for _, t in re.findall(r"\((\d+) cycles in ([0-9.]+) s", out.stdout))
     with open(os.path.join(work, c["history"])) as f:
         peak = max(float(r["ratio"]) for r in csv.DictReader(f))
-    return dict(case=c["name"], frac=frac, wall_s=wall, peak=peak, note="")
+    return dict(case=c["name"], backend=backend, frac=frac, wall_s=wall, peak=peak, note="")
 
 
-def quasi_static_section(trubal, examples, work):
-    table = ["| case | FRAC | wall s (cycling) | peak ratio | error | against |", "|---|---|---|---|---|---|"]
+def quasi_static_section(trubal, examples, work, outdir):
+    table = ["| case | backend | FRAC | wall s (cycling) | peak ratio | error | against |",
+             "|---|---|---|---|---|---|---|"]
     rows_all = []
     for c in QUASI_STATIC:
-        rows = [run_quasi_static(trubal, c, frac, examples, work) for frac in QUASI_FRACS]
-        finest = rows[0]["peak"]
-        ref, against = (c["exact"], "closed form") if c["exact"] else (finest, f"FRAC {QUASI_FRACS[0]}")
-        for r in rows:
-            r["error"] = abs(r["peak"] / ref - 1) if r["peak"] == r["peak"] else float("nan")
-            mark = " **(default)**" if abs(r["frac"] - DEFAULT_FRAC) < 1e-12 else ""
-            status = f"{r['peak']:.4f}" if not r["note"] else f"stopped: {r['note']}"
-            table.append(f"| {c['name']} | {r['frac']:g}{mark} | {r['wall_s']:.3f} | {status} | {r['error']:.2e} | "
-                         f"{against} ({ref:.4f}) |")
-            print(f"{c['name']:12s} FRAC {r['frac']:4.2f}  {r['wall_s']:.3f} s  peak {r['peak']:.4f}  "
-                  f"err {r['error']:.2e}", flush=True)
-        rows_all += rows
+        per_backend = {}
+        for backend in ("serial", "threaded threads 2"):
+            rows = [run_quasi_static(trubal, c, frac, examples, work, backend) for frac in QUASI_FRACS]
+            finest = rows[0]["peak"]
+            ref, against = (c["exact"], "closed form") if c["exact"] else (finest, f"FRAC {QUASI_FRACS[0]}")
+            for r in rows:
+                r["error"] = abs(r["peak"] / ref - 1) if r["peak"] == r["peak"] else float("nan")
+                mark = " **(default)**" if abs(r["frac"] - DEFAULT_FRAC) < 1e-12 else ""
+                status = f"{r['peak']:.6f}" if not r["note"] else f"stopped: {r['note']}"
+                table.append(f"| {c['name']} | {backend} | {r['frac']:g}{mark} | {r['wall_s']:.3f} | {status} | "
+                             f"{r['error']:.2e} | {against} ({ref:.4f}) |")
+                print(f"{c['name']:12s} {backend:18s} FRAC {r['frac']:4.2f}  {r['wall_s']:.3f} s  "
+                      f"peak {r['peak']:.6f}  err {r['error']:.2e}", flush=True)
+            per_backend[backend] = rows
+            rows_all += rows
+        plot_quasi_static(c, per_backend, outdir)
     return table, rows_all
+
+
+def plot_quasi_static(c, per_backend, outdir):
+    if not shutil.which("gnuplot"):
+        return
+    plots = []
+    for k, (backend, rows) in enumerate(per_backend.items()):
+        dat = os.path.join(outdir, f"{c['name']}_{k}.dat")
+        with open(dat, "w") as f:
+            for r in rows:
+                if r["error"] > 0:   # the reference run itself has no error to draw
+                    f.write(f"{r['wall_s']} {r['error']} {r['frac']}\n")
+        plots.append(f"'{c['name']}_{k}.dat' u 1:2 w lp t '{backend}', '' u 1:2:(sprintf('%.2g', $3)) "
+                     f"w labels offset 1.5,0.5 font ',8' notitle")
+    script = (f"set terminal pngcairo size 800,600\nset output '{c['name']}.png'\nset logscale xy\n"
+              f"set xlabel 'wall time of the cycles (s)'\nset ylabel 'relative error of the peak ratio'\n"
+              f"set title \"{c['title']}\"\nplot " + ", ".join(plots) + "\n")
+    res = subprocess.run(["gnuplot"], input=script, text=True, cwd=outdir, capture_output=True)
+    if res.returncode != 0:
+        subprocess.run(["gnuplot"], input=script.replace("pngcairo", "png"), text=True, cwd=outdir,
+                       capture_output=True)
 
 
 def write_quasi_static(outdir, table, rows):
@@ -295,7 +322,7 @@ def main():
     orders = []
     if args.quasi_static_only:
         with tempfile.TemporaryDirectory() as work:
-            table, rows = quasi_static_section(trubal, os.path.join(root, "examples"), work)
+            table, rows = quasi_static_section(trubal, os.path.join(root, "examples"), work, args.out)
         write_quasi_static(args.out, table, rows)
         print("\n".join(table))
         return
@@ -326,7 +353,7 @@ def main():
         order_table.append(f"| {c['title']} | {cf['time'] * 1e6:.4g} us, {cf['overlap'] * 1e6:.4g} um | {st:.2f} | "
                            f"{se:.2f} | {so:.2f} |")
     with tempfile.TemporaryDirectory() as work:
-        quasi_table, quasi_rows = quasi_static_section(trubal, os.path.join(root, "examples"), work)
+        quasi_table, quasi_rows = quasi_static_section(trubal, os.path.join(root, "examples"), work, args.out)
     write_quasi_static(args.out, quasi_table, quasi_rows)
     md = "\n".join(order_table) + "\n\n" + "\n".join(table) + "\n\n" + "\n".join(quasi_table) + "\n"
     with open(os.path.join(args.out, "speed_vs_error.md"), "w") as f:
