@@ -44,6 +44,10 @@ CASES = [
          rho=2500, R=0.010, v=20.0, layout="pairs"),
     dict(name="co1_glass", title="Chung & Ooi 1, glass spheres +-10 m/s", law="hertz", E=4.8e10, nu=0.20, rho=2800,
          R=0.010, v=20.0, layout="pairs", table=dict(overlap=274.1e-6, time=40.34e-6)),
+    dict(name="co2_al", title="Chung & Ooi 2, Al alloy sphere on a rigid plane, 0.2 m/s", law="hertz", E=7.0e10,
+         nu=0.33, rho=2699, R=0.10, v=0.2, layout="plane", table=dict(overlap=49.3e-6, time=725.7e-6)),
+    dict(name="co2_mg", title="Chung & Ooi 2, Mg alloy sphere on a rigid plane, 0.2 m/s", law="hertz", E=4.0e10,
+         nu=0.35, rho=1800, R=0.10, v=0.2, layout="plane", table=dict(overlap=52.1e-6, time=767.1e-6)),
     dict(name="co3_aloxide", title="Chung & Ooi 3, Al oxide on a rigid plane, 3.9 m/s", law="hertz", E=3.8e11,
          nu=0.23, rho=4000, R=0.0025, v=3.9, layout="plane", table=dict(overlap=8.09e-6, time=6.10e-6)),
 ]
