@@ -28,10 +28,10 @@ TEST_CASE("validation: Rowe's triaxial test, 403 balls, peak stress ratio and a 
   TempDir dir;
   WorkingDir here(dir.path());
   std::string deck = slurp(std::string(TRUBAL_SOURCE_DIR) + "/examples/rowe403.dat");
-  // Record often, so that the first row is at eps1 ~ 0 (the deck records every 100 cycles).
-  const auto at = deck.find("every 100");
+  // Record often, so that the first row is at eps1 ~ 0 (the deck records every 10 cycles).
+  const auto at = deck.find("every 10 ");
   REQUIRE(at != std::string::npos);
-  deck.replace(at, 9, "every 5");
+  deck.replace(at, 9, "every 5 ");
   const auto plot = deck.find("\nplot ");
   if (plot != std::string::npos) deck.erase(plot + 1, deck.find('\n', plot + 1) - plot);
   Harness h;
