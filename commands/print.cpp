@@ -1,13 +1,12 @@
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <sstream>
 
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "io/atomic_file.hpp"
 #include "io/csv.hpp"
-#include "io/save.hpp"
 #include "physics/measure.hpp"
 
 namespace trubal {
@@ -15,19 +14,6 @@ namespace trubal {
 static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
                                                      "energy", "fabric", "coordination", "prop", "damp",
                                                      "history"};
-
-// Writes text to a file through a temporary and a rename, so a failed write leaves no half file.
-static void write_file_atomically(const std::string& path, const std::string& text) {
-  std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::trunc);
-    if (!f) throw std::runtime_error(fmt::format("cannot write '{}'", path));
-    f << text;
-    f.flush();
-    if (!f) throw std::runtime_error(fmt::format("cannot write '{}'", path));
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error(fmt::format("cannot write '{}'", path));
-}
 
 static void print_info(Context& ctx) {
   const Session& s = ctx.session;

@@ -1,18 +1,15 @@
 #include "io/vtk.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
 #include <map>
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "io/atomic_file.hpp"
 
 namespace trubal {
 namespace {
@@ -77,25 +74,6 @@ std::vector<std::int64_t> iota64(std::size_t n, std::int64_t step, std::int64_t 
   return v;
 }
 
-// Writes through a temporary file in the same folder and a rename (no fsync: a dump is not a save).
-void write_whole_file(const std::string& path, const std::string& text) {
-  const std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    f.write(text.data(), static_cast<std::streamsize>(text.size()));
-    f.close();
-    if (!f) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error(fmt::format("cannot write '{}'", path));
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    throw std::runtime_error(fmt::format("cannot write '{}': {}", path, std::strerror(err)));
-  }
-}
-
 }  // namespace
 
 void write_balls_vtp(const Model& model, const std::string& path) {
@@ -112,7 +90,7 @@ void write_balls_vtp(const Model& model, const std::string& path) {
   w.array("PointData", "Float64", "velocity", interleave(b.vx, b.vy, b.vz), 3);
   w.array("PointData", "Float64", "spin", interleave(b.wx, b.wy, b.wz), 3);
   w.array("PointData", "Float64", "force", interleave(b.fx, b.fy, b.fz), 3);
-  write_whole_file(path, w.finish(n, n, 0));
+  write_file_atomically(path, w.finish(n, n, 0));
 }
 
 void write_contacts_vtp(const Model& model, const std::string& path) {
@@ -145,7 +123,7 @@ void write_contacts_vtp(const Model& model, const std::string& path) {
   w.array("CellData", "Float64", "force", force, 3);
   w.array("CellData", "Int64", "id_i", id_i);
   w.array("CellData", "Int64", "id_j", id_j);
-  write_whole_file(path, w.finish(2 * lines, 0, lines));
+  write_file_atomically(path, w.finish(2 * lines, 0, lines));
 }
 
 VtkSeries::VtkSeries(std::string base, std::int64_t every) : base_(std::move(base)), every_(every) {
@@ -195,7 +173,7 @@ void VtkSeries::write_pvd() const {
                        leaf(contacts_path(e.cycle)));
   }
   xml += "  </Collection>\n</VTKFile>\n";
-  write_whole_file(pvd_path(), xml);
+  write_file_atomically(pvd_path(), xml);
 }
 
 }  // namespace trubal

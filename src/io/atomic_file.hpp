@@ -1,0 +1,13 @@
+// Text files written whole or not at all: a temporary file beside the target, then a rename, so an
+// interrupted or failed write never leaves half a file in place of a good one.
+#pragma once
+
+#include <string>
+
+namespace trubal {
+
+// Writes `text` to `path` through PATH.tmp-PID and a rename (no fsync: for outputs, not saves;
+// SAVE syncs, io/save.cpp). Throws std::runtime_error naming the file; the temporary is removed.
+void write_file_atomically(const std::string& path, const std::string& text);
+
+}  // namespace trubal
