@@ -228,6 +228,9 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
       if (histories) history_->sample(m, moving_cell ? L[0] * L[1] * L[2] : vol);
       if (dumps && dumps->due(m.cycle)) dumps->write(m);
     };
+  control.reads_contacts = [this, histories, dumps](std::int64_t cycle) {
+    return (histories && history_->due(cycle)) || (dumps && dumps->due(cycle));
+  };
   CycleResult r = run_cycles(model_, *backend_, n, control);
   interrupt_requested() = false;
   totals_.cycles += r.done;

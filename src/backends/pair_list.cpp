@@ -63,6 +63,7 @@ void build_gather(ContactTable& table, std::size_t ball_count) {
     next_j[b] = table.gather_begin[b];
     next_i[b] = table.gather_begin[b] + as_j[b];
   }
+  table.step_force.assign(n, PairForce{});
   table.gather_pair.assign(2 * n, 0);
   table.gather_sign.assign(2 * n, 0);
   for (std::size_t p = 0; p < n; ++p) {

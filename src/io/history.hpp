@@ -40,6 +40,12 @@ class History {
   static std::vector<std::size_t> platen_balls(const Model& model, const HistoryTable& table);
   // Records a row in every table whose period divides the model's cycle count.
   void sample(const Model& model, double volume);
+  // Whether sample() records a row at this cycle.
+  bool due(std::int64_t cycle) const {
+    for (const auto& t : tables_)
+      if (cycle % t->every == 0) return true;
+    return false;
+  }
   // Records a row in every table now, whatever the cycle.
   void sample_all(const Model& model, double volume);
   void clear();

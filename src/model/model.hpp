@@ -58,6 +58,13 @@ struct Balls {
   }
 };
 
+// What the gather of one step needs of a pair, in one cache line: the total force on j, n x the
+// shear force (moment on ball b is -R_b t), and the stiffness the time-step estimate sums.
+struct alignas(64) PairForce {
+  double fx, fy, fz, tx, ty, tz;
+  double kmax, ks;                                      // max(k_n, k_s) and k_s now
+};
+
 // Pairs of balls that may touch, i < j as ball indices, sorted by (i, j). Only pairs with positive
 // overlap are contacts; the rest carry zero history. The shear force is history and survives
 // rebuilds because it is carried over by the pair of ball ids.
@@ -78,6 +85,11 @@ struct ContactTable {
   // are its pairs in ascending partner order; gather_sign is +1 where b is j, -1 where b is i.
   std::vector<std::uint32_t> gather_begin, gather_pair;
   std::vector<std::int8_t> gather_sign;
+  // Scratch of one step (not saved, not part of the state): the contact loop writes it, the
+  // gather reads it. Sized with the gather index. The arrays above (normal, overlap, forces,
+  // stiffness, work, state) are written only on steps whose results someone reads (the last step
+  // of a CYCLE, history and dump cycles, servo steps): see StepKernels::contacts_full.
+  std::vector<PairForce> step_force;
 
   std::size_t size() const { return i.size(); }
   template <class F> void for_each_pair_array(F&& f) {

@@ -87,9 +87,10 @@ void cell_after_step(Model& model, double dt) {
   // Energy into the balls through image contacts: the spring energy grows by -F_j . (image dL/dt) dt.
   const ContactTable& c = model.contacts;
   double work = 0;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (c.state[p] == 0 || (c.image_x[p] == 0 && c.image_y[p] == 0 && c.image_z[p] == 0)) continue;
-    work -= c.fx[p] * c.image_x[p] * rate[0] + c.fy[p] * c.image_y[p] * rate[1] + c.fz[p] * c.image_z[p] * rate[2];
+  for (std::size_t p = 0; p < c.size(); ++p) {   // this step's forces (zero where apart)
+    if (c.image_x[p] == 0 && c.image_y[p] == 0 && c.image_z[p] == 0) continue;
+    const PairForce& f = c.step_force[p];
+    work -= f.fx * c.image_x[p] * rate[0] + f.fy * c.image_y[p] * rate[1] + f.fz * c.image_z[p] * rate[2];
   }
   model.energy.boundary_work += work * dt;
   s.gross_work += std::abs(work * dt);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 namespace trubal {
@@ -51,106 +52,162 @@ struct ContactResult {
   std::uint8_t state = 0;         // 0 apart, 1 touching, 2 sliding
 };
 
+// A batch of pairs as structure of arrays: the kernel below is one loop over it without branches
+// (every condition a select), which the compiler turns into SIMD code. Each lane does exactly the
+// arithmetic of one pair, in the same order whatever the batch, so a pair's force does not depend
+// on which batch, backend or thread computed it.
+inline constexpr std::size_t kBatch = 32;
+
+struct ContactBatch {
+  // Inputs (as ContactInput).
+  alignas(64) double dx[kBatch], dy[kBatch], dz[kBatch], ri[kBatch], rj[kBatch];
+  alignas(64) double vx[kBatch], vy[kBatch], vz[kBatch], sx[kBatch], sy[kBatch], sz[kBatch];
+  alignas(64) double mstar[kBatch], hx[kBatch], hy[kBatch], hz[kBatch];   // h: history in
+  // The pair law per lane (only when the scene has several materials).
+  alignas(64) double kn_law[kBatch], ks_law[kBatch], friction[kBatch], cohesion[kBatch];
+  alignas(64) double hertz_n[kBatch], hertz_s[kBatch], rest_xi[kBatch];
+  // Results (as ContactResult; state 0, 1, 2 as a double).
+  alignas(64) double nx[kBatch], ny[kBatch], nz[kBatch], overlap[kBatch], fn[kBatch];
+  alignas(64) double fx[kBatch], fy[kBatch], fz[kBatch], tx[kBatch], ty[kBatch], tz[kBatch];
+  alignas(64) double kn[kBatch], ks[kBatch], cn[kBatch], fsx[kBatch], fsy[kBatch], fsz[kBatch];
+  alignas(64) double work_friction[kBatch], work_damping[kBatch], strain[kBatch], state[kBatch];
+
+  void set_law(std::size_t q, const PairLaw& law) {
+    kn_law[q] = law.kn; ks_law[q] = law.ks; friction[q] = law.friction; cohesion[q] = law.cohesion;
+    hertz_n[q] = law.hertz_n; hertz_s[q] = law.hertz_s; rest_xi[q] = law.rest_xi;
+  }
+};
+
+// The forces of lanes [0, count) of a batch. one_law: every pair has `law` (a scene of one
+// material, or all pairs of one pair of types); else each lane's law is in the batch.
 // beta: Rayleigh stiffness-proportional coefficient (0 without). dt: this step.
-template <unsigned F>
-inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, double dt, double beta) {
+template <unsigned F, bool kOneLaw>
+inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta) {
   using namespace contact_bits;
-  ContactResult r;
-  const double d2 = in.dx * in.dx + in.dy * in.dy + in.dz * in.dz;
-  const double rsum = in.ri + in.rj;
-  if (!(d2 < rsum * rsum)) return r;   // U <= 0: no force, and the history is forgotten
-  const double d = std::sqrt(d2);
-  const double u = rsum - d;
-  // Coincident centres (a ball launched onto another) have no direction: push along +z rather than
-  // make NaN, and let the energy guard judge the outcome.
-  const double inv_d = d > 0 ? 1.0 / d : 0.0;
-  const double nx = in.dx * inv_d, ny = in.dy * inv_d, nz = d > 0 ? in.dz * inv_d : 1.0;
+  for (std::size_t q = 0; q < count; ++q) {
+    const double law_kn = kOneLaw ? law.kn : B.kn_law[q], law_ks = kOneLaw ? law.ks : B.ks_law[q];
+    const double law_friction = kOneLaw ? law.friction : B.friction[q];
+    const double law_cohesion = kOneLaw ? law.cohesion : B.cohesion[q];
+    const double law_hertz_n = kOneLaw ? law.hertz_n : B.hertz_n[q];
+    const double law_hertz_s = kOneLaw ? law.hertz_s : B.hertz_s[q];
+    const double law_rest_xi = kOneLaw ? law.rest_xi : B.rest_xi[q];
+    const double dx = B.dx[q], dy = B.dy[q], dz = B.dz[q], ri = B.ri[q], rj = B.rj[q];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    const double rsum = ri + rj;
+    const bool touching = d2 < rsum * rsum;   // U <= 0: no force, and the history is forgotten
+    const double d = std::sqrt(d2);
+    const double u = rsum - d;
+    // Coincident centres (a ball launched onto another) have no direction: push along +z rather
+    // than make NaN, and let the energy guard judge the outcome.
+    const double inv_d = d > 0 ? 1.0 / (d > 0 ? d : 1.0) : 0.0;
+    const double nx = dx * inv_d, ny = dy * inv_d, nz = d > 0 ? dz * inv_d : 1.0;
 
-  // Relative velocity of j's contact point against i's: V = v_j - v_i - (R_i w_i + R_j w_j) x n.
-  double vx = in.vx, vy = in.vy, vz = in.vz;
-  if constexpr ((F & kRotation) != 0) {
-    vx -= in.sy * nz - in.sz * ny;
-    vy -= in.sz * nx - in.sx * nz;
-    vz -= in.sx * ny - in.sy * nx;
-  }
-  const double vn = vx * nx + vy * ny + vz * nz;
-
-  double kn, ks, fn_spring;
-  if constexpr ((F & kHertz) != 0) {
-    const double root = std::sqrt(in.ri * in.rj / rsum * u);   // sqrt(R* U)
-    fn_spring = law.hertz_n * root * u;
-    kn = 1.5 * law.hertz_n * root;                              // dF_n/dU
-    ks = law.hertz_s * root;
-  } else {
-    kn = law.kn;
-    ks = law.ks;
-    fn_spring = kn * u;
-  }
-
-  double fn = fn_spring;
-  double work_damping = 0;
-  double cn = 0;
-  if constexpr ((F & kDashpot) != 0) {
-    if (law.rest_xi > 0) {
-      const double factor = (F & kHertz) != 0 ? kHertzDashpotFactor : 2.0;
-      cn = factor * law.rest_xi * std::sqrt(kn * in.mstar);
+    // Relative velocity of j's contact point against i's: V = v_j - v_i - (R_i w_i + R_j w_j) x n.
+    double vx = B.vx[q], vy = B.vy[q], vz = B.vz[q];
+    if constexpr ((F & kRotation) != 0) {
+      const double sx = B.sx[q], sy = B.sy[q], sz = B.sz[q];
+      vx -= sy * nz - sz * ny;
+      vy -= sz * nx - sx * nz;
+      vz -= sx * ny - sy * nx;
     }
-    double f_dash = (beta * kn + cn) * -vn;                     // dU/dt = -V.n
-    if (cn > 0 && fn_spring + f_dash < 0) f_dash = -fn_spring;  // a restitution dashpot never pulls
-    fn = fn_spring + f_dash;
-    work_damping = f_dash * -vn * dt;
-  }
+    const double vn = vx * nx + vy * ny + vz * nz;
 
-  double fsx = 0, fsy = 0, fsz = 0, sx = 0, sy = 0, sz = 0;
-  double work_friction = 0, strain_shear = 0;
-  std::uint8_t state = 1;
-  if constexpr ((F & kShear) != 0) {
-    // Last step's shear force, turned onto the new contact plane at its old length.
-    fsx = in.fsx; fsy = in.fsy; fsz = in.fsz;
-    const double old2 = fsx * fsx + fsy * fsy + fsz * fsz;
-    if (old2 > 0) {
-      const double fs_n = fsx * nx + fsy * ny + fsz * nz;
-      fsx -= fs_n * nx; fsy -= fs_n * ny; fsz -= fs_n * nz;
-      const double new2 = fsx * fsx + fsy * fsy + fsz * fsz;
-      if (new2 > 0) {
-        const double scale = std::sqrt(old2 / new2);
-        fsx *= scale; fsy *= scale; fsz *= scale;
+    double kn, ks, fn_spring;
+    if constexpr ((F & kHertz) != 0) {
+      const double root = std::sqrt(touching ? ri * rj / rsum * u : 0.0);   // sqrt(R* U)
+      fn_spring = law_hertz_n * root * u;
+      kn = 1.5 * law_hertz_n * root;                                        // dF_n/dU
+      ks = law_hertz_s * root;
+    } else {
+      kn = law_kn;
+      ks = law_ks;
+      fn_spring = kn * u;
+    }
+
+    double fn = fn_spring;
+    double work_damping = 0;
+    double cn = 0;
+    if constexpr ((F & kDashpot) != 0) {
+      const double factor = (F & kHertz) != 0 ? kHertzDashpotFactor : 2.0;
+      const double km = kn * B.mstar[q];
+      cn = law_rest_xi > 0 ? factor * law_rest_xi * std::sqrt(km > 0 ? km : 0.0) : 0.0;
+      double f_dash = (beta * kn + cn) * -vn;                         // dU/dt = -V.n
+      f_dash = cn > 0 && fn_spring + f_dash < 0 ? -fn_spring : f_dash;   // a restitution dashpot never pulls
+      fn = fn_spring + f_dash;
+      work_damping = f_dash * -vn * dt;
+    }
+
+    double fsx = 0, fsy = 0, fsz = 0, sx = 0, sy = 0, sz = 0;
+    double work_friction = 0, strain_shear = 0;
+    double state = 1;
+    if constexpr ((F & kShear) != 0) {
+      // Last step's shear force, turned onto the new contact plane at its old length.
+      const double hx = B.hx[q], hy = B.hy[q], hz = B.hz[q];
+      const double old2 = hx * hx + hy * hy + hz * hz;
+      const double h_n = hx * nx + hy * ny + hz * nz;
+      const double px = hx - h_n * nx, py = hy - h_n * ny, pz = hz - h_n * nz;
+      const double new2 = px * px + py * py + pz * pz;
+      const bool turn = old2 > 0, rescale = turn && new2 > 0;
+      const double scale = rescale ? std::sqrt(old2 / (rescale ? new2 : 1.0)) : 1.0;
+      fsx = turn ? (rescale ? px * scale : px) : hx;
+      fsy = turn ? (rescale ? py * scale : py) : hy;
+      fsz = turn ? (rescale ? pz * scale : pz) : hz;
+      const double vsx = vx - vn * nx, vsy = vy - vn * ny, vsz = vz - vn * nz;
+      const double kdt = ks * dt;
+      fsx -= kdt * vsx; fsy -= kdt * vsy; fsz -= kdt * vsz;
+      // Coulomb limit on the spring force (the dashpots act beside it).
+      const double limit = law_friction * fn_spring + law_cohesion;
+      const double fs2 = fsx * fsx + fsy * fsy + fsz * fsz;
+      const bool slide = fs2 > limit * limit;
+      const double fs = std::sqrt(fs2);
+      const double cut = slide ? limit / (slide ? fs : 1.0) : 1.0;
+      fsx = slide ? fsx * cut : fsx; fsy = slide ? fsy * cut : fsy; fsz = slide ? fsz * cut : fsz;
+      const double ks_safe = ks > 0 ? ks : 1.0;
+      work_friction = slide && ks > 0 ? limit * (fs - limit) / ks_safe : 0.0;   // force times plastic slip
+      state = slide ? 2 : 1;
+      strain_shear = ks > 0 ? (fsx * fsx + fsy * fsy + fsz * fsz) / (2 * ks_safe) : 0.0;
+      sx = fsx; sy = fsy; sz = fsz;
+      if constexpr ((F & kDashpot) != 0) {
+        const double c = beta * ks;
+        sx -= c * vsx; sy -= c * vsy; sz -= c * vsz;
+        work_damping += c * (vsx * vsx + vsy * vsy + vsz * vsz) * dt;
       }
     }
-    const double vsx = vx - vn * nx, vsy = vy - vn * ny, vsz = vz - vn * nz;
-    const double kdt = ks * dt;
-    fsx -= kdt * vsx; fsy -= kdt * vsy; fsz -= kdt * vsz;
-    // Coulomb limit on the spring force (the dashpots act beside it).
-    const double limit = law.friction * fn_spring + law.cohesion;
-    const double fs2 = fsx * fsx + fsy * fsy + fsz * fsz;
-    if (fs2 > limit * limit) {
-      const double fs = std::sqrt(fs2);
-      const double scale = limit / fs;
-      fsx *= scale; fsy *= scale; fsz *= scale;
-      if (ks > 0) work_friction = limit * (fs - limit) / ks;   // force times plastic slip
-      state = 2;
-    }
-    if (ks > 0) strain_shear = (fsx * fsx + fsy * fsy + fsz * fsz) / (2 * ks);
-    sx = fsx; sy = fsy; sz = fsz;
-    if constexpr ((F & kDashpot) != 0) {
-      const double c = beta * ks;
-      sx -= c * vsx; sy -= c * vsy; sz -= c * vsz;
-      work_damping += c * (vsx * vsx + vsy * vsy + vsz * vsz) * dt;
-    }
-  }
 
-  r.nx = nx; r.ny = ny; r.nz = nz;
-  r.overlap = u;
-  r.fn = fn;
-  r.fx = fn * nx + sx; r.fy = fn * ny + sy; r.fz = fn * nz + sz;
-  r.tx = ny * sz - nz * sy; r.ty = nz * sx - nx * sz; r.tz = nx * sy - ny * sx;
-  r.kn = kn; r.ks = ks; r.cn = cn;
-  r.fsx = fsx; r.fsy = fsy; r.fsz = fsz;
-  r.work_friction = work_friction;
-  r.work_damping = work_damping;
-  // Spring energy: linear 1/2 F_n U, Hertz 2/5 F_n U; shear |F_s|^2 / (2 k_s).
-  r.strain = ((F & kHertz) != 0 ? 0.4 : 0.5) * fn_spring * u + strain_shear;
-  r.state = state;
+    // Spring energy: linear 1/2 F_n U, Hertz 2/5 F_n U; shear |F_s|^2 / (2 k_s).
+    const double strain = ((F & kHertz) != 0 ? 0.4 : 0.5) * fn_spring * u + strain_shear;
+    B.nx[q] = touching ? nx : 0.0; B.ny[q] = touching ? ny : 0.0; B.nz[q] = touching ? nz : 0.0;
+    B.overlap[q] = touching ? u : 0.0;
+    B.fn[q] = touching ? fn : 0.0;
+    B.fx[q] = touching ? fn * nx + sx : 0.0;
+    B.fy[q] = touching ? fn * ny + sy : 0.0;
+    B.fz[q] = touching ? fn * nz + sz : 0.0;
+    B.tx[q] = touching ? ny * sz - nz * sy : 0.0;
+    B.ty[q] = touching ? nz * sx - nx * sz : 0.0;
+    B.tz[q] = touching ? nx * sy - ny * sx : 0.0;
+    B.kn[q] = touching ? kn : 0.0; B.ks[q] = touching ? ks : 0.0; B.cn[q] = touching ? cn : 0.0;
+    B.fsx[q] = touching ? fsx : 0.0; B.fsy[q] = touching ? fsy : 0.0; B.fsz[q] = touching ? fsz : 0.0;
+    B.work_friction[q] = touching ? work_friction : 0.0;
+    B.work_damping[q] = touching ? work_damping : 0.0;
+    B.strain[q] = touching ? strain : 0.0;
+    B.state[q] = touching ? state : 0.0;
+  }
+}
+
+// The force at one contact: the batch kernel on one lane (for the time-step estimate and tests).
+template <unsigned F>
+inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, double dt, double beta) {
+  ContactBatch B;
+  B.dx[0] = in.dx; B.dy[0] = in.dy; B.dz[0] = in.dz; B.ri[0] = in.ri; B.rj[0] = in.rj;
+  B.vx[0] = in.vx; B.vy[0] = in.vy; B.vz[0] = in.vz; B.sx[0] = in.sx; B.sy[0] = in.sy; B.sz[0] = in.sz;
+  B.mstar[0] = in.mstar; B.hx[0] = in.fsx; B.hy[0] = in.fsy; B.hz[0] = in.fsz;
+  contact_forces<F, true>(B, 1, law, dt, beta);
+  ContactResult r;
+  r.nx = B.nx[0]; r.ny = B.ny[0]; r.nz = B.nz[0]; r.overlap = B.overlap[0]; r.fn = B.fn[0];
+  r.fx = B.fx[0]; r.fy = B.fy[0]; r.fz = B.fz[0]; r.tx = B.tx[0]; r.ty = B.ty[0]; r.tz = B.tz[0];
+  r.kn = B.kn[0]; r.ks = B.ks[0]; r.cn = B.cn[0]; r.fsx = B.fsx[0]; r.fsy = B.fsy[0]; r.fsz = B.fsz[0];
+  r.work_friction = B.work_friction[0]; r.work_damping = B.work_damping[0]; r.strain = B.strain[0];
+  r.state = static_cast<std::uint8_t>(B.state[0]);
   return r;
 }
 

@@ -240,6 +240,15 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
   for (std::int64_t s = 1; s <= n; ++s) {
     const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
     kernels.dt = dt;
+    // The per-pair results measurements read are written only where someone will read them: the
+    // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (a restored model prints
+    // right), servo steps (the servo reads the stress) and the cycles history and dumps record.
+    const bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
+    const Space& space = model.space;
+    const bool details = s == n || stopping || s % kSnapshotEvery == 0 ||
+                         (space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2])) ||
+                         (control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1)));
+    kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
     StepSums sums;
     const auto step_start = Clock::now();
     cell_before_step(model, dt);   // periodic space: the servo's rates
@@ -304,7 +313,7 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
         last_progress = now;
       }
     }
-    if (control.interrupt && control.interrupt->load(std::memory_order_relaxed)) {
+    if (stopping) {   // seen before this step, which therefore wrote the details
       result.interrupted = s < n;
       break;
     }

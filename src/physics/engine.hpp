@@ -30,6 +30,9 @@ struct CycleControl {
   const std::atomic<bool>* interrupt = nullptr;   // set by Ctrl-C: stop at the end of the step
   // Called after every completed step (history, dumps); keep it cheap.
   std::function<void(const Model&)> after_step;
+  // Whether after_step will read the contacts' results (normal, overlap, forces, state) after the
+  // step that ends at this cycle; steps nobody reads skip writing them. Unset: every step.
+  std::function<bool(std::int64_t cycle)> reads_contacts;
   // Called now and then for progress reports.
   std::function<void(std::int64_t done, std::int64_t total)> progress;
 };

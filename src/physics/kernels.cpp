@@ -12,16 +12,16 @@ namespace {
 // Raw pointers, so that the compiler knows the stores into one array cannot move another's data.
 #define TRUBAL_PTR(name, vec) auto* __restrict name = (vec).data()
 
-// Results are staged per chunk of contacts and then copied one array at a time: writing the ~20
-// result arrays element by element thrashes the cache when their starts share a page offset, as
-// large std::vector allocations do (measured 8x slower at 76,000 contacts).
-inline constexpr std::size_t kChunk = 64;
-enum Field { kNx, kNy, kNz, kOverlap, kFn, kFx, kFy, kFz, kTx, kTy, kTz, kKn, kKs, kCn, kFsx, kFsy, kFsz,
-             kWorkFriction, kWorkDamping, kFieldCount };
+// kDetails (a bit above the contact-law bits): also write what measurements read (normal,
+// overlap, forces, stiffness, work, state). Without it a step writes only the shear history, the
+// one-line PairForce the gather reads and (with dashpots) the dashpot coefficient.
+inline constexpr unsigned kDetails = contact_bits::kCount;
 
-template <unsigned F>
-void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
+template <unsigned F, bool kOneLaw>
+void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
   using namespace contact_bits;
+  constexpr unsigned kLaw = F & (kCount - 1);
+  constexpr bool kFull = (F & kDetails) != 0;
   const Balls& b = model.balls;
   ContactTable& c = model.contacts;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
@@ -29,62 +29,71 @@ void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::si
   TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
+  TRUBAL_PTR(force, c.step_force); TRUBAL_PTR(cn_out, c.cn_eff); TRUBAL_PTR(state, c.state);
   // Periodic space: j's image is x_j + image L, moving at v_j + image dL/dt (backends/periodic.hpp).
   const bool periodic = model.space.periodic;
   const auto cell = image_lengths(model.space), cell_rate = image_rates(model.space);
   const std::int8_t* const img_x = c.image_x.data();
   const std::int8_t* const img_y = c.image_y.data();
   const std::int8_t* const img_z = c.image_z.data();
-  double* const out[kFieldCount] = {c.nx.data(), c.ny.data(), c.nz.data(), c.overlap.data(), c.fn.data(),
-                                    c.fx.data(), c.fy.data(), c.fz.data(), c.tx.data(), c.ty.data(), c.tz.data(),
-                                    c.kn_eff.data(), c.ks_eff.data(), c.cn_eff.data(), c.fsx.data(), c.fsy.data(),
-                                    c.fsz.data(), c.work_friction.data(), c.work_damping.data()};
   const double dt = k.dt, beta = k.beta;
+  const PairLaw& one_law = k.laws[0];
   double work_friction = 0, work_damping = 0, strain = 0;
-  alignas(64) double stage[kFieldCount][kChunk];
-  for (std::size_t p0 = begin; p0 < end; p0 += kChunk) {
-    const std::size_t count = std::min(kChunk, end - p0);
+  ContactBatch B;
+  for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
+    const std::size_t count = std::min(kBatch, end - p0);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q, i = pi[p], j = pj[p];
-      const PairLaw& law = k.law(i, j);
-      ContactInput in{};
-      in.dx = x[j] - x[i]; in.dy = y[j] - y[i]; in.dz = z[j] - z[i];
-      in.ri = rad[i]; in.rj = rad[j];
-      in.vx = vx[j] - vx[i]; in.vy = vy[j] - vy[i]; in.vz = vz[j] - vz[i];
+      if constexpr (!kOneLaw) B.set_law(q, k.law(i, j));
+      B.dx[q] = x[j] - x[i]; B.dy[q] = y[j] - y[i]; B.dz[q] = z[j] - z[i];
+      B.ri[q] = rad[i]; B.rj[q] = rad[j];
+      B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
       if (periodic) {
-        in.dx = image_delta(x[j], x[i], img_x[p], cell[0]);
-        in.dy = image_delta(y[j], y[i], img_y[p], cell[1]);
-        in.dz = image_delta(z[j], z[i], img_z[p], cell[2]);
-        in.vx += static_cast<double>(img_x[p]) * cell_rate[0];
-        in.vy += static_cast<double>(img_y[p]) * cell_rate[1];
-        in.vz += static_cast<double>(img_z[p]) * cell_rate[2];
+        B.dx[q] = image_delta(x[j], x[i], img_x[p], cell[0]);
+        B.dy[q] = image_delta(y[j], y[i], img_y[p], cell[1]);
+        B.dz[q] = image_delta(z[j], z[i], img_z[p], cell[2]);
+        B.vx[q] += static_cast<double>(img_x[p]) * cell_rate[0];
+        B.vy[q] += static_cast<double>(img_y[p]) * cell_rate[1];
+        B.vz[q] += static_cast<double>(img_z[p]) * cell_rate[2];
       }
-      if constexpr ((F & kRotation) != 0) {
-        in.sx = in.ri * wx[i] + in.rj * wx[j];
-        in.sy = in.ri * wy[i] + in.rj * wy[j];
-        in.sz = in.ri * wz[i] + in.rj * wz[j];
+      if constexpr ((kLaw & kRotation) != 0) {
+        B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
+        B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
+        B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
       }
-      if constexpr ((F & kDashpot) != 0)
-        if (law.rest_xi > 0) in.mstar = mass[i] * mass[j] / (mass[i] + mass[j]);
-      if constexpr ((F & kShear) != 0) { in.fsx = fsx[p]; in.fsy = fsy[p]; in.fsz = fsz[p]; }
-      const ContactResult r = contact_force<F>(law, in, dt, beta);
-      stage[kNx][q] = r.nx; stage[kNy][q] = r.ny; stage[kNz][q] = r.nz;
-      stage[kOverlap][q] = r.overlap; stage[kFn][q] = r.fn;
-      stage[kFx][q] = r.fx; stage[kFy][q] = r.fy; stage[kFz][q] = r.fz;
-      stage[kTx][q] = r.tx; stage[kTy][q] = r.ty; stage[kTz][q] = r.tz;
-      stage[kKn][q] = r.kn; stage[kKs][q] = r.ks; stage[kCn][q] = r.cn;
-      stage[kFsx][q] = r.fsx; stage[kFsy][q] = r.fsy; stage[kFsz][q] = r.fsz;
-      stage[kWorkFriction][q] = r.work_friction; stage[kWorkDamping][q] = r.work_damping;
-      c.state[p] = r.state;
-      work_friction += r.work_friction;
-      work_damping += r.work_damping;
-      strain += r.strain;
+      if constexpr ((kLaw & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+      if constexpr ((kLaw & kShear) != 0) { B.hx[q] = fsx[p]; B.hy[q] = fsy[p]; B.hz[q] = fsz[p]; }
     }
-    for (int f = 0; f < kFieldCount; ++f) std::copy(stage[f], stage[f] + count, out[f] + p0);
+    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta);
+    for (std::size_t q = 0; q < count; ++q) {
+      const std::size_t p = p0 + q;
+      force[p] = PairForce{B.fx[q], B.fy[q], B.fz[q], B.tx[q], B.ty[q], B.tz[q], std::max(B.kn[q], B.ks[q]), B.ks[q]};
+      if constexpr ((kLaw & kShear) != 0) { fsx[p] = B.fsx[q]; fsy[p] = B.fsy[q]; fsz[p] = B.fsz[q]; }
+      if constexpr ((kLaw & kDashpot) != 0) cn_out[p] = B.cn[q];
+      work_friction += B.work_friction[q];
+      work_damping += B.work_damping[q];
+      strain += B.strain[q];
+    }
+    if constexpr (kFull) {
+      // One array at a time: writing ~15 arrays element by element thrashes the cache when their
+      // starts share a page offset, as large std::vector allocations do.
+      auto put = [&](std::vector<double>& to, const double* from) { std::copy(from, from + count, to.data() + p0); };
+      put(c.nx, B.nx); put(c.ny, B.ny); put(c.nz, B.nz); put(c.overlap, B.overlap); put(c.fn, B.fn);
+      put(c.fx, B.fx); put(c.fy, B.fy); put(c.fz, B.fz); put(c.tx, B.tx); put(c.ty, B.ty); put(c.tz, B.tz);
+      put(c.kn_eff, B.kn); put(c.ks_eff, B.ks); put(c.work_friction, B.work_friction);
+      put(c.work_damping, B.work_damping);
+      for (std::size_t q = 0; q < count; ++q) state[p0 + q] = static_cast<std::uint8_t>(B.state[q]);
+    }
   }
   sums.friction_work += work_friction;
   sums.damping_work += work_damping;
   sums.strain += strain;
+}
+
+template <unsigned F>
+void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
+  if (k.type_count == 1) contact_range<F, true>(model, k, begin, end, sums);
+  else contact_range<F, false>(model, k, begin, end, sums);
 }
 
 // Motion variant index: rotation + 2 loads + 4 damping kind (0..2) + 12 estimate (0..2).
@@ -137,12 +146,13 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
     double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
     for (std::uint32_t q = c.gather_begin[ball], e = c.gather_begin[ball + 1]; q < e; ++q) {
       const std::uint32_t p = c.gather_pair[q];
-      if (c.gather_sign[q] > 0) { fx += c.fx[p]; fy += c.fy[p]; fz += c.fz[p]; }
-      else { fx -= c.fx[p]; fy -= c.fy[p]; fz -= c.fz[p]; }
-      if constexpr (kRot) { tx += c.tx[p]; ty += c.ty[p]; tz += c.tz[p]; }
+      const PairForce& pf = c.step_force[p];
+      if (c.gather_sign[q] > 0) { fx += pf.fx; fy += pf.fy; fz += pf.fz; }
+      else { fx -= pf.fx; fy -= pf.fy; fz -= pf.fz; }
+      if constexpr (kRot) { tx += pf.tx; ty += pf.ty; tz += pf.tz; }
       if constexpr (kEstimate != StepEstimate::None) {
-        sum_kmax += std::max(c.kn_eff[p], c.ks_eff[p]);
-        sum_ks += c.ks_eff[p];
+        sum_kmax += pf.kmax;
+        sum_ks += pf.ks;
         if constexpr (kEstimate == StepEstimate::Damped) sum_cn += c.cn_eff[p];
       }
     }
@@ -212,7 +222,7 @@ template <std::size_t... I>
 constexpr std::array<MotionLoop, sizeof...(I)> motion_loops(std::index_sequence<I...>) {
   return {&motion_loop<I>...};
 }
-constexpr auto kContactLoops = contact_loops(std::make_index_sequence<contact_bits::kCount>{});
+constexpr auto kContactLoops = contact_loops(std::make_index_sequence<2 * contact_bits::kCount>{});
 constexpr auto kMotionLoops = motion_loops(std::make_index_sequence<kMotionCount>{});
 
 double series(double a, double b) { return a + b > 0 ? a * b / (a + b) : 0; }
@@ -297,7 +307,9 @@ StepKernels make_kernels(const Model& model) {
   using namespace contact_bits;
   const unsigned contact = (f.rotation ? kRotation : 0) | (f.friction ? kShear : 0) | (f.hertz ? kHertz : 0) |
                            (f.stiffness_damping ? kDashpot : 0);
-  k.contacts = kContactLoops[contact];
+  k.contacts_lean = kContactLoops[contact];
+  k.contacts_full = kContactLoops[contact | kDetails];
+  k.contacts = k.contacts_full;
   const unsigned motion = (f.rotation ? 1 : 0) + (f.gravity || f.applied ? 2 : 0) +
                           4 * static_cast<unsigned>(f.mass_damping) + 12 * static_cast<unsigned>(k.estimate);
   k.motion = kMotionLoops[motion];

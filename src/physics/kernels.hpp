@@ -58,7 +58,11 @@ struct StepKernels {
   std::vector<PairLaw> laws;
   // A ball without contacts counts as touching one ball of its own kind (per compact type).
   std::vector<double> alone_kn, alone_ks, alone_xi;
-  ContactLoop contacts = nullptr;
+  // The contact loop this step runs: contacts_full also writes the per-pair results measurements
+  // read (ContactTable normal, overlap, forces, stiffness, work, state); contacts_lean writes only
+  // what the next step needs (history, PairForce). The engine picks one per step; both compute
+  // the same numbers.
+  ContactLoop contacts = nullptr, contacts_full = nullptr, contacts_lean = nullptr;
   MotionLoop motion = nullptr;
 
   const PairLaw& law(std::size_t i, std::size_t j) const {
