@@ -64,6 +64,8 @@ void build_gather(ContactTable& table, std::size_t ball_count) {
     next_i[b] = table.gather_begin[b] + as_j[b];
   }
   table.step_force.assign(n, PairForce{});
+  table.ball_force.assign(ball_count, PairForce{});
+  table.ball_cn.assign(ball_count, 0.0);
   table.gather_pair.assign(2 * n, 0);
   table.gather_sign.assign(2 * n, 0);
   for (std::size_t p = 0; p < n; ++p) {

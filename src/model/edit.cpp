@@ -65,6 +65,8 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   c.gather_pair.clear();
   c.gather_sign.clear();
   c.step_force.clear();
+  c.ball_force.clear();
+  c.ball_cn.clear();
   for (auto& [name, ids] : model.groups)
     std::erase_if(ids, [&](std::int64_t id) { return find_ball(model, id) < 0; });
   return removed;

@@ -90,6 +90,11 @@ struct ContactTable {
   // stiffness, work, state) are written only on steps whose results someone reads (the last step
   // of a CYCLE, history and dump cycles, servo steps): see StepKernels::contacts_full.
   std::vector<PairForce> step_force;
+  // The same sums per ball (sign for ball i included), for a backend that adds each pair to its
+  // balls as it goes, in list order (the serial one): that order is the gather's, so the sums are
+  // the same to the bit. ball_cn: the dashpot coefficients' sum (time step with dashpots).
+  std::vector<PairForce> ball_force;
+  std::vector<double> ball_cn;
 
   std::size_t size() const { return i.size(); }
   template <class F> void for_each_pair_array(F&& f) {

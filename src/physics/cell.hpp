@@ -25,8 +25,9 @@ double default_servo_max_rate(double dt);
 
 // Before a step in a periodic space: the servo's new rates (from the last force pass's stress).
 void cell_before_step(Model& model, double dt);
-// After a step: the work the cell did on the balls through image contacts, the new cell edges
+// After a step: the work the cell did on the balls through image contacts (image_power: the
+// contact loop's sum of -F_j . (image velocity), StepSums::image_power), the new cell edges
 // (about the centre) and the accumulated strain.
-void cell_after_step(Model& model, double dt);
+void cell_after_step(Model& model, double dt, double image_power);
 
 }  // namespace trubal

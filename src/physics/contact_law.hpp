@@ -63,6 +63,7 @@ struct ContactBatch {
   alignas(64) double dx[kBatch], dy[kBatch], dz[kBatch], ri[kBatch], rj[kBatch];
   alignas(64) double vx[kBatch], vy[kBatch], vz[kBatch], sx[kBatch], sy[kBatch], sz[kBatch];
   alignas(64) double mstar[kBatch], hx[kBatch], hy[kBatch], hz[kBatch];   // h: history in
+  alignas(64) double ivx[kBatch], ivy[kBatch], ivz[kBatch];   // periodic: velocity of j's image offset
   // The pair law per lane (only when the scene has several materials).
   alignas(64) double kn_law[kBatch], ks_law[kBatch], friction[kBatch], cohesion[kBatch];
   alignas(64) double hertz_n[kBatch], hertz_s[kBatch], rest_xi[kBatch];

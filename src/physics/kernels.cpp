@@ -17,7 +17,7 @@ namespace {
 // one-line PairForce the gather reads and (with dashpots) the dashpot coefficient.
 inline constexpr unsigned kDetails = contact_bits::kCount;
 
-template <unsigned F, bool kOneLaw>
+template <unsigned F, bool kOneLaw, bool kSum>
 void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
   using namespace contact_bits;
   constexpr unsigned kLaw = F & (kCount - 1);
@@ -30,6 +30,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   TRUBAL_PTR(force, c.step_force); TRUBAL_PTR(cn_out, c.cn_eff); TRUBAL_PTR(state, c.state);
+  TRUBAL_PTR(ball_sum, c.ball_force); TRUBAL_PTR(cn_sum, c.ball_cn);
   // Periodic space: j's image is x_j + image L, moving at v_j + image dL/dt (backends/periodic.hpp).
   const bool periodic = model.space.periodic;
   const auto cell = image_lengths(model.space), cell_rate = image_rates(model.space);
@@ -38,8 +39,18 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   const std::int8_t* const img_z = c.image_z.data();
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws[0];
-  double work_friction = 0, work_damping = 0, strain = 0;
+  double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
   ContactBatch B;
+  // kSum: the running sum of the ball whose pairs the list is on.
+  constexpr std::size_t kNone = ~std::size_t{0};
+  std::size_t acc_ball = kNone;
+  PairForce acc{};
+  double acc_cn = 0;
+  auto flush = [&] {
+    if (acc_ball == kNone) return;
+    ball_sum[acc_ball] = acc;
+    if constexpr ((kLaw & kDashpot) != 0) cn_sum[acc_ball] = acc_cn;
+  };
   for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
     const std::size_t count = std::min(kBatch, end - p0);
     for (std::size_t q = 0; q < count; ++q) {
@@ -52,9 +63,10 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
         B.dx[q] = image_delta(x[j], x[i], img_x[p], cell[0]);
         B.dy[q] = image_delta(y[j], y[i], img_y[p], cell[1]);
         B.dz[q] = image_delta(z[j], z[i], img_z[p], cell[2]);
-        B.vx[q] += static_cast<double>(img_x[p]) * cell_rate[0];
-        B.vy[q] += static_cast<double>(img_y[p]) * cell_rate[1];
-        B.vz[q] += static_cast<double>(img_z[p]) * cell_rate[2];
+        B.ivx[q] = static_cast<double>(img_x[p]) * cell_rate[0];
+        B.ivy[q] = static_cast<double>(img_y[p]) * cell_rate[1];
+        B.ivz[q] = static_cast<double>(img_z[p]) * cell_rate[2];
+        B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
       }
       if constexpr ((kLaw & kRotation) != 0) {
         B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
@@ -67,9 +79,34 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
     contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q;
-      force[p] = PairForce{B.fx[q], B.fy[q], B.fz[q], B.tx[q], B.ty[q], B.tz[q], std::max(B.kn[q], B.ks[q]), B.ks[q]};
+      const double kmax = std::max(B.kn[q], B.ks[q]);
+      if constexpr (kSum) {
+        // Ball j gets +F, ball i -F; both get the moment term and the stiffness. In list order
+        // a ball first meets its pairs with lower partners, ascending, then those with higher
+        // ones: the order of the gather (build_gather). Ball i's sum stays in registers while
+        // the list stays on i (its run of pairs), the same additions in the same order.
+        if (pi[p] != acc_ball) {
+          flush();
+          acc_ball = pi[p];
+          acc = ball_sum[acc_ball];
+          if constexpr ((kLaw & kDashpot) != 0) acc_cn = cn_sum[acc_ball];
+        }
+        PairForce& fj = ball_sum[pj[p]];
+        fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
+        acc.fx -= B.fx[q]; acc.fy -= B.fy[q]; acc.fz -= B.fz[q];
+        if constexpr ((kLaw & kRotation) != 0) {
+          acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q];
+          fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q];
+        }
+        acc.kmax += kmax; acc.ks += B.ks[q];
+        fj.kmax += kmax; fj.ks += B.ks[q];
+        if constexpr ((kLaw & kDashpot) != 0) { acc_cn += B.cn[q]; cn_sum[pj[p]] += B.cn[q]; }
+      } else {
+        force[p] = PairForce{B.fx[q], B.fy[q], B.fz[q], B.tx[q], B.ty[q], B.tz[q], kmax, B.ks[q]};
+      }
       if constexpr ((kLaw & kShear) != 0) { fsx[p] = B.fsx[q]; fsy[p] = B.fsy[q]; fsz[p] = B.fsz[q]; }
       if constexpr ((kLaw & kDashpot) != 0) cn_out[p] = B.cn[q];
+      if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
       work_friction += B.work_friction[q];
       work_damping += B.work_damping[q];
       strain += B.strain[q];
@@ -85,26 +122,34 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
       for (std::size_t q = 0; q < count; ++q) state[p0 + q] = static_cast<std::uint8_t>(B.state[q]);
     }
   }
+  if constexpr (kSum) flush();
   sums.friction_work += work_friction;
   sums.damping_work += work_damping;
   sums.strain += strain;
+  sums.image_power += image_power;
 }
 
+// F: law bits | kDetails | kSumPerBall.
+inline constexpr unsigned kSumPerBall = 2 * contact_bits::kCount;
 template <unsigned F>
 void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
-  if (k.type_count == 1) contact_range<F, true>(model, k, begin, end, sums);
-  else contact_range<F, false>(model, k, begin, end, sums);
+  constexpr bool kSum = (F & kSumPerBall) != 0;
+  constexpr unsigned G = F & ~kSumPerBall;
+  if (k.type_count == 1) contact_range<G, true, kSum>(model, k, begin, end, sums);
+  else contact_range<G, false, kSum>(model, k, begin, end, sums);
 }
 
 // Motion variant index: rotation + 2 loads + 4 damping kind (0..2) + 12 estimate (0..2).
-inline constexpr unsigned kMotionCount = 36;
+// + 36: the sums per ball are already made (ContactTable::ball_force), no gather.
+inline constexpr unsigned kMotionCount = 72;
 
 template <unsigned M>
 void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
   constexpr bool kRot = (M & 1) != 0;
   constexpr bool kLoads = (M & 2) != 0;
   constexpr auto kDamp = static_cast<DampKind>((M / 4) % 3);
-  constexpr auto kEstimate = static_cast<StepEstimate>(M / 12);
+  constexpr auto kEstimate = static_cast<StepEstimate>((M / 12) % 3);
+  constexpr bool kSummed = M >= 36;
   Balls& b = model.balls;
   const ContactTable& c = model.contacts;
   const double dt = k.dt;
@@ -144,7 +189,16 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
   for (std::size_t ball = begin; ball < end; ++ball) {
     double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
-    for (std::uint32_t q = c.gather_begin[ball], e = c.gather_begin[ball + 1]; q < e; ++q) {
+    if constexpr (kSummed) {
+      const PairForce& pf = c.ball_force[ball];
+      fx = pf.fx; fy = pf.fy; fz = pf.fz;
+      if constexpr (kRot) { tx = pf.tx; ty = pf.ty; tz = pf.tz; }
+      if constexpr (kEstimate != StepEstimate::None) {
+        sum_kmax = pf.kmax;
+        sum_ks = pf.ks;
+        if constexpr (kEstimate == StepEstimate::Damped) sum_cn = c.ball_cn[ball];
+      }
+    } else for (std::uint32_t q = c.gather_begin[ball], e = c.gather_begin[ball + 1]; q < e; ++q) {
       const std::uint32_t p = c.gather_pair[q];
       const PairForce& pf = c.step_force[p];
       if (c.gather_sign[q] > 0) { fx += pf.fx; fy += pf.fy; fz += pf.fz; }
@@ -222,7 +276,7 @@ template <std::size_t... I>
 constexpr std::array<MotionLoop, sizeof...(I)> motion_loops(std::index_sequence<I...>) {
   return {&motion_loop<I>...};
 }
-constexpr auto kContactLoops = contact_loops(std::make_index_sequence<2 * contact_bits::kCount>{});
+constexpr auto kContactLoops = contact_loops(std::make_index_sequence<4 * contact_bits::kCount>{});
 constexpr auto kMotionLoops = motion_loops(std::make_index_sequence<kMotionCount>{});
 
 double series(double a, double b) { return a + b > 0 ? a * b / (a + b) : 0; }
@@ -310,9 +364,13 @@ StepKernels make_kernels(const Model& model) {
   k.contacts_lean = kContactLoops[contact];
   k.contacts_full = kContactLoops[contact | kDetails];
   k.contacts = k.contacts_full;
+  k.sum_lean = kContactLoops[contact | kSumPerBall];
+  k.sum_full = kContactLoops[contact | kDetails | kSumPerBall];
+  k.contacts_sum = k.sum_full;
   const unsigned motion = (f.rotation ? 1 : 0) + (f.gravity || f.applied ? 2 : 0) +
                           4 * static_cast<unsigned>(f.mass_damping) + 12 * static_cast<unsigned>(k.estimate);
   k.motion = kMotionLoops[motion];
+  k.motion_summed = kMotionLoops[motion + 36];
   return k;
 }
 

@@ -25,6 +25,7 @@ inline constexpr std::size_t kReduceBlock = 2048;
 struct StepSums {
   double friction_work = 0, damping_work = 0, boundary_work = 0;
   double strain = 0;                        // spring energy at the start of the step
+  double image_power = 0;                   // periodic: sum of -F_j . (velocity of j's image offset)
   double kinetic = 0, potential = 0;        // at t: m v(t-dt/2).v(t+dt/2)/2 and -m g.x(t), for the guard
   double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate
   double fastest_speed2 = -1;               // |v|^2 + |R w|^2 of the fastest ball (NaN wins)
@@ -32,7 +33,7 @@ struct StepSums {
 
   void add(const StepSums& o) {
     friction_work += o.friction_work; damping_work += o.damping_work;
-    boundary_work += o.boundary_work; strain += o.strain;
+    boundary_work += o.boundary_work; strain += o.strain; image_power += o.image_power;
     kinetic += o.kinetic; potential += o.potential;
     critical_dt = std::min(critical_dt, o.critical_dt);
     if (!(o.fastest_speed2 <= fastest_speed2)) { fastest_speed2 = o.fastest_speed2; fastest_ball = o.fastest_ball; }
@@ -64,6 +65,11 @@ struct StepKernels {
   // the same numbers.
   ContactLoop contacts = nullptr, contacts_full = nullptr, contacts_lean = nullptr;
   MotionLoop motion = nullptr;
+  // The same, for a backend that runs every pair in list order on one thread: contacts_sum adds
+  // each pair to its two balls' sums (ContactTable::ball_force, zeroed first) and motion_summed
+  // reads them; the sums are those of the gather, bit for bit.
+  ContactLoop contacts_sum = nullptr, sum_full = nullptr, sum_lean = nullptr;
+  MotionLoop motion_summed = nullptr;
 
   const PairLaw& law(std::size_t i, std::size_t j) const {
     return type_count == 1 ? laws[0] : laws[ball_type[i] * type_count + ball_type[j]];

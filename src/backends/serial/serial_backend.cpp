@@ -32,15 +32,19 @@ class SerialBackend final : public Backend {
     prepare(model);
     const auto t1 = Clock::now();
     const std::size_t pairs = model.contacts.size(), balls = model.balls.size();
+    // One thread, pairs in list order: each pair adds itself to its balls' sums as it goes.
+    ContactTable& c = model.contacts;
+    std::fill(c.ball_force.begin(), c.ball_force.end(), PairForce{});
+    std::fill(c.ball_cn.begin(), c.ball_cn.end(), 0.0);
     for (std::size_t begin = 0; begin < pairs; begin += kReduceBlock) {
       StepSums block;
-      kernels.contacts(model, kernels, begin, std::min(pairs, begin + kReduceBlock), block);
+      kernels.contacts_sum(model, kernels, begin, std::min(pairs, begin + kReduceBlock), block);
       sums.add(block);
     }
     const auto t2 = Clock::now();
     for (std::size_t begin = 0; begin < balls; begin += kReduceBlock) {
       StepSums block;
-      kernels.motion(model, kernels, begin, std::min(balls, begin + kReduceBlock), block);
+      kernels.motion_summed(model, kernels, begin, std::min(balls, begin + kReduceBlock), block);
       sums.add(block);
     }
     const auto t3 = Clock::now();
