@@ -52,10 +52,27 @@ struct Snapshot {
   }
 };
 
+// The held critical step of a Hertz scene (see next_critical_step): shrunk only when the step would
+// exceed this fraction of the critical estimate (or FRAC itself, when FRAC is larger), and grown
+// within a contact episode only when the estimate has risen this many times above it.
+constexpr double kHeldStability = 0.9;
+constexpr double kHeldGrowth = 2.0;
+
 constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs about one step's memory traffic
 constexpr double kProgressSeconds = 0.2;
 
 }  // namespace
+
+double next_critical_step(double held, double estimate, double frac, double cap, bool hertz) {
+  if (!hertz || !(held > 0)) return estimate;
+  // Between contact episodes (nothing stiffer than a lone Hertz ball's cap) the step is free.
+  if (!(estimate < cap)) return estimate;
+  // Stability: the step frac * held must stay below kHeldStability (or frac) times the estimate.
+  if (frac * held > std::max(kHeldStability, frac) * estimate) return estimate;
+  // A much softer state (contacts unloaded): take the longer step, a bounded number of jumps.
+  if (estimate > kHeldGrowth * held) return estimate;
+  return held;
+}
 
 std::string Features::describe() const {
   std::string s = hertz ? "hertz-mindlin" : "linear";
@@ -264,7 +281,8 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
     model.energy.boundary_work += sums.boundary_work;
     if (kernels.estimate != StepEstimate::None) {
       const double estimate = std::min(sums.critical_dt, cap);
-      if (std::isfinite(estimate)) model.critical_dt = estimate;
+      if (std::isfinite(estimate))
+        model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, cap, kernels.features.hertz);
     }
 
     const double dissipated = model.energy.friction_work - friction0 + model.energy.damping_work - damping0;

@@ -52,6 +52,16 @@ void check_ready(const Model& model);
 void update_mass(Model& model);
 // Critical time step of the current state (before FRAC), see PHYSICS.md "Time step".
 double critical_timestep(const Model& model);
+// The critical step the next cycle uses (its step is FRAC times this), from the one held now and the
+// estimate of the state just computed (both capped by the Rayleigh step of the Hertz balls, `cap`).
+// Linear law: the estimate, every cycle. Hertz: the tangent stiffness, and so the estimate, changes
+// every step of a contact, and a step that follows it costs central differences their time symmetry
+// (first-order impacts). So the held step is kept through a contact episode and replaced by the
+// estimate only (1) between episodes, when no contact is stiffer than the cap; (2) when stability
+// needs it: FRAC times the held step above max(0.9, FRAC) times the estimate; (3) when the estimate
+// has grown to twice the held step. The step then changes a bounded number of times per contact,
+// whatever FRAC, and the rebound is second order in the step.
+double next_critical_step(double held, double estimate, double frac, double cap, bool hertz);
 // Runs n steps (or until interrupted or unstable). On instability the model is left at the last
 // good state, which can be printed and saved.
 CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const CycleControl& control);
