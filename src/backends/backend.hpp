@@ -25,8 +25,8 @@ class Backend {
   // Brings model.contacts up to date for the current positions (pair list, carried history, gather
   // index) without computing forces; step() does it itself. Used before estimating the first step.
   virtual void prepare(Model& model) = 0;
-  // One time step: find the pairs that may touch, compute contact forces, gather, move. The kernels'
-  // block sums are added into `sums` in ascending block order (kReduceBlock).
+  // One time step: find the pairs that may touch, compute contact forces and their sums per ball,
+  // move (backends/threaded/parallel_step.hpp: the one way every backend runs the kernels).
   virtual void step(Model& model, const StepKernels& kernels, StepSums& sums) = 0;
   // The balls were changed outside cycling (added, deleted, moved, resized): drop cached lists.
   virtual void invalidate() {}

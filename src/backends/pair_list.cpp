@@ -1,5 +1,6 @@
 #include "backends/pair_list.hpp"
 
+#include <algorithm>
 #include <type_traits>
 
 namespace trubal {
@@ -63,7 +64,9 @@ void build_gather(ContactTable& table, std::size_t ball_count) {
     next_j[b] = table.gather_begin[b];
     next_i[b] = table.gather_begin[b] + as_j[b];
   }
-  table.step_force.assign(n, PairForce{});
+  table.run_begin.assign(ball_count + 1, static_cast<std::uint32_t>(n));
+  for (std::size_t p = n; p-- > 0;) table.run_begin[table.i[p]] = static_cast<std::uint32_t>(p);
+  for (std::size_t b = ball_count; b-- > 0;) table.run_begin[b] = std::min(table.run_begin[b], table.run_begin[b + 1]);
   table.ball_force.assign(ball_count, PairForce{});
   table.ball_cn.assign(ball_count, 0.0);
   table.gather_pair.assign(2 * n, 0);

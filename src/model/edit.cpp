@@ -64,7 +64,7 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   c.gather_begin.clear();
   c.gather_pair.clear();
   c.gather_sign.clear();
-  c.step_force.clear();
+  c.run_begin.clear();
   c.ball_force.clear();
   c.ball_cn.clear();
   for (auto& [name, ids] : model.groups)

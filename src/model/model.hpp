@@ -58,8 +58,8 @@ struct Balls {
   }
 };
 
-// What the gather of one step needs of a pair, in one cache line: the total force on j, n x the
-// shear force (moment on ball b is -R_b t), and the stiffness the time-step estimate sums.
+// The contact sums of one ball in one cache line: total contact force, sum of n x shear force
+// (the moment is -R t), and the stiffness sums the time-step estimate uses.
 struct alignas(64) PairForce {
   double fx, fy, fz, tx, ty, tz;
   double kmax, ks;                                      // max(k_n, k_s) and k_s now
@@ -85,14 +85,13 @@ struct ContactTable {
   // are its pairs in ascending partner order; gather_sign is +1 where b is j, -1 where b is i.
   std::vector<std::uint32_t> gather_begin, gather_pair;
   std::vector<std::int8_t> gather_sign;
-  // Scratch of one step (not saved, not part of the state): the contact loop writes it, the
-  // gather reads it. Sized with the gather index. The arrays above (normal, overlap, forces,
-  // stiffness, work, state) are written only on steps whose results someone reads (the last step
-  // of a CYCLE, history and dump cycles, servo steps): see StepKernels::contacts_full.
-  std::vector<PairForce> step_force;
-  // The same sums per ball (sign for ball i included), for a backend that adds each pair to its
-  // balls as it goes, in list order (the serial one): that order is the gather's, so the sums are
-  // the same to the bit. ball_cn: the dashpot coefficients' sum (time step with dashpots).
+  std::vector<std::uint32_t> run_begin;                 // first pair with i >= b, for b = 0 .. balls
+  // Scratch of one step (not saved, not part of the state), sized with the gather index: the
+  // contact sums per ball (sign for ball i included), added in the gather's order (lower partners
+  // ascending, then higher ones) whichever thread adds them, so they are the same to the bit.
+  // ball_cn: the dashpot coefficients' sum (time step with dashpots). The per-pair arrays above
+  // (normal, overlap, forces, stiffness, work, state) are written only on steps whose results
+  // someone reads (the last step of a CYCLE, history and dump cycles, servo steps).
   std::vector<PairForce> ball_force;
   std::vector<double> ball_cn;
 

@@ -266,7 +266,6 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
                          (space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2])) ||
                          (control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1)));
     kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
-    kernels.contacts_sum = details ? kernels.sum_full : kernels.sum_lean;
     StepSums sums;
     const auto step_start = Clock::now();
     cell_before_step(model, dt);   // periodic space: the servo's rates

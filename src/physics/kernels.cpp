@@ -17,8 +17,9 @@ namespace {
 // one-line PairForce the gather reads and (with dashpots) the dashpot coefficient.
 inline constexpr unsigned kDetails = contact_bits::kCount;
 
-template <unsigned F, bool kOneLaw, bool kSum>
-void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
+template <unsigned F, bool kOneLaw>
+void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end,
+                   StepSums& sums) {
   using namespace contact_bits;
   constexpr unsigned kLaw = F & (kCount - 1);
   constexpr bool kFull = (F & kDetails) != 0;
@@ -29,7 +30,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
-  TRUBAL_PTR(force, c.step_force); TRUBAL_PTR(cn_out, c.cn_eff); TRUBAL_PTR(state, c.state);
+  TRUBAL_PTR(cn_out, c.cn_eff); TRUBAL_PTR(state, c.state);
   TRUBAL_PTR(ball_sum, c.ball_force); TRUBAL_PTR(cn_sum, c.ball_cn);
   // Periodic space: j's image is x_j + image L, moving at v_j + image dL/dt (backends/periodic.hpp).
   const bool periodic = model.space.periodic;
@@ -41,7 +42,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   const PairLaw& one_law = k.laws[0];
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
   ContactBatch B;
-  // kSum: the running sum of the ball whose pairs the list is on.
+  // The running sum of the ball whose pairs the list is on.
   constexpr std::size_t kNone = ~std::size_t{0};
   std::size_t acc_ball = kNone;
   PairForce acc{};
@@ -80,29 +81,27 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q;
       const double kmax = std::max(B.kn[q], B.ks[q]);
-      if constexpr (kSum) {
-        // Ball j gets +F, ball i -F; both get the moment term and the stiffness. In list order
-        // a ball first meets its pairs with lower partners, ascending, then those with higher
-        // ones: the order of the gather (build_gather). Ball i's sum stays in registers while
-        // the list stays on i (its run of pairs), the same additions in the same order.
-        if (pi[p] != acc_ball) {
-          flush();
-          acc_ball = pi[p];
-          acc = ball_sum[acc_ball];
-          if constexpr ((kLaw & kDashpot) != 0) acc_cn = cn_sum[acc_ball];
-        }
+      // Ball j gets +F, ball i -F; both get the moment term and the stiffness. In list order a
+      // ball first meets its pairs with lower partners, ascending, then those with higher ones:
+      // the order of the gather index (build_gather). Ball i's sum stays in registers while the
+      // list stays on i (its run of pairs). A j beyond own_end belongs to a later thread, which
+      // adds this pair itself (cross_loop).
+      if (pi[p] != acc_ball) {
+        flush();
+        acc_ball = pi[p];
+        acc = ball_sum[acc_ball];
+        if constexpr ((kLaw & kDashpot) != 0) acc_cn = cn_sum[acc_ball];
+      }
+      acc.fx -= B.fx[q]; acc.fy -= B.fy[q]; acc.fz -= B.fz[q];
+      if constexpr ((kLaw & kRotation) != 0) { acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q]; }
+      acc.kmax += kmax; acc.ks += B.ks[q];
+      if constexpr ((kLaw & kDashpot) != 0) acc_cn += B.cn[q];
+      if (pj[p] < own_end) {
         PairForce& fj = ball_sum[pj[p]];
         fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
-        acc.fx -= B.fx[q]; acc.fy -= B.fy[q]; acc.fz -= B.fz[q];
-        if constexpr ((kLaw & kRotation) != 0) {
-          acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q];
-          fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q];
-        }
-        acc.kmax += kmax; acc.ks += B.ks[q];
+        if constexpr ((kLaw & kRotation) != 0) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
         fj.kmax += kmax; fj.ks += B.ks[q];
-        if constexpr ((kLaw & kDashpot) != 0) { acc_cn += B.cn[q]; cn_sum[pj[p]] += B.cn[q]; }
-      } else {
-        force[p] = PairForce{B.fx[q], B.fy[q], B.fz[q], B.tx[q], B.ty[q], B.tz[q], kmax, B.ks[q]};
+        if constexpr ((kLaw & kDashpot) != 0) cn_sum[pj[p]] += B.cn[q];
       }
       if constexpr ((kLaw & kShear) != 0) { fsx[p] = B.fsx[q]; fsy[p] = B.fsy[q]; fsz[p] = B.fsz[q]; }
       if constexpr ((kLaw & kDashpot) != 0) cn_out[p] = B.cn[q];
@@ -122,34 +121,93 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
       for (std::size_t q = 0; q < count; ++q) state[p0 + q] = static_cast<std::uint8_t>(B.state[q]);
     }
   }
-  if constexpr (kSum) flush();
+  flush();
   sums.friction_work += work_friction;
   sums.damping_work += work_damping;
   sums.strain += strain;
   sums.image_power += image_power;
 }
 
-// F: law bits | kDetails | kSumPerBall.
-inline constexpr unsigned kSumPerBall = 2 * contact_bits::kCount;
 template <unsigned F>
-void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
-  constexpr bool kSum = (F & kSumPerBall) != 0;
-  constexpr unsigned G = F & ~kSumPerBall;
-  if (k.type_count == 1) contact_range<G, true, kSum>(model, k, begin, end, sums);
-  else contact_range<G, false, kSum>(model, k, begin, end, sums);
+void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end,
+                  StepSums& sums) {
+  if (k.type_count == 1) contact_range<F, true>(model, k, begin, end, own_end, sums);
+  else contact_range<F, false>(model, k, begin, end, own_end, sums);
+}
+
+// Pairs (i, j) with i below ball_begin and j in [ball_begin, ball_end): their forces on j, added
+// first (lower partners come first in j's order), ascending i per j, from the history before this
+// step. The thread that owns i computes the same pairs with the same arithmetic.
+template <unsigned F>
+void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end) {
+  using namespace contact_bits;
+  const Balls& b = model.balls;
+  ContactTable& c = model.contacts;
+  std::fill(c.ball_force.begin() + ball_begin, c.ball_force.begin() + ball_end, PairForce{});
+  std::fill(c.ball_cn.begin() + ball_begin, c.ball_cn.begin() + ball_end, 0.0);
+  if (ball_begin == 0) return;
+  TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
+  TRUBAL_PTR(x, b.x); TRUBAL_PTR(y, b.y); TRUBAL_PTR(z, b.z); TRUBAL_PTR(rad, b.rad); TRUBAL_PTR(mass, b.mass);
+  TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
+  TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
+  TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
+  const bool periodic = model.space.periodic;
+  const auto cell = image_lengths(model.space), cell_rate = image_rates(model.space);
+  std::vector<std::uint32_t> pairs;
+  for (std::size_t ball = ball_begin; ball < ball_end; ++ball)
+    for (std::uint32_t q = c.gather_begin[ball], e = c.gather_begin[ball + 1]; q < e; ++q) {
+      const std::uint32_t p = c.gather_pair[q];
+      if (c.gather_sign[q] < 0 || pi[p] >= ball_begin) break;   // lower partners come first
+      pairs.push_back(p);
+    }
+  ContactBatch B;
+  for (std::size_t q0 = 0; q0 < pairs.size(); q0 += kBatch) {
+    const std::size_t count = std::min(kBatch, pairs.size() - q0);
+    for (std::size_t q = 0; q < count; ++q) {
+      const std::size_t p = pairs[q0 + q], i = pi[p], j = pj[p];
+      if (k.type_count != 1) B.set_law(q, k.law(i, j));
+      B.dx[q] = x[j] - x[i]; B.dy[q] = y[j] - y[i]; B.dz[q] = z[j] - z[i];
+      B.ri[q] = rad[i]; B.rj[q] = rad[j];
+      B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
+      if (periodic) {
+        B.dx[q] = image_delta(x[j], x[i], c.image_x[p], cell[0]);
+        B.dy[q] = image_delta(y[j], y[i], c.image_y[p], cell[1]);
+        B.dz[q] = image_delta(z[j], z[i], c.image_z[p], cell[2]);
+        B.ivx[q] = static_cast<double>(c.image_x[p]) * cell_rate[0];
+        B.ivy[q] = static_cast<double>(c.image_y[p]) * cell_rate[1];
+        B.ivz[q] = static_cast<double>(c.image_z[p]) * cell_rate[2];
+        B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
+      }
+      if constexpr ((F & kRotation) != 0) {
+        B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
+        B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
+        B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
+      }
+      if constexpr ((F & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+      if constexpr ((F & kShear) != 0) { B.hx[q] = fsx[p]; B.hy[q] = fsy[p]; B.hz[q] = fsz[p]; }
+    }
+    if (k.type_count == 1) contact_forces<F, true>(B, count, k.laws[0], k.dt, k.beta);
+    else contact_forces<F, false>(B, count, k.laws[0], k.dt, k.beta);
+    for (std::size_t q = 0; q < count; ++q) {
+      const std::size_t j = pj[pairs[q0 + q]];
+      PairForce& fj = c.ball_force[j];
+      fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
+      if constexpr ((F & kRotation) != 0) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
+      fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q];
+      if constexpr ((F & kDashpot) != 0) c.ball_cn[j] += B.cn[q];
+    }
+  }
 }
 
 // Motion variant index: rotation + 2 loads + 4 damping kind (0..2) + 12 estimate (0..2).
-// + 36: the sums per ball are already made (ContactTable::ball_force), no gather.
-inline constexpr unsigned kMotionCount = 72;
+inline constexpr unsigned kMotionCount = 36;
 
 template <unsigned M>
 void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
   constexpr bool kRot = (M & 1) != 0;
   constexpr bool kLoads = (M & 2) != 0;
   constexpr auto kDamp = static_cast<DampKind>((M / 4) % 3);
-  constexpr auto kEstimate = static_cast<StepEstimate>((M / 12) % 3);
-  constexpr bool kSummed = M >= 36;
+  constexpr auto kEstimate = static_cast<StepEstimate>(M / 12);
   Balls& b = model.balls;
   const ContactTable& c = model.contacts;
   const double dt = k.dt;
@@ -189,7 +247,7 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
   for (std::size_t ball = begin; ball < end; ++ball) {
     double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
-    if constexpr (kSummed) {
+    {   // the sums the contact loops made (ContactTable::ball_force)
       const PairForce& pf = c.ball_force[ball];
       fx = pf.fx; fy = pf.fy; fz = pf.fz;
       if constexpr (kRot) { tx = pf.tx; ty = pf.ty; tz = pf.tz; }
@@ -197,17 +255,6 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
         sum_kmax = pf.kmax;
         sum_ks = pf.ks;
         if constexpr (kEstimate == StepEstimate::Damped) sum_cn = c.ball_cn[ball];
-      }
-    } else for (std::uint32_t q = c.gather_begin[ball], e = c.gather_begin[ball + 1]; q < e; ++q) {
-      const std::uint32_t p = c.gather_pair[q];
-      const PairForce& pf = c.step_force[p];
-      if (c.gather_sign[q] > 0) { fx += pf.fx; fy += pf.fy; fz += pf.fz; }
-      else { fx -= pf.fx; fy -= pf.fy; fz -= pf.fz; }
-      if constexpr (kRot) { tx += pf.tx; ty += pf.ty; tz += pf.tz; }
-      if constexpr (kEstimate != StepEstimate::None) {
-        sum_kmax += pf.kmax;
-        sum_ks += pf.ks;
-        if constexpr (kEstimate == StepEstimate::Damped) sum_cn += c.cn_eff[p];
       }
     }
     const double m = b.mass[ball], inv_m = 1 / m;
@@ -273,10 +320,15 @@ constexpr std::array<ContactLoop, sizeof...(I)> contact_loops(std::index_sequenc
   return {&contact_loop<I>...};
 }
 template <std::size_t... I>
+constexpr std::array<CrossLoop, sizeof...(I)> cross_loops(std::index_sequence<I...>) {
+  return {&cross_loop<I>...};
+}
+template <std::size_t... I>
 constexpr std::array<MotionLoop, sizeof...(I)> motion_loops(std::index_sequence<I...>) {
   return {&motion_loop<I>...};
 }
-constexpr auto kContactLoops = contact_loops(std::make_index_sequence<4 * contact_bits::kCount>{});
+constexpr auto kContactLoops = contact_loops(std::make_index_sequence<2 * contact_bits::kCount>{});
+constexpr auto kCrossLoops = cross_loops(std::make_index_sequence<contact_bits::kCount>{});
 constexpr auto kMotionLoops = motion_loops(std::make_index_sequence<kMotionCount>{});
 
 double series(double a, double b) { return a + b > 0 ? a * b / (a + b) : 0; }
@@ -364,13 +416,10 @@ StepKernels make_kernels(const Model& model) {
   k.contacts_lean = kContactLoops[contact];
   k.contacts_full = kContactLoops[contact | kDetails];
   k.contacts = k.contacts_full;
-  k.sum_lean = kContactLoops[contact | kSumPerBall];
-  k.sum_full = kContactLoops[contact | kDetails | kSumPerBall];
-  k.contacts_sum = k.sum_full;
+  k.cross = kCrossLoops[contact];
   const unsigned motion = (f.rotation ? 1 : 0) + (f.gravity || f.applied ? 2 : 0) +
                           4 * static_cast<unsigned>(f.mass_damping) + 12 * static_cast<unsigned>(k.estimate);
   k.motion = kMotionLoops[motion];
-  k.motion_summed = kMotionLoops[motion + 36];
   return k;
 }
 

@@ -41,8 +41,19 @@ struct StepSums {
 };
 
 struct StepKernels;
-using ContactLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&);
+// Pairs [begin, end) of the list (whole runs of i), adding each to its balls' sums in
+// ContactTable::ball_force: ball i always, ball j if below own_end (a later thread owns the rest).
+using ContactLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, std::size_t own_end,
+                             StepSums&);
+// Zeroes the sums of balls [ball_begin, ball_end) and adds the pairs they have with lower balls
+// outside the range (cross pairs), before any ContactLoop runs.
+using CrossLoop = void (*)(Model&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end);
 using MotionLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&);
+
+// Pair blocks: the pairs of kContactBalls consecutive balls i (whole runs), the unit of the
+// contact sums and of the work a thread takes. Defined by balls, so the same for every backend
+// and thread count.
+inline constexpr std::size_t kContactBalls = 256;
 
 // How the motion loop estimates the next step.
 enum class StepEstimate : unsigned { None = 0, Undamped = 1, Damped = 2 };
@@ -61,15 +72,11 @@ struct StepKernels {
   std::vector<double> alone_kn, alone_ks, alone_xi;
   // The contact loop this step runs: contacts_full also writes the per-pair results measurements
   // read (ContactTable normal, overlap, forces, stiffness, work, state); contacts_lean writes only
-  // what the next step needs (history, PairForce). The engine picks one per step; both compute
-  // the same numbers.
+  // what the next step needs (history, the sums per ball). The engine picks one per step; both
+  // compute the same numbers.
   ContactLoop contacts = nullptr, contacts_full = nullptr, contacts_lean = nullptr;
+  CrossLoop cross = nullptr;
   MotionLoop motion = nullptr;
-  // The same, for a backend that runs every pair in list order on one thread: contacts_sum adds
-  // each pair to its two balls' sums (ContactTable::ball_force, zeroed first) and motion_summed
-  // reads them; the sums are those of the gather, bit for bit.
-  ContactLoop contacts_sum = nullptr, sum_full = nullptr, sum_lean = nullptr;
-  MotionLoop motion_summed = nullptr;
 
   const PairLaw& law(std::size_t i, std::size_t j) const {
     return type_count == 1 ? laws[0] : laws[ball_type[i] * type_count + ball_type[j]];

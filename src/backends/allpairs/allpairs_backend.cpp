@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <new>
 #include <stdexcept>
@@ -61,7 +62,9 @@ class AllPairsBackend final : public Backend {
   }
 
   void step(Model& model, const StepKernels& kernels, StepSums& sums) override {
+    const auto t0 = std::chrono::steady_clock::now();
     prepare(model);
+    model.timing.detect += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     step_.run(pool_, model, kernels, sums);
   }
 

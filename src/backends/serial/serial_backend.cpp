@@ -10,6 +10,8 @@
 #include "backends/pair_list.hpp"
 #include "backends/periodic.hpp"
 #include "backends/serial/box_grid.hpp"
+#include "backends/threaded/parallel_step.hpp"
+#include "backends/threaded/thread_pool.hpp"
 #include "backends/verlet.hpp"
 #include "physics/kernels.hpp"
 
@@ -27,30 +29,10 @@ class SerialBackend final : public Backend {
   }
 
   void step(Model& model, const StepKernels& kernels, StepSums& sums) override {
-    using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
     prepare(model);
-    const auto t1 = Clock::now();
-    const std::size_t pairs = model.contacts.size(), balls = model.balls.size();
-    // One thread, pairs in list order: each pair adds itself to its balls' sums as it goes.
-    ContactTable& c = model.contacts;
-    std::fill(c.ball_force.begin(), c.ball_force.end(), PairForce{});
-    std::fill(c.ball_cn.begin(), c.ball_cn.end(), 0.0);
-    for (std::size_t begin = 0; begin < pairs; begin += kReduceBlock) {
-      StepSums block;
-      kernels.contacts_sum(model, kernels, begin, std::min(pairs, begin + kReduceBlock), block);
-      sums.add(block);
-    }
-    const auto t2 = Clock::now();
-    for (std::size_t begin = 0; begin < balls; begin += kReduceBlock) {
-      StepSums block;
-      kernels.motion_summed(model, kernels, begin, std::min(balls, begin + kReduceBlock), block);
-      sums.add(block);
-    }
-    const auto t3 = Clock::now();
-    model.timing.detect += std::chrono::duration<double>(t1 - t0).count();
-    model.timing.forces += std::chrono::duration<double>(t2 - t1).count();
-    model.timing.motion += std::chrono::duration<double>(t3 - t2).count();
+    model.timing.detect += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    step_.run(pool_, model, kernels, sums);   // one thread: pairs in list order, then the balls
   }
 
   void invalidate() override { ref_.invalidate(); }
@@ -76,6 +58,8 @@ class SerialBackend final : public Backend {
     ref_.record(model, skin);
   }
 
+  ThreadPool pool_{1};
+  ParallelStep step_;
   BoxGrid grid_;
   PairCandidates pairs_;
   VerletReference ref_;

@@ -1,7 +1,11 @@
-// The contact and motion kernels of one step spread over a thread pool. Each thread takes a run
-// of whole kReduceBlock blocks and calls the kernel once per block, exactly as the serial backend
-// does; block sums are kept per block and added in ascending block order afterwards. So the
-// arithmetic, and the answer, is the serial one for every thread count.
+// One step's contact and motion kernels over a thread pool (every backend; the serial one uses a
+// pool of one). Thread t owns a contiguous range of balls, made of whole pair blocks (the pairs of
+// kContactBalls consecutive balls i): it first zeroes its balls' sums and adds the pairs they have
+// with lower balls of earlier ranges (cross pairs, from the history before the step), then runs
+// its pair blocks in list order, adding each pair to ball i and to ball j where it owns j. Every
+// ball's sum is thus the same additions in the same order (lower partners ascending, then higher
+// ones) for every thread count; block sums (energies) are added in ascending block order. So the
+// answer is the serial one, bit for bit.
 #pragma once
 
 #include <vector>
@@ -14,13 +18,13 @@ namespace trubal {
 
 class ParallelStep {
  public:
-  // Contacts over model.contacts (every pair), then motion over the balls.
+  // Contacts over model.contacts (every pair), then motion over the balls; the time of each
+  // phase is added to model.timing (forces, motion).
   void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums);
 
  private:
-  void phase(ThreadPool& pool, Model& model, const StepKernels& kernels, ContactLoop loop, std::size_t count,
-             StepSums& sums);
   std::vector<StepSums> blocks_;
+  std::vector<std::size_t> first_block_;   // per thread, then the block count
 };
 
 // Splits [0, count) into `parts` contiguous ranges; range t is [split(t), split(t+1)).

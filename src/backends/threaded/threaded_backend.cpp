@@ -1,6 +1,7 @@
 #include "backends/threaded/threaded_backend.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -34,7 +35,9 @@ class ThreadedBackend final : public Backend {
   }
 
   void step(Model& model, const StepKernels& kernels, StepSums& sums) override {
+    const auto t0 = std::chrono::steady_clock::now();
     prepare(model);
+    model.timing.detect += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     step_.run(pool_, model, kernels, sums);
   }
 
