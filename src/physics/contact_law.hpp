@@ -62,7 +62,7 @@ struct ContactBatch {
   // Inputs (as ContactInput).
   alignas(64) double dx[kBatch], dy[kBatch], dz[kBatch], ri[kBatch], rj[kBatch];
   alignas(64) double vx[kBatch], vy[kBatch], vz[kBatch], sx[kBatch], sy[kBatch], sz[kBatch];
-  alignas(64) double mstar[kBatch], hx[kBatch], hy[kBatch], hz[kBatch];   // h: history in
+  alignas(64) double mstar[kBatch];
   alignas(64) double ivx[kBatch], ivy[kBatch], ivz[kBatch];   // periodic: velocity of j's image offset
   // The pair law per lane (only when the scene has several materials).
   alignas(64) double kn_law[kBatch], ks_law[kBatch], friction[kBatch], cohesion[kBatch];
@@ -70,7 +70,7 @@ struct ContactBatch {
   // Results (as ContactResult; state 0, 1, 2 as a double).
   alignas(64) double nx[kBatch], ny[kBatch], nz[kBatch], overlap[kBatch], fn[kBatch];
   alignas(64) double fx[kBatch], fy[kBatch], fz[kBatch], tx[kBatch], ty[kBatch], tz[kBatch];
-  alignas(64) double kn[kBatch], ks[kBatch], cn[kBatch], fsx[kBatch], fsy[kBatch], fsz[kBatch];
+  alignas(64) double kn[kBatch], ks[kBatch], cn[kBatch];
   alignas(64) double work_friction[kBatch], work_damping[kBatch], strain[kBatch], state[kBatch];
 
   void set_law(std::size_t q, const PairLaw& law) {
@@ -82,8 +82,10 @@ struct ContactBatch {
 // The forces of lanes [0, count) of a batch. one_law: every pair has `law` (a scene of one
 // material, or all pairs of one pair of types); else each lane's law is in the batch.
 // beta: Rayleigh stiffness-proportional coefficient (0 without). dt: this step.
+// hx, hy, hz (kShear): the shear force history of the lanes, read and replaced in place.
 template <unsigned F, bool kOneLaw>
-inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta) {
+inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta,
+                           double* __restrict hx_io, double* __restrict hy_io, double* __restrict hz_io) {
   using namespace contact_bits;
   for (std::size_t q = 0; q < count; ++q) {
     const double law_kn = kOneLaw ? law.kn : B.kn_law[q], law_ks = kOneLaw ? law.ks : B.ks_law[q];
@@ -143,7 +145,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     double state = 1;
     if constexpr ((F & kShear) != 0) {
       // Last step's shear force, turned onto the new contact plane at its old length.
-      const double hx = B.hx[q], hy = B.hy[q], hz = B.hz[q];
+      const double hx = hx_io[q], hy = hy_io[q], hz = hz_io[q];
       const double old2 = hx * hx + hy * hy + hz * hz;
       const double h_n = hx * nx + hy * ny + hz * nz;
       const double px = hx - h_n * nx, py = hy - h_n * ny, pz = hz - h_n * nz;
@@ -187,7 +189,9 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     B.ty[q] = touching ? nz * sx - nx * sz : 0.0;
     B.tz[q] = touching ? nx * sy - ny * sx : 0.0;
     B.kn[q] = touching ? kn : 0.0; B.ks[q] = touching ? ks : 0.0; B.cn[q] = touching ? cn : 0.0;
-    B.fsx[q] = touching ? fsx : 0.0; B.fsy[q] = touching ? fsy : 0.0; B.fsz[q] = touching ? fsz : 0.0;
+    if constexpr ((F & kShear) != 0) {
+      hx_io[q] = touching ? fsx : 0.0; hy_io[q] = touching ? fsy : 0.0; hz_io[q] = touching ? fsz : 0.0;
+    }
     B.work_friction[q] = touching ? work_friction : 0.0;
     B.work_damping[q] = touching ? work_damping : 0.0;
     B.strain[q] = touching ? strain : 0.0;
@@ -201,12 +205,14 @@ inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, d
   ContactBatch B;
   B.dx[0] = in.dx; B.dy[0] = in.dy; B.dz[0] = in.dz; B.ri[0] = in.ri; B.rj[0] = in.rj;
   B.vx[0] = in.vx; B.vy[0] = in.vy; B.vz[0] = in.vz; B.sx[0] = in.sx; B.sy[0] = in.sy; B.sz[0] = in.sz;
-  B.mstar[0] = in.mstar; B.hx[0] = in.fsx; B.hy[0] = in.fsy; B.hz[0] = in.fsz;
-  contact_forces<F, true>(B, 1, law, dt, beta);
+  B.mstar[0] = in.mstar;
+  double hx = in.fsx, hy = in.fsy, hz = in.fsz;
+  contact_forces<F, true>(B, 1, law, dt, beta, &hx, &hy, &hz);
   ContactResult r;
   r.nx = B.nx[0]; r.ny = B.ny[0]; r.nz = B.nz[0]; r.overlap = B.overlap[0]; r.fn = B.fn[0];
   r.fx = B.fx[0]; r.fy = B.fy[0]; r.fz = B.fz[0]; r.tx = B.tx[0]; r.ty = B.ty[0]; r.tz = B.tz[0];
-  r.kn = B.kn[0]; r.ks = B.ks[0]; r.cn = B.cn[0]; r.fsx = B.fsx[0]; r.fsy = B.fsy[0]; r.fsz = B.fsz[0];
+  r.kn = B.kn[0]; r.ks = B.ks[0]; r.cn = B.cn[0];
+  if constexpr ((F & contact_bits::kShear) != 0) { r.fsx = hx; r.fsy = hy; r.fsz = hz; }
   r.work_friction = B.work_friction[0]; r.work_damping = B.work_damping[0]; r.strain = B.strain[0];
   r.state = static_cast<std::uint8_t>(B.state[0]);
   return r;

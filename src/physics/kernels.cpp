@@ -75,9 +75,8 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
         B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
       }
       if constexpr ((kLaw & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
-      if constexpr ((kLaw & kShear) != 0) { B.hx[q] = fsx[p]; B.hy[q] = fsy[p]; B.hz[q] = fsz[p]; }
     }
-    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta);
+    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q;
       const double kmax = std::max(B.kn[q], B.ks[q]);
@@ -103,7 +102,6 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
         fj.kmax += kmax; fj.ks += B.ks[q];
         if constexpr ((kLaw & kDashpot) != 0) cn_sum[pj[p]] += B.cn[q];
       }
-      if constexpr ((kLaw & kShear) != 0) { fsx[p] = B.fsx[q]; fsy[p] = B.fsy[q]; fsz[p] = B.fsz[q]; }
       if constexpr ((kLaw & kDashpot) != 0) cn_out[p] = B.cn[q];
       if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
       work_friction += B.work_friction[q];
@@ -161,6 +159,7 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
       pairs.push_back(p);
     }
   ContactBatch B;
+  alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
   for (std::size_t q0 = 0; q0 < pairs.size(); q0 += kBatch) {
     const std::size_t count = std::min(kBatch, pairs.size() - q0);
     for (std::size_t q = 0; q < count; ++q) {
@@ -184,10 +183,11 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
         B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
       }
       if constexpr ((F & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
-      if constexpr ((F & kShear) != 0) { B.hx[q] = fsx[p]; B.hy[q] = fsy[p]; B.hz[q] = fsz[p]; }
+      if constexpr ((F & kShear) != 0) { hx[q] = fsx[p]; hy[q] = fsy[p]; hz[q] = fsz[p]; }
     }
-    if (k.type_count == 1) contact_forces<F, true>(B, count, k.laws[0], k.dt, k.beta);
-    else contact_forces<F, false>(B, count, k.laws[0], k.dt, k.beta);
+    // The history is the owner's to replace: the cross pass works on a copy.
+    if (k.type_count == 1) contact_forces<F, true>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz);
+    else contact_forces<F, false>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];
       PairForce& fj = c.ball_force[j];
