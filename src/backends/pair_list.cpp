@@ -1,6 +1,7 @@
 #include "backends/pair_list.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <type_traits>
 
 namespace trubal {
@@ -53,6 +54,8 @@ void install_pairs(ContactTable& table, const PairCandidates& pairs, std::size_t
 }
 
 void build_gather(ContactTable& table, std::size_t ball_count) {
+  static std::atomic<std::uint64_t> versions{0};   // unique across tables (a restored copy keeps its own)
+  table.list_version = ++versions;
   const std::size_t n = table.size();
   std::vector<std::uint32_t> as_j(ball_count, 0), as_i(ball_count, 0);
   for (std::size_t p = 0; p < n; ++p) { ++as_j[table.j[p]]; ++as_i[table.i[p]]; }

@@ -86,6 +86,7 @@ struct ContactTable {
   std::vector<std::uint32_t> gather_begin, gather_pair;
   std::vector<std::int8_t> gather_sign;
   std::vector<std::uint32_t> run_begin;                 // first pair with i >= b, for b = 0 .. balls
+  std::uint64_t list_version = 0;                       // unique to each list build_gather indexed
   // Scratch of one step (not saved, not part of the state), sized with the gather index: the
   // contact sums per ball (sign for ball i included), added in the gather's order (lower partners
   // ascending, then higher ones) whichever thread adds them, so they are the same to the bit.

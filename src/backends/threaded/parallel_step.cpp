@@ -5,6 +5,45 @@
 
 namespace trubal {
 
+void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
+  const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;
+  split_version_ = c.list_version;
+  split_parts_ = parts;
+  first_block_.assign(parts + 1, blocks);
+  first_block_[0] = 0;
+  if (parts == 1) return;
+  // start[k]: pairs before block k; cross[k]: pairs with i before block k and j in or after it.
+  std::vector<std::size_t> start(blocks + 1), cross(blocks + 2, 0);
+  for (std::size_t k = 0; k <= blocks; ++k) start[k] = c.run_begin[std::min(balls, k * kContactBalls)];
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const std::size_t bi = c.i[p] / kContactBalls, bj = c.j[p] / kContactBalls;
+    if (bj > bi) { ++cross[bi + 1]; --cross[bj + 1]; }
+  }
+  for (std::size_t k = 1; k <= blocks; ++k) cross[k] += cross[k - 1];
+  // The smallest largest cost that `parts` runs of blocks can have, a run [a, b) costing
+  // start[b] - start[a] + cross[a] (its own pairs and, roughly, the cross pairs it redoes).
+  auto fits = [&](std::size_t most, bool record) {
+    std::size_t a = 0;
+    for (int t = 0; t < parts; ++t) {
+      if (record) first_block_[t] = a;
+      std::size_t b = a;
+      while (b < blocks && start[b + 1] - start[a] + cross[a] <= most) ++b;
+      if (b == a && a < blocks) return false;   // a block alone exceeds `most`
+      a = b;
+    }
+    if (record) first_block_[parts] = blocks;
+    return a == blocks;
+  };
+  std::size_t lo = 0, hi = start[blocks] + c.size() + 1;
+  while (lo < hi) {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    if (fits(mid, false)) hi = mid; else lo = mid + 1;
+  }
+  if (!fits(lo, true)) {   // cannot happen (hi always fits); keep a valid split anyway
+    for (int t = 0; t <= parts; ++t) first_block_[t] = split_point(blocks, parts, t);
+  }
+}
+
 void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
@@ -14,18 +53,10 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
   auto block_ball = [&](std::size_t k) { return std::min(balls, k * kContactBalls); };
   auto block_pair = [&](std::size_t k) { return static_cast<std::size_t>(c.run_begin[block_ball(k)]); };
 
-  // Threads take runs of whole blocks with about equal pair counts (a block of many pairs is
-  // never split, so a thread may get none).
   const int parts = static_cast<int>(std::min<std::size_t>(pool.size(), std::max<std::size_t>(blocks, 1)));
-  first_block_.assign(parts + 1, blocks);
-  first_block_[0] = 0;
-  const std::size_t pairs = c.size();
-  for (int t = 1; t < parts; ++t) {
-    const std::size_t target = split_point(pairs, parts, t);
-    std::size_t k = first_block_[t - 1];
-    while (k < blocks && block_pair(k) < target) ++k;
-    first_block_[t] = k;
-  }
+  if (c.list_version != split_version_ || parts != split_parts_ || first_block_.size() != static_cast<std::size_t>(parts) + 1 ||
+      first_block_.back() != blocks)
+    split(c, balls, parts);
   const bool parallel = parts > 1;
   blocks_.assign(blocks, StepSums{});
   pool.run([&](int t) {

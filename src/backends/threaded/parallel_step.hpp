@@ -23,8 +23,14 @@ class ParallelStep {
   void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums);
 
  private:
+  // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
+  // pairs it computes again (kept while the pair list stays the same).
+  void split(const ContactTable& c, std::size_t balls, int parts);
+
   std::vector<StepSums> blocks_;
   std::vector<std::size_t> first_block_;   // per thread, then the block count
+  std::uint64_t split_version_ = 0;
+  int split_parts_ = 0;
 };
 
 // Splits [0, count) into `parts` contiguous ranges; range t is [split(t), split(t+1)).
