@@ -148,3 +148,22 @@ TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread
     }
   }
 }
+
+TEST_CASE("backends: allpairs tests every pair once per step, the first step of a CYCLE included",
+          "[backends]") {
+  Scene scene = fcc_compression(3, 3, 3);   // 108 balls: 5,778 pair slots
+  auto backend = make_backend("allpairs", 1);
+  const std::size_t n = scene.model.balls.size(), slots = n * (n - 1) / 2;
+  auto tests = [&] {
+    for (const auto& [key, value] : backend->info())
+      if (key == "pair tests") return std::stoull(value);
+    return 0ULL;
+  };
+  REQUIRE(run_cycles(scene.model, *backend, 3, {}).done == 3);   // prepare + 3 steps: 3 passes
+  CHECK(tests() == 3 * slots);
+  REQUIRE(run_cycles(scene.model, *backend, 2, {}).done == 2);
+  CHECK(tests() == 5 * slots);
+  backend->invalidate();   // balls edited between CYCLEs: the next step tests again
+  REQUIRE(run_cycles(scene.model, *backend, 1, {}).done == 1);
+  CHECK(tests() == 6 * slots);
+}
