@@ -71,6 +71,9 @@ void build_gather(ContactTable& table, std::size_t ball_count) {
   for (std::size_t p = n; p-- > 0;) table.run_begin[table.i[p]] = static_cast<std::uint32_t>(p);
   for (std::size_t b = ball_count; b-- > 0;) table.run_begin[b] = std::min(table.run_begin[b], table.run_begin[b + 1]);
   table.ball_force.assign(ball_count, PairForce{});
+  table.fsx_next.assign(n, 0.0);
+  table.fsy_next.assign(n, 0.0);
+  table.fsz_next.assign(n, 0.0);
   table.ball_cn.assign(ball_count, 0.0);
   table.gather_pair.assign(2 * n, 0);
   table.gather_sign.assign(2 * n, 0);

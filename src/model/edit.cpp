@@ -65,6 +65,9 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   c.gather_pair.clear();
   c.gather_sign.clear();
   c.run_begin.clear();
+  c.fsx_next.clear();
+  c.fsy_next.clear();
+  c.fsz_next.clear();
   c.ball_force.clear();
   c.ball_cn.clear();
   for (auto& [name, ids] : model.groups)

@@ -94,6 +94,9 @@ struct ContactTable {
   // (normal, overlap, forces, stiffness, work, state) are written only on steps whose results
   // someone reads (the last step of a CYCLE, history and dump cycles, servo steps).
   std::vector<PairForce> ball_force;
+  // The shear history a step writes (read from fsx, fsy, fsz, which other threads may still read
+  // for their cross pairs), swapped in after the contact pass.
+  std::vector<double> fsx_next, fsy_next, fsz_next;
   std::vector<double> ball_cn;
 
   std::size_t size() const { return i.size(); }

@@ -82,10 +82,12 @@ struct ContactBatch {
 // The forces of lanes [0, count) of a batch. one_law: every pair has `law` (a scene of one
 // material, or all pairs of one pair of types); else each lane's law is in the batch.
 // beta: Rayleigh stiffness-proportional coefficient (0 without). dt: this step.
-// hx, hy, hz (kShear): the shear force history of the lanes, read and replaced in place.
+// (kShear) h*_in: the lanes' shear force history; h*_out: where the new history goes.
 template <unsigned F, bool kOneLaw>
 inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta,
-                           double* __restrict hx_io, double* __restrict hy_io, double* __restrict hz_io) {
+                           const double* __restrict hx_in, const double* __restrict hy_in,
+                           const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
+                           double* __restrict hz_out) {
   using namespace contact_bits;
   for (std::size_t q = 0; q < count; ++q) {
     const double law_kn = kOneLaw ? law.kn : B.kn_law[q], law_ks = kOneLaw ? law.ks : B.ks_law[q];
@@ -145,7 +147,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     double state = 1;
     if constexpr ((F & kShear) != 0) {
       // Last step's shear force, turned onto the new contact plane at its old length.
-      const double hx = hx_io[q], hy = hy_io[q], hz = hz_io[q];
+      const double hx = hx_in[q], hy = hy_in[q], hz = hz_in[q];
       const double old2 = hx * hx + hy * hy + hz * hz;
       const double h_n = hx * nx + hy * ny + hz * nz;
       const double px = hx - h_n * nx, py = hy - h_n * ny, pz = hz - h_n * nz;
@@ -190,7 +192,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     B.tz[q] = touching ? nx * sy - ny * sx : 0.0;
     B.kn[q] = touching ? kn : 0.0; B.ks[q] = touching ? ks : 0.0; B.cn[q] = touching ? cn : 0.0;
     if constexpr ((F & kShear) != 0) {
-      hx_io[q] = touching ? fsx : 0.0; hy_io[q] = touching ? fsy : 0.0; hz_io[q] = touching ? fsz : 0.0;
+      hx_out[q] = touching ? fsx : 0.0; hy_out[q] = touching ? fsy : 0.0; hz_out[q] = touching ? fsz : 0.0;
     }
     B.work_friction[q] = touching ? work_friction : 0.0;
     B.work_damping[q] = touching ? work_damping : 0.0;
@@ -206,8 +208,8 @@ inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, d
   B.dx[0] = in.dx; B.dy[0] = in.dy; B.dz[0] = in.dz; B.ri[0] = in.ri; B.rj[0] = in.rj;
   B.vx[0] = in.vx; B.vy[0] = in.vy; B.vz[0] = in.vz; B.sx[0] = in.sx; B.sy[0] = in.sy; B.sz[0] = in.sz;
   B.mstar[0] = in.mstar;
-  double hx = in.fsx, hy = in.fsy, hz = in.fsz;
-  contact_forces<F, true>(B, 1, law, dt, beta, &hx, &hy, &hz);
+  double hx = 0, hy = 0, hz = 0;
+  contact_forces<F, true>(B, 1, law, dt, beta, &in.fsx, &in.fsy, &in.fsz, &hx, &hy, &hz);
   ContactResult r;
   r.nx = B.nx[0]; r.ny = B.ny[0]; r.nz = B.nz[0]; r.overlap = B.overlap[0]; r.fn = B.fn[0];
   r.fx = B.fx[0]; r.fy = B.fy[0]; r.fz = B.fz[0]; r.tx = B.tx[0]; r.ty = B.ty[0]; r.tz = B.tz[0];

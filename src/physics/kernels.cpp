@@ -31,6 +31,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   TRUBAL_PTR(cn_out, c.cn_eff); TRUBAL_PTR(state, c.state);
+  TRUBAL_PTR(next_x, c.fsx_next); TRUBAL_PTR(next_y, c.fsy_next); TRUBAL_PTR(next_z, c.fsz_next);
   TRUBAL_PTR(ball_sum, c.ball_force); TRUBAL_PTR(cn_sum, c.ball_cn);
   // Periodic space: j's image is x_j + image L, moving at v_j + image dL/dt (backends/periodic.hpp).
   const bool periodic = model.space.periodic;
@@ -76,7 +77,8 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
       }
       if constexpr ((kLaw & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
     }
-    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0);
+    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, next_x + p0, next_y + p0,
+                                  next_z + p0);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q;
       const double kmax = std::max(B.kn[q], B.ks[q]);
@@ -159,7 +161,7 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
       pairs.push_back(p);
     }
   ContactBatch B;
-  alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
+  alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
   for (std::size_t q0 = 0; q0 < pairs.size(); q0 += kBatch) {
     const std::size_t count = std::min(kBatch, pairs.size() - q0);
     for (std::size_t q = 0; q < count; ++q) {
@@ -185,9 +187,9 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
       if constexpr ((F & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
       if constexpr ((F & kShear) != 0) { hx[q] = fsx[p]; hy[q] = fsy[p]; hz[q] = fsz[p]; }
     }
-    // The history is the owner's to replace: the cross pass works on a copy.
-    if (k.type_count == 1) contact_forces<F, true>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz);
-    else contact_forces<F, false>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz);
+    // The new history is the owner's to write: here it goes to a scratch copy.
+    if (k.type_count == 1) contact_forces<F, true>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
+    else contact_forces<F, false>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];
       PairForce& fj = c.ball_force[j];

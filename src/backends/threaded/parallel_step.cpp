@@ -59,17 +59,22 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
     split(c, balls, parts);
   const bool parallel = parts > 1;
   blocks_.assign(blocks, StepSums{});
-  pool.run([&](int t) {
-    if (t >= parts) return;
-    kernels.cross(model, kernels, block_ball(first_block_[t]), block_ball(first_block_[t + 1]));
-  }, parallel);
+  // The history is read from fsx.. and written to fsx_next..: a thread's cross pairs may belong to
+  // a thread that is already writing, so the two passes need no barrier between them.
   pool.run([&](int t) {
     if (t >= parts) return;
     const std::size_t own_end = block_ball(first_block_[t + 1]);
+    kernels.cross(model, kernels, block_ball(first_block_[t]), own_end);
     for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)
       kernels.contacts(model, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
   }, parallel);
   for (const StepSums& block : blocks_) sums.add(block);
+  if (kernels.features.friction) {
+    ContactTable& table = model.contacts;
+    table.fsx.swap(table.fsx_next);
+    table.fsy.swap(table.fsy_next);
+    table.fsz.swap(table.fsz_next);
+  }
   const auto t1 = Clock::now();
 
   const std::size_t motion_blocks = (balls + kReduceBlock - 1) / kReduceBlock;

@@ -1,11 +1,12 @@
 // One step's contact and motion kernels over a thread pool (every backend; the serial one uses a
 // pool of one). Thread t owns a contiguous range of balls, made of whole pair blocks (the pairs of
-// kContactBalls consecutive balls i): it first zeroes its balls' sums and adds the pairs they have
-// with lower balls of earlier ranges (cross pairs, from the history before the step), then runs
-// its pair blocks in list order, adding each pair to ball i and to ball j where it owns j. Every
+// kContactBalls consecutive balls i): it zeroes its balls' sums and adds the pairs they have with
+// lower balls of earlier ranges (cross pairs, computed again from the same inputs), then runs its
+// pair blocks in list order, adding each pair to ball i and to ball j where it owns j. Every
 // ball's sum is thus the same additions in the same order (lower partners ascending, then higher
 // ones) for every thread count; block sums (energies) are added in ascending block order. So the
-// answer is the serial one, bit for bit.
+// answer is the serial one, bit for bit. The new shear history goes to a second buffer, swapped in
+// after the pass, so that cross pairs read the old one without a barrier.
 #pragma once
 
 #include <vector>
