@@ -29,9 +29,9 @@ void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::si
   TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
-  // Periodic space: j's image is x_j + image L, moving at v_j + image dL/dt (backends/periodic.hpp).
+  // Periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image (backends/periodic.hpp).
   const bool periodic = model.space.periodic;
-  const auto cell = image_lengths(model.space), cell_rate = image_rates(model.space);
+  const CellFrame cell = cell_frame(model.space);
   const std::int8_t* const img_x = c.image_x.data();
   const std::int8_t* const img_y = c.image_y.data();
   const std::int8_t* const img_z = c.image_z.data();
@@ -52,12 +52,15 @@ void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::si
       in.ri = rad[i]; in.rj = rad[j];
       in.vx = vx[j] - vx[i]; in.vy = vy[j] - vy[i]; in.vz = vz[j] - vz[i];
       if (periodic) {
-        in.dx = image_delta(x[j], x[i], img_x[p], cell[0]);
-        in.dy = image_delta(y[j], y[i], img_y[p], cell[1]);
-        in.dz = image_delta(z[j], z[i], img_z[p], cell[2]);
-        in.vx += static_cast<double>(img_x[p]) * cell_rate[0];
-        in.vy += static_cast<double>(img_y[p]) * cell_rate[1];
-        in.vz += static_cast<double>(img_z[p]) * cell_rate[2];
+        double ox, oy, oz, ux, uy, uz;
+        image_offset(cell, img_x[p], img_y[p], img_z[p], ox, oy, oz);
+        image_velocity(cell, img_x[p], img_y[p], img_z[p], ux, uy, uz);
+        in.dx = image_delta(x[j], x[i], ox);
+        in.dy = image_delta(y[j], y[i], oy);
+        in.dz = image_delta(z[j], z[i], oz);
+        in.vx += ux;
+        in.vy += uy;
+        in.vz += uz;
       }
       if constexpr ((F & kRotation) != 0) {
         in.sx = in.ri * wx[i] + in.rj * wx[j];
