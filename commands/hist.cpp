@@ -67,7 +67,7 @@ const Command hist_command = {
     "HIST", {},
     "HIST what... [every n] [file f.csv] [area a] [pressure p] [range ...]  |  HIST reset",
     "record quantities every n cycles",
-    "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33), "
+    "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33 e12 e13 e23), "
     "ratio, axial, platen, energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "

@@ -23,6 +23,9 @@ static void print_info(Context& ctx) {
   if (m.started) {
     auto L = m.space.length();
     o << fmt::format("space: {} {} x {} x {}\n", m.space.periodic ? "periodic" : "box", L[0], L[1], L[2]);
+    const auto& t = m.space.tilt;
+    if (m.space.periodic && (t[0] != 0 || t[1] != 0 || t[2] != 0))
+      o << fmt::format("cell tilt: xy {:.6g}  xz {:.6g}  yz {:.6g}\n", t[0], t[1], t[2]);
   } else {
     o << "space: none (START first)\n";
   }
@@ -209,12 +212,13 @@ static void run_print(Context& ctx, Args& args) {
 const Command print_command = {
     "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history [file f] [range ...]",
     "print a table or a measurement",
-    "info: a `name: value` summary (balls, contacts, cycle, time, timestep, backend, threads, active "
-    "physics). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
+    "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
+    "physics; the cell's tilts xy xz yz once STRAIN has sheared it). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
     "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
-    "compression positive. strain: the periodic space's accumulated strain. energy: the energy terms and "
+    "compression positive. strain: the periodic space's accumulated strain (xx yy zz xy xz yz, tensor "
+    "components). energy: the energy terms and "
     "their balance. fabric: the fabric tensor. coordination: coordination number, sliding fraction and "
     "unbalanced-force ratio. prop, damp: the settings. history: the recorded histories.",
     {"info", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp", "history",

@@ -91,10 +91,12 @@ class PlacementGrid {
   bool overlaps(double x, double y, double z, double r) const {
     if (!space_.periodic) return overlaps_here(x, y, z, r);
     auto L = space_.length();
-    for (int i = -1; i <= 1; ++i)
-      for (int j = -1; j <= 1; ++j)
-        for (int k = -1; k <= 1; ++k)
-          if (overlaps_here(x + i * L[0], y + j * L[1], z + k * L[2], r)) return true;
+    const auto& t = space_.tilt;   // a sheared cell: images along its edge vectors, two deep
+    const int reach = t[0] == 0 && t[1] == 0 && t[2] == 0 ? 1 : 2;
+    for (int i = -reach; i <= reach; ++i)
+      for (int j = -reach; j <= reach; ++j)
+        for (int k = -reach; k <= reach; ++k)
+          if (overlaps_here(x + i * L[0] + j * t[0] + k * t[1], y + j * L[1] + k * t[2], z + k * L[2], r)) return true;
     return false;
   }
 

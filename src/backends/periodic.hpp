@@ -1,8 +1,9 @@
 // The periodic cell as the backends see it (PHYSICS.md "Periodic space"): balls are wrapped into
 // the cell at the start of every step, each pair carries the image of j that i sees (int8 per
-// axis), and every backend finds the same pairs with the same arithmetic, so that their answers
-// stay bitwise equal. The rule that keeps one image per pair: every edge at least twice the
-// largest diameter (then only the nearest image of a ball can touch it).
+// edge vector), and every backend finds the same pairs with the same arithmetic, so that their
+// answers stay bitwise equal. The cell is a parallelepiped when it is sheared. The rule that keeps
+// one image per pair: every width of the cell at least twice the largest diameter (then only the
+// nearest image of a ball can touch it).
 #pragma once
 
 #include <array>
@@ -15,42 +16,90 @@
 
 namespace trubal {
 
-// x_j - x_i for j's image `image` across a cell of edge L: (x_j - x_i) + image * L, in this order
-// everywhere (detection, contact kernel, time step), so that every backend rounds alike. Outside
-// a periodic space image is 0 and L is 0: the plain difference.
-inline double image_delta(double xj, double xi, std::int8_t image, double length) {
-  return (xj - xi) + static_cast<double>(image) * length;
+// The periodic cell as a matrix H whose columns are its edge vectors a = (lx, 0, 0),
+// b = (xy, ly, 0), c = (xz, yz, lz) (upper triangular: the lengths along the axes and the tilts of
+// Space), and their rate of change dH/dt = L H for the velocity gradient L of the strain rates.
+// Image n = (ix, iy, iz) of a ball at x is x + H n and moves at v + (dH/dt) n: an image across
+// the y faces is shifted by xy along x (Lees-Edwards), one across the z faces by xz and yz.
+// Outside a periodic space every entry is 0, so that the plain difference comes out.
+struct CellFrame {
+  double lx = 0, ly = 0, lz = 0, xy = 0, xz = 0, yz = 0;         // H
+  double vlx = 0, vly = 0, vlz = 0, vxy = 0, vxz = 0, vyz = 0;   // dH/dt
+};
+
+CellFrame cell_frame(const Space& s);
+
+// The velocity gradient of the strain rates (compression positive, tensor shear components):
+// upper triangular, so that the cell stays in the form above; the shear is simple shear, e.g. e12
+// moves x with y: L_xy = -2 e12 (the top y face moves toward -x for e12 > 0), with the spin that
+// simple shear has. Rows x y z, columns x y z.
+std::array<std::array<double, 3>, 3> velocity_gradient(const std::array<double, 6>& rates);
+
+// H n, the offset of image n: (ix lx + iy xy + iz xz, iy ly + iz yz, iz lz), in this order
+// everywhere (detection, contact kernel, time step), so that every backend rounds alike. With no
+// tilt the terms of the other axes are (signed) zeros and leave the sum exact.
+inline void image_offset(const CellFrame& f, std::int8_t ix, std::int8_t iy, std::int8_t iz, double& ox, double& oy,
+                         double& oz) {
+  const double nx = ix, ny = iy, nz = iz;
+  ox = nx * f.lx + ny * f.xy + nz * f.xz;
+  oy = ny * f.ly + nz * f.yz;
+  oz = nz * f.lz;
+}
+// (dH/dt) n, the velocity of image n relative to the ball.
+inline void image_velocity(const CellFrame& f, std::int8_t ix, std::int8_t iy, std::int8_t iz, double& ux, double& uy,
+                           double& uz) {
+  const double nx = ix, ny = iy, nz = iz;
+  ux = nx * f.vlx + ny * f.vxy + nz * f.vxz;
+  uy = ny * f.vly + nz * f.vyz;
+  uz = nz * f.vlz;
 }
 
-// The image (-1, 0, +1) of j nearest to i along an axis, for wrapped positions (|d| < L).
-inline std::int8_t nearest_image(double d, double length) {
-  return d > 0.5 * length ? std::int8_t{-1} : (d < -0.5 * length ? std::int8_t{1} : std::int8_t{0});
+// x_j - x_i for j's image at offset o (from image_offset): (x_j - x_i) + o.
+inline double image_delta(double xj, double xi, double offset) { return (xj - xi) + offset; }
+
+// The image (-1, 0, +1) of j nearest to i along one lattice direction, from the separation t along
+// it (|t| < 1.5 edge).
+inline std::int8_t nearest_image(double t, double length) {
+  return t > 0.5 * length ? std::int8_t{-1} : (t < -0.5 * length ? std::int8_t{1} : std::int8_t{0});
 }
 
-// Edge lengths the kernels use: the cell's in periodic space, zeros outside.
-inline std::array<double, 3> image_lengths(const Space& s) {
-  return s.periodic ? s.length() : std::array<double, 3>{0, 0, 0};
-}
-// Rate of change of the edge lengths (compression positive strain rates: dL/dt = -rate L).
-inline std::array<double, 3> image_rates(const Space& s) {
-  if (!s.periodic) return {0, 0, 0};
-  const auto L = s.length();
-  return {-s.strain_rate[0] * L[0], -s.strain_rate[1] * L[1], -s.strain_rate[2] * L[2]};
+// The image of j nearest to i for wrapped positions, separation d = x_j - x_i: each fractional
+// coordinate of d (H^-1 d) rounded to the nearest integer. In a cell whose widths are at least
+// twice the reach, an image within reach is this one.
+inline void nearest_image(const CellFrame& f, double dx, double dy, double dz, std::int8_t& ix, std::int8_t& iy,
+                          std::int8_t& iz) {
+  const double sz = dz / f.lz;
+  const double ty = dy - f.yz * sz;              // ly times the fractional y
+  const double tx = dx - f.xy * (ty / f.ly) - f.xz * sz;
+  ix = nearest_image(tx, f.lx);
+  iy = nearest_image(ty, f.ly);
+  iz = nearest_image(dz, f.lz);
 }
 
-// Throws std::runtime_error when some edge is shorter than twice the largest ball diameter.
+// The widths of the periodic cell: the distances between its opposite faces (the edge lengths
+// when it has no tilt).
+std::array<double, 3> cell_widths(const Space& s);
+
+// Throws std::runtime_error when some width of the cell is less than twice the largest ball diameter.
 void check_periodic_cell(const Model& model);
 
 // The pair-list skin to use in the periodic cell: the given one, cut down so that a ball's reach
-// (its diameter plus the skin) stays below half of every edge (one image per pair).
+// (its diameter plus the skin) stays below half of every width (one image per pair).
 double periodic_skin(const Model& model, double skin);
 
-// Wraps every ball centre into [lo, hi) of the periodic cell. A wrapped ball's velocity changes by
-// the cell's edge velocity; the images of its pairs in model.contacts change so that each pair
+// Wraps every ball centre into the periodic cell (the parallelepiped lo + H s, s in [0, 1), taken
+// z first, then y, then x). A ball moved by an edge vector has its velocity changed by that edge's
+// velocity; the images of its pairs in model.contacts change so that each pair
 // keeps the same partner image (and its history); ref (the backend's reference positions, if the
 // same size) moves with the ball. The kinetic energy that the velocity change adds is counted as
 // boundary work. Returns whether any ball moved.
 bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z);
+
+// Keeps the tilts within half an edge (|yz| <= ly/2, then |xz|, |xy| <= lx/2) by replacing an edge
+// vector with itself less another (c - b, c - a, b - a): the same lattice of images, so nothing
+// physical changes; the images of the pairs in model.contacts are renumbered to stay the same
+// images, and the balls are wrapped into the new cell at the next step. Returns whether it did.
+bool reduce_cell_tilt(Model& model);
 
 // Every pair i < j (wrapped positions) with j's nearest image closer than R_i + R_j + skin, sorted by
 // (i, j), with that image. skin 0 gives exactly the pairs the contact kernel gives a force.

@@ -12,11 +12,15 @@ double VerletReference::displacement_limit2(const Model& model) const {
   const std::size_t n = b.size();
   if (!valid_ || x.size() != n || model.contacts.gather_begin.size() != n + 1) return -1;
   if (n && std::memcmp(rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return -1;
-  // Periodic space: an image pair also closes by the change of the cell edge.
+  // Periodic space: an image pair also closes by the change of the cell's edge vectors (per axis,
+  // the change of the edge length plus those of the tilts that shift that axis).
   double cell_change = 0;
   if (model.space.periodic) {
     const auto L = model.space.length();
-    for (int a = 0; a < 3; ++a) cell_change = std::max(cell_change, std::abs(L[a] - cell_[a]));
+    const auto& t = model.space.tilt;
+    const double change[3] = {std::abs(L[0] - cell_[0]) + std::abs(t[0] - tilt_[0]) + std::abs(t[1] - tilt_[1]),
+                              std::abs(L[1] - cell_[1]) + std::abs(t[2] - tilt_[2]), std::abs(L[2] - cell_[2])};
+    for (int a = 0; a < 3; ++a) cell_change = std::max(cell_change, change[a]);
     if (!(cell_change < skin_)) return -1;
   }
   return 0.25 * (skin_ - cell_change) * (skin_ - cell_change);
@@ -42,6 +46,7 @@ void VerletReference::record(const Model& model, double skin) {
   const Balls& b = model.balls;
   x = b.x; y = b.y; z = b.z; rad_ = b.rad;
   cell_ = model.space.length();
+  tilt_ = model.space.tilt;
   skin_ = skin;
   valid_ = true;
   ++rebuilds_;

@@ -38,6 +38,7 @@ class VerletReference {
  private:
   std::vector<double> rad_;
   std::array<double, 3> cell_{0, 0, 0};   // periodic cell edges at the last rebuild
+  std::array<double, 3> tilt_{0, 0, 0};   // and its tilts
   double skin_ = 0;
   bool valid_ = false;
   std::size_t rebuilds_ = 0;

@@ -17,8 +17,10 @@ namespace trubal {
 namespace {
 
 constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
-// 2: the membrane's pressure and area.
-constexpr std::uint32_t kVersion = 2;
+// 2: the membrane's pressure and area. 3: the periodic cell's tilts (shear); version 2 files are
+// read as cells without tilt.
+constexpr std::uint32_t kVersion = 3;
+constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
 std::uint64_t fnv1a(const std::string& data) {
@@ -82,9 +84,10 @@ class Reader {
 };
 
 // One description of the layout serves both directions, so save and load cannot drift apart.
-template <class IO> void transfer(IO& io, Model& m) {
+template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.space.periodic);
   io.pod(m.space.lo); io.pod(m.space.hi); io.pod(m.space.boxes);
+  if (version >= 3) io.pod(m.space.tilt);
   io.pod(m.space.strain_rate); io.pod(m.space.strain);
   io.pod(m.space.servo_on); io.pod(m.space.servo_target);
   io.pod(m.space.servo_gain); io.pod(m.space.servo_max_rate);
@@ -137,7 +140,7 @@ template <class IO> void transfer(IO& io, Model& m) {
 
 void save_model(const Model& model, const std::string& path) {
   Writer w;
-  transfer(w, const_cast<Model&>(model));
+  transfer(w, const_cast<Model&>(model), kVersion);
   std::string header(kMagic, sizeof kMagic);
   header.append(reinterpret_cast<const char*>(&kVersion), sizeof kVersion);
   std::uint64_t size = w.buf.size(), sum = fnv1a(w.buf);
@@ -182,9 +185,9 @@ Model load_model(const std::string& path) {
   std::memcpy(&version, data.data() + sizeof kMagic, sizeof version);
   std::memcpy(&size, data.data() + sizeof kMagic + sizeof version, sizeof size);
   std::memcpy(&sum, data.data() + sizeof kMagic + sizeof version + sizeof size, sizeof sum);
-  if (version != kVersion)
-    throw std::runtime_error(
-        fmt::format("'{}' was saved by save format version {}; this trubal reads version {}", path, version, kVersion));
+  if (version < kOldestVersion || version > kVersion)
+    throw std::runtime_error(fmt::format("'{}' was saved by save format version {}; this trubal reads versions {} to {}",
+                                         path, version, kOldestVersion, kVersion));
   std::string body = data.substr(header_size);
   if (body.size() < size)
     throw std::runtime_error(
@@ -193,7 +196,7 @@ Model load_model(const std::string& path) {
     throw std::runtime_error(fmt::format("'{}' is corrupted: its checksum does not match (not restarted)", path));
   Model m;
   Reader r(body, path);
-  transfer(r, m);
+  transfer(r, m, version);
   if (!r.at_end()) r.corrupt();
   // Cross-checks that a checksum collision or a bug could not hide.
   const std::size_t n = m.balls.id.size();

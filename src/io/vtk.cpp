@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "backends/periodic.hpp"
 #include "io/atomic_file.hpp"
 
 namespace trubal {
@@ -96,7 +97,7 @@ void write_balls_vtp(const Model& model, const std::string& path) {
 void write_contacts_vtp(const Model& model, const std::string& path) {
   const Balls& b = model.balls;
   const ContactTable& c = model.contacts;
-  const auto L = model.space.length();
+  const CellFrame frame = cell_frame(model.space);
   std::vector<double> points;
   std::vector<double> fn, force;
   std::vector<std::int64_t> id_i, id_j;
@@ -105,9 +106,8 @@ void write_contacts_vtp(const Model& model, const std::string& path) {
     const std::size_t i = c.i[p], j = c.j[p];
     if (i >= b.size() || j >= b.size()) continue;
     // j as seen from i: across the periodic cell when the contact is with an image.
-    const double shift[3] = {model.space.periodic ? c.image_x[p] * L[0] : 0.0,
-                             model.space.periodic ? c.image_y[p] * L[1] : 0.0,
-                             model.space.periodic ? c.image_z[p] * L[2] : 0.0};
+    double shift[3] = {0.0, 0.0, 0.0};
+    if (model.space.periodic) image_offset(frame, c.image_x[p], c.image_y[p], c.image_z[p], shift[0], shift[1], shift[2]);
     points.insert(points.end(), {b.x[i], b.y[i], b.z[i], b.x[j] + shift[0], b.y[j] + shift[1], b.z[j] + shift[2]});
     fn.push_back(std::abs(c.fn[p]));
     force.insert(force.end(), {c.fx[p], c.fy[p], c.fz[p]});

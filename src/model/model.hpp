@@ -112,6 +112,9 @@ struct ContactTable {
 struct Space {
   bool periodic = false;
   std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};   // region, or periodic cell [lo, hi)
+  // A sheared periodic cell (STRAIN with shear rates) is the parallelepiped lo + H s, s in [0, 1)^3,
+  // with edge vectors a = (Lx, 0, 0), b = (xy, Ly, 0), c = (xz, yz, Lz), L = hi - lo: these tilts.
+  std::array<double, 3> tilt{0, 0, 0};              // xy xz yz
   std::array<int, 3> boxes{0, 0, 0};                // contact-detection boxes asked for (0: auto)
   // Periodic cell control (compression positive): xx yy zz xy xz yz.
   std::array<double, 6> strain_rate{};

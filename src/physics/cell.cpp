@@ -10,33 +10,51 @@
 
 namespace trubal {
 
-void set_strain_rates(Model& model, const std::array<double, 3>& rates) {
+std::array<double, 3> cell_centre(const Space& s) {
+  return {0.5 * (s.lo[0] + s.hi[0]) + 0.5 * (s.tilt[0] + s.tilt[1]), 0.5 * (s.lo[1] + s.hi[1]) + 0.5 * s.tilt[2],
+          0.5 * (s.lo[2] + s.hi[2])};
+}
+
+void set_all_strain_rates(Model& model, const std::array<double, 6>& rates) {
   Space& s = model.space;
   Balls& b = model.balls;
-  std::array<double, 3> change{}, centre{};
+  std::array<double, 6> change{};
   bool any = false;
-  for (int a = 0; a < 3; ++a) {
+  for (int a = 0; a < 6; ++a) {
     change[a] = rates[a] - s.strain_rate[a];
-    centre[a] = 0.5 * (s.lo[a] + s.hi[a]);
     any = any || change[a] != 0;
     s.strain_rate[a] = rates[a];
   }
   if (!any || !s.periodic) return;
   update_mass(model);   // STRAIN may come before the first CYCLE: the energy needs the masses
+  const auto centre = cell_centre(s);
+  const auto g = velocity_gradient(change);   // the change of the homogeneous field v = L (x - centre)
   std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
   std::vector<double>* vel[3] = {&b.vx, &b.vy, &b.vz};
   double work = 0;
   for (std::size_t k = 0; k < b.size(); ++k)
     for (int a = 0; a < 3; ++a) {
-      if (change[a] == 0) continue;
       if (b.fixed[k] & (a == 0 ? kXVel : a == 1 ? kYVel : kZVel)) continue;
+      double dv = 0;
+      bool changes = false;
+      for (int e = a; e < 3; ++e) {
+        if (g[a][e] == 0) continue;
+        dv += g[a][e] * ((*pos[e])[k] - centre[e]);
+        changes = true;
+      }
+      if (!changes) continue;
       double& v = (*vel[a])[k];
       const double old = v;
-      v -= change[a] * ((*pos[a])[k] - centre[a]);
+      v += dv;
       work += 0.5 * b.mass[k] * (v * v - old * old);
       s.gross_work += 0.5 * b.mass[k] * std::abs(v * v - old * old);
     }
   model.energy.boundary_work += work;
+}
+
+void set_strain_rates(Model& model, const std::array<double, 3>& rates) {
+  const auto& r = model.space.strain_rate;
+  set_all_strain_rates(model, {rates[0], rates[1], rates[2], r[3], r[4], r[5]});
 }
 
 double default_servo_gain(const Model& model, int axis, double dt) {
@@ -82,19 +100,27 @@ void cell_before_step(Model& model, double dt) {
 void cell_after_step(Model& model, double dt, double image_power) {
   Space& s = model.space;
   if (!s.periodic) return;
-  const auto rate = image_rates(s);
-  if (rate[0] == 0 && rate[1] == 0 && rate[2] == 0) return;
-  // Energy into the balls through image contacts: the spring energy grows by -F_j . (image dL/dt) dt.
+  const CellFrame f = cell_frame(s);
+  if (f.vlx == 0 && f.vly == 0 && f.vlz == 0 && f.vxy == 0 && f.vxz == 0 && f.vyz == 0) return;
+  // Energy into the balls through image contacts: the spring energy grows by -F_j . (dH/dt n) dt,
+  // summed by the contact loop (image_power).
   const double work = image_power;
   model.energy.boundary_work += work * dt;
   s.gross_work += std::abs(work * dt);
+  // The new cell, H + (dH/dt) dt, about its centre.
+  const auto centre = cell_centre(s);
+  s.tilt[0] += f.vxy * dt;
+  s.tilt[1] += f.vxz * dt;
+  s.tilt[2] += f.vyz * dt;
+  const double tilt_shift[3] = {0.5 * (s.tilt[0] + s.tilt[1]), 0.5 * s.tilt[2], 0.0};
   for (int a = 0; a < 3; ++a) {
-    const double centre = 0.5 * (s.lo[a] + s.hi[a]);
+    const double middle = centre[a] - tilt_shift[a];
     const double half = 0.5 * (s.hi[a] - s.lo[a]) * (1 - s.strain_rate[a] * dt);
-    s.lo[a] = centre - half;
-    s.hi[a] = centre + half;
-    s.strain[a] += s.strain_rate[a] * dt;
+    s.lo[a] = middle - half;
+    s.hi[a] = middle + half;
   }
+  for (int a = 0; a < 6; ++a) s.strain[a] += s.strain_rate[a] * dt;
+  reduce_cell_tilt(model);
 }
 
 }  // namespace trubal

@@ -1,7 +1,8 @@
 // Control of the periodic cell (PHYSICS.md "Periodic space"): strain rates (compression positive)
-// deform the cell about its centre; ball velocities are total velocities and carry the homogeneous
-// field v_a = -rate_a (x_a - c_a), so a change of rate changes every ball's velocity; the servo
-// turns each axis's rate toward a target average stress.
+// deform the cell about its centre, the shear rates as simple shear (the cell becomes a
+// parallelepiped, backends/periodic.hpp); ball velocities are total velocities and carry the
+// homogeneous field v = L (x - c), so a change of rate changes every ball's velocity; the servo
+// turns each normal rate toward a target average stress.
 #pragma once
 
 #include <array>
@@ -10,9 +11,16 @@
 
 namespace trubal {
 
-// Sets the normal strain rates (xx yy zz) and changes every ball's velocity by the change of the
-// homogeneous field; the kinetic energy this adds is counted as boundary work.
+// Sets the strain rates (xx yy zz xy xz yz; tensor components, compression positive) and changes
+// every free velocity component by the change of the homogeneous field v = L (x - centre), L the
+// velocity gradient (backends/periodic.hpp: simple shear for the shear rates); the kinetic energy
+// this adds is counted as boundary work.
+void set_all_strain_rates(Model& model, const std::array<double, 6>& rates);
+// The normal rates (xx yy zz) only; the shear rates stay.
 void set_strain_rates(Model& model, const std::array<double, 3>& rates);
+
+// The centre of the periodic cell, about which it deforms.
+std::array<double, 3> cell_centre(const Space& space);
 
 // Servo gain (strain rate per unit stress error) that the default uses for an axis: the stress
 // would close kServoFraction of its error in one step if it followed the contact stiffness at once,
@@ -26,8 +34,8 @@ double default_servo_max_rate(double dt);
 // Before a step in a periodic space: the servo's new rates (from the last force pass's stress).
 void cell_before_step(Model& model, double dt);
 // After a step: the work the cell did on the balls through image contacts (image_power: the
-// contact loop's sum of -F_j . (image velocity), StepSums::image_power), the new cell edges
-// (about the centre) and the accumulated strain.
+// contact loop's sum of -F_j . (image velocity), StepSums::image_power), the new cell edges and
+// tilts (about the centre, tilts kept within half an edge) and the accumulated strain.
 void cell_after_step(Model& model, double dt, double image_power);
 
 }  // namespace trubal

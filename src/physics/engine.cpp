@@ -171,10 +171,11 @@ double critical_timestep(const Model& model) {
     ContactInput in{};
     in.dx = b.x[j] - b.x[i]; in.dy = b.y[j] - b.y[i]; in.dz = b.z[j] - b.z[i];
     if (model.space.periodic && p < c.image_x.size()) {
-      const auto cell = model.space.length();
-      in.dx = image_delta(b.x[j], b.x[i], c.image_x[p], cell[0]);
-      in.dy = image_delta(b.y[j], b.y[i], c.image_y[p], cell[1]);
-      in.dz = image_delta(b.z[j], b.z[i], c.image_z[p], cell[2]);
+      double ox, oy, oz;
+      image_offset(cell_frame(model.space), c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
+      in.dx = image_delta(b.x[j], b.x[i], ox);
+      in.dy = image_delta(b.y[j], b.y[i], oy);
+      in.dz = image_delta(b.z[j], b.z[i], oz);
     }
     in.ri = b.rad[i]; in.rj = b.rad[j];
     if (law.rest_xi > 0) in.mstar = b.mass[i] * b.mass[j] / (b.mass[i] + b.mass[j]);

@@ -33,9 +33,9 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   TRUBAL_PTR(cn_out, c.cn_eff); TRUBAL_PTR(state, c.state);
   TRUBAL_PTR(next_x, c.fsx_next); TRUBAL_PTR(next_y, c.fsy_next); TRUBAL_PTR(next_z, c.fsz_next);
   TRUBAL_PTR(ball_sum, c.ball_force); TRUBAL_PTR(cn_sum, c.ball_cn);
-  // Periodic space: j's image is x_j + image L, moving at v_j + image dL/dt (backends/periodic.hpp).
+  // Periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image (backends/periodic.hpp).
   const bool periodic = model.space.periodic;
-  const auto cell = image_lengths(model.space), cell_rate = image_rates(model.space);
+  const CellFrame cell = cell_frame(model.space);
   const std::int8_t* const img_x = c.image_x.data();
   const std::int8_t* const img_y = c.image_y.data();
   const std::int8_t* const img_z = c.image_z.data();
@@ -62,12 +62,12 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
       B.ri[q] = rad[i]; B.rj[q] = rad[j];
       B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
       if (periodic) {
-        B.dx[q] = image_delta(x[j], x[i], img_x[p], cell[0]);
-        B.dy[q] = image_delta(y[j], y[i], img_y[p], cell[1]);
-        B.dz[q] = image_delta(z[j], z[i], img_z[p], cell[2]);
-        B.ivx[q] = static_cast<double>(img_x[p]) * cell_rate[0];
-        B.ivy[q] = static_cast<double>(img_y[p]) * cell_rate[1];
-        B.ivz[q] = static_cast<double>(img_z[p]) * cell_rate[2];
+        double ox, oy, oz;
+        image_offset(cell, img_x[p], img_y[p], img_z[p], ox, oy, oz);
+        image_velocity(cell, img_x[p], img_y[p], img_z[p], B.ivx[q], B.ivy[q], B.ivz[q]);
+        B.dx[q] = image_delta(x[j], x[i], ox);
+        B.dy[q] = image_delta(y[j], y[i], oy);
+        B.dz[q] = image_delta(z[j], z[i], oz);
         B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
       }
       if constexpr ((kLaw & kRotation) != 0) {
@@ -152,7 +152,7 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   const bool periodic = model.space.periodic;
-  const auto cell = image_lengths(model.space), cell_rate = image_rates(model.space);
+  const CellFrame cell = cell_frame(model.space);
   std::vector<std::uint32_t> pairs;
   for (std::size_t ball = ball_begin; ball < ball_end; ++ball)
     for (std::uint32_t q = c.gather_begin[ball], e = c.gather_begin[ball + 1]; q < e; ++q) {
@@ -171,12 +171,12 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
       B.ri[q] = rad[i]; B.rj[q] = rad[j];
       B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
       if (periodic) {
-        B.dx[q] = image_delta(x[j], x[i], c.image_x[p], cell[0]);
-        B.dy[q] = image_delta(y[j], y[i], c.image_y[p], cell[1]);
-        B.dz[q] = image_delta(z[j], z[i], c.image_z[p], cell[2]);
-        B.ivx[q] = static_cast<double>(c.image_x[p]) * cell_rate[0];
-        B.ivy[q] = static_cast<double>(c.image_y[p]) * cell_rate[1];
-        B.ivz[q] = static_cast<double>(c.image_z[p]) * cell_rate[2];
+        double ox, oy, oz;
+        image_offset(cell, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
+        image_velocity(cell, c.image_x[p], c.image_y[p], c.image_z[p], B.ivx[q], B.ivy[q], B.ivz[q]);
+        B.dx[q] = image_delta(x[j], x[i], ox);
+        B.dy[q] = image_delta(y[j], y[i], oy);
+        B.dz[q] = image_delta(z[j], z[i], oz);
         B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
       }
       if constexpr ((F & kRotation) != 0) {

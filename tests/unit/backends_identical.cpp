@@ -67,6 +67,13 @@ TEST_CASE("backends: Rayleigh damping, bitwise", "[backends]") {
   check_scene(rayleigh_cloud(13));   // 2197 balls
 }
 
+TEST_CASE("backends: a sheared periodic cell, images renamed mid-run, bitwise", "[backends][periodic]") {
+  const Scene scene = sheared_periodic(12, 300);   // 1728 balls
+  const Model reference = run(scene, "serial", 1, scene.cycles);
+  REQUIRE(reference.space.tilt[0] < 0);   // the xy tilt passed half an edge and the images were renamed
+  check_scene(scene);
+}
+
 TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[backends]") {
   check_scene(settling(9, 8, 3000), false);   // 81 held + 648 falling; two threads only
 }

@@ -13,6 +13,7 @@
 #include "backends/backend.hpp"
 #include "model/edit.hpp"
 #include "model/model.hpp"
+#include "physics/cell.hpp"
 #include "physics/engine.hpp"
 
 namespace trubal::test {
@@ -116,6 +117,23 @@ inline Scene rayleigh_cloud(int n) {
   s.model.settings.damping.kind = DampKind::Rayleigh;
   s.model.settings.damping.alpha = 0.5;
   s.model.settings.damping.beta = 1e-3;
+  return s;
+}
+
+// A frictional polydisperse cloud in a periodic cell of edge n straining in all six components,
+// the cell already sheared: the xy tilt starts just below half an edge, so that the cell renames
+// its images during the run, and balls cross every face, the shifted ones included.
+inline Scene sheared_periodic(int n, int cycles) {
+  Scene s{"sheared periodic cell", {}, cycles};
+  s.model.space.periodic = true;
+  s.model.started = true;
+  s.model.space.lo = {-0.5, -0.5, -0.5};
+  s.model.space.hi = {n - 0.5, n - 0.5, n - 0.5};
+  s.model.space.tilt = {0.5 * n - 0.01, 0.3, -0.2};
+  s.model.materials[1] = scene_linear(1e6, 7e5, 0.4, 1000);
+  jittered_grid(s.model, n, n, 0, 3.0, 29);
+  update_mass(s.model);
+  set_all_strain_rates(s.model, {1e-3, -1e-3, 2e-3, -0.05, 0.01, -0.01});
   return s;
 }
 

@@ -158,16 +158,18 @@ class AllPairsBackend final : public Backend {
   void find_touching_periodic(const Model& model) {
     const Balls& b = model.balls;
     const std::size_t n = b.size();
-    const auto L = model.space.length();
+    const CellFrame f = cell_frame(model.space);
     pool_.run([&](int t) {
       PairCandidates& out = found_[t];
       out.clear();
       for (std::size_t i = row_split_[t]; i < row_split_[t + 1]; ++i)
         for (std::size_t j = i + 1; j < n; ++j) {
-          const std::int8_t ix = nearest_image(b.x[j] - b.x[i], L[0]), iy = nearest_image(b.y[j] - b.y[i], L[1]),
-                            iz = nearest_image(b.z[j] - b.z[i], L[2]);
-          const double dx = image_delta(b.x[j], b.x[i], ix, L[0]), dy = image_delta(b.y[j], b.y[i], iy, L[1]),
-                       dz = image_delta(b.z[j], b.z[i], iz, L[2]);
+          std::int8_t ix, iy, iz;
+          nearest_image(f, b.x[j] - b.x[i], b.y[j] - b.y[i], b.z[j] - b.z[i], ix, iy, iz);
+          double ox, oy, oz;
+          image_offset(f, ix, iy, iz, ox, oy, oz);
+          const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
+                       dz = image_delta(b.z[j], b.z[i], oz);
           const double reach = b.rad[i] + b.rad[j] + 0.0;
           if (dx * dx + dy * dy + dz * dz < reach * reach) {
             out.i.push_back(static_cast<std::uint32_t>(i));
