@@ -67,6 +67,36 @@ double periodic_skin(const Model& model, double skin) {
   return std::max(0.0, most);
 }
 
+namespace {
+
+// The part of ball k's coordinate a that the tilts contribute (0 in an unsheared cell): the
+// coordinate less it is lo[a] + edge length * the fractional coordinate along edge a.
+double tilt_terms(const Space& s, const CellFrame& f, const Balls& b, std::size_t k, int a) {
+  if (a == 2 || (f.xy == 0 && f.xz == 0 && f.yz == 0)) return 0;
+  const double sz = (b.z[k] - s.lo[2]) / f.lz;
+  if (a == 1) return f.yz * sz;
+  const double sy = (b.y[k] - s.lo[1] - f.yz * sz) / f.ly;
+  return f.xy * sy + f.xz * sz;
+}
+
+}  // namespace
+
+bool outside_cell(const Model& model, std::size_t begin, std::size_t end) {
+  const Space& s = model.space;
+  if (!s.periodic) return false;
+  const Balls& b = model.balls;
+  const CellFrame f = cell_frame(s);
+  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  for (std::size_t k = begin; k < end; ++k)
+    for (int a = 2; a >= 0; --a) {   // the test wrap_into_cell makes, on unmoved coordinates
+      const double x = (*pos[a])[k];
+      if (!std::isfinite(x)) continue;
+      const double t = x - tilt_terms(s, f, b, k, a);
+      if (!(t >= s.lo[a] && t < s.hi[a])) return true;
+    }
+  return false;
+}
+
 bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z) {
   const Space& s = model.space;
   if (!s.periodic) return false;
@@ -83,7 +113,6 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
   const bool table_ok = c.gather_begin.size() == n + 1 && c.image_x.size() == c.size() &&
                         c.gather_pair.size() == 2 * c.size();
   std::int8_t* image[3] = {c.image_x.data(), c.image_y.data(), c.image_z.data()};
-  const bool tilted = f.xy != 0 || f.xz != 0 || f.yz != 0;
   bool any = false;
   double work = 0;
   for (std::size_t k = 0; k < n; ++k) {
@@ -91,26 +120,16 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
     for (int a = 2; a >= 0; --a) {
       double& x = (*pos[a])[k];
       if (!std::isfinite(x)) continue;   // the guard reports it
-      // The coordinate less the tilt terms: lo[a] + length * (fractional coordinate along a).
-      double tilt_terms = 0;
-      if (a < 2 && tilted) {
-        const double sz = (b.z[k] - s.lo[2]) / f.lz;
-        if (a == 1) {
-          tilt_terms = f.yz * sz;
-        } else {
-          const double sy = (b.y[k] - s.lo[1] - f.yz * sz) / f.ly;
-          tilt_terms = f.xy * sy + f.xz * sz;
-        }
-      }
-      const double t = x - tilt_terms;
+      const double tilt = tilt_terms(s, f, b, k, a);
+      const double t = x - tilt;
       if (t >= s.lo[a] && t < s.hi[a]) continue;
       // The ball moves to its own image inside the cell: minus shift edge vectors.
       const double shift = std::floor((t - s.lo[a]) / edge[a][a]);
       if (shift == 0) continue;   // rounding at the upper face
       for (int e = 0; e <= a; ++e) (*pos[e])[k] -= shift * edge[a][e];
       // Rounding can land a tiny negative offset on hi: keep the shift, stay inside.
-      if (x - tilt_terms >= s.hi[a]) x = std::nextafter(s.hi[a], s.lo[a]) + tilt_terms;
-      if (x - tilt_terms < s.lo[a]) x = s.lo[a] + tilt_terms;
+      if (x - tilt >= s.hi[a]) x = std::nextafter(s.hi[a], s.lo[a]) + tilt;
+      if (x - tilt < s.lo[a]) x = s.lo[a] + tilt;
       const auto step = static_cast<int>(shift);
       for (int e = 0; e <= a; ++e)
         if (ref[e] && ref[e]->size() == n) (*ref[e])[k] -= shift * edge[a][e];

@@ -87,6 +87,10 @@ void check_periodic_cell(const Model& model);
 // (its diameter plus the skin) stays below half of every width (one image per pair).
 double periodic_skin(const Model& model, double skin);
 
+// Whether some ball of [begin, end) lies outside the cell, so that wrap_into_cell would move it
+// (a read-only test that threads can share out; a true answer may be conservative).
+bool outside_cell(const Model& model, std::size_t begin, std::size_t end);
+
 // Wraps every ball centre into the periodic cell (the parallelepiped lo + H s, s in [0, 1), taken
 // z first, then y, then x). A ball moved by an edge vector has its velocity changed by that edge's
 // velocity; the images of its pairs in model.contacts change so that each pair

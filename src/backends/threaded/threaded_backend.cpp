@@ -30,7 +30,7 @@ class ThreadedBackend final : public Backend {
   int threads() const override { return pool_.size(); }
 
   void prepare(Model& model) override {
-    if (model.space.periodic) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
+    if (model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
     if (needs_rebuild(model)) rebuild(model);
   }
 
@@ -48,6 +48,18 @@ class ThreadedBackend final : public Backend {
   }
 
  private:
+  // Whether a ball left the periodic cell (the test in parallel; the rare wrap itself serial).
+  bool any_outside(const Model& model) {
+    const std::size_t n = model.balls.size();
+    moved_.assign(pool_.size(), 0.0);
+    pool_.run([&](int t) {
+      moved_[t] = outside_cell(model, split_point(n, pool_.size(), t), split_point(n, pool_.size(), t + 1)) ? 1.0 : 0.0;
+    }, n >= kParallelBalls);
+    for (double m : moved_)
+      if (m != 0) return true;
+    return false;
+  }
+
   // The serial backend's rule (backends/verlet.hpp), the largest displacement found in parallel
   // (a max is exact in any order).
   bool needs_rebuild(const Model& model) {
