@@ -16,7 +16,8 @@ static void run_frac(Context& ctx, Args& args) {
 const Command frac_command = {
     "FRAC", {}, "FRAC f", "time step as a fraction of the critical step",
     "The time step is f times the critical step, estimated every cycle from the stiffest ball (default "
-    "0.8). Cancels a fixed TSTEP.",
+    "0.8). With Hertz contacts the critical step is held through a contact episode and renewed only "
+    "between episodes or when stability needs it (man page, CONVENTIONS). Cancels a fixed TSTEP.",
     {}, run_frac};
 
 static void run_tstep(Context& ctx, Args& args) {

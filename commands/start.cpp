@@ -32,8 +32,8 @@ const Command start_command = {
     "(balls interact with images across every face); nbx nby nbz are the numbers of contact-detection boxes "
     "along each axis, chosen automatically if absent. `START box x0 x1 y0 y1 z0 z1` makes a free region "
     "with no walls. Every periodic edge must stay at least twice the largest ball diameter (CYCLE refuses a "
-    "smaller cell: a ball could touch two images of another); centres are wrapped into [0, x) etc. as they "
-    "cross a face. STRAIN and SERVO deform the cell. Materials, damping, gravity and histories are cleared; the backend choice and variables "
+    "smaller cell: a ball could touch two images of another); centres are wrapped into the cell as they "
+    "cross a face ([0, x) etc.; in a sheared cell, the parallelepiped of its edge vectors). STRAIN and SERVO deform the cell. Materials, damping, gravity and histories are cleared; the backend choice and variables "
     "stay.",
     {"box"}, run_start};
 
