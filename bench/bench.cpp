@@ -77,6 +77,25 @@ Timing run(Model model, const std::string& backend_name, int steps, int threads 
   return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts};
 }
 
+// Peak resident memory of the process since the last reset_peak_memory(), from /proc (Linux);
+// 0 where it cannot be read.
+void reset_peak_memory() {
+  if (std::FILE* f = std::fopen("/proc/self/clear_refs", "w")) {   // "5": reset VmHWM (Linux 4.0+)
+    std::fputs("5", f);
+    std::fclose(f);
+  }
+}
+double peak_memory_mib() {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (!f) return 0;
+  char line[256];
+  double kib = 0;
+  while (std::fgets(line, sizeof line, f))
+    if (std::sscanf(line, "VmHWM: %lf kB", &kib) == 1) break;
+  std::fclose(f);
+  return kib / 1024;
+}
+
 // The lattice for about n balls: 4 nx ny nz (1680 is the peers' 7 x 6 x 10 block, 403 becomes 400).
 void lattice_for(int n, int& nx, int& ny, int& nz) {
   nx = static_cast<int>(std::lround(std::cbrt(n / 4.0))); ny = nx; nz = nx;
@@ -91,8 +110,8 @@ int compare(const std::vector<int>& sizes, int steps) {
   struct Variant { const char* backend; int threads; };
   const Variant variants[] = {{"serial", 1}, {"threaded", 1}, {"threaded", 2}, {"allpairs", 1}, {"allpairs", 2}};
   std::printf("dense FCC block, dt 0.02, every backend; M = million per second, G = billion per second\n");
-  std::printf("%8s %10s %9s %2s %7s %8s %14s %16s %7s %6s\n", "N", "contacts", "backend", "p", "steps", "s",
-              "ball-cycles/s", "pair tests/s", "Sp", "Ep");
+  std::printf("%8s %10s %9s %2s %7s %8s %14s %16s %7s %6s %9s\n", "N", "contacts", "backend", "p", "steps", "s",
+              "ball-cycles/s", "pair tests/s", "Sp", "Ep", "peak MiB");
   for (int n : sizes) {
     int nx, ny, nz;
     lattice_for(n, nx, ny, nz);
@@ -101,9 +120,10 @@ int compare(const std::vector<int>& sizes, int steps) {
     double best_one = 0;
     for (const Variant& v : variants) {
       const bool all = std::string(v.backend) == "allpairs";
-      int k = steps > 0 ? steps : std::max(20, static_cast<int>(4e6 / balls));
+      int k = steps > 0 ? steps : std::max(20, static_cast<int>(1.2e7 / balls));
       if (all && steps <= 0) k = std::max(3, std::min(k, static_cast<int>(2e9 / pair_slots)));
       Timing t;
+      reset_peak_memory();
       try {
         t = run(fcc_block(nx, ny, nz, Scene::Standard), v.backend, k, v.threads, all ? 2 : 20);
       } catch (const std::exception& e) {   // allpairs above its memory limit says so
@@ -115,12 +135,13 @@ int compare(const std::vector<int>& sizes, int steps) {
       const double speedup = best_one / per_step;
       char tests[32] = "-";
       if (all) std::snprintf(tests, sizeof tests, "%.3f G", pair_slots / per_step / 1e9);
-      std::printf("%8.0f %10zu %9s %2d %7d %8.3f %12.2f M %16s %6.2fx %6.2f\n", balls, t.contacts, v.backend,
-                  v.threads, k, t.seconds, t.ball_steps / 1e6, tests, speedup, speedup / v.threads);
+      std::printf("%8.0f %10zu %9s %2d %7d %8.3f %12.2f M %16s %6.2fx %6.2f %9.0f\n", balls, t.contacts, v.backend,
+                  v.threads, k, t.seconds, t.ball_steps / 1e6, tests, speedup, speedup / v.threads, peak_memory_mib());
       std::fflush(stdout);
     }
   }
-  std::printf("Sp = T*/Tp with T* the best one-thread time per step at that N (serial first), Ep = Sp/p.\n");
+  std::printf("Sp = T*/Tp with T* the best one-thread time per step at that N (serial first), Ep = Sp/p;\n"
+              "peak MiB: the process's peak resident memory during that row (model, lists, backend).\n");
   return 0;
 }
 
