@@ -68,6 +68,7 @@ const Command hist_command = {
     "HIST what... [every n] [file f.csv] [area a] [pressure p] [range ...]  |  HIST reset",
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33 e12 e13 e23), "
+    "volumetric (evol = e11 + e22 + e33, compression positive), "
     "ratio, axial, platen, energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
@@ -80,7 +81,7 @@ const Command hist_command = {
     "platen is the z reaction force of the balls in the range (all balls without one). With `file` the rows "
     "are written as CSV (header cycle,time,... then one row per record, flushed as they come). `HIST reset` "
     "forgets all histories.",
-    {"stress", "strain", "ratio", "axial", "platen", "energy", "unbal", "contacts", "time", "every", "file", "area",
+    {"stress", "strain", "volumetric", "ratio", "axial", "platen", "energy", "unbal", "contacts", "time", "every", "file", "area",
      "pressure", "reset", "range"},
     run_hist};
 

@@ -13,14 +13,15 @@
 namespace trubal {
 
 const std::vector<std::string_view>& History::item_names() {
-  static const std::vector<std::string_view> names = {"stress", "strain", "ratio", "axial", "platen", "energy",
-                                                      "unbal", "contacts", "time"};
+  static const std::vector<std::string_view> names = {"stress", "strain", "volumetric", "ratio", "axial", "platen",
+                                                      "energy", "unbal", "contacts", "time"};
   return names;
 }
 
 static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "stress") return {"s11", "s22", "s33", "s12", "s13", "s23"};
   if (item == "strain") return {"e11", "e22", "e33", "e12", "e13", "e23"};
+  if (item == "volumetric") return {"evol"};
   if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work"};
   if (item == "contacts") return {"contacts", "sliding", "coordination"};
   if (item == "time") return {};   // cycle and time lead every row
@@ -70,6 +71,8 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       for (double s : get_stress()) row.push_back(s);
     } else if (item == "strain") {
       for (int a = 0; a < 6; ++a) row.push_back(model.space.strain[a]);
+    } else if (item == "volumetric") {   // e11 + e22 + e33, compression positive
+      row.push_back(model.space.strain[0] + model.space.strain[1] + model.space.strain[2]);
     } else if (item == "ratio" && !t.platen_ids.empty()) {
       // Rowe's R = sigma1 / sigma2 = F1 / (A sigma2).
       const double load = t.area * t.pressure;

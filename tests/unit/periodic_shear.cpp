@@ -386,3 +386,28 @@ strain off
   CHECK(m.balls.size() == 601);
   CHECK(contact_count(m) == 0);   // no ball overlaps another or an image
 }
+
+TEST_CASE("periodic: HIST volumetric records e11 + e22 + e33 of the cell", "[periodic][commands]") {
+  TempDir dir;
+  WorkingDir here(dir.path());
+  Harness h;
+  REQUIRE(h.deck(R"(
+start 200 200 200
+prop kn 1e6 ks 1e6 fric 0.3 dens 2000
+gen 50 8 10 seed 3
+tstep 0.01
+strain 1e-3 -4e-4 2e-3
+hist strain volumetric every 50 file vol.csv
+cycle 100
+)"));
+  const auto rows = lines_of(slurp("vol.csv"));
+  REQUIRE(rows.size() == 3);
+  CHECK(rows[0] == "cycle,time,e11,e22,e33,e12,e13,e23,evol");
+  std::vector<double> last;
+  std::istringstream row(rows[2]);
+  for (std::string field; std::getline(row, field, ',');) last.push_back(std::stod(field));
+  REQUIRE(last.size() == 9);
+  // 100 steps of 0.01 at rates summing to 2.6e-3: evol = 2.6e-3 (compression positive).
+  CHECK(last[8] == Approx(2.6e-3).epsilon(1e-9));
+  CHECK(last[8] == Approx(last[2] + last[3] + last[4]).epsilon(1e-12));
+}
