@@ -25,17 +25,24 @@ class SerialBackend final : public Backend {
   void prepare(Model& model) override {
     if (model.space.periodic) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
     const double limit2 = ref_.displacement_limit2(model);
-    if (!(limit2 >= 0) || !(ref_.max_displacement2(model.balls, 0, model.balls.size()) <= limit2)) rebuild(model);
+    // The last step measured the displacements as it moved the balls (ParallelStep::moved2).
+    const bool known = moved_known_;
+    moved_known_ = false;
+    if (!(limit2 >= 0)) { rebuild(model); return; }
+    const double moved2 = known ? step_.moved2() : ref_.max_displacement2(model.balls, 0, model.balls.size());
+    if (!(moved2 <= limit2)) rebuild(model);
   }
 
   void step(Model& model, const StepKernels& kernels, StepSums& sums) override {
     const auto t0 = std::chrono::steady_clock::now();
     prepare(model);
     model.timing.detect += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    step_.run(pool_, model, kernels, sums);   // one thread: pairs in list order, then the balls
+    const bool measure = ref_.x.size() == model.balls.size();
+    step_.run(pool_, model, kernels, sums, measure ? &ref_ : nullptr);   // one thread: pairs in list order, then balls
+    moved_known_ = measure;
   }
 
-  void invalidate() override { ref_.invalidate(); }
+  void invalidate() override { ref_.invalidate(); moved_known_ = false; }
 
   std::vector<std::pair<std::string, std::string>> info() const override {
     return ref_.info(grid_.dims(), grid_.cell_size());
@@ -59,6 +66,7 @@ class SerialBackend final : public Backend {
   }
 
   ThreadPool pool_{1};
+  bool moved_known_ = false;   // step_.moved2() holds the displacements of the current positions
   ParallelStep step_;
   BoxGrid grid_;
   PairCandidates pairs_;

@@ -44,7 +44,8 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   }
 }
 
-void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums) {
+void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
+                       const VerletReference* moved) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   const ContactTable& c = model.contacts;
@@ -80,12 +81,17 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
   const std::size_t motion_blocks = (balls + kReduceBlock - 1) / kReduceBlock;
   blocks_.assign(motion_blocks, StepSums{});
   const int motion_parts = static_cast<int>(std::min<std::size_t>(pool.size(), std::max<std::size_t>(motion_blocks, 1)));
+  moved_.assign(motion_parts, 0.0);
   pool.run([&](int t) {
     if (t >= motion_parts) return;
-    for (std::size_t k = split_point(motion_blocks, motion_parts, t), e = split_point(motion_blocks, motion_parts, t + 1);
-         k < e; ++k)
+    const std::size_t first = split_point(motion_blocks, motion_parts, t), last = split_point(motion_blocks, motion_parts, t + 1);
+    for (std::size_t k = first; k < last; ++k)
       kernels.motion(model, kernels, k * kReduceBlock, std::min(balls, (k + 1) * kReduceBlock), blocks_[k]);
+    if (moved)
+      moved_[t] = moved->max_displacement2(model.balls, std::min(balls, first * kReduceBlock), std::min(balls, last * kReduceBlock));
   }, motion_parts > 1);
+  moved2_ = 0;
+  for (double m : moved_) moved2_ = std::max(moved2_, m);
   for (const StepSums& block : blocks_) sums.add(block);
   const auto t2 = Clock::now();
   model.timing.forces += std::chrono::duration<double>(t1 - t0).count();

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "backends/threaded/thread_pool.hpp"
+#include "backends/verlet.hpp"
 #include "model/model.hpp"
 #include "physics/kernels.hpp"
 
@@ -21,7 +22,12 @@ class ParallelStep {
  public:
   // Contacts over model.contacts (every pair), then motion over the balls; the time of each
   // phase is added to model.timing (forces, motion).
-  void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums);
+  // With `moved`, each thread also measures, right after moving its balls, their largest squared
+  // displacement from the reference positions of the pair list: the next step's stale-list test
+  // (moved2()) costs no pass of its own.
+  void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
+           const VerletReference* moved = nullptr);
+  double moved2() const { return moved2_; }
 
  private:
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
@@ -31,6 +37,8 @@ class ParallelStep {
   std::vector<StepSums> blocks_;
   std::vector<std::size_t> first_block_;   // per thread, then the block count
   std::uint64_t split_version_ = 0;
+  std::vector<double> moved_;
+  double moved2_ = 0;
   int split_parts_ = 0;
 };
 

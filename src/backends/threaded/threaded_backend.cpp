@@ -38,10 +38,12 @@ class ThreadedBackend final : public Backend {
     const auto t0 = std::chrono::steady_clock::now();
     prepare(model);
     model.timing.detect += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    step_.run(pool_, model, kernels, sums);
+    const bool measure = ref_.x.size() == model.balls.size();
+    step_.run(pool_, model, kernels, sums, measure ? &ref_ : nullptr);
+    moved_known_ = measure;
   }
 
-  void invalidate() override { ref_.invalidate(); }
+  void invalidate() override { ref_.invalidate(); moved_known_ = false; }
 
   std::vector<std::pair<std::string, std::string>> info() const override {
     return ref_.info(grid_.dims(), grid_.cell_size());
@@ -64,7 +66,10 @@ class ThreadedBackend final : public Backend {
   // (a max is exact in any order).
   bool needs_rebuild(const Model& model) {
     const double limit2 = ref_.displacement_limit2(model);
+    const bool known = moved_known_;   // the last step measured the displacements as it moved the balls
+    moved_known_ = false;
     if (!(limit2 >= 0)) return true;
+    if (known) return !(step_.moved2() <= limit2);
     const Balls& b = model.balls;
     const std::size_t n = b.size();
     moved_.assign(pool_.size(), 0.0);
@@ -97,6 +102,7 @@ class ThreadedBackend final : public Backend {
   PairCandidates pairs_;
   VerletReference ref_;
   std::vector<double> moved_;
+  bool moved_known_ = false;   // step_.moved2() holds the displacements of the current positions
 };
 }  // namespace
 
