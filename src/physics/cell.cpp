@@ -57,6 +57,12 @@ void set_strain_rates(Model& model, const std::array<double, 3>& rates) {
   set_all_strain_rates(model, {rates[0], rates[1], rates[2], r[3], r[4], r[5]});
 }
 
+// kServoFraction / (M dt), M = (1/V) sum k_n l_a^2.
+static double servo_gain_for(double m, double dt) {
+  if (!(m > 0) || !(dt > 0)) return std::numeric_limits<double>::infinity();
+  return kServoFraction / (m * dt);
+}
+
 double default_servo_gain(const Model& model, int axis, double dt) {
   const ContactTable& c = model.contacts;
   const Balls& b = model.balls;
@@ -69,23 +75,28 @@ double default_servo_gain(const Model& model, int axis, double dt) {
     const double l = (b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p]) * (*normal[axis])[p];
     m += c.kn_eff[p] * l * l;
   }
-  m /= volume;
-  if (!(m > 0) || !(dt > 0)) return std::numeric_limits<double>::infinity();
-  return kServoFraction / (m * dt);
+  return servo_gain_for(m / volume, dt);
 }
 
 double default_servo_max_rate(double dt) { return dt > 0 ? 1e-4 / dt : 0; }
 
-void cell_before_step(Model& model, double dt) {
+void cell_before_step(Model& model, double dt, const ContactMoments* last) {
   Space& s = model.space;
   if (!s.periodic || !(s.servo_on[0] || s.servo_on[1] || s.servo_on[2])) return;
   const auto L = s.length();
-  const Sym6 stress = average_stress(model, L[0] * L[1] * L[2]);
+  const double volume = L[0] * L[1] * L[2];
+  Sym6 stress;
+  if (last)
+    for (int a = 0; a < 6; ++a) stress[a] = last->force[a] / volume;
+  else
+    stress = average_stress(model, volume);
   std::array<double, 3> rates{s.strain_rate[0], s.strain_rate[1], s.strain_rate[2]};
   const double most = s.servo_max_rate > 0 ? s.servo_max_rate : default_servo_max_rate(dt);
   for (int a = 0; a < 3; ++a) {
     if (!s.servo_on[a]) continue;
-    const double gain = s.servo_gain > 0 ? s.servo_gain : default_servo_gain(model, a, dt);
+    const double gain = s.servo_gain > 0 ? s.servo_gain
+                        : last ? servo_gain_for(last->stiffness[a] / volume, dt)
+                               : default_servo_gain(model, a, dt);
     const double error = s.servo_target[a] - stress[a];   // too little compression: compress (rate > 0)
     double r = gain * error;
     if (!std::isfinite(r)) r = error > 0 ? most : (error < 0 ? -most : 0);

@@ -255,22 +255,30 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
     return result;
   };
 
+  ContactMoments moments;   // the last force pass's, for the servo (from the second step on)
+  bool have_moments = false;
   for (std::int64_t s = 1; s <= n; ++s) {
     const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
     kernels.dt = dt;
     // The per-pair results measurements read are written only where someone will read them: the
     // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (a restored model prints
-    // right), servo steps (the servo reads the stress) and the cycles history and dumps record.
+    // right) and the cycles history and dumps record.
     const bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
     const Space& space = model.space;
     const bool details = s == n || stopping || s % kSnapshotEvery == 0 ||
-                         (space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2])) ||
                          (control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1)));
+    // A servo reads the stress and stiffness of each force pass: the contact loops sum them.
+    kernels.moments = space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2]);
     kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
     StepSums sums;
     const auto step_start = Clock::now();
-    cell_before_step(model, dt);   // periodic space: the servo's rates
+    cell_before_step(model, dt, have_moments ? &moments : nullptr);   // periodic space: the servo's rates
     backend.step(model, kernels, sums);
+    if (kernels.moments) {
+      moments.force = sums.force_moment;
+      moments.stiffness = sums.stiffness_moment;
+      have_moments = true;
+    }
     cell_after_step(model, dt, sums.image_power);    // periodic space: the cell's work, its new edges, the strain
     model.timing.step += std::chrono::duration<double>(Clock::now() - step_start).count();
     model.cycle += 1;

@@ -42,6 +42,8 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws[0];
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
+  std::array<double, 6> force_moment{};
+  std::array<double, 3> stiffness_moment{};
   ContactBatch B;
   // The running sum of the ball whose pairs the list is on.
   constexpr std::size_t kNone = ~std::size_t{0};
@@ -106,6 +108,16 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
       }
       if constexpr ((kLaw & kDashpot) != 0) cn_out[p] = B.cn[q];
       if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
+      if (k.moments) {   // force on j times the branch vector i -> j (zero where apart)
+        const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q], lx = B.dx[q], ly = B.dy[q], lz = B.dz[q];
+        force_moment[0] += fx * lx; force_moment[1] += fy * ly; force_moment[2] += fz * lz;
+        force_moment[3] += 0.5 * (fx * ly + fy * lx);
+        force_moment[4] += 0.5 * (fx * lz + fz * lx);
+        force_moment[5] += 0.5 * (fy * lz + fz * ly);
+        stiffness_moment[0] += B.kn[q] * lx * lx;
+        stiffness_moment[1] += B.kn[q] * ly * ly;
+        stiffness_moment[2] += B.kn[q] * lz * lz;
+      }
       work_friction += B.work_friction[q];
       work_damping += B.work_damping[q];
       strain += B.strain[q];
@@ -126,6 +138,8 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   sums.damping_work += work_damping;
   sums.strain += strain;
   sums.image_power += image_power;
+  for (int a = 0; a < 6; ++a) sums.force_moment[a] += force_moment[a];
+  for (int a = 0; a < 3; ++a) sums.stiffness_moment[a] += stiffness_moment[a];
 }
 
 template <unsigned F>

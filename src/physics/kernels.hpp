@@ -26,6 +26,11 @@ struct StepSums {
   double friction_work = 0, damping_work = 0, boundary_work = 0;
   double strain = 0;                        // spring energy at the start of the step
   double image_power = 0;                   // periodic: sum of -F_j . (velocity of j's image offset)
+  // StepKernels::moments only: sum of F (x) l (symmetric part, xx yy zz xy xz yz) and of k_n l_a^2,
+  // l the branch vector i -> j (image included), over the touching pairs: the servo's stress and
+  // stiffness (physics/cell.hpp).
+  std::array<double, 6> force_moment{};
+  std::array<double, 3> stiffness_moment{};
   double kinetic = 0, potential = 0;        // at t: m v(t-dt/2).v(t+dt/2)/2 and -m g.x(t), for the guard
   double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate
   double fastest_speed2 = -1;               // |v|^2 + |R w|^2 of the fastest ball (NaN wins)
@@ -34,6 +39,8 @@ struct StepSums {
   void add(const StepSums& o) {
     friction_work += o.friction_work; damping_work += o.damping_work;
     boundary_work += o.boundary_work; strain += o.strain; image_power += o.image_power;
+    for (int a = 0; a < 6; ++a) force_moment[a] += o.force_moment[a];
+    for (int a = 0; a < 3; ++a) stiffness_moment[a] += o.stiffness_moment[a];
     kinetic += o.kinetic; potential += o.potential;
     critical_dt = std::min(critical_dt, o.critical_dt);
     if (!(o.fastest_speed2 <= fastest_speed2)) { fastest_speed2 = o.fastest_speed2; fastest_ball = o.fastest_ball; }
@@ -61,6 +68,8 @@ enum class StepEstimate : unsigned { None = 0, Undamped = 1, Damped = 2 };
 struct StepKernels {
   Features features;
   StepEstimate estimate = StepEstimate::Undamped;
+  bool moments = false;                     // the contact loops sum StepSums::force_moment and
+                                            // stiffness_moment (set while a servo runs)
   double dt = 0;                            // this step
   double beta = 0, alpha = 0, local = 0;    // damping
   std::array<double, 3> gravity{0, 0, 0};
