@@ -74,6 +74,17 @@ TEST_CASE("backends: a sheared periodic cell, images renamed mid-run, bitwise", 
   check_scene(scene);
 }
 
+TEST_CASE("backends: a periodic cell under the servo, bitwise", "[backends][periodic]") {
+  // The servo reads the stress and stiffness the contact loops sum per pair block.
+  Scene scene = sheared_periodic(10, 300);   // 1000 balls
+  scene.model.space.servo_on = {true, true, false};
+  scene.model.space.servo_target = {2e4, 1e4, 0};
+  const Model reference = run(scene, "serial", 1, scene.cycles);
+  REQUIRE(reference.space.strain_rate[0] != 1e-3);   // the servo moved the rates it controls
+  REQUIRE(reference.space.strain_rate[1] != -1e-3);
+  check_scene(scene);
+}
+
 TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[backends]") {
   check_scene(settling(9, 8, 3000), false);   // 81 held + 648 falling; two threads only
 }
