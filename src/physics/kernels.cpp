@@ -149,17 +149,19 @@ void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::si
   else contact_range<F, false>(model, k, begin, end, own_end, sums);
 }
 
-// Pairs (i, j) with i below ball_begin and j in [ball_begin, ball_end): their forces on j, added
-// first (lower partners come first in j's order), ascending i per j, from the history before this
-// step. The thread that owns i computes the same pairs with the same arithmetic.
+// Pairs (i, j) with i below ball_begin and j in [ball_begin, ball_end), given in list order (so
+// ascending i for each j, and the owner's data read in order): their forces on j, added first
+// (lower partners come first in j's order), from the history before this step. The thread that
+// owns i computes the same pairs with the same arithmetic.
 template <unsigned F>
-void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end) {
+void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end,
+                const std::uint32_t* pairs, std::size_t pair_count) {
   using namespace contact_bits;
   const Balls& b = model.balls;
   ContactTable& c = model.contacts;
   std::fill(c.ball_force.begin() + ball_begin, c.ball_force.begin() + ball_end, PairForce{});
   std::fill(c.ball_cn.begin() + ball_begin, c.ball_cn.begin() + ball_end, 0.0);
-  if (ball_begin == 0) return;
+  if (pair_count == 0) return;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
   TRUBAL_PTR(x, b.x); TRUBAL_PTR(y, b.y); TRUBAL_PTR(z, b.z); TRUBAL_PTR(rad, b.rad); TRUBAL_PTR(mass, b.mass);
   TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
@@ -167,17 +169,10 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   const bool periodic = model.space.periodic;
   const CellFrame cell = cell_frame(model.space);
-  std::vector<std::uint32_t> pairs;
-  for (std::size_t ball = ball_begin; ball < ball_end; ++ball)
-    for (std::uint32_t q = c.gather_begin[ball], e = c.gather_begin[ball + 1]; q < e; ++q) {
-      const std::uint32_t p = c.gather_pair[q];
-      if (c.gather_sign[q] < 0 || pi[p] >= ball_begin) break;   // lower partners come first
-      pairs.push_back(p);
-    }
   ContactBatch B;
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
-  for (std::size_t q0 = 0; q0 < pairs.size(); q0 += kBatch) {
-    const std::size_t count = std::min(kBatch, pairs.size() - q0);
+  for (std::size_t q0 = 0; q0 < pair_count; q0 += kBatch) {
+    const std::size_t count = std::min(kBatch, pair_count - q0);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = pairs[q0 + q], i = pi[p], j = pj[p];
       if (k.type_count != 1) B.set_law(q, k.law(i, j));

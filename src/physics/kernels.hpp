@@ -53,8 +53,9 @@ struct StepKernels;
 using ContactLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, std::size_t own_end,
                              StepSums&);
 // Zeroes the sums of balls [ball_begin, ball_end) and adds the pairs they have with lower balls
-// outside the range (cross pairs), before any ContactLoop runs.
-using CrossLoop = void (*)(Model&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end);
+// outside the range (cross pairs: `pairs`, `count` of them, in list order), before any ContactLoop.
+using CrossLoop = void (*)(Model&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end,
+                           const std::uint32_t* pairs, std::size_t count);
 using MotionLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&);
 
 // Pair blocks: the pairs of kContactBalls consecutive balls i (whole runs), the unit of the

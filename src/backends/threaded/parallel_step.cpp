@@ -11,7 +11,7 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   split_parts_ = parts;
   first_block_.assign(parts + 1, blocks);
   first_block_[0] = 0;
-  if (parts == 1) return;
+  if (parts == 1) { cross_lists(c, balls, parts); return; }
   // start[k]: pairs before block k; cross[k]: pairs with i before block k and j in or after it.
   std::vector<std::size_t> start(blocks + 1), cross(blocks + 2, 0);
   for (std::size_t k = 0; k <= blocks; ++k) start[k] = c.run_begin[std::min(balls, k * kContactBalls)];
@@ -42,6 +42,21 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   if (!fits(lo, true)) {   // cannot happen (hi always fits); keep a valid split anyway
     for (int t = 0; t <= parts; ++t) first_block_[t] = split_point(blocks, parts, t);
   }
+  cross_lists(c, balls, parts);
+}
+
+void ParallelStep::cross_lists(const ContactTable& c, std::size_t balls, int parts) {
+  cross_.assign(parts, {});
+  if (parts == 1) return;
+  // The thread owning each block, then each pair whose j a later thread owns than its i.
+  const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;
+  std::vector<int> owner(blocks, parts - 1);
+  for (int t = 0; t < parts; ++t)
+    for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k) owner[k] = t;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const int ti = owner[c.i[p] / kContactBalls], tj = owner[c.j[p] / kContactBalls];
+    if (tj != ti) cross_[tj].push_back(static_cast<std::uint32_t>(p));
+  }
 }
 
 void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
@@ -65,7 +80,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
   pool.run([&](int t) {
     if (t >= parts) return;
     const std::size_t own_end = block_ball(first_block_[t + 1]);
-    kernels.cross(model, kernels, block_ball(first_block_[t]), own_end);
+    kernels.cross(model, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
     for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)
       kernels.contacts(model, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
   }, parallel);

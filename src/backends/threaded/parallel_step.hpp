@@ -33,9 +33,11 @@ class ParallelStep {
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
   // pairs it computes again (kept while the pair list stays the same).
   void split(const ContactTable& c, std::size_t balls, int parts);
+  void cross_lists(const ContactTable& c, std::size_t balls, int parts);
 
   std::vector<StepSums> blocks_;
   std::vector<std::size_t> first_block_;   // per thread, then the block count
+  std::vector<std::vector<std::uint32_t>> cross_;   // per thread: its cross pairs, in list order
   std::uint64_t split_version_ = 0;
   std::vector<double> moved_;
   double moved2_ = 0;
