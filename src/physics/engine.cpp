@@ -270,6 +270,7 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
     // A servo reads the stress and stiffness of each force pass: the contact loops sum them.
     kernels.moments = space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2]);
     kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
+    kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
     StepSums sums;
     const auto step_start = Clock::now();
     cell_before_step(model, dt, have_moments ? &moments : nullptr);   // periodic space: the servo's rates

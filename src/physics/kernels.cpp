@@ -211,14 +211,17 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
 }
 
 // Motion variant index: rotation + 2 loads + 4 damping kind (0..2) + 12 estimate (0..2).
-inline constexpr unsigned kMotionCount = 36;
+// + 36: also write each ball's unbalanced force and moment (Balls::fx.. mz), which only output
+// reads (the steps that write the contacts' details).
+inline constexpr unsigned kMotionCount = 72;
 
 template <unsigned M>
 void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
   constexpr bool kRot = (M & 1) != 0;
   constexpr bool kLoads = (M & 2) != 0;
   constexpr auto kDamp = static_cast<DampKind>((M / 4) % 3);
-  constexpr auto kEstimate = static_cast<StepEstimate>(M / 12);
+  constexpr auto kEstimate = static_cast<StepEstimate>((M / 12) % 3);
+  constexpr bool kWriteForces = M >= 36;
   Balls& b = model.balls;
   const ContactTable& c = model.contacts;
   const double dt = k.dt;
@@ -278,7 +281,7 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
     advance(fx, kLoads ? b.ax[ball] : 0.0, b.vx[ball], inv_m, m, fixed & kXVel);
     advance(fy, kLoads ? b.ay[ball] : 0.0, b.vy[ball], inv_m, m, fixed & kYVel);
     advance(fz, kLoads ? b.az[ball] : 0.0, b.vz[ball], inv_m, m, fixed & kZVel);
-    b.fx[ball] = fx; b.fy[ball] = fy; b.fz[ball] = fz;
+    if constexpr (kWriteForces) { b.fx[ball] = fx; b.fy[ball] = fy; b.fz[ball] = fz; }
     const double vx = b.vx[ball], vy = b.vy[ball], vz = b.vz[ball];
     b.x[ball] += vx * dt; b.y[ball] += vy * dt; b.z[ball] += vz * dt;
     double speed2 = vx * vx + vy * vy + vz * vz;
@@ -289,7 +292,7 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
       advance(mx, kLoads ? b.amx[ball] : 0.0, b.wx[ball], inv_i, inertia, fixed & kXSpin);
       advance(my, kLoads ? b.amy[ball] : 0.0, b.wy[ball], inv_i, inertia, fixed & kYSpin);
       advance(mz, kLoads ? b.amz[ball] : 0.0, b.wz[ball], inv_i, inertia, fixed & kZSpin);
-      b.mx[ball] = mx; b.my[ball] = my; b.mz[ball] = mz;
+      if constexpr (kWriteForces) { b.mx[ball] = mx; b.my[ball] = my; b.mz[ball] = mz; }
       const double wx = b.wx[ball], wy = b.wy[ball], wz = b.wz[ball];
       const double spin2 = wx * wx + wy * wy + wz * wz;
       speed2 += r * r * spin2;
@@ -430,7 +433,9 @@ StepKernels make_kernels(const Model& model) {
   k.cross = kCrossLoops[contact];
   const unsigned motion = (f.rotation ? 1 : 0) + (f.gravity || f.applied ? 2 : 0) +
                           4 * static_cast<unsigned>(f.mass_damping) + 12 * static_cast<unsigned>(k.estimate);
-  k.motion = kMotionLoops[motion];
+  k.motion_lean = kMotionLoops[motion];
+  k.motion_full = kMotionLoops[motion + 36];
+  k.motion = k.motion_full;
   return k;
 }
 

@@ -19,7 +19,7 @@
 
 namespace trubal {
 
-inline constexpr std::size_t kReduceBlock = 2048;
+inline constexpr std::size_t kReduceBlock = 256;   // balls per block of the motion loop
 
 // Reductions of one step. Sums are added block by block in ascending order; min/max are exact.
 struct StepSums {
@@ -86,7 +86,7 @@ struct StepKernels {
   // compute the same numbers.
   ContactLoop contacts = nullptr, contacts_full = nullptr, contacts_lean = nullptr;
   CrossLoop cross = nullptr;
-  MotionLoop motion = nullptr;
+  MotionLoop motion = nullptr, motion_full = nullptr, motion_lean = nullptr;   // full: also Balls::fx.. mz
 
   const PairLaw& law(std::size_t i, std::size_t j) const {
     return type_count == 1 ? laws[0] : laws[ball_type[i] * type_count + ball_type[j]];
