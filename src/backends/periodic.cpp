@@ -248,13 +248,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out) {
         const std::uint32_t j = order[e];
         if (j <= i) continue;
         std::int8_t ix, iy, iz;
-        nearest_image(f, b.x[j] - b.x[i], b.y[j] - b.y[i], b.z[j] - b.z[i], ix, iy, iz);
-        double ox, oy, oz;
-        image_offset(f, ix, iy, iz, ox, oy, oz);
-        const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
-                     dz = image_delta(b.z[j], b.z[i], oz);
-        const double reach = b.rad[i] + b.rad[j] + skin;
-        if (dx * dx + dy * dy + dz * dz < reach * reach) near.push_back({j, ix, iy, iz});
+        if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + skin, ix, iy, iz)) near.push_back({j, ix, iy, iz});
       }
     std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
     for (const Hit& h : near) {

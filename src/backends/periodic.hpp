@@ -80,6 +80,18 @@ inline void nearest_image(const CellFrame& f, double dx, double dy, double dz, s
 // when it has no tilt).
 std::array<double, 3> cell_widths(const Space& s);
 
+// Whether balls i < j touch within `reach` at j's nearest image; sets that image. The one test
+// the periodic pair searches make (serial/threaded lists with a skin, allpairs without).
+inline bool nearest_image_within(const CellFrame& f, const Balls& b, std::size_t i, std::size_t j, double reach,
+                                 std::int8_t& ix, std::int8_t& iy, std::int8_t& iz) {
+  nearest_image(f, b.x[j] - b.x[i], b.y[j] - b.y[i], b.z[j] - b.z[i], ix, iy, iz);
+  double ox, oy, oz;
+  image_offset(f, ix, iy, iz, ox, oy, oz);
+  const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
+               dz = image_delta(b.z[j], b.z[i], oz);
+  return dx * dx + dy * dy + dz * dz < reach * reach;
+}
+
 // Throws std::runtime_error when some width of the cell is less than twice the largest ball diameter.
 void check_periodic_cell(const Model& model);
 

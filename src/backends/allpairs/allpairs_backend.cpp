@@ -165,13 +165,7 @@ class AllPairsBackend final : public Backend {
       for (std::size_t i = row_split_[t]; i < row_split_[t + 1]; ++i)
         for (std::size_t j = i + 1; j < n; ++j) {
           std::int8_t ix, iy, iz;
-          nearest_image(f, b.x[j] - b.x[i], b.y[j] - b.y[i], b.z[j] - b.z[i], ix, iy, iz);
-          double ox, oy, oz;
-          image_offset(f, ix, iy, iz, ox, oy, oz);
-          const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
-                       dz = image_delta(b.z[j], b.z[i], oz);
-          const double reach = b.rad[i] + b.rad[j] + 0.0;
-          if (dx * dx + dy * dy + dz * dz < reach * reach) {
+          if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + 0.0, ix, iy, iz)) {
             out.i.push_back(static_cast<std::uint32_t>(i));
             out.j.push_back(static_cast<std::uint32_t>(j));
             out.image_x.push_back(ix);
