@@ -78,7 +78,7 @@ struct ContactTable {
   std::vector<double> fx, fy, fz;                       // total force on j (on i: minus this)
   std::vector<double> tx, ty, tz;                       // n x (shear force): moment on b is -R_b t
   std::vector<double> kn_eff, ks_eff;                   // stiffness now, for the time step
-  std::vector<double> cn_eff;                           // restitution dashpot coefficient now (time step)
+  std::vector<double> cn_eff;                           // restitution dashpot coefficient now
   std::vector<double> work_friction, work_damping;      // energy dissipated this step
   std::vector<std::uint8_t> state;                      // 0 apart, 1 touching, 2 sliding
   // Gather index (CSR): for ball b, entries gather_begin[b] .. gather_begin[b+1] of gather_pair

@@ -1,4 +1,5 @@
-// The per-contact loop and the per-ball gather + law of motion (PHYSICS.md "Law of motion"),
+// The per-contact loop (adding each pair to its balls' sums) and the per-ball law of motion
+// (PHYSICS.md "Law of motion"),
 // instantiated for every combination of features and picked once per CYCLE by make_kernels.
 #include "physics/kernels.hpp"
 
@@ -13,8 +14,8 @@ namespace {
 #define TRUBAL_PTR(name, vec) auto* __restrict name = (vec).data()
 
 // kDetails (a bit above the contact-law bits): also write what measurements read (normal,
-// overlap, forces, stiffness, work, state). Without it a step writes only the shear history, the
-// one-line PairForce the gather reads and (with dashpots) the dashpot coefficient.
+// overlap, forces, stiffness, dashpot coefficient, work, state). Without it a step writes only the
+// new shear history and the sums per ball (ContactTable::ball_force, ball_cn).
 inline constexpr unsigned kDetails = contact_bits::kCount;
 
 template <unsigned F, bool kOneLaw>
@@ -30,7 +31,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
-  TRUBAL_PTR(cn_out, c.cn_eff); TRUBAL_PTR(state, c.state);
+  TRUBAL_PTR(state, c.state);
   TRUBAL_PTR(next_x, c.fsx_next); TRUBAL_PTR(next_y, c.fsy_next); TRUBAL_PTR(next_z, c.fsz_next);
   TRUBAL_PTR(ball_sum, c.ball_force); TRUBAL_PTR(cn_sum, c.ball_cn);
   // Periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image (backends/periodic.hpp).
@@ -106,7 +107,6 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
         fj.kmax += kmax; fj.ks += B.ks[q];
         if constexpr ((kLaw & kDashpot) != 0) cn_sum[pj[p]] += B.cn[q];
       }
-      if constexpr ((kLaw & kDashpot) != 0) cn_out[p] = B.cn[q];
       if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
       if (k.moments) {   // force on j times the branch vector i -> j (zero where apart)
         const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q], lx = B.dx[q], ly = B.dy[q], lz = B.dz[q];
@@ -129,7 +129,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
       put(c.nx, B.nx); put(c.ny, B.ny); put(c.nz, B.nz); put(c.overlap, B.overlap); put(c.fn, B.fn);
       put(c.fx, B.fx); put(c.fy, B.fy); put(c.fz, B.fz); put(c.tx, B.tx); put(c.ty, B.ty); put(c.tz, B.tz);
       put(c.kn_eff, B.kn); put(c.ks_eff, B.ks); put(c.work_friction, B.work_friction);
-      put(c.work_damping, B.work_damping);
+      put(c.work_damping, B.work_damping); put(c.cn_eff, B.cn);
       for (std::size_t q = 0; q < count; ++q) state[p0 + q] = static_cast<std::uint8_t>(B.state[q]);
     }
   }

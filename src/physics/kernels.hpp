@@ -1,8 +1,9 @@
 // The specialised loops of one time step, chosen once per CYCLE for the features a scene uses.
-// A backend calls them on ranges: first `contacts` over pair ranges (every pair), then `motion`
-// over ball ranges (gather in ascending partner order, law of motion). Ranges start on multiples of
-// kReduceBlock and each returns its block's sums; a backend adds the block sums in ascending block
-// order, so every backend and thread count rounds the totals alike.
+// A backend calls them through ParallelStep (backends/threaded/parallel_step.hpp): `cross` and
+// `contacts` over pair blocks (the pairs of kContactBalls consecutive balls i), adding each pair to
+// its balls' sums in partner order, then `motion` over blocks of kReduceBlock balls (law of
+// motion). Each call returns its block's sums; they are added in ascending block order, so every
+// backend and thread count rounds the totals alike.
 #pragma once
 
 #include <algorithm>
