@@ -241,7 +241,8 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
   // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
   // an unstable step grows exponentially and passes this within a few steps.
   const double energy_floor = resting_energy_floor(model);
-  Snapshot snapshot;
+  if (!model.scratch.data) model.scratch.data = std::make_shared<Snapshot>();
+  Snapshot& snapshot = *std::static_pointer_cast<Snapshot>(model.scratch.data);
   snapshot.take(model);
   using Clock = std::chrono::steady_clock;
   const auto loop_start = Clock::now();
