@@ -5,7 +5,7 @@
 // container), or the stored spring energy would blow the block apart.
 //
 //   trubal_bench [--backend name] [--threads t] [--steps k] [N ...]   N rounded to 4 n^3 (default 1680 13500 108000)
-//   trubal_bench --compare [--steps k] [N ...]   every backend on 1 and 2 threads, speedup and efficiency
+//   trubal_bench --compare [--steps k] [--phases] [N ...]   every backend on 1 and 2 threads, speedup and efficiency
 //                                                 against the best one-thread time (default 403 1680 13500 108000)
 #include <chrono>
 #include <cmath>
@@ -64,7 +64,9 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
   return model;
 }
 
-struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; };
+struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; PhaseTimes phases; };
+
+bool g_phases = false;   // --phases: print where each run's time went
 
 Timing run(Model model, const std::string& backend_name, int steps, int threads = 1, int warm_up = 20) {
   auto backend = make_backend(backend_name, threads);
@@ -74,7 +76,14 @@ Timing run(Model model, const std::string& backend_name, int steps, int threads 
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (r.unstable) std::fprintf(stderr, "unstable: %s\n", r.message.c_str());
   const std::size_t contacts = contact_count(model);
-  return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts};
+  if (g_phases) {
+    const PhaseTimes& p = r.times;
+    const double us = 1e6 / steps;
+    std::printf("  [%s %d thr: us per step: detect %.1f, forces %.1f, motion %.1f, rest of step %.1f, outside step %.1f]\n",
+                backend_name.c_str(), threads, p.detect * us, p.forces * us, p.motion * us,
+                (p.step - p.detect - p.forces - p.motion) * us, (s - p.step) * us);
+  }
+  return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts, r.times};
 }
 
 // Peak resident memory of the process since the last reset_peak_memory(), from /proc (Linux);
@@ -158,6 +167,7 @@ int main(int argc, char** argv) {
     else if (arg == "--threads" && k + 1 < argc) threads = std::atoi(argv[++k]);
     else if (arg == "--backend" && k + 1 < argc) backend = argv[++k];
     else if (arg == "--steps" && k + 1 < argc) steps = std::atoi(argv[++k]);
+    else if (arg == "--phases") g_phases = true;
     else sizes.push_back(std::atoi(arg.c_str()));
   }
   if (comparing) {
