@@ -4,8 +4,10 @@
 // really split the work.
 #include <catch2/catch.hpp>
 
+#include <cstdlib>
 #include <stdexcept>
 
+#include "backends/threaded/parallel_step.hpp"
 #include "backends_scenes.hpp"
 
 using namespace trubal;
@@ -15,10 +17,18 @@ namespace {
 
 struct Variant { const char* backend; int threads; };
 
+// The threads share the work even where one would be as fast (the small scenes), so that the split
+// is what is tested.
+struct ShareAlways {
+  ShareAlways() { ParallelStep::always_share = true; }
+  ~ShareAlways() { ParallelStep::always_share = false; }
+};
+
 const Variant kVariants[] = {{"allpairs", 1}, {"allpairs", 2}, {"allpairs", 3}, {"threaded", 1},
                              {"threaded", 2}, {"threaded", 3}, {"threaded", 4}};
 
 Model run(const Scene& scene, const std::string& backend_name, int threads, int cycles) {
+  const ShareAlways share;
   Model model = scene.model;
   auto backend = make_backend(backend_name, threads);
   const CycleResult r = run_cycles(model, *backend, cycles, {});
@@ -85,6 +95,28 @@ TEST_CASE("backends: a periodic cell under the servo, bitwise", "[backends][peri
   check_scene(scene);
 }
 
+TEST_CASE("backends: threads share a step only where it pays, with the same answer", "[backends]") {
+  // Numbered layer by layer, the pairs stay near the diagonal: two threads share the work. Numbered
+  // by layer parity (as the Rowe decks), most pairs join the two halves: each would be computed
+  // twice, so one thread does it all, and says so in PRINT info.
+  auto threads_used = [](const Backend& backend) {
+    for (const auto& [key, value] : backend.info())
+      if (key == "threads used") return std::atoi(value.c_str());
+    return backend.threads();
+  };
+  for (bool by_parity : {false, true}) {
+    INFO((by_parity ? "numbered by layer parity" : "numbered layer by layer"));
+    const Scene scene = fcc_compression(9, 8, 8, by_parity);
+    Model serial_model = scene.model, threaded_model = scene.model;
+    auto serial = make_backend("serial", 1);
+    auto threaded = make_backend("threaded", 2);
+    REQUIRE(run_cycles(serial_model, *serial, 100, {}).done == 100);
+    REQUIRE(run_cycles(threaded_model, *threaded, 100, {}).done == 100);
+    CHECK(threads_used(*threaded) == (by_parity ? 1 : 2));
+    CHECK(difference(picture(serial_model), picture(threaded_model)) == "");
+  }
+}
+
 TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[backends]") {
   check_scene(settling(9, 8, 3000), false);   // 81 held + 648 falling; two threads only
 }
@@ -94,6 +126,7 @@ TEST_CASE("backends: switching backend mid-run gives the same result as not swit
   const Picture expected = picture(run(scene, "serial", 1, scene.cycles));
   const char* order[][2] = {{"serial", "allpairs"}, {"allpairs", "threaded"}, {"threaded", "serial"},
                             {"threaded", "allpairs"}};
+  const ShareAlways share;
   for (const auto& pair : order) {
     INFO(pair[0] << " then " << pair[1] << " then " << pair[0]);
     Model model = scene.model;

@@ -32,7 +32,9 @@ inline Material scene_linear(double kn, double ks, double mu, double density) {
 
 // A dense FCC block (R = 20, every ball touching its 12 neighbours, as the benchmark) whose outer
 // layer is held and moves inward: compression with friction and rotation.
-inline Scene fcc_compression(int nx, int ny, int nz) {
+// by_layer_parity: the balls numbered as the Rowe decks number them, all even lattice layers
+// first, then all odd ones, so that most pairs join balls far apart in numbering.
+inline Scene fcc_compression(int nx, int ny, int nz, bool by_layer_parity = false) {
   Scene s{"dense FCC under compression", {}, 300};
   const double r = 20, a = 0.99 * 2 * r * std::sqrt(2.0);
   s.model.materials[1] = scene_linear(1.5e9, 1.5e9, 0.3, 2000);
@@ -41,10 +43,12 @@ inline Scene fcc_compression(int nx, int ny, int nz) {
   std::uniform_real_distribution<double> jitter(-0.05, 0.05);
   const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   const double cx = 0.5 * nx * a, cy = 0.5 * ny * a, cz = 0.5 * nz * a, rate = 2e-3;
+  for (int parity = 0; parity < (by_layer_parity ? 2 : 1); ++parity)
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
         for (const auto& b : basis) {
+          if (by_layer_parity && (b[2] != 0) != (parity == 1)) continue;
           const double x = (i + b[0] + 0.25) * a + jitter(rng), y = (j + b[1] + 0.25) * a + jitter(rng);
           const double z = (k + b[2] + 0.25) * a + jitter(rng);
           const std::size_t ball = add_ball(s.model, 0, 1, x, y, z, r);

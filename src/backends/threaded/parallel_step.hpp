@@ -6,7 +6,8 @@
 // ball's sum is thus the same additions in the same order (lower partners ascending, then higher
 // ones) for every thread count; block sums (energies) are added in ascending block order. So the
 // answer is the serial one, bit for bit. The new shear history goes to a second buffer, swapped in
-// after the pass, so that cross pairs read the old one without a barrier.
+// after the pass, so that cross pairs read the old one without a barrier. Each thread then moves
+// the balls it owns.
 //
 // The split is by pair counts, not by measured thread speeds. A split that followed the measured
 // times (every 100 steps, damped, only for a thread slow three intervals running) was tried: on an
@@ -15,6 +16,7 @@
 // scheduler moves work between cores.
 #pragma once
 
+#include <atomic>
 #include <vector>
 
 #include "backends/threaded/thread_pool.hpp"
@@ -34,6 +36,11 @@ class ParallelStep {
   void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
            const VerletReference* moved = nullptr);
   double moved2() const { return moved2_; }
+  // Threads the last step shared its work among: 1 where the split would not pay.
+  int active() const { return active_; }
+  // Tests: split the work even where one thread would be as fast, so that small scenes still
+  // exercise the split (every ParallelStep of the process).
+  static inline std::atomic<bool> always_share{false};
 
  private:
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
@@ -48,6 +55,7 @@ class ParallelStep {
   std::vector<double> moved_;
   double moved2_ = 0;
   int split_parts_ = 0;
+  int active_ = 1;   // threads the split uses: 1 where sharing would not pay (ParallelStep::split)
 };
 
 // Splits [0, count) into `parts` contiguous ranges; range t is [split(t), split(t+1)).

@@ -46,7 +46,12 @@ class ThreadedBackend final : public Backend {
   void invalidate() override { ref_.invalidate(); moved_known_ = false; }
 
   std::vector<std::pair<std::string, std::string>> info() const override {
-    return ref_.info(grid_.dims(), grid_.cell_size());
+    auto lines = ref_.info(grid_.dims(), grid_.cell_size());
+    if (pool_.size() > 1 && step_.active() < pool_.size())
+      lines.emplace_back("threads used", std::to_string(step_.active()) +
+                                             " (most pairs join balls far apart in numbering: the threads would "
+                                             "compute them twice; number balls in space order to share the work)");
+    return lines;
   }
 
  private:
