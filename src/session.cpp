@@ -156,6 +156,16 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
     made.push_back({p[0], p[1], p[2], r});
     ++placed;
   }
+  // Numbered in space order: by cells of the largest diameter, z slowest, then y, then x (generation
+  // order within a cell). Balls near in space are then near in number, which the pair lists' cache
+  // use and the threaded backend's split (contiguous number ranges) depend on.
+  const double cell = 2 * rmax;
+  auto cell_of = [&](const std::array<double, 4>& q, int a) { return static_cast<std::int64_t>(std::floor((q[a] - s.lo[a]) / cell)); };
+  std::stable_sort(made.begin(), made.end(), [&](const auto& p, const auto& q) {
+    for (int a = 2; a >= 0; --a)
+      if (cell_of(p, a) != cell_of(q, a)) return cell_of(p, a) < cell_of(q, a);
+    return false;
+  });
   Model& m = edit();
   for (const auto& q : made) trubal::add_ball(m, 0, type, q[0], q[1], q[2], q[3]);
   return placed;
