@@ -6,8 +6,14 @@
 
 #include <fmt/format.h>
 
+#include "backends/threaded/parallel_step.hpp"
+#include "backends/threaded/thread_pool.hpp"
+
 namespace trubal {
 namespace {
+
+// Fewer balls than this are searched on one thread: waking the others costs more.
+constexpr std::size_t kParallelSearch = 4096;
 
 double largest_radius(const Balls& b) {
   double r = 0;
@@ -189,7 +195,7 @@ bool reduce_cell_tilt(Model& model) {
   return any;
 }
 
-void find_periodic_pairs(const Model& model, double skin, PairCandidates& out) {
+void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool) {
   out.clear();
   const Balls& b = model.balls;
   const Space& s = model.space;
@@ -228,36 +234,52 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out) {
     std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
     for (std::size_t k = 0; k < n; ++k) order[next[cell[k]]++] = static_cast<std::uint32_t>(k);
   }
-  std::vector<std::uint32_t> near_cells;
   struct Hit { std::uint32_t j; std::int8_t ix, iy, iz; };
-  std::vector<Hit> near;
-  for (std::size_t i = 0; i < n; ++i) {
-    near_cells.clear();
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int cx = (where[i][0] + dx + dims[0]) % dims[0], cy = (where[i][1] + dy + dims[1]) % dims[1],
-                    cz = (where[i][2] + dz + dims[2]) % dims[2];
-          near_cells.push_back(static_cast<std::uint32_t>((cz * dims[1] + cy) * dims[0] + cx));
-        }
-    std::sort(near_cells.begin(), near_cells.end());
-    near_cells.erase(std::unique(near_cells.begin(), near_cells.end()), near_cells.end());
-    near.clear();
-    for (std::uint32_t q : near_cells)
-      for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
-        const std::uint32_t j = order[e];
-        if (j <= i) continue;
-        std::int8_t ix, iy, iz;
-        if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + skin, ix, iy, iz)) near.push_back({j, ix, iy, iz});
+  const bool few_cells = dims[0] < 3 || dims[1] < 3 || dims[2] < 3;
+  auto search = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
+    std::vector<std::uint32_t> near_cells;
+    std::vector<Hit> near;
+    for (std::size_t i = begin; i < end; ++i) {
+      near_cells.clear();
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int cx = (where[i][0] + dx + dims[0]) % dims[0], cy = (where[i][1] + dy + dims[1]) % dims[1],
+                      cz = (where[i][2] + dz + dims[2]) % dims[2];
+            near_cells.push_back(static_cast<std::uint32_t>((cz * dims[1] + cy) * dims[0] + cx));
+          }
+      if (few_cells) {   // fewer than 3 bins on some axis: the 27 neighbours repeat some
+        std::sort(near_cells.begin(), near_cells.end());
+        near_cells.erase(std::unique(near_cells.begin(), near_cells.end()), near_cells.end());
       }
-    std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
-    for (const Hit& h : near) {
-      out.i.push_back(static_cast<std::uint32_t>(i));
-      out.j.push_back(h.j);
-      out.image_x.push_back(h.ix);
-      out.image_y.push_back(h.iy);
-      out.image_z.push_back(h.iz);
+      near.clear();
+      for (std::uint32_t q : near_cells)
+        for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
+          const std::uint32_t j = order[e];
+          if (j <= i) continue;
+          std::int8_t ix, iy, iz;
+          if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + skin, ix, iy, iz)) near.push_back({j, ix, iy, iz});
+        }
+      std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
+      for (const Hit& h : near) {
+        mine.i.push_back(static_cast<std::uint32_t>(i));
+        mine.j.push_back(h.j);
+        mine.image_x.push_back(h.ix);
+        mine.image_y.push_back(h.iy);
+        mine.image_z.push_back(h.iz);
+      }
     }
+  };
+  const int parts = pool && n >= kParallelSearch ? pool->size() : 1;
+  if (parts == 1) { search(0, n, out); return; }
+  std::vector<PairCandidates> lists(parts);
+  pool->run([&](int t) { search(split_point(n, parts, t), split_point(n, parts, t + 1), lists[t]); });
+  for (const PairCandidates& part : lists) {
+    out.i.insert(out.i.end(), part.i.begin(), part.i.end());
+    out.j.insert(out.j.end(), part.j.begin(), part.j.end());
+    out.image_x.insert(out.image_x.end(), part.image_x.begin(), part.image_x.end());
+    out.image_y.insert(out.image_y.end(), part.image_y.begin(), part.image_y.end());
+    out.image_z.insert(out.image_z.end(), part.image_z.begin(), part.image_z.end());
   }
 }
 

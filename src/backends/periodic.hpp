@@ -16,6 +16,8 @@
 
 namespace trubal {
 
+class ThreadPool;
+
 // The periodic cell as a matrix H whose columns are its edge vectors a = (lx, 0, 0),
 // b = (xy, ly, 0), c = (xz, yz, lz) (upper triangular: the lengths along the axes and the tilts of
 // Space), and their rate of change dH/dt = L H for the velocity gradient L of the strain rates.
@@ -119,6 +121,7 @@ bool reduce_cell_tilt(Model& model);
 
 // Every pair i < j (wrapped positions) with j's nearest image closer than R_i + R_j + skin, sorted by
 // (i, j), with that image. skin 0 gives exactly the pairs the contact kernel gives a force.
-void find_periodic_pairs(const Model& model, double skin, PairCandidates& out);
+// With a pool, its threads search ranges of i and their lists are joined: the same list.
+void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool = nullptr);
 
 }  // namespace trubal

@@ -184,7 +184,8 @@ TEST_CASE("backends: threads default to the machine's and are reported", "[backe
 }
 
 TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread count", "[backends]") {
-  for (Scene scene : {settling(14, 12, 0), rayleigh_cloud(17), fcc_compression(8, 8, 8)}) {   // 2548, 4913, 2048 balls
+  // 2548, 4913, 2048 balls, and a periodic cell of 4096 (searched on every thread from 4096 on)
+  for (Scene scene : {settling(14, 12, 0), rayleigh_cloud(17), fcc_compression(8, 8, 8), sheared_periodic(16, 0)}) {
     INFO(scene.name);
     Model serial = scene.model;
     make_backend("serial", 1)->prepare(serial);
@@ -195,6 +196,9 @@ TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread
       make_backend("threaded", threads)->prepare(model);
       CHECK(model.contacts.i == serial.contacts.i);
       CHECK(model.contacts.j == serial.contacts.j);
+      CHECK(model.contacts.image_x == serial.contacts.image_x);
+      CHECK(model.contacts.image_y == serial.contacts.image_y);
+      CHECK(model.contacts.image_z == serial.contacts.image_z);
       CHECK(model.contacts.gather_pair == serial.contacts.gather_pair);
     }
   }

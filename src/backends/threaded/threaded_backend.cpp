@@ -93,7 +93,7 @@ class ThreadedBackend final : public Backend {
     if (model.space.periodic) {   // the serial backend's periodic search (backends/periodic.hpp)
       check_periodic_cell(model);
       skin = periodic_skin(model, skin);
-      find_periodic_pairs(model, skin, pairs_);
+      find_periodic_pairs(model, skin, pairs_, &pool_);
     } else {
       grid_.find(pool_, b, 2 * rad_max + skin, model.space.boxes, skin, pairs_);
     }
