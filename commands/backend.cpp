@@ -32,7 +32,9 @@ const Command backend_command = {
     "Chooses the backend that finds contacts and sums forces; switching keeps balls, contacts and their shear "
     "history, and every backend gives the same numbers, bitwise, for any thread count. serial: TRUBAL's boxes "
     "and contact lists. threaded: the same lists, with forces and motion spread over `threads n` threads "
-    "(default: one per hardware thread). allpairs: TPM's arrangement, every pair of balls tested every cycle "
+    "(default: one per hardware thread); each thread takes a range of ball numbers, so balls near in space "
+    "should be near in number (GEN numbers them so); where the numbering would make the threads compute most "
+    "pairs twice, one thread does the work and PRINT info says so. allpairs: TPM's arrangement, every pair of balls tested every cycle "
     "(N(N-1)/2 pair slots of one byte; it cannot miss a contact); it refuses to take more than `maxmem` bytes "
     "(default 4 GiB or half the physical memory, the smaller).",
     {"serial", "allpairs", "threaded", "threads", "maxmem"}, run_backend};

@@ -28,7 +28,8 @@ const Command gen_command = {
     "Generates n balls with radii uniform in [rlo, rhi] at random positions that overlap no ball, inside "
     "the START box (whole balls) or anywhere in the periodic space, and where the range holds. The same "
     "seed gives the same balls (default seed: SET seed). If there is no room for all, it says how many it "
-    "placed.",
+    "placed. The new balls are numbered in space order (by cells of the largest diameter: z slowest, then y, "
+    "then x), so that balls near in space are near in number, as the threaded backend needs.",
     {"type", "seed", "range"}, run_gen};
 
 }  // namespace trubal

@@ -113,17 +113,19 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
   }
   const auto t1 = Clock::now();
 
-  // Each thread moves the balls it owns: their sums and positions stay in its core's cache.
-  static_assert(kReduceBlock == kContactBalls, "motion blocks are the pair blocks");
-  blocks_.assign(blocks, StepSums{});
-  moved_.assign(parts, 0.0);
+  // The balls in equal shares (the contact split may be uneven, to even out cross pairs).
+  const std::size_t motion_blocks = (balls + kReduceBlock - 1) / kReduceBlock;
+  blocks_.assign(motion_blocks, StepSums{});
+  const int motion_parts = parallel ? static_cast<int>(std::min<std::size_t>(pool.size(), motion_blocks)) : 1;
+  moved_.assign(motion_parts, 0.0);
   pool.run([&](int t) {
-    if (t >= parts) return;
-    const std::size_t first = first_block_[t], last = first_block_[t + 1];
+    if (t >= motion_parts) return;
+    const std::size_t first = split_point(motion_blocks, motion_parts, t), last = split_point(motion_blocks, motion_parts, t + 1);
     for (std::size_t k = first; k < last; ++k)
-      kernels.motion(model, kernels, block_ball(k), block_ball(k + 1), blocks_[k]);
-    if (moved) moved_[t] = moved->max_displacement2(model.balls, block_ball(first), block_ball(last));
-  }, parallel);
+      kernels.motion(model, kernels, k * kReduceBlock, std::min(balls, (k + 1) * kReduceBlock), blocks_[k]);
+    if (moved)
+      moved_[t] = moved->max_displacement2(model.balls, std::min(balls, first * kReduceBlock), std::min(balls, last * kReduceBlock));
+  }, motion_parts > 1);
   moved2_ = 0;
   for (double m : moved_) moved2_ = std::max(moved2_, m);
   for (const StepSums& block : blocks_) sums.add(block);

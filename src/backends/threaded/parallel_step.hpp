@@ -6,8 +6,8 @@
 // ball's sum is thus the same additions in the same order (lower partners ascending, then higher
 // ones) for every thread count; block sums (energies) are added in ascending block order. So the
 // answer is the serial one, bit for bit. The new shear history goes to a second buffer, swapped in
-// after the pass, so that cross pairs read the old one without a barrier. Each thread then moves
-// the balls it owns.
+// after the pass, so that cross pairs read the old one without a barrier. The motion pass then
+// gives each thread an equal share of the balls.
 //
 // The split is by pair counts, not by measured thread speeds. A split that followed the measured
 // times (every 100 steps, damped, only for a thread slow three intervals running) was tried: on an
