@@ -33,8 +33,8 @@ const Command backend_command = {
     "history, and every backend gives the same numbers, bitwise, for any thread count. serial: TRUBAL's boxes "
     "and contact lists. threaded: the same lists, with forces and motion spread over `threads n` threads "
     "(default: one per hardware thread); each thread takes a range of ball numbers, so balls near in space "
-    "should be near in number (GEN numbers them so); where the numbering would make the threads compute most "
-    "pairs twice, one thread does the work and PRINT info says so. allpairs: TPM's arrangement, every pair of balls tested every cycle "
+    "should be near in number (GEN numbers them so); whether sharing pays is timed in the first steps, and "
+    "where it does not, one thread does the work and PRINT info says so. allpairs: TPM's arrangement, every pair of balls tested every cycle "
     "(N(N-1)/2 pair slots of one byte; it cannot miss a contact); it refuses to take more than `maxmem` bytes "
     "(default 4 GiB or half the physical memory, the smaller).",
     {"serial", "allpairs", "threaded", "threads", "maxmem"}, run_backend};

@@ -10,10 +10,22 @@ namespace {
 // A pair another thread's ball makes a cross pair costs more than one of the thread's own: it is
 // read by index, from memory the other core last wrote (measured 1.3 to 1.7 times as long).
 constexpr std::size_t kCrossPercent = 150;
-// The step runs on one thread where the best split would not be this much faster than one thread
-// (by the cost above): balls numbered so that most pairs join distant numbers (the Rowe decks
-// make all large layers, then all small ones) leave little to share.
-constexpr double kLeastGain = 1.25;
+// Whether the threads share the step at all is timed, not predicted: balls numbered so that most
+// pairs join distant numbers (the Rowe decks make all large layers, then all small ones) make the
+// cross pairs scattered and slow, and small scenes pay more for waking threads than any cost model
+// says. A trial of kTrialChunks chunks of kTrialChunk steps, shared and on one thread in turn (the
+// first kTrialWarm steps of each chunk not counted: data moving between the cores' caches), whenever
+// the ball count or the pool changes and every kRetrial steps; sharing is kept where its median step
+// is at least kShareGain times faster.
+constexpr int kTrialChunks = 8, kTrialChunk = 16, kTrialWarm = 4;
+constexpr std::int64_t kRetrial = 20000;
+constexpr double kShareGain = 1.05;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
 
 }  // namespace
 
@@ -23,7 +35,6 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   split_parts_ = parts;
   first_block_.assign(parts + 1, blocks);
   first_block_[0] = 0;
-  active_ = 1;
   if (parts == 1) { cross_lists(c, balls, parts); return; }
   // start[k]: pairs before block k; cross[k]: pairs with i before block k and j in or after it.
   std::vector<std::size_t> start(blocks + 1), cross(blocks + 2, 0);
@@ -55,14 +66,30 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   if (!fits(lo, true)) {   // cannot happen (hi always fits); keep a valid split anyway
     for (int t = 0; t <= parts; ++t) first_block_[t] = split_point(blocks, parts, t);
   }
-  if (!always_share && static_cast<double>(c.size()) < kLeastGain * static_cast<double>(lo)) {
-    first_block_.assign(parts + 1, blocks);   // everything on thread 0
-    first_block_[0] = 0;
-    cross_lists(c, balls, parts);
-    return;
-  }
-  active_ = parts;
   cross_lists(c, balls, parts);
+}
+
+bool ParallelStep::share_now(std::size_t balls, int parts) {
+  const int rule = share_rule.load(std::memory_order_relaxed);
+  if (rule != 0) return rule > 0;
+  if (trial_step_ == 0 && (balls != trial_balls_ || parts != trial_parts_ || ++since_trial_ >= kRetrial)) {
+    trial_balls_ = balls;
+    trial_parts_ = parts;
+    since_trial_ = 0;
+    trial_step_ = 1;
+    trial_[0].clear();
+    trial_[1].clear();
+  }
+  if (trial_step_ == 0) return share_;
+  return ((trial_step_ - 1) / kTrialChunk) % 2 == 0;   // chunks shared, single, shared, ...
+}
+
+void ParallelStep::trial_time(bool shared, double seconds) {
+  if ((trial_step_ - 1) % kTrialChunk >= kTrialWarm) trial_[shared ? 1 : 0].push_back(seconds);
+  if (++trial_step_ > kTrialChunks * kTrialChunk) {
+    trial_step_ = 0;
+    share_ = median(trial_[1]) * kShareGain < median(trial_[0]);
+  }
 }
 
 void ParallelStep::cross_lists(const ContactTable& c, std::size_t balls, int parts) {
@@ -93,17 +120,23 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
   if (c.list_version != split_version_ || parts != split_parts_ || first_block_.size() != static_cast<std::size_t>(parts) + 1 ||
       first_block_.back() != blocks)
     split(c, balls, parts);
-  const bool parallel = active_ > 1;
+  const bool parallel = parts > 1 && share_now(balls, parts);
+  active_ = parallel ? parts : 1;
   blocks_.assign(blocks, StepSums{});
   // The history is read from fsx.. and written to fsx_next..: a thread's cross pairs may belong to
   // a thread that is already writing, so the two passes need no barrier between them.
-  pool.run([&](int t) {
-    if (t >= parts) return;
-    const std::size_t own_end = block_ball(first_block_[t + 1]);
-    kernels.cross(model, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
-    for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)
-      kernels.contacts(model, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
-  }, parallel);
+  if (parallel) {
+    pool.run([&](int t) {
+      if (t >= parts) return;
+      const std::size_t own_end = block_ball(first_block_[t + 1]);
+      kernels.cross(model, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
+      for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)
+        kernels.contacts(model, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
+    });
+  } else {   // every block on this thread: no cross pairs
+    kernels.cross(model, kernels, 0, balls, nullptr, 0);
+    for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, kernels, block_pair(k), block_pair(k + 1), balls, blocks_[k]);
+  }
   for (const StepSums& block : blocks_) sums.add(block);
   if (kernels.features.friction) {
     ContactTable& table = model.contacts;
@@ -130,6 +163,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
   for (double m : moved_) moved2_ = std::max(moved2_, m);
   for (const StepSums& block : blocks_) sums.add(block);
   const auto t2 = Clock::now();
+  if (trial_step_ > 0) trial_time(parallel, std::chrono::duration<double>(t2 - t0).count());
   model.timing.forces += std::chrono::duration<double>(t1 - t0).count();
   model.timing.motion += std::chrono::duration<double>(t2 - t1).count();
 }

@@ -9,7 +9,8 @@
 // after the pass, so that cross pairs read the old one without a barrier. The motion pass then
 // gives each thread an equal share of the balls.
 //
-// The split is by pair counts, not by measured thread speeds. A split that followed the measured
+// Whether the threads share a step at all is timed (ParallelStep::share_now); the split itself is
+// by pair counts, not by measured thread speeds. A split that followed the measured
 // times (every 100 steps, damped, only for a thread slow three intervals running) was tried: on an
 // idle machine it gained nothing measurable (0.50 s for 888 steps at 13,500 balls either way), and
 // beside a busy process it lost (1.05-1.10 s -> 1.08-1.28 s), since the slow thread changes as the
@@ -36,11 +37,11 @@ class ParallelStep {
   void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
            const VerletReference* moved = nullptr);
   double moved2() const { return moved2_; }
-  // Threads the last step shared its work among: 1 where the split would not pay.
+  // Threads the last step shared its work among: 1 where sharing did not pay (timed).
   int active() const { return active_; }
-  // Tests: split the work even where one thread would be as fast, so that small scenes still
-  // exercise the split (every ParallelStep of the process).
-  static inline std::atomic<bool> always_share{false};
+  // Tests: 0 times whether sharing pays (the default), 1 always shares (small scenes still exercise
+  // the split), -1 never does; for every ParallelStep of the process.
+  static inline std::atomic<int> share_rule{0};
 
  private:
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
@@ -55,7 +56,17 @@ class ParallelStep {
   std::vector<double> moved_;
   double moved2_ = 0;
   int split_parts_ = 0;
-  int active_ = 1;   // threads the split uses: 1 where sharing would not pay (ParallelStep::split)
+  int active_ = 1;   // threads the last step used
+
+  // Whether this step shares the work (a trial step or the trial's verdict); records a trial step's time.
+  bool share_now(std::size_t balls, int parts);
+  void trial_time(bool shared, double seconds);
+  bool share_ = true;                  // the last trial's verdict
+  int trial_step_ = 0;                 // 1.. within a trial, 0 outside
+  std::vector<double> trial_[2];       // step times: [0] one thread, [1] shared
+  std::size_t trial_balls_ = 0;        // what the last trial ran on
+  int trial_parts_ = 0;
+  std::int64_t since_trial_ = 0;
 };
 
 // Splits [0, count) into `parts` contiguous ranges; range t is [split(t), split(t+1)).

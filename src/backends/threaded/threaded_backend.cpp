@@ -49,8 +49,8 @@ class ThreadedBackend final : public Backend {
     auto lines = ref_.info(grid_.dims(), grid_.cell_size());
     if (pool_.size() > 1 && step_.active() < pool_.size())
       lines.emplace_back("threads used", std::to_string(step_.active()) +
-                                             " (most pairs join balls far apart in numbering: the threads would "
-                                             "compute them twice; number balls in space order to share the work)");
+                                             " (timed: sharing the step was not faster; a small scene, or balls "
+                                             "near in space far apart in numbering)");
     return lines;
   }
 
