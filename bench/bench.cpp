@@ -68,9 +68,11 @@ struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts;
 
 bool g_phases = false;   // --phases: print where each run's time went
 
-Timing run(Model model, const std::string& backend_name, int steps, int threads = 1, int warm_up = 20) {
+// The warm-up builds the pair list, fills the caches and covers the threaded backend's trial of
+// whether sharing a step pays (its first 128 steps): start-up costs, not throughput.
+Timing run(Model model, const std::string& backend_name, int steps, int threads = 1, int warm_up = 150) {
   auto backend = make_backend(backend_name, threads);
-  run_cycles(model, *backend, warm_up, {});   // warm-up: pair list, caches
+  run_cycles(model, *backend, warm_up, {});
   const auto t0 = std::chrono::steady_clock::now();
   const CycleResult r = run_cycles(model, *backend, steps, {});
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -134,7 +136,7 @@ int compare(const std::vector<int>& sizes, int steps) {
       Timing t;
       reset_peak_memory();
       try {
-        t = run(fcc_block(nx, ny, nz, Scene::Standard), v.backend, k, v.threads, all ? 2 : 20);
+        t = run(fcc_block(nx, ny, nz, Scene::Standard), v.backend, k, v.threads, all ? 2 : 150);
       } catch (const std::exception& e) {   // allpairs above its memory limit says so
         std::printf("%8.0f %10s %9s %2d  %s\n", balls, "", v.backend, v.threads, e.what());
         continue;

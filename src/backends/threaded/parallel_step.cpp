@@ -15,11 +15,12 @@ constexpr std::size_t kCrossPercent = 150;
 // cross pairs scattered and slow, and small scenes pay more for waking threads than any cost model
 // says. A trial of kTrialChunks chunks of kTrialChunk steps, shared and on one thread in turn (the
 // first kTrialWarm steps of each chunk not counted: data moving between the cores' caches), whenever
-// the ball count or the pool changes and every kRetrial steps; sharing is kept where its median step
-// is at least kShareGain times faster.
+// the ball count or the pool changes and every kRetrial steps; one thread takes over only where its
+// median step is kSingleGain times faster than the shared one: a wrong verdict for one thread costs
+// up to half the speed, one for sharing a few percent.
 constexpr int kTrialChunks = 8, kTrialChunk = 16, kTrialWarm = 4;
 constexpr std::int64_t kRetrial = 20000;
-constexpr double kShareGain = 1.05;
+constexpr double kSingleGain = 1.05;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -88,7 +89,7 @@ void ParallelStep::trial_time(bool shared, double seconds) {
   if ((trial_step_ - 1) % kTrialChunk >= kTrialWarm) trial_[shared ? 1 : 0].push_back(seconds);
   if (++trial_step_ > kTrialChunks * kTrialChunk) {
     trial_step_ = 0;
-    share_ = median(trial_[1]) * kShareGain < median(trial_[0]);
+    share_ = !(median(trial_[0]) * kSingleGain < median(trial_[1]));
   }
 }
 
