@@ -274,13 +274,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
   if (parts == 1) { search(0, n, out); return; }
   std::vector<PairCandidates> lists(parts);
   pool->run([&](int t) { search(split_point(n, parts, t), split_point(n, parts, t + 1), lists[t]); });
-  for (const PairCandidates& part : lists) {
-    out.i.insert(out.i.end(), part.i.begin(), part.i.end());
-    out.j.insert(out.j.end(), part.j.begin(), part.j.end());
-    out.image_x.insert(out.image_x.end(), part.image_x.begin(), part.image_x.end());
-    out.image_y.insert(out.image_y.end(), part.image_y.begin(), part.image_y.end());
-    out.image_z.insert(out.image_z.end(), part.image_z.begin(), part.image_z.end());
-  }
+  for (const PairCandidates& part : lists) out.append(part);
 }
 
 }  // namespace trubal

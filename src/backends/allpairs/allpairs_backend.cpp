@@ -175,13 +175,7 @@ class AllPairsBackend final : public Backend {
         }
     }, slot_count_ >= kParallelSlots);
     pairs_.clear();
-    for (const PairCandidates& part : found_) {
-      pairs_.i.insert(pairs_.i.end(), part.i.begin(), part.i.end());
-      pairs_.j.insert(pairs_.j.end(), part.j.begin(), part.j.end());
-      pairs_.image_x.insert(pairs_.image_x.end(), part.image_x.begin(), part.image_x.end());
-      pairs_.image_y.insert(pairs_.image_y.end(), part.image_y.begin(), part.image_y.end());
-      pairs_.image_z.insert(pairs_.image_z.end(), part.image_z.begin(), part.image_z.end());
-    }
+    for (const PairCandidates& part : found_) pairs_.append(part);
     tests_ += slot_count_;
   }
 

@@ -55,13 +55,7 @@ void CellPairs::find(ThreadPool& pool, const Balls& balls, double min_size, cons
     }
   }, n >= 4096);
   out.clear();
-  for (const PairCandidates& part : parts_) {
-    out.i.insert(out.i.end(), part.i.begin(), part.i.end());
-    out.j.insert(out.j.end(), part.j.begin(), part.j.end());
-    out.image_x.insert(out.image_x.end(), part.image_x.begin(), part.image_x.end());
-    out.image_y.insert(out.image_y.end(), part.image_y.begin(), part.image_y.end());
-    out.image_z.insert(out.image_z.end(), part.image_z.begin(), part.image_z.end());
-  }
+  for (const PairCandidates& part : parts_) out.append(part);
 }
 
 }  // namespace trubal
