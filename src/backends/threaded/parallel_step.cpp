@@ -7,9 +7,10 @@ namespace trubal {
 
 namespace {
 
-// A pair another thread's ball makes a cross pair costs more than one of the thread's own: it is
-// read by index, from memory the other core last wrote (measured 1.3 to 1.7 times as long).
-constexpr std::size_t kCrossPercent = 150;
+// A cross pair is charged as one of the thread's own pairs. It takes longer (read by index, from
+// memory the other core last wrote: 1.7 times on the periodic benchmark), but charging it 1.5 times
+// made the 13,500-ball free-space benchmark 3% slower in interleaved runs.
+constexpr std::size_t kCrossPercent = 100;
 // Whether the threads share the step at all is timed, not predicted: balls numbered so that most
 // pairs join distant numbers (the Rowe decks make all large layers, then all small ones) make the
 // cross pairs scattered and slow, and small scenes pay more for waking threads than any cost model
@@ -46,7 +47,7 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   }
   for (std::size_t k = 1; k <= blocks; ++k) cross[k] += cross[k - 1];
   // The smallest largest cost that `parts` runs of blocks can have, a run [a, b) costing
-  // start[b] - start[a] + 1.5 cross[a] (its own pairs and, roughly, the cross pairs it redoes).
+  // start[b] - start[a] + cross[a] (its own pairs and, roughly, the cross pairs it redoes).
   auto fits = [&](std::size_t most, bool record) {
     std::size_t a = 0;
     for (int t = 0; t < parts; ++t) {
