@@ -248,10 +248,8 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
                       cz = (where[i][2] + dz + dims[2]) % dims[2];
             near_cells.push_back(static_cast<std::uint32_t>((cz * dims[1] + cy) * dims[0] + cx));
           }
-      if (few_cells) {   // fewer than 3 bins on some axis: the 27 neighbours repeat some
-        std::sort(near_cells.begin(), near_cells.end());
-        near_cells.erase(std::unique(near_cells.begin(), near_cells.end()), near_cells.end());
-      }
+      std::sort(near_cells.begin(), near_cells.end());   // fewer than 3 bins on some axis: the 27 repeat some
+      near_cells.erase(std::unique(near_cells.begin(), near_cells.end()), near_cells.end());
       near.clear();
       for (std::uint32_t q : near_cells)
         for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
@@ -270,10 +268,59 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
       }
     }
   };
+  // With 3 or more bins on every axis, the 27 bins around a ball's are distinct, and the image of
+  // a ball in one of them is the bin's: -1 across the upper face, +1 across the lower one. Within
+  // reach (less than half of every width) only one image of j can be, and it is that one, the one
+  // nearest_image() finds; so the test below takes the image from the bin and skips the rounding,
+  // with the same arithmetic from there on (same pairs, same images, same bits).
+  auto search_bins = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
+    std::vector<Hit> near;
+    for (std::size_t i = begin; i < end; ++i) {
+      near.clear();
+      for (int dz = -1; dz <= 1; ++dz) {
+        int cz = where[i][2] + dz;
+        const std::int8_t iz = cz < 0 ? std::int8_t{-1} : (cz >= dims[2] ? std::int8_t{1} : std::int8_t{0});
+        cz -= iz * dims[2];
+        for (int dy = -1; dy <= 1; ++dy) {
+          int cy = where[i][1] + dy;
+          const std::int8_t iy = cy < 0 ? std::int8_t{-1} : (cy >= dims[1] ? std::int8_t{1} : std::int8_t{0});
+          cy -= iy * dims[1];
+          for (int dx = -1; dx <= 1; ++dx) {
+            int cx = where[i][0] + dx;
+            const std::int8_t ix = cx < 0 ? std::int8_t{-1} : (cx >= dims[0] ? std::int8_t{1} : std::int8_t{0});
+            cx -= ix * dims[0];
+            double ox, oy, oz;
+            image_offset(f, ix, iy, iz, ox, oy, oz);
+            const std::size_t q = (static_cast<std::size_t>(cz) * dims[1] + cy) * dims[0] + cx;
+            for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
+              const std::uint32_t j = order[e];
+              if (j <= i) continue;
+              const double ddx = image_delta(b.x[j], b.x[i], ox), ddy = image_delta(b.y[j], b.y[i], oy),
+                           ddz = image_delta(b.z[j], b.z[i], oz);
+              const double reach = b.rad[i] + b.rad[j] + skin;
+              if (ddx * ddx + ddy * ddy + ddz * ddz < reach * reach) near.push_back({j, ix, iy, iz});
+            }
+          }
+        }
+      }
+      std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
+      for (const Hit& h : near) {
+        mine.i.push_back(static_cast<std::uint32_t>(i));
+        mine.j.push_back(h.j);
+        mine.image_x.push_back(h.ix);
+        mine.image_y.push_back(h.iy);
+        mine.image_z.push_back(h.iz);
+      }
+    }
+  };
+  auto search_any = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
+    if (few_cells) search(begin, end, mine);
+    else search_bins(begin, end, mine);
+  };
   const int parts = pool && n >= kParallelSearch ? pool->size() : 1;
-  if (parts == 1) { search(0, n, out); return; }
+  if (parts == 1) { search_any(0, n, out); return; }
   std::vector<PairCandidates> lists(parts);
-  pool->run([&](int t) { search(split_point(n, parts, t), split_point(n, parts, t + 1), lists[t]); });
+  pool->run([&](int t) { search_any(split_point(n, parts, t), split_point(n, parts, t + 1), lists[t]); });
   for (const PairCandidates& part : lists) out.append(part);
 }
 
