@@ -236,6 +236,17 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
   }
   struct Hit { std::uint32_t j; std::int8_t ix, iy, iz; };
   const bool few_cells = dims[0] < 3 || dims[1] < 3 || dims[2] < 3;
+  // Ball i's pairs, in ascending j.
+  auto emit = [](std::size_t i, std::vector<Hit>& near, PairCandidates& mine) {
+    std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
+    for (const Hit& h : near) {
+      mine.i.push_back(static_cast<std::uint32_t>(i));
+      mine.j.push_back(h.j);
+      mine.image_x.push_back(h.ix);
+      mine.image_y.push_back(h.iy);
+      mine.image_z.push_back(h.iz);
+    }
+  };
   auto search = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
     std::vector<std::uint32_t> near_cells;
     std::vector<Hit> near;
@@ -258,14 +269,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
           std::int8_t ix, iy, iz;
           if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + skin, ix, iy, iz)) near.push_back({j, ix, iy, iz});
         }
-      std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
-      for (const Hit& h : near) {
-        mine.i.push_back(static_cast<std::uint32_t>(i));
-        mine.j.push_back(h.j);
-        mine.image_x.push_back(h.ix);
-        mine.image_y.push_back(h.iy);
-        mine.image_z.push_back(h.iz);
-      }
+      emit(i, near, mine);
     }
   };
   // With 3 or more bins on every axis, the 27 bins around a ball's are distinct, and the image of
@@ -303,14 +307,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
           }
         }
       }
-      std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
-      for (const Hit& h : near) {
-        mine.i.push_back(static_cast<std::uint32_t>(i));
-        mine.j.push_back(h.j);
-        mine.image_x.push_back(h.ix);
-        mine.image_y.push_back(h.iy);
-        mine.image_z.push_back(h.iz);
-      }
+      emit(i, near, mine);
     }
   };
   auto search_any = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
