@@ -7,10 +7,6 @@ namespace trubal {
 
 namespace {
 
-// A cross pair is charged as one of the thread's own pairs. It takes longer (read by index, from
-// memory the other core last wrote: 1.7 times on the periodic benchmark), but charging it 1.5 times
-// made the 13,500-ball free-space benchmark 3% slower in interleaved runs.
-constexpr std::size_t kCrossPercent = 100;
 // Whether the threads share the step at all is timed, not predicted: balls numbered so that most
 // pairs join distant numbers (the Rowe decks make all large layers, then all small ones) make the
 // cross pairs scattered and slow, and small scenes pay more for waking threads than any cost model
@@ -47,20 +43,22 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   }
   for (std::size_t k = 1; k <= blocks; ++k) cross[k] += cross[k - 1];
   // The smallest largest cost that `parts` runs of blocks can have, a run [a, b) costing
-  // start[b] - start[a] + cross[a] (its own pairs and, roughly, the cross pairs it redoes).
+  // start[b] - start[a] + cross[a] (its own pairs and, roughly, the cross pairs it redoes; a cross
+  // pair takes longer, 1.7 times on the periodic benchmark, but charging it 1.5 times made the
+  // 13,500-ball benchmark 3% slower in interleaved runs).
   auto fits = [&](std::size_t most, bool record) {
     std::size_t a = 0;
     for (int t = 0; t < parts; ++t) {
       if (record) first_block_[t] = a;
       std::size_t b = a;
-      while (b < blocks && start[b + 1] - start[a] + cross[a] * kCrossPercent / 100 <= most) ++b;
+      while (b < blocks && start[b + 1] - start[a] + cross[a] <= most) ++b;
       if (b == a && a < blocks) return false;   // a block alone exceeds `most`
       a = b;
     }
     if (record) first_block_[parts] = blocks;
     return a == blocks;
   };
-  std::size_t lo = 0, hi = start[blocks] + c.size() * (1 + kCrossPercent / 100) + 1;
+  std::size_t lo = 0, hi = start[blocks] + c.size() + 1;
   while (lo < hi) {
     const std::size_t mid = lo + (hi - lo) / 2;
     if (fits(mid, false)) hi = mid; else lo = mid + 1;
