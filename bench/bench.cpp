@@ -64,7 +64,7 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
   return model;
 }
 
-struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; PhaseTimes phases; };
+struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; };
 
 bool g_phases = false;   // --phases: print where each run's time went
 
@@ -85,7 +85,7 @@ Timing run(Model model, const std::string& backend_name, int steps, int threads 
                 backend_name.c_str(), threads, p.detect * us, p.forces * us, p.motion * us,
                 (p.step - p.detect - p.forces - p.motion) * us, (s - p.step) * us);
   }
-  return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts, r.times};
+  return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts};
 }
 
 // Peak resident memory of the process since the last reset_peak_memory(), from /proc (Linux);
