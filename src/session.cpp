@@ -160,14 +160,16 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   // order within a cell). Balls near in space are then near in number, which the pair lists' cache
   // use and the threaded backend's split (contiguous number ranges) depend on.
   const double cell = 2 * rmax;
-  auto cell_of = [&](const std::array<double, 4>& q, int a) { return static_cast<std::int64_t>(std::floor((q[a] - s.lo[a]) / cell)); };
-  std::stable_sort(made.begin(), made.end(), [&](const auto& p, const auto& q) {
-    for (int a = 2; a >= 0; --a)
-      if (cell_of(p, a) != cell_of(q, a)) return cell_of(p, a) < cell_of(q, a);
-    return false;
-  });
+  struct Placed { std::array<std::int64_t, 3> key; std::array<double, 4> ball; };   // key: z, y, x cell
+  std::vector<Placed> sorted;
+  sorted.reserve(made.size());
+  for (const auto& q : made) {
+    auto cell_of = [&](int a) { return static_cast<std::int64_t>(std::floor((q[a] - s.lo[a]) / cell)); };
+    sorted.push_back({{cell_of(2), cell_of(1), cell_of(0)}, q});
+  }
+  std::stable_sort(sorted.begin(), sorted.end(), [](const Placed& p, const Placed& q) { return p.key < q.key; });
   Model& m = edit();
-  for (const auto& q : made) trubal::add_ball(m, 0, type, q[0], q[1], q[2], q[3]);
+  for (const auto& [key, q] : sorted) trubal::add_ball(m, 0, type, q[0], q[1], q[2], q[3]);
   return placed;
 }
 
