@@ -121,7 +121,6 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
       first_block_.back() != blocks)
     split(c, balls, parts);
   const bool parallel = parts > 1 && share_now(balls, parts);
-  active_ = parallel ? parts : 1;
   blocks_.assign(blocks, StepSums{});
   // The history is read from fsx.. and written to fsx_next..: a thread's cross pairs may belong to
   // a thread that is already writing, so the two passes need no barrier between them.

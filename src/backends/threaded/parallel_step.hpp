@@ -37,8 +37,13 @@ class ParallelStep {
   void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
            const VerletReference* moved = nullptr);
   double moved2() const { return moved2_; }
-  // Threads the last step shared its work among: 1 where sharing did not pay (timed).
-  int active() const { return active_; }
+  // Threads the steps share their work among: 1 where the rule or the last trial says one thread,
+  // at most one per pair block, all of them while a trial runs; 0 before the first step.
+  int active() const {
+    const int rule = share_rule.load(std::memory_order_relaxed);
+    const bool sharing = rule != 0 ? rule > 0 : trial_step_ > 0 || share_;
+    return sharing ? split_parts_ : 1;
+  }
   // Tests: 0 times whether sharing pays (the default), 1 always shares (small scenes still exercise
   // the split), -1 never does; for every ParallelStep of the process.
   static inline std::atomic<int> share_rule{0};
@@ -56,7 +61,6 @@ class ParallelStep {
   std::vector<double> moved_;
   double moved2_ = 0;
   int split_parts_ = 0;
-  int active_ = 1;   // threads the last step used
 
   // Whether this step shares the work (a trial step or the trial's verdict); records a trial step's time.
   bool share_now(std::size_t balls, int parts);

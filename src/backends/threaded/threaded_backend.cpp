@@ -47,10 +47,13 @@ class ThreadedBackend final : public Backend {
 
   std::vector<std::pair<std::string, std::string>> info() const override {
     auto lines = ref_.info(grid_.dims(), grid_.cell_size());
-    if (pool_.size() > 1 && step_.active() < pool_.size())
-      lines.emplace_back("threads used", std::to_string(step_.active()) +
-                                             " (timed: sharing the step was not faster; a small scene, or balls "
-                                             "near in space far apart in numbering)");
+    const int used = step_.active();
+    if (used > 0 && used < pool_.size())
+      lines.emplace_back("threads used", std::to_string(used) +
+                                             (used > 1 ? " (one per block of 256 balls)"
+                                                       : " (the balls fill one block of 256, or sharing the step was "
+                                                         "timed no faster: a small scene, or balls near in space far "
+                                                         "apart in numbering)"));
     return lines;
   }
 
