@@ -18,8 +18,10 @@ namespace {
 
 constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // 2: the membrane's pressure and area. 3: the periodic cell's tilts (shear); version 2 files are
-// read as cells without tilt.
-constexpr std::uint32_t kVersion = 3;
+// read as cells without tilt. 4: the servo's last measured moments (Space::servo_measured), so
+// that a restarted servo takes the steps an unbroken run takes; older files start it from the
+// contact table.
+constexpr std::uint32_t kVersion = 4;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -91,6 +93,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.space.strain_rate); io.pod(m.space.strain);
   io.pod(m.space.servo_on); io.pod(m.space.servo_target);
   io.pod(m.space.servo_gain); io.pod(m.space.servo_max_rate);
+  if (version >= 4) { io.pod(m.space.servo_measured); io.pod(m.space.servo_measured_valid); }
   std::uint64_t nmat = m.materials.size();
   io.pod(nmat);
   if constexpr (std::is_same_v<IO, Reader>) {

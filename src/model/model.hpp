@@ -109,6 +109,13 @@ struct ContactTable {
   }
 };
 
+// What the servo reads of a force pass, summed by the contact loops: sum of F (x) l (symmetric part,
+// xx yy zz xy xz yz) and of k_n l_a^2 over the touching pairs, l the branch vector i -> j.
+struct ContactMoments {
+  std::array<double, 6> force{};
+  std::array<double, 3> stiffness{};
+};
+
 // Where the balls live: a free region (START box) or a periodic cell (START x y z).
 struct Space {
   bool periodic = false;
@@ -123,6 +130,12 @@ struct Space {
   std::array<bool, 3> servo_on{false, false, false};
   std::array<double, 3> servo_target{};
   double servo_gain = 0, servo_max_rate = 0;
+  // The moments of the last force pass while the servo ran: the next step's servo acts on them. They
+  // are state, like the velocities at t - dt/2, so that a run cut into CYCLEs, switched to another
+  // backend or saved and restarted takes the same steps as one CYCLE (saved). Not valid before the
+  // servo's first step: it then reads the contact table.
+  ContactMoments servo_measured;
+  bool servo_measured_valid = false;
   // Energy the cell control moved in and out, counted without sign (not saved): the instability
   // guard's scale, as a servo stopping a fast cell takes much out in one step.
   double gross_work = 0;

@@ -31,13 +31,6 @@ double default_servo_gain(const Model& model, int axis, double dt);
 // Default largest servo rate: rate dt <= 1e-4, the cell changes by at most 1e-4 of its size per step.
 double default_servo_max_rate(double dt);
 
-// What the servo reads of the last force pass, summed by the contact loops (StepSums): sum of
-// F (x) l and of k_n l_a^2 over the touching pairs, l the branch vector.
-struct ContactMoments {
-  std::array<double, 6> force{};
-  std::array<double, 3> stiffness{};
-};
-
 // Before a step in a periodic space: the servo's new rates, from the last force pass's stress
 // (`last`, or the contact table's per-pair results when it is null).
 void cell_before_step(Model& model, double dt, const ContactMoments* last = nullptr);

@@ -256,8 +256,6 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
     return result;
   };
 
-  ContactMoments moments;   // the last force pass's, for the servo (from the second step on)
-  bool have_moments = false;
   for (std::int64_t s = 1; s <= n; ++s) {
     const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
     kernels.dt = dt;
@@ -274,13 +272,11 @@ CycleResult run_cycles(Model& model, Backend& backend, std::int64_t n, const Cyc
     kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
     StepSums sums;
     const auto step_start = Clock::now();
-    cell_before_step(model, dt, have_moments ? &moments : nullptr);   // periodic space: the servo's rates
+    // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
+    cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr);
     backend.step(model, kernels, sums);
-    if (kernels.moments) {
-      moments.force = sums.force_moment;
-      moments.stiffness = sums.stiffness_moment;
-      have_moments = true;
-    }
+    model.space.servo_measured_valid = kernels.moments;
+    if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};
     cell_after_step(model, dt, sums.image_power);    // periodic space: the cell's work, its new edges, the strain
     model.timing.step += std::chrono::duration<double>(Clock::now() - step_start).count();
     model.cycle += 1;
