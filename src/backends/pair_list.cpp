@@ -57,16 +57,6 @@ void build_gather(ContactTable& table, std::size_t ball_count) {
   static std::atomic<std::uint64_t> versions{0};   // unique across tables (a restored copy keeps its own)
   table.list_version = ++versions;
   const std::size_t n = table.size();
-  std::vector<std::uint32_t> as_j(ball_count, 0), as_i(ball_count, 0);
-  for (std::size_t p = 0; p < n; ++p) { ++as_j[table.j[p]]; ++as_i[table.i[p]]; }
-  table.gather_begin.assign(ball_count + 1, 0);
-  for (std::size_t b = 0; b < ball_count; ++b) table.gather_begin[b + 1] = table.gather_begin[b] + as_j[b] + as_i[b];
-  // Partners below b (b is j) come first, in list order = ascending i; then partners above b.
-  std::vector<std::uint32_t> next_j(ball_count), next_i(ball_count);
-  for (std::size_t b = 0; b < ball_count; ++b) {
-    next_j[b] = table.gather_begin[b];
-    next_i[b] = table.gather_begin[b] + as_j[b];
-  }
   table.run_begin.assign(ball_count + 1, static_cast<std::uint32_t>(n));
   for (std::size_t p = n; p-- > 0;) table.run_begin[table.i[p]] = static_cast<std::uint32_t>(p);
   for (std::size_t b = ball_count; b-- > 0;) table.run_begin[b] = std::min(table.run_begin[b], table.run_begin[b + 1]);
@@ -75,15 +65,6 @@ void build_gather(ContactTable& table, std::size_t ball_count) {
   table.fsy_next.assign(n, 0.0);
   table.fsz_next.assign(n, 0.0);
   table.ball_cn.assign(ball_count, 0.0);
-  table.gather_pair.assign(2 * n, 0);
-  table.gather_sign.assign(2 * n, 0);
-  for (std::size_t p = 0; p < n; ++p) {
-    const std::uint32_t qj = next_j[table.j[p]]++, qi = next_i[table.i[p]]++;
-    table.gather_pair[qj] = static_cast<std::uint32_t>(p);
-    table.gather_sign[qj] = 1;
-    table.gather_pair[qi] = static_cast<std::uint32_t>(p);
-    table.gather_sign[qi] = -1;
-  }
 }
 
 }  // namespace trubal

@@ -1,5 +1,7 @@
 #include "backends/verlet.hpp"
 
+#include "model/periodic_cell.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,7 +12,7 @@ namespace trubal {
 double VerletReference::displacement_limit2(const Model& model) const {
   const Balls& b = model.balls;
   const std::size_t n = b.size();
-  if (!valid_ || x.size() != n || model.contacts.gather_begin.size() != n + 1) return -1;
+  if (!valid_ || x.size() != n || model.contacts.run_begin.size() != n + 1) return -1;
   if (n && std::memcmp(rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return -1;
   // Periodic space: an image pair also closes by the change of the cell's edge vectors (per axis,
   // the change of the edge length plus those of the tilts that shift that axis).
@@ -65,5 +67,14 @@ std::vector<std::pair<std::string, std::string>> VerletReference::info(const std
           {"pair list skin", number(skin_)},
           {"pair list rebuilds", std::to_string(rebuilds_)}};
 }
+
+double periodic_skin(const Model& model, double skin) {
+  const auto w = cell_widths(model.space);
+  const double reach = 2 * model.balls.max_radius();
+  double most = skin;
+  for (int a = 0; a < 3; ++a) most = std::min(most, 0.5 * (0.5 * w[a] - reach));
+  return std::max(0.0, most);
+}
+
 
 }  // namespace trubal

@@ -44,4 +44,9 @@ class VerletReference {
   std::size_t rebuilds_ = 0;
 };
 
+// The pair-list skin to use in the periodic cell: the given one, cut down so that a ball's reach
+// (its diameter plus the skin) stays below half of every width (one image per pair).
+double periodic_skin(const Model& model, double skin);
+
+
 }  // namespace trubal

@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "backends/periodic.hpp"
+#include "model/periodic_cell.hpp"
 #include "io/atomic_file.hpp"
 
 namespace trubal {

@@ -46,6 +46,11 @@ struct Balls {
   std::vector<double> amx, amy, amz;            // applied moment
 
   std::size_t size() const { return id.size(); }
+  double max_radius() const {
+    double r = 0;
+    for (double v : rad) r = v > r ? v : r;
+    return r;
+  }
 
   // Calls f(vector&) for every per-ball array, so resizing and reordering cannot miss one.
   template <class F> void for_each_array(F&& f) {
@@ -82,10 +87,6 @@ struct ContactTable {
   std::vector<double> cn_eff;                           // restitution dashpot coefficient now
   std::vector<double> work_friction, work_damping;      // energy dissipated this step
   std::vector<std::uint8_t> state;                      // 0 apart, 1 touching, 2 sliding
-  // Gather index (CSR): for ball b, entries gather_begin[b] .. gather_begin[b+1] of gather_pair
-  // are its pairs in ascending partner order; gather_sign is +1 where b is j, -1 where b is i.
-  std::vector<std::uint32_t> gather_begin, gather_pair;
-  std::vector<std::int8_t> gather_sign;
   std::vector<std::uint32_t> run_begin;                 // first pair with i >= b, for b = 0 .. balls
   std::uint64_t list_version = 0;                       // unique to each list build_gather indexed
   // Scratch of one step (not saved, not part of the state), sized with the gather index: the

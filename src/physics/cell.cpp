@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "backends/periodic.hpp"
+#include "model/periodic_cell.hpp"
 #include "physics/engine.hpp"
 #include "physics/measure.hpp"
 

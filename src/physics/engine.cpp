@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "backends/periodic.hpp"
+#include "model/periodic_cell.hpp"
 #include "physics/cell.hpp"
 #include "physics/kernels.hpp"
 

@@ -3,7 +3,7 @@
 // instantiated for every combination of features and picked once per CYCLE by make_kernels.
 #include "physics/kernels.hpp"
 
-#include "backends/periodic.hpp"
+#include "model/periodic_cell.hpp"
 
 #include <utility>
 

@@ -7,7 +7,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "backends/periodic.hpp"
+#include "model/periodic_cell.hpp"
 #include "backends_scenes.hpp"
 #include "interp_support.hpp"
 #include "physics/cell.hpp"

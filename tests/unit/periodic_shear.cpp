@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "backends/periodic.hpp"
+#include "model/periodic_cell.hpp"
 #include "backends_scenes.hpp"
 #include "interp_support.hpp"
 #include "io/save.hpp"

@@ -13,9 +13,10 @@
 
 #include "backends/allpairs/pair_test.hpp"
 #include "backends/pair_list.hpp"
-#include "backends/periodic.hpp"
+#include "backends/periodic_pairs.hpp"
+#include "model/periodic_cell.hpp"
 #include "backends/threaded/parallel_step.hpp"
-#include "backends/threaded/thread_pool.hpp"
+#include "support/thread_pool.hpp"
 #include "physics/kernels.hpp"
 
 namespace trubal {
@@ -182,7 +183,7 @@ class AllPairsBackend final : public Backend {
   // Whether the table already holds exactly these pairs (then nothing needs carrying over).
   bool same_list(ContactTable& table, std::size_t n) const {
     const std::size_t size = pairs_.i.size();
-    bool consistent = table.gather_begin.size() == n + 1 && table.gather_pair.size() == 2 * size;
+    bool consistent = table.run_begin.size() == n + 1;
     table.for_each_pair_array([&](auto& v) { consistent = consistent && v.size() == size; });
     if (!consistent) return false;
     for (std::size_t p = 0; p < size; ++p)

@@ -8,10 +8,11 @@
 #include <string>
 
 #include "backends/pair_list.hpp"
-#include "backends/periodic.hpp"
+#include "backends/periodic_pairs.hpp"
+#include "model/periodic_cell.hpp"
 #include "backends/serial/box_grid.hpp"
 #include "backends/threaded/parallel_step.hpp"
-#include "backends/threaded/thread_pool.hpp"
+#include "support/thread_pool.hpp"
 #include "backends/verlet.hpp"
 #include "physics/kernels.hpp"
 

@@ -10,7 +10,7 @@
 
 #include "backends/grid_shape.hpp"
 #include "backends/pair_list.hpp"
-#include "backends/threaded/thread_pool.hpp"
+#include "support/thread_pool.hpp"
 #include "model/model.hpp"
 
 namespace trubal {

@@ -20,7 +20,7 @@
 #include <atomic>
 #include <vector>
 
-#include "backends/threaded/thread_pool.hpp"
+#include "support/thread_pool.hpp"
 #include "backends/verlet.hpp"
 #include "model/model.hpp"
 #include "physics/kernels.hpp"
@@ -72,11 +72,5 @@ class ParallelStep {
   int trial_parts_ = 0;
   std::int64_t since_trial_ = 0;
 };
-
-// Splits [0, count) into `parts` contiguous ranges; range t is [split(t), split(t+1)).
-inline std::size_t split_point(std::size_t count, int parts, int t) {
-  return static_cast<std::size_t>(static_cast<unsigned __int128>(count) * static_cast<unsigned>(t) /
-                                  static_cast<unsigned>(parts));
-}
 
 }  // namespace trubal

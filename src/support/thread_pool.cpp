@@ -1,4 +1,4 @@
-#include "backends/threaded/thread_pool.hpp"
+#include "support/thread_pool.hpp"
 
 #include <algorithm>
 #include <chrono>

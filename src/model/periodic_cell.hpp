@@ -1,7 +1,8 @@
-// The periodic cell as the backends see it (PHYSICS.md "Periodic space"): balls are wrapped into
-// the cell at the start of every step, each pair carries the image of j that i sees (int8 per
-// edge vector), and every backend finds the same pairs with the same arithmetic, so that their
-// answers stay bitwise equal. The cell is a parallelepiped when it is sheared. The rule that keeps
+// The periodic cell's geometry (doc/physics.md "Periodic space"): its frame, the images of balls
+// and how they move, wrapping balls into the cell and keeping its tilts short. Balls are wrapped
+// into the cell at the start of every step, each pair carries the image of j that i sees (int8 per
+// edge vector), and every pair search and kernel uses this arithmetic, so that every backend's
+// answer is the same to the bit. The cell is a parallelepiped when it is sheared. The rule that keeps
 // one image per pair: every width of the cell at least twice the largest diameter (then only the
 // nearest image of a ball can touch it).
 #pragma once
@@ -11,12 +12,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "backends/pair_list.hpp"
 #include "model/model.hpp"
 
 namespace trubal {
-
-class ThreadPool;
 
 // The periodic cell as a matrix H whose columns are its edge vectors a = (lx, 0, 0),
 // b = (xy, ly, 0), c = (xz, yz, lz) (upper triangular: the lengths along the axes and the tilts of
@@ -97,10 +95,6 @@ inline bool nearest_image_within(const CellFrame& f, const Balls& b, std::size_t
 // Throws std::runtime_error when some width of the cell is less than twice the largest ball diameter.
 void check_periodic_cell(const Model& model);
 
-// The pair-list skin to use in the periodic cell: the given one, cut down so that a ball's reach
-// (its diameter plus the skin) stays below half of every width (one image per pair).
-double periodic_skin(const Model& model, double skin);
-
 // Whether some ball of [begin, end) lies outside the cell, so that wrap_into_cell would move it
 // (a read-only test that threads can share out; a true answer may be conservative).
 bool outside_cell(const Model& model, std::size_t begin, std::size_t end);
@@ -108,7 +102,7 @@ bool outside_cell(const Model& model, std::size_t begin, std::size_t end);
 // Wraps every ball centre into the periodic cell (the parallelepiped lo + H s, s in [0, 1), taken
 // z first, then y, then x). A ball moved by an edge vector has its velocity changed by that edge's
 // velocity; the images of its pairs in model.contacts change so that each pair
-// keeps the same partner image (and its history); ref (the backend's reference positions, if the
+// keeps the same partner image (and its history); ref (the pair list's reference positions, if the
 // same size) moves with the ball. The kinetic energy that the velocity change adds is counted as
 // boundary work. Returns whether any ball moved.
 bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z);
@@ -119,9 +113,5 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
 // images, and the balls are wrapped into the new cell at the next step. Returns whether it did.
 bool reduce_cell_tilt(Model& model);
 
-// Every pair i < j (wrapped positions) with j's nearest image closer than R_i + R_j + skin, sorted by
-// (i, j), with that image. skin 0 gives exactly the pairs the contact kernel gives a force.
-// With a pool, its threads search ranges of i and their lists are joined: the same list.
-void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool = nullptr);
 
 }  // namespace trubal

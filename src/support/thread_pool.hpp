@@ -48,4 +48,10 @@ class ThreadPool {
   std::exception_ptr error_;
 };
 
+// Splits [0, count) into `parts` contiguous ranges; range t is [split(t), split(t+1)).
+inline std::size_t split_point(std::size_t count, int parts, int t) {
+  return static_cast<std::size_t>(static_cast<unsigned __int128>(count) * static_cast<unsigned>(t) /
+                                  static_cast<unsigned>(parts));
+}
+
 }  // namespace trubal

@@ -1,0 +1,141 @@
+#include "backends/periodic_pairs.hpp"
+
+#include <algorithm>
+
+#include "model/periodic_cell.hpp"
+
+namespace trubal {
+namespace {
+
+// Fewer balls than this are searched on one thread: waking the others costs more.
+constexpr std::size_t kParallelSearch = 4096;
+
+}  // namespace
+
+void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool) {
+  out.clear();
+  const Balls& b = model.balls;
+  const Space& s = model.space;
+  const std::size_t n = b.size();
+  const CellFrame f = cell_frame(s);
+  const auto L = s.length();
+  const auto w = cell_widths(s);
+  const double reach_max = 2 * b.max_radius() + skin;
+  // Bins in the cell's fractional coordinates (parallelepipeds like the cell), at least reach_max
+  // wide across; fewer than 3 per axis: all are neighbours.
+  std::array<int, 3> dims{};
+  for (int a = 0; a < 3; ++a) {
+    const double d = reach_max > 0 ? std::floor(w[a] / reach_max) : 1.0;
+    dims[a] = static_cast<int>(std::clamp(d, 1.0, 1000.0));
+    if (s.boxes[a] > 0) dims[a] = std::min(dims[a], s.boxes[a]);   // START x y z nbx nby nbz: at most these
+  }
+  while (static_cast<double>(dims[0]) * dims[1] * dims[2] > 2.0 * static_cast<double>(n) + 27)
+    for (int a = 0; a < 3; ++a) dims[a] = std::max(1, dims[a] / 2);
+  const std::size_t cells = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
+  std::vector<std::uint32_t> cell(n), start(cells + 1, 0), order(n);
+  std::vector<std::array<int, 3>> where(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double sz = (b.z[k] - s.lo[2]) / f.lz;
+    const double ty = b.y[k] - f.yz * sz;
+    const double tx = b.x[k] - f.xy * ((ty - s.lo[1]) / f.ly) - f.xz * sz;
+    const double t[3] = {tx, ty, b.z[k]};   // the coordinates less their tilt terms
+    for (int a = 0; a < 3; ++a) {
+      const double q = std::floor((t[a] - s.lo[a]) / L[a] * dims[a]);
+      where[k][a] = !(q >= 0) ? 0 : (q >= dims[a] ? dims[a] - 1 : static_cast<int>(q));
+    }
+    cell[k] = static_cast<std::uint32_t>((where[k][2] * dims[1] + where[k][1]) * dims[0] + where[k][0]);
+    ++start[cell[k] + 1];
+  }
+  for (std::size_t q = 0; q < cells; ++q) start[q + 1] += start[q];
+  {
+    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < n; ++k) order[next[cell[k]]++] = static_cast<std::uint32_t>(k);
+  }
+  struct Hit { std::uint32_t j; std::int8_t ix, iy, iz; };
+  const bool few_cells = dims[0] < 3 || dims[1] < 3 || dims[2] < 3;
+  // Ball i's pairs, in ascending j.
+  auto emit = [](std::size_t i, std::vector<Hit>& near, PairCandidates& mine) {
+    std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
+    for (const Hit& h : near) {
+      mine.i.push_back(static_cast<std::uint32_t>(i));
+      mine.j.push_back(h.j);
+      mine.image_x.push_back(h.ix);
+      mine.image_y.push_back(h.iy);
+      mine.image_z.push_back(h.iz);
+    }
+  };
+  auto search = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
+    std::vector<std::uint32_t> near_cells;
+    std::vector<Hit> near;
+    for (std::size_t i = begin; i < end; ++i) {
+      near_cells.clear();
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int cx = (where[i][0] + dx + dims[0]) % dims[0], cy = (where[i][1] + dy + dims[1]) % dims[1],
+                      cz = (where[i][2] + dz + dims[2]) % dims[2];
+            near_cells.push_back(static_cast<std::uint32_t>((cz * dims[1] + cy) * dims[0] + cx));
+          }
+      std::sort(near_cells.begin(), near_cells.end());   // fewer than 3 bins on some axis: the 27 repeat some
+      near_cells.erase(std::unique(near_cells.begin(), near_cells.end()), near_cells.end());
+      near.clear();
+      for (std::uint32_t q : near_cells)
+        for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
+          const std::uint32_t j = order[e];
+          if (j <= i) continue;
+          std::int8_t ix, iy, iz;
+          if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + skin, ix, iy, iz)) near.push_back({j, ix, iy, iz});
+        }
+      emit(i, near, mine);
+    }
+  };
+  // With 3 or more bins on every axis, the 27 bins around a ball's are distinct, and the image of
+  // a ball in one of them is the bin's: -1 across the upper face, +1 across the lower one. Within
+  // reach (less than half of every width) only one image of j can be, and it is that one, the one
+  // nearest_image() finds; so the test below takes the image from the bin and skips the rounding,
+  // with the same arithmetic from there on (same pairs, same images, same bits).
+  auto search_bins = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
+    std::vector<Hit> near;
+    for (std::size_t i = begin; i < end; ++i) {
+      near.clear();
+      for (int dz = -1; dz <= 1; ++dz) {
+        int cz = where[i][2] + dz;
+        const std::int8_t iz = cz < 0 ? std::int8_t{-1} : (cz >= dims[2] ? std::int8_t{1} : std::int8_t{0});
+        cz -= iz * dims[2];
+        for (int dy = -1; dy <= 1; ++dy) {
+          int cy = where[i][1] + dy;
+          const std::int8_t iy = cy < 0 ? std::int8_t{-1} : (cy >= dims[1] ? std::int8_t{1} : std::int8_t{0});
+          cy -= iy * dims[1];
+          for (int dx = -1; dx <= 1; ++dx) {
+            int cx = where[i][0] + dx;
+            const std::int8_t ix = cx < 0 ? std::int8_t{-1} : (cx >= dims[0] ? std::int8_t{1} : std::int8_t{0});
+            cx -= ix * dims[0];
+            double ox, oy, oz;
+            image_offset(f, ix, iy, iz, ox, oy, oz);
+            const std::size_t q = (static_cast<std::size_t>(cz) * dims[1] + cy) * dims[0] + cx;
+            for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
+              const std::uint32_t j = order[e];
+              if (j <= i) continue;
+              const double ddx = image_delta(b.x[j], b.x[i], ox), ddy = image_delta(b.y[j], b.y[i], oy),
+                           ddz = image_delta(b.z[j], b.z[i], oz);
+              const double reach = b.rad[i] + b.rad[j] + skin;
+              if (ddx * ddx + ddy * ddy + ddz * ddz < reach * reach) near.push_back({j, ix, iy, iz});
+            }
+          }
+        }
+      }
+      emit(i, near, mine);
+    }
+  };
+  auto search_any = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
+    if (few_cells) search(begin, end, mine);
+    else search_bins(begin, end, mine);
+  };
+  const int parts = pool && n >= kParallelSearch ? pool->size() : 1;
+  if (parts == 1) { search_any(0, n, out); return; }
+  std::vector<PairCandidates> lists(parts);
+  pool->run([&](int t) { search_any(split_point(n, parts, t), split_point(n, parts, t + 1), lists[t]); });
+  for (const PairCandidates& part : lists) out.append(part);
+}
+
+}  // namespace trubal

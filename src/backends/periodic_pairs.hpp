@@ -1,0 +1,16 @@
+// The periodic pair search the serial and threaded backends share (model/periodic_cell.hpp has the
+// geometry): wrapped positions, j's nearest image, the same test for every pair.
+#pragma once
+
+#include "backends/pair_candidates.hpp"
+#include "model/model.hpp"
+#include "support/thread_pool.hpp"
+
+namespace trubal {
+
+// Every pair i < j (wrapped positions) with j's nearest image closer than R_i + R_j + skin, sorted by
+// (i, j), with that image. skin 0 gives exactly the pairs the contact kernel gives a force.
+// With a pool, its threads search ranges of i and their lists are joined: the same list.
+void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool = nullptr);
+
+}  // namespace trubal

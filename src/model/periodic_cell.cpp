@@ -1,0 +1,182 @@
+#include "model/periodic_cell.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace trubal {
+
+CellFrame cell_frame(const Space& s) {
+  CellFrame f;
+  if (!s.periodic) return f;
+  const auto L = s.length();
+  f.lx = L[0]; f.ly = L[1]; f.lz = L[2];
+  f.xy = s.tilt[0]; f.xz = s.tilt[1]; f.yz = s.tilt[2];
+  const auto g = velocity_gradient(s.strain_rate);
+  // dH/dt = L H, both upper triangular.
+  f.vlx = g[0][0] * f.lx;
+  f.vxy = g[0][0] * f.xy + g[0][1] * f.ly;
+  f.vxz = g[0][0] * f.xz + g[0][1] * f.yz + g[0][2] * f.lz;
+  f.vly = g[1][1] * f.ly;
+  f.vyz = g[1][1] * f.yz + g[1][2] * f.lz;
+  f.vlz = g[2][2] * f.lz;
+  return f;
+}
+
+std::array<std::array<double, 3>, 3> velocity_gradient(const std::array<double, 6>& r) {
+  return {{{-r[0], -2 * r[3], -2 * r[4]}, {0.0, -r[1], -2 * r[5]}, {0.0, 0.0, -r[2]}}};
+}
+
+std::array<double, 3> cell_widths(const Space& s) {
+  const auto L = s.length();
+  const double xy = s.tilt[0], xz = s.tilt[1], yz = s.tilt[2];
+  // Face normals: b x c, c x a, a x b; width = volume / face area.
+  const double q = (xy * yz - L[1] * xz) / (L[1] * L[2]);
+  return {L[0] / std::sqrt(1 + (xy / L[1]) * (xy / L[1]) + q * q), L[1] / std::sqrt(1 + (yz / L[2]) * (yz / L[2])),
+          L[2]};
+}
+
+void check_periodic_cell(const Model& model) {
+  if (!model.space.periodic) return;
+  const double d = 2 * model.balls.max_radius();
+  const auto w = cell_widths(model.space);
+  for (int a = 0; a < 3; ++a)
+    if (!(w[a] >= 2 * d))
+      throw std::runtime_error(fmt::format(
+          "periodic cell too small: {} {} is {:.6g}, less than twice the largest ball diameter ({:.6g}); "
+          "a ball could touch two images of another. Use a larger cell (START x y z) or smaller balls",
+          model.space.tilt == std::array<double, 3>{0, 0, 0} ? "edge" : "width across", "xyz"[a], w[a], d));
+}
+
+namespace {
+
+// The part of ball k's coordinate a that the tilts contribute (0 in an unsheared cell): the
+// coordinate less it is lo[a] + edge length * the fractional coordinate along edge a.
+double tilt_terms(const Space& s, const CellFrame& f, const Balls& b, std::size_t k, int a) {
+  if (a == 2 || (f.xy == 0 && f.xz == 0 && f.yz == 0)) return 0;
+  const double sz = (b.z[k] - s.lo[2]) / f.lz;
+  if (a == 1) return f.yz * sz;
+  const double sy = (b.y[k] - s.lo[1] - f.yz * sz) / f.ly;
+  return f.xy * sy + f.xz * sz;
+}
+
+}  // namespace
+
+bool outside_cell(const Model& model, std::size_t begin, std::size_t end) {
+  const Space& s = model.space;
+  if (!s.periodic) return false;
+  const Balls& b = model.balls;
+  const CellFrame f = cell_frame(s);
+  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  for (std::size_t k = begin; k < end; ++k)
+    for (int a = 2; a >= 0; --a) {   // the test wrap_into_cell makes, on unmoved coordinates
+      const double x = (*pos[a])[k];
+      if (!std::isfinite(x)) continue;
+      const double t = x - tilt_terms(s, f, b, k, a);
+      if (!(t >= s.lo[a] && t < s.hi[a])) return true;
+    }
+  return false;
+}
+
+bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z) {
+  const Space& s = model.space;
+  if (!s.periodic) return false;
+  Balls& b = model.balls;
+  ContactTable& c = model.contacts;
+  const std::size_t n = b.size();
+  const CellFrame f = cell_frame(s);
+  // Edge vectors and their velocities, by axis (columns of H and dH/dt).
+  const double edge[3][3] = {{f.lx, 0, 0}, {f.xy, f.ly, 0}, {f.xz, f.yz, f.lz}};
+  const double edge_velocity[3][3] = {{f.vlx, 0, 0}, {f.vxy, f.vly, 0}, {f.vxz, f.vyz, f.vlz}};
+  std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  std::vector<double>* vel[3] = {&b.vx, &b.vy, &b.vz};
+  std::vector<double>* ref[3] = {ref_x, ref_y, ref_z};
+  // Edge vectors each ball moved by, per axis (made when the first ball moves).
+  std::vector<std::array<int, 3>> moved;
+  bool any = false;
+  double work = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    // z first: moving along c shifts y and x; then y (b shifts x); then x.
+    for (int a = 2; a >= 0; --a) {
+      double& x = (*pos[a])[k];
+      if (!std::isfinite(x)) continue;   // the guard reports it
+      const double tilt = tilt_terms(s, f, b, k, a);
+      const double t = x - tilt;
+      if (t >= s.lo[a] && t < s.hi[a]) continue;
+      // The ball moves to its own image inside the cell: minus shift edge vectors.
+      const double shift = std::floor((t - s.lo[a]) / edge[a][a]);
+      if (shift == 0) continue;   // rounding at the upper face
+      for (int e = 0; e <= a; ++e) (*pos[e])[k] -= shift * edge[a][e];
+      // Rounding can land a tiny negative offset on hi: keep the shift, stay inside.
+      if (x - tilt >= s.hi[a]) x = std::nextafter(s.hi[a], s.lo[a]) + tilt;
+      if (x - tilt < s.lo[a]) x = s.lo[a] + tilt;
+      const auto step = static_cast<int>(shift);
+      for (int e = 0; e <= a; ++e)
+        if (ref[e] && ref[e]->size() == n) (*ref[e])[k] -= shift * edge[a][e];
+      for (int e = 0; e <= a; ++e) {
+        if (edge_velocity[a][e] == 0) continue;
+        double& v = (*vel[e])[k];
+        const double v_old = v;
+        v -= shift * edge_velocity[a][e];
+        work += 0.5 * b.mass[k] * (v * v - v_old * v_old);
+        model.space.gross_work += 0.5 * b.mass[k] * std::abs(v * v - v_old * v_old);
+      }
+      if (moved.empty()) moved.assign(n, {0, 0, 0});
+      moved[k][a] += step;
+      any = true;
+    }
+  }
+  model.energy.boundary_work += work;
+  // Image of j seen from i: x_j + H img - x_i. Moving j by -shift along edge a adds shift to img_a;
+  // moving i takes it off. (A table that does not fit the balls has nothing to keep.)
+  const bool table_fits = c.image_x.size() == c.size() && c.image_y.size() == c.size() && c.image_z.size() == c.size();
+  if (any && table_fits) {
+    std::vector<std::int8_t>* image[3] = {&c.image_x, &c.image_y, &c.image_z};
+    for (std::size_t p = 0; p < c.size(); ++p) {
+      const std::size_t i = c.i[p], j = c.j[p];
+      if (i >= n || j >= n) continue;
+      for (int a = 0; a < 3; ++a)
+        if (moved[j][a] != moved[i][a])
+          (*image[a])[p] = static_cast<std::int8_t>((*image[a])[p] + moved[j][a] - moved[i][a]);
+    }
+  }
+  return any;
+}
+
+bool reduce_cell_tilt(Model& model) {
+  Space& s = model.space;
+  if (!s.periodic) return false;
+  ContactTable& c = model.contacts;
+  const auto L = s.length();
+  // Replacing edge `from` by itself less `by` edges `other`: image n becomes n' with
+  // n'_other = n_other + by n_from (the same offset H n).
+  auto renumber = [&](std::vector<std::int8_t>& other, const std::vector<std::int8_t>& from, int by) {
+    for (std::size_t p = 0; p < other.size() && p < from.size(); ++p)
+      other[p] = static_cast<std::int8_t>(other[p] + by * from[p]);
+  };
+  bool any = false;
+  while (std::abs(s.tilt[2]) > 0.5 * L[1]) {   // yz: c -/+ b
+    const int by = s.tilt[2] > 0 ? 1 : -1;
+    s.tilt[2] -= by * L[1];
+    s.tilt[1] -= by * s.tilt[0];
+    renumber(c.image_y, c.image_z, by);
+    any = true;
+  }
+  while (std::abs(s.tilt[1]) > 0.5 * L[0]) {   // xz: c -/+ a
+    const int by = s.tilt[1] > 0 ? 1 : -1;
+    s.tilt[1] -= by * L[0];
+    renumber(c.image_x, c.image_z, by);
+    any = true;
+  }
+  while (std::abs(s.tilt[0]) > 0.5 * L[0]) {   // xy: b -/+ a
+    const int by = s.tilt[0] > 0 ? 1 : -1;
+    s.tilt[0] -= by * L[0];
+    renumber(c.image_x, c.image_y, by);
+    any = true;
+  }
+  return any;
+}
+
+}  // namespace trubal
