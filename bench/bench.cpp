@@ -16,9 +16,11 @@
 #include <string>
 #include <vector>
 
-#include "backends/backend.hpp"
+#include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
-#include "physics/engine.hpp"
+#include "cycle/run.hpp"
+#include "physics/scene.hpp"
+#include "physics/timestep.hpp"
 #include "physics/measure.hpp"
 
 using namespace trubal;
@@ -71,7 +73,7 @@ bool g_phases = false;   // --phases: print where each run's time went
 // The warm-up builds the pair list, fills the caches and covers the threaded backend's trial of
 // whether sharing a step pays (its first 128 steps): start-up costs, not throughput.
 Timing run(Model model, const std::string& backend_name, int steps, int threads = 1, int warm_up = 150) {
-  auto backend = make_backend(backend_name, threads);
+  auto backend = make_pipeline(backend_name, threads);
   run_cycles(model, *backend, warm_up, {});
   const auto t0 = std::chrono::steady_clock::now();
   const CycleResult r = run_cycles(model, *backend, steps, {});

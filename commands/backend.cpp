@@ -22,9 +22,9 @@ static void run_backend(Context& ctx, Args& args) {
     } else break;
   }
   args.done();
-  ctx.session.set_backend(names[k], threads);
-  if (max_memory > 0) ctx.session.backend().set_max_memory(static_cast<std::uint64_t>(std::floor(max_memory)));
-  ctx.out << fmt::format("backend {} ({} threads)\n", ctx.session.backend().name(), ctx.session.backend().threads());
+  ctx.session.set_backend(names[k], threads, static_cast<std::uint64_t>(std::floor(max_memory)));
+  const Pipeline& p = ctx.session.pipeline();
+  ctx.out << fmt::format("backend {} ({} threads)\n", p.backend().name(), p.threads());
 }
 
 const Command backend_command = {

@@ -3,7 +3,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
-#include "io/summary.hpp"
+#include "interp/summary.hpp"
 #include "physics/measure.hpp"
 
 namespace trubal {

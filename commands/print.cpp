@@ -36,9 +36,9 @@ static void print_info(Context& ctx) {
   o << fmt::format("timestep: {}\n", m.dt);
   o << fmt::format("frac: {}\n", m.settings.frac);
   if (m.settings.fixed_dt > 0) o << fmt::format("fixed timestep: {}\n", m.settings.fixed_dt);
-  o << fmt::format("backend: {}\n", s.backend().name());
-  o << fmt::format("threads: {}\n", s.backend().threads());
-  for (const auto& [k, v] : s.backend().info()) o << k << ": " << v << '\n';
+  o << fmt::format("backend: {}\n", s.pipeline().backend().name());
+  o << fmt::format("threads: {}\n", s.pipeline().threads());
+  for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);
   o << fmt::format("physics: {}\n", f.describe());
   // The loops compiled for exactly these features (the general kernel has every one on).

@@ -12,7 +12,7 @@
 #include "interp/output.hpp"
 #include "interp/shell.hpp"
 #include "interp/signals.hpp"
-#include "io/summary.hpp"
+#include "interp/summary.hpp"
 #include "session.hpp"
 
 int main(int argc, char** argv) {

@@ -15,17 +15,17 @@
 
 namespace trubal {
 
-Session::Session() : backend_(make_backend("serial", 1)), history_(std::make_unique<History>()) {}
+Session::Session() : pipeline_(make_pipeline("serial", 1)), history_(std::make_unique<History>()) {}
 Session::~Session() = default;
 
 Model& Session::edit() {
-  backend_->invalidate();
+  pipeline_->invalidate();
   model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
   return model_;
 }
 
-void Session::set_backend(const std::string& name, int threads) {
-  backend_ = make_backend(name, threads);
+void Session::set_backend(const std::string& name, int threads, std::uint64_t max_memory) {
+  pipeline_ = make_pipeline(name, threads, max_memory);
 }
 
 void Session::require_started() const {
@@ -39,7 +39,7 @@ void Session::start(const Space& space) {
   model_ = std::move(fresh);
   history_->clear();
   dumps_.reset();
-  backend_->invalidate();
+  pipeline_->invalidate();
 }
 
 void Session::start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
@@ -245,7 +245,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   control.reads_contacts = [this, histories, dumps](std::int64_t cycle) {
     return (histories && history_->due(cycle)) || (dumps && dumps->due(cycle));
   };
-  CycleResult r = run_cycles(model_, *backend_, n, control);
+  CycleResult r = run_cycles(model_, *pipeline_, n, control);
   interrupt_requested() = false;
   totals_.cycles += r.done;
   totals_.ball_cycles += static_cast<double>(r.done) * static_cast<double>(model_.balls.size());
@@ -298,7 +298,7 @@ void Session::restart(const std::string& path) {
   model_ = std::move(loaded);
   history_->clear();
   dumps_.reset();
-  backend_->invalidate();
+  pipeline_->invalidate();
 }
 
 }  // namespace trubal

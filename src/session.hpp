@@ -1,5 +1,5 @@
 // The one API through which commands reach the engine: it owns the model, the backend and the
-// history, and keeps them consistent (a change to the balls invalidates the backend's lists).
+// history, and keeps them consistent (a change to the balls invalidates the pipeline's lists).
 #pragma once
 
 #include <array>
@@ -11,12 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "backends/backend.hpp"
+#include "cycle/pipeline.hpp"
+#include "cycle/run.hpp"
 #include "io/history.hpp"
 #include "io/vtk.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
-#include "physics/engine.hpp"
 
 namespace trubal {
 
@@ -35,9 +35,11 @@ class Session {
     return model_.settings;
   }
 
-  Backend& backend() { return *backend_; }
-  const Backend& backend() const { return *backend_; }
-  void set_backend(const std::string& name, int threads);
+  // The step pipeline: its backend (pair finding) and threads.
+  const Pipeline& pipeline() const { return *pipeline_; }
+  // BACKEND: threads <= 0 the backend's default; max_memory 0 its default (throws
+  // std::invalid_argument for a bad name or option).
+  void set_backend(const std::string& name, int threads, std::uint64_t max_memory = 0);
 
   // START: a new model (the backend choice and the interpreter's variables stay).
   void start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi);
@@ -93,7 +95,7 @@ class Session {
  private:
   void start(const Space& space);   // a fresh model in this space; histories and dumps end
   Model model_;
-  std::unique_ptr<Backend> backend_;
+  std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<History> history_;
   std::unique_ptr<VtkSeries> dumps_;
   RunTotals totals_;

@@ -1,45 +1,54 @@
-// The narrow interface every backend implements. Backends differ only in which pairs they visit and
-// how the work is spread; the force at a contact, the gather order and the law of motion are shared
-// (src/physics), which is what makes their answers bitwise equal.
+// What a backend is: a way of finding the pairs of balls that may touch. Everything else a step
+// does (the contact forces, each ball's sums in the fixed order, the law of motion, the threads)
+// is the one pipeline's (cycle/pipeline.hpp), which is what makes every backend's answer the same
+// to the bit.
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
+#include "backends/pair_candidates.hpp"
 #include "model/model.hpp"
+#include "support/thread_pool.hpp"
 
 namespace trubal {
-
-struct StepKernels;   // the per-scene specialised loops, chosen once per CYCLE (physics/kernels.hpp)
-struct StepSums;      // what one step adds up: energies, the next critical step (physics/kernels.hpp)
 
 class Backend {
  public:
   virtual ~Backend() = default;
   virtual std::string name() const = 0;
-  virtual int threads() const { return 1; }
-  // Brings model.contacts up to date for the current positions (pair list, carried history, gather
-  // index) without computing forces; step() does it itself. Used before estimating the first step.
-  virtual void prepare(Model& model) = 0;
-  // One time step: find the pairs that may touch, compute contact forces and their sums per ball,
-  // move (backends/threaded/parallel_step.hpp: the one way every backend runs the kernels).
-  virtual void step(Model& model, const StepKernels& kernels, StepSums& sums) = 0;
-  // The balls were changed outside cycling (added, deleted, moved, resized): drop cached lists.
-  virtual void invalidate() {}
-  // A limit on the memory the backend may take (allpairs: its pair slots); others refuse it.
-  virtual void set_max_memory(std::uint64_t bytes);
+  // Every pair i < j (ball indices) whose centres are closer than R_i + R_j + skin, sorted by
+  // (i, j, image); in a periodic cell at j's nearest image, the positions wrapped into the cell
+  // (model/periodic_cell.hpp). The pool's threads may share the search; the list is the same for
+  // any pool.
+  virtual void find_pairs(const Model& model, double skin, ThreadPool& pool, PairCandidates& out) = 0;
+  // Whether the pipeline keeps the list between searches while the skin rule allows (cycle/verlet.hpp);
+  // false: the backend is asked every step for the pairs touching now (skin 0), as TPM 2.0's static
+  // pair slots were tested every step.
+  virtual bool keeps_list() const { return true; }
   // Extra lines for PRINT info ("name: value").
   virtual std::vector<std::pair<std::string, std::string>> info() const { return {}; }
+  // Candidate pairs tested so far, for tests and PRINT info (0 where the backend does not count).
+  virtual std::uint64_t pair_tests() const { return 0; }
 };
 
-// Backends by name (the interpreter never names a concrete one). Throws std::invalid_argument
-// with the list of names for an unknown name; options such as threads are given as words.
-// threads <= 0: the backend's default (one per hardware thread where it runs threads).
-std::unique_ptr<Backend> make_backend(std::string_view name, int threads);
+// What BACKEND may say besides the name.
+struct BackendOptions {
+  int threads = 0;                 // <= 0: the backend's default
+  std::uint64_t max_memory = 0;    // allpairs: the limit on its pair slots (0: its default)
+};
+
+// Backends by name (nothing outside src/backends/ names a concrete one). Throws
+// std::invalid_argument with the list of names for an unknown name, and for an option the backend
+// does not take.
+std::unique_ptr<Backend> make_backend(std::string_view name, const BackendOptions& options = {});
 std::vector<std::string> backend_names();
+// The threads a backend runs on by default (1 for serial, one per hardware thread for the others),
+// and at most (0: any).
+int default_threads(std::string_view name);
 
 }  // namespace trubal

@@ -1,5 +1,5 @@
 // Backends by name. Each backend's folder offers one factory; this table is the only place that
-// names them, so the interpreter never includes a concrete backend.
+// names them, so the interpreter and the cycle never include a concrete backend.
 #include <stdexcept>
 
 #include "backends/allpairs/allpairs_backend.hpp"
@@ -12,23 +12,26 @@ namespace {
 
 struct Entry {
   const char* name;
-  int max_threads;   // 0: any
-  std::unique_ptr<Backend> (*make)(int threads);
+  int max_threads;      // 0: any
+  bool takes_max_memory;
+  std::unique_ptr<Backend> (*make)(const BackendOptions& options);
 };
-
-std::unique_ptr<Backend> make_serial(int) { return make_serial_backend(); }
 
 const Entry kBackends[] = {
-    {"serial", 1, &make_serial},
-    {"allpairs", 0, &make_allpairs_backend},
-    {"threaded", 0, &make_threaded_backend},
+    {"serial", 1, false, [](const BackendOptions&) { return make_serial_backend(); }},
+    {"allpairs", 0, true, [](const BackendOptions& o) { return make_allpairs_backend(o.max_memory); }},
+    {"threaded", 0, false, [](const BackendOptions&) { return make_threaded_backend(); }},
 };
 
-}  // namespace
-
-void Backend::set_max_memory(std::uint64_t) {
-  throw std::invalid_argument("backend " + name() + " has no memory limit (maxmem is for allpairs)");
+const Entry& entry(std::string_view name) {
+  for (const Entry& e : kBackends)
+    if (name == e.name) return e;
+  std::string known;
+  for (const auto& n : backend_names()) known += (known.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown backend '" + std::string(name) + "' (known: " + known + ")");
 }
+
+}  // namespace
 
 std::vector<std::string> backend_names() {
   std::vector<std::string> names;
@@ -36,17 +39,19 @@ std::vector<std::string> backend_names() {
   return names;
 }
 
-std::unique_ptr<Backend> make_backend(std::string_view name, int threads) {
-  for (const Entry& e : kBackends) {
-    if (name != e.name) continue;
-    if (e.max_threads > 0 && threads > e.max_threads)
-      throw std::invalid_argument("backend " + std::string(name) + " runs on " + std::to_string(e.max_threads) +
-                                  " thread" + (e.max_threads == 1 ? "" : "s"));
-    return e.make(threads);
-  }
-  std::string known;
-  for (const auto& n : backend_names()) known += (known.empty() ? "" : ", ") + n;
-  throw std::invalid_argument("unknown backend '" + std::string(name) + "' (known: " + known + ")");
+int default_threads(std::string_view name) {
+  const Entry& e = entry(name);
+  return e.max_threads > 0 ? e.max_threads : ThreadPool::hardware_threads();
+}
+
+std::unique_ptr<Backend> make_backend(std::string_view name, const BackendOptions& options) {
+  const Entry& e = entry(name);
+  if (e.max_threads > 0 && options.threads > e.max_threads)
+    throw std::invalid_argument("backend " + std::string(name) + " runs on " + std::to_string(e.max_threads) +
+                                " thread" + (e.max_threads == 1 ? "" : "s"));
+  if (options.max_memory > 0 && !e.takes_max_memory)
+    throw std::invalid_argument("backend " + std::string(name) + " has no memory limit (maxmem goes with BACKEND allpairs)");
+  return e.make(options);
 }
 
 }  // namespace trubal

@@ -20,7 +20,7 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // 2: the membrane's pressure and area. 3: the periodic cell's tilts (shear); version 2 files are
 // read as cells without tilt. 4: the servo's last measured moments (Space::servo_measured), so
 // that a restarted servo takes the steps an unbroken run takes; older files start it from the
-// contact table.
+// contact table; and the cycle the contacts' results are of.
 constexpr std::uint32_t kVersion = 4;
 constexpr std::uint32_t kOldestVersion = 2;
 
@@ -114,6 +114,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   }
   m.balls.for_each_array([&](auto& v) { io.vec(v); });
   m.contacts.for_each_pair_array([&](auto& v) { io.vec(v); });
+  if (version >= 4) io.pod(m.contacts.results_cycle);
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
   io.pod(m.settings.damping);
   io.pod(m.energy);

@@ -23,7 +23,7 @@ std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y
   if (static_cast<std::size_t>(pos) < b.size()) {
     for (auto& v : model.contacts.i) v += (v >= pos);
     for (auto& v : model.contacts.j) v += (v >= pos);
-    model.contacts.run_begin.clear();
+    model.contacts.list_version = 0;   // a list nobody has indexed
   }
   model.critical_dt = 0;   // the new ball may be stiffer or lighter than any before
   b.for_each_array([&](auto& v) { v.insert(v.begin() + pos, typename std::decay_t<decltype(v)>::value_type{}); });
@@ -61,12 +61,7 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   });
   for (auto& v : c.i) v = static_cast<std::uint32_t>(new_index[v]);
   for (auto& v : c.j) v = static_cast<std::uint32_t>(new_index[v]);
-  c.run_begin.clear();
-  c.fsx_next.clear();
-  c.fsy_next.clear();
-  c.fsz_next.clear();
-  c.ball_force.clear();
-  c.ball_cn.clear();
+  c.list_version = 0;   // a list nobody has indexed
   for (auto& [name, ids] : model.groups)
     std::erase_if(ids, [&](std::int64_t id) { return find_ball(model, id) < 0; });
   return removed;

@@ -1,5 +1,6 @@
-// The state of a simulation as plain data: balls, materials, contacts, space and settings.
-// Nothing here computes physics; src/physics/ and src/backends/ act on it.
+// The state of a simulation as plain data: balls, materials, contacts with their history, space and
+// settings. No per-step scratch and no timings (the cycle keeps those); src/physics/ and src/cycle/
+// act on it.
 #pragma once
 
 #include <array>
@@ -64,13 +65,6 @@ struct Balls {
   }
 };
 
-// The contact sums of one ball in one cache line: total contact force, sum of n x shear force
-// (the moment is -R t), and the stiffness sums the time-step estimate uses.
-struct alignas(64) PairForce {
-  double fx, fy, fz, tx, ty, tz;
-  double kmax, ks;                                      // max(k_n, k_s) and k_s now
-};
-
 // Pairs of balls that may touch, i < j as ball indices, sorted by (i, j). Only pairs with positive
 // overlap are contacts; the rest carry zero history. The shear force is history and survives
 // rebuilds because it is carried over by the pair of ball ids.
@@ -87,19 +81,12 @@ struct ContactTable {
   std::vector<double> cn_eff;                           // restitution dashpot coefficient now
   std::vector<double> work_friction, work_damping;      // energy dissipated this step
   std::vector<std::uint8_t> state;                      // 0 apart, 1 touching, 2 sliding
-  std::vector<std::uint32_t> run_begin;                 // first pair with i >= b, for b = 0 .. balls
-  std::uint64_t list_version = 0;                       // unique to each list build_gather indexed
-  // Scratch of one step (not saved, not part of the state), sized with the gather index: the
-  // contact sums per ball (sign for ball i included), added in the gather's order (lower partners
-  // ascending, then higher ones) whichever thread adds them, so they are the same to the bit.
-  // ball_cn: the dashpot coefficients' sum (time step with dashpots). The per-pair arrays above
-  // (normal, overlap, forces, stiffness, work, state) are written only on steps whose results
-  // someone reads (the last step of a CYCLE, history and dump cycles, servo steps).
-  std::vector<PairForce> ball_force;
-  // The shear history a step writes (read from fsx, fsy, fsz, which other threads may still read
-  // for their cross pairs), swapped in after the contact pass.
-  std::vector<double> fsx_next, fsy_next, fsz_next;
-  std::vector<double> ball_cn;
+  // The cycle whose step's force pass the results above are of (cycle/run.hpp says which steps
+  // write them); -1: none yet.
+  std::int64_t results_cycle = -1;
+  // Unique to each pair list installed (cycle/pair_list.hpp): what the pipeline's index of the
+  // list is checked against. Not saved; 0: a list nobody indexed.
+  std::uint64_t list_version = 0;
 
   std::size_t size() const { return i.size(); }
   template <class F> void for_each_pair_array(F&& f) {
@@ -166,36 +153,11 @@ struct Energy {
   double boundary_work = 0;        // done by fixed velocities and applied forces (gravity: potential)
 };
 
-// Where cycling time goes, in seconds, added up by run_cycles (step, output) and by backends that
-// split their step (detect, forces, motion; all 0 from a backend that does not).
-struct PhaseTimes {
-  double detect = 0;     // pair lists and contact detection
-  double forces = 0;     // contact forces and their gather
-  double motion = 0;     // law of motion
-  double step = 0;       // the whole of Backend::step
-  double output = 0;     // histories and dumps between steps
-  void add(const PhaseTimes& o) {
-    detect += o.detect; forces += o.forces; motion += o.motion; step += o.step; output += o.output;
-  }
-};
-
 // MEMBRANE: its pressure and the cross-section area its forces are consistent with (the union of
 // the loaded layers' square cells), so that HIST ratio can form F1 / (A sigma2). 0: no membrane.
 struct Membrane {
   double pressure = 0;
   double area = 0;
-};
-
-// Working memory run_cycles keeps from one CYCLE to the next (its rescue copy of the state), so
-// that each CYCLE does not fault in fresh pages for it: 50 ms at 13,500 balls. Not saved; a copy
-// of a Model starts without it.
-struct EngineScratch {
-  std::shared_ptr<void> data;
-  EngineScratch() = default;
-  EngineScratch(const EngineScratch&) {}
-  EngineScratch& operator=(const EngineScratch&) { return *this; }
-  EngineScratch(EngineScratch&&) = default;
-  EngineScratch& operator=(EngineScratch&&) = default;
 };
 
 struct Model {
@@ -213,8 +175,6 @@ struct Model {
   double critical_dt = 0;                 // critical step from the last force pass (0: estimate afresh)
   std::string title;
   bool started = false;                   // START given
-  PhaseTimes timing;                      // of the current CYCLE (not saved)
-  EngineScratch scratch;
 };
 
 }  // namespace trubal

@@ -5,7 +5,8 @@
 #include <limits>
 
 #include "model/periodic_cell.hpp"
-#include "physics/engine.hpp"
+#include "physics/scene.hpp"
+#include "physics/timestep.hpp"
 #include "physics/measure.hpp"
 
 namespace trubal {

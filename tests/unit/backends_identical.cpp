@@ -9,7 +9,7 @@
 
 #include "backends/periodic_pairs.hpp"
 #include "model/periodic_cell.hpp"
-#include "backends/threaded/parallel_step.hpp"
+#include "cycle/parallel_step.hpp"
 #include "backends_scenes.hpp"
 
 using namespace trubal;
@@ -32,7 +32,7 @@ const Variant kVariants[] = {{"allpairs", 1}, {"allpairs", 2}, {"allpairs", 3}, 
 Model run(const Scene& scene, const std::string& backend_name, int threads, int cycles) {
   const ShareRule share(1);
   Model model = scene.model;
-  auto backend = make_backend(backend_name, threads);
+  auto backend = make_pipeline(backend_name, threads);
   const CycleResult r = run_cycles(model, *backend, cycles, {});
   REQUIRE_FALSE(r.unstable);
   REQUIRE(r.done == cycles);
@@ -102,23 +102,19 @@ TEST_CASE("backends: threads share a step only where it pays, with the same answ
   // first 128 steps), so which way it goes depends on the machine; every way gives the serial bits,
   // and PRINT info says when one thread does the work. Numbered layer by layer, the pairs stay near
   // the diagonal; numbered by layer parity (as the Rowe decks), most pairs join the two halves.
-  auto threads_used = [](const Backend& backend) {
-    for (const auto& [key, value] : backend.info())
-      if (key == "threads used") return std::atoi(value.c_str());
-    return backend.threads();
-  };
+  auto threads_used = [](const Pipeline& backend) { return backend.counters().threads_used; };
   for (bool by_parity : {false, true}) {
     INFO((by_parity ? "numbered by layer parity" : "numbered layer by layer"));
     const Scene scene = fcc_compression(9, 8, 8, by_parity);
     Model serial_model = scene.model;
-    auto serial = make_backend("serial", 1);
+    auto serial = make_pipeline("serial", 1);
     REQUIRE(run_cycles(serial_model, *serial, 200, {}).done == 200);
     const Picture expected = picture(serial_model);
     for (int rule : {1, -1, 0}) {   // always share, never, timed (the trial switches every 16 steps)
       INFO("share rule " << rule);
       const ShareRule share(rule);
       Model model = scene.model;
-      auto threaded = make_backend("threaded", 2);
+      auto threaded = make_pipeline("threaded", 2);
       REQUIRE(run_cycles(model, *threaded, 200, {}).done == 200);
       const int used = threads_used(*threaded);
       if (rule != 0) CHECK(used == (rule > 0 ? 2 : 1));
@@ -178,11 +174,11 @@ TEST_CASE("backends: switching backend mid-run gives the same result as not swit
     INFO(pair[0] << " then " << pair[1] << " then " << pair[0]);
     Model model = scene.model;
     auto threads = [](const char* name, int n) { return std::string(name) == "serial" ? 1 : n; };
-    auto first = make_backend(pair[0], threads(pair[0], 2));
+    auto first = make_pipeline(pair[0], threads(pair[0], 2));
     REQUIRE(run_cycles(model, *first, 80, {}).done == 80);
-    auto second = make_backend(pair[1], threads(pair[1], 3));
+    auto second = make_pipeline(pair[1], threads(pair[1], 3));
     REQUIRE(run_cycles(model, *second, 80, {}).done == 80);
-    auto third = make_backend(pair[0], 1);
+    auto third = make_pipeline(pair[0], 1);
     REQUIRE(run_cycles(model, *third, 80, {}).done == 80);
     CHECK(difference(expected, picture(model)) == "");
   }
@@ -190,7 +186,7 @@ TEST_CASE("backends: switching backend mid-run gives the same result as not swit
 
 TEST_CASE("backends: allpairs finds exactly the touching pairs, as brute force does", "[backends]") {
   Scene scene = fcc_compression(4, 4, 5);
-  auto backend = make_backend("allpairs", 2);
+  auto backend = make_pipeline("allpairs", 2);
   backend->prepare(scene.model);
   const Balls& b = scene.model.balls;
   std::size_t touching = 0;
@@ -206,8 +202,7 @@ TEST_CASE("backends: allpairs finds exactly the touching pairs, as brute force d
 TEST_CASE("backends: allpairs refuses more pair slots than maxmem allows, before taking them", "[backends]") {
   Scene scene = rayleigh_cloud(6);   // 216 balls: 23,220 pair slots of one byte
   const Picture before = picture(scene.model);
-  auto backend = make_backend("allpairs", 2);
-  backend->set_max_memory(20000);
+  auto backend = make_pipeline("allpairs", 2, 20000);
   try {
     run_cycles(scene.model, *backend, 5, {});
     FAIL("allpairs ran above its memory limit");
@@ -217,17 +212,17 @@ TEST_CASE("backends: allpairs refuses more pair slots than maxmem allows, before
     CHECK(message.find("maxmem") != std::string::npos);
   }
   CHECK(difference(before, picture(scene.model)) == "");
-  backend->set_max_memory(23220);
+  backend = make_pipeline("allpairs", 2, 23220);
   CHECK(run_cycles(scene.model, *backend, 5, {}).done == 5);
-  CHECK_THROWS_AS(make_backend("serial", 1)->set_max_memory(1), std::invalid_argument);
+  CHECK_THROWS_AS(make_pipeline("serial", 1, 1), std::invalid_argument);
 }
 
 TEST_CASE("backends: threads default to the machine's and are reported", "[backends]") {
-  CHECK(make_backend("threaded", 0)->threads() >= 1);
-  CHECK(make_backend("threaded", 3)->threads() == 3);
-  CHECK(make_backend("allpairs", 2)->threads() == 2);
-  CHECK(make_backend("serial", 0)->threads() == 1);
-  CHECK_THROWS_AS(make_backend("serial", 2), std::invalid_argument);
+  CHECK(make_pipeline("threaded", 0)->threads() >= 1);
+  CHECK(make_pipeline("threaded", 3)->threads() == 3);
+  CHECK(make_pipeline("allpairs", 2)->threads() == 2);
+  CHECK(make_pipeline("serial", 0)->threads() == 1);
+  CHECK_THROWS_AS(make_pipeline("serial", 2), std::invalid_argument);
 }
 
 TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread count", "[backends]") {
@@ -235,12 +230,12 @@ TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread
   for (Scene scene : {settling(14, 12, 0), rayleigh_cloud(17), fcc_compression(8, 8, 8), sheared_periodic(16, 0)}) {
     INFO(scene.name);
     Model serial = scene.model;
-    make_backend("serial", 1)->prepare(serial);
+    make_pipeline("serial", 1)->prepare(serial);
     REQUIRE(serial.contacts.size() > 500);
     for (int threads : {1, 2, 3, 4}) {
       INFO(threads << " threads");
       Model model = scene.model;
-      make_backend("threaded", threads)->prepare(model);
+      make_pipeline("threaded", threads)->prepare(model);
       CHECK(model.contacts.i == serial.contacts.i);
       CHECK(model.contacts.j == serial.contacts.j);
       CHECK(model.contacts.image_x == serial.contacts.image_x);
@@ -253,7 +248,7 @@ TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread
 TEST_CASE("backends: allpairs tests every pair once per step, the first step of a CYCLE included",
           "[backends]") {
   Scene scene = fcc_compression(3, 3, 3);   // 108 balls: 5,778 pair slots
-  auto backend = make_backend("allpairs", 1);
+  auto backend = make_pipeline("allpairs", 1);
   const std::size_t n = scene.model.balls.size(), slots = n * (n - 1) / 2;
   auto tests = [&] {
     for (const auto& [key, value] : backend->info())

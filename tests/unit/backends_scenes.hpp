@@ -10,11 +10,13 @@
 #include <utility>
 #include <vector>
 
-#include "backends/backend.hpp"
+#include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
 #include "model/model.hpp"
 #include "physics/cell.hpp"
-#include "physics/engine.hpp"
+#include "cycle/run.hpp"
+#include "physics/scene.hpp"
+#include "physics/timestep.hpp"
 
 namespace trubal::test {
 

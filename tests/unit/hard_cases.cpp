@@ -6,7 +6,7 @@
 #include <random>
 
 #include "interp_support.hpp"
-#include "physics/kernels.hpp"
+#include "cycle/kernels.hpp"
 #include "physics/measure.hpp"
 #include "physics_helpers.hpp"
 
@@ -107,7 +107,7 @@ TEST_CASE("hard: size ratio 1:20 polydisperse packing settles under gravity onto
   // and small balls in the gaps of the floor
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) add_ball(model, 0, 1, rmax * (2 * i + 1), rmax * (2 * j + 1), 1.5 * rmax, rmin);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   const CycleResult first = run_cycles(model, *backend, 2000, {});
   INFO(first.message);
   REQUIRE_FALSE(first.unstable);
@@ -129,7 +129,7 @@ TEST_CASE("hard: stiffness ratio 1e4 between two materials in one pack", "[hard]
   model.materials[1] = test::linear_material(1e4, 1e4, 0.3, 2500);
   model.materials[2] = test::linear_material(1e8, 1e8, 0.3, 2500);
   shake(model, 0.01);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE_FALSE(run_cycles(model, *backend, 1, {}).unstable);
   const double e0 = energy(model).total();
   const CycleResult r = run_cycles(model, *backend, 5000, {});
@@ -147,7 +147,7 @@ TEST_CASE("hard: mass ratio 1e3 (dense and light balls) in one pack", "[hard]") 
   model.materials[1] = test::linear_material(1e6, 1e6, 0.3, 10);
   model.materials[2] = test::linear_material(1e6, 1e6, 0.3, 10000);
   shake(model, 0.01);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE_FALSE(run_cycles(model, *backend, 1, {}).unstable);
   const double e0 = energy(model).total();
   const CycleResult r = run_cycles(model, *backend, 5000, {});
@@ -161,7 +161,7 @@ TEST_CASE("hard: stiffness-proportional damping that dominates the step shrinks 
   Model model = fcc_block(4, 0.99, [](int) { return 1; });
   model.materials[1] = test::linear_material(1e8, 1e8, 0.3, 2500);
   shake(model, 0.01);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   update_mass(model);
   const double undamped = critical_timestep(model);
   // beta 100 times the undamped step: xi = beta omega / 2 around 100, the step about 1/xi^2 ... 1/(2 xi).
@@ -187,7 +187,7 @@ TEST_CASE("hard: a dense pack compressed to 5% overlap is stable with forces kn 
   Model model = fcc_block(4, 0.95, [](int) { return 1; });
   model.materials[1] = test::linear_material(kn, kn, 0.3, 2500);
   shake(model, 0.001);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   const CycleResult r = run_cycles(model, *backend, 3000, {});
   INFO(r.message);
   REQUIRE_FALSE(r.unstable);
@@ -228,7 +228,7 @@ TEST_CASE("hard: a ball crossing a whole contact box in one step meets the same 
   for (const char* name : {"allpairs", "serial", "threaded"}) {
     Model model = build();
     model.balls.vx.back() = speed;
-    auto backend = make_backend(name, std::string(name) == "serial" ? 1 : 2);
+    auto backend = make_pipeline(name, std::string(name) == "serial" ? 1 : 2);
     std::size_t most_contacts = 0;
     CycleControl control;
     control.after_step = [&](const Model& m) { most_contacts = std::max(most_contacts, contact_count(m)); };

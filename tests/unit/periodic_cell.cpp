@@ -44,7 +44,7 @@ Model periodic_fcc(int n, double jitter_size, double rate) {
 
 Model run(const Model& start, const std::string& backend_name, int threads, int cycles) {
   Model model = start;
-  auto backend = make_backend(backend_name, threads);
+  auto backend = make_pipeline(backend_name, threads);
   const CycleResult r = run_cycles(model, *backend, cycles, {});
   INFO(r.message);
   REQUIRE_FALSE(r.unstable);
@@ -96,7 +96,7 @@ TEST_CASE("periodic: a ball wrapped across a face keeps its contact and shear hi
     m.balls.vx = {-1.0, -1.0};                  // both drift across the face at x = 0
     m.balls.vy = {0.01, -0.01};                 // and shear: the history grows steadily
     m.balls.fixed = {kVel | kSpin, kVel | kSpin};
-    auto backend = make_backend(name, std::string(name) == "serial" ? 1 : 1);
+    auto backend = make_pipeline(name, std::string(name) == "serial" ? 1 : 1);
     double last_shear = 0;
     bool wrapped = false;
     for (int step = 0; step < 60; ++step) {
@@ -123,7 +123,7 @@ TEST_CASE("periodic: a cell shorter than twice the largest diameter is refused",
   m.started = true;
   m.materials[1] = scene_linear(1e4, 1e4, 0.3, 1000);
   add_ball(m, 1, 1, 5, 5, 1, 1);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   CHECK_THROWS_WITH(run_cycles(m, *backend, 1, {}), Catch::Contains("periodic cell too small"));
 }
 

@@ -80,7 +80,7 @@ TEST_CASE("periodic shear: simple shear of a frictional FCC block has the cell's
   const auto L0 = m.space.length();
   const double e12 = 2e-3;
   set_all_strain_rates(m, {0, 0, 0, e12, 0, 0});
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   const CycleResult r = run_cycles(m, *backend, 2000, {});
   REQUIRE(r.done == 2000);
   const double t = m.time;
@@ -122,7 +122,7 @@ TEST_CASE("periodic shear: a pair across the shifted y face feels its image wher
     INFO(name);
     // At rest: the overlap is the one across the shifted face.
     Model m = pair_across_y(3.25, 0.02);
-    auto backend = make_backend(name, 1);
+    auto backend = make_pipeline(name, 1);
     REQUIRE(run_cycles(m, *backend, 1, {}).done == 1);
     REQUIRE(contact_count(m) == 1);
     std::size_t p = touching_pair(m);
@@ -133,7 +133,7 @@ TEST_CASE("periodic shear: a pair across the shifted y face feels its image wher
     // Without the tilt the two are 3.25 apart along x: no contact.
     Model flat = pair_across_y(3.25, 0.02);
     flat.space.tilt = {0, 0, 0};
-    REQUIRE(run_cycles(flat, *make_backend(name, 1), 1, {}).done == 1);
+    REQUIRE(run_cycles(flat, *make_pipeline(name, 1), 1, {}).done == 1);
     CHECK(contact_count(flat) == 0);
 
     // Shearing: the image of 2 moves along x at 2 e12 L_y relative to 1 (e12 > 0 moves the image
@@ -142,7 +142,7 @@ TEST_CASE("periodic shear: a pair across the shifted y face feels its image wher
     Model s = pair_across_y(0.0, 0.02);
     const double e12 = 0.005;
     set_all_strain_rates(s, {0, 0, 0, e12, 0, 0});
-    auto sb = make_backend(name, 1);
+    auto sb = make_pipeline(name, 1);
     REQUIRE(run_cycles(s, *sb, 200, {}).done == 200);
     REQUIRE(contact_count(s) == 1);
     p = touching_pair(s);
@@ -170,7 +170,7 @@ TEST_CASE("periodic shear: a ball crossing a shifted face keeps its contact and 
     m.balls.vy = {-1.0, -1.0};
     m.balls.vx = {0.3, 0.1};      // 2's image moves with 1: its own 0.1 and the image's 0.2
     m.balls.vz = {0.01, -0.01};
-    auto backend = make_backend(name, 1);
+    auto backend = make_pipeline(name, 1);
     double last_shear = 0;
     bool wrapped = false;
     for (int step = 0; step < 60; ++step) {
@@ -192,7 +192,7 @@ TEST_CASE("periodic shear: a ball crossing a shifted face keeps its contact and 
 TEST_CASE("periodic shear: renaming the images past half an edge keeps every pair's image", "[periodic]") {
   Scene scene = sheared_periodic(6, 0);   // 216 balls
   Model m = scene.model;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE(run_cycles(m, *backend, 50, {}).done == 50);
   // An equivalent cell one edge further tilted, each image renamed to stay the same image.
   Model far = m;
@@ -227,7 +227,7 @@ TEST_CASE("periodic shear: shear to large strain renames the images and keeps th
   Model m = fcc_cell(2);   // 32 balls
   m.settings.damping.kind = DampKind::Local;
   m.settings.damping.local = 0.3;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE(run_cycles(m, *backend, 1, {}).done == 1);
   const int steps = 6000;
   const double t0 = m.time, e12 = -2.6 / (2 * steps * m.dt);   // shear about 2.6: xy passes half an edge 3 times
@@ -290,15 +290,15 @@ TEST_CASE("periodic shear: SAVE and RESTART continue a sheared run bitwise; a ve
   TempDir dir;
   const Scene scene = sheared_periodic(6, 0);
   Model straight = scene.model;
-  REQUIRE(run_cycles(straight, *make_backend("serial", 1), 60, {}).done == 60);
+  REQUIRE(run_cycles(straight, *make_pipeline("serial", 1), 60, {}).done == 60);
   Model first = scene.model;
-  REQUIRE(run_cycles(first, *make_backend("serial", 1), 2, {}).done == 2);
+  REQUIRE(run_cycles(first, *make_pipeline("serial", 1), 2, {}).done == 2);
   const std::string path = (dir.path() / "sheared.sav").string();
   save_model(first, path);
   REQUIRE(first.space.tilt[0] > 0);   // the restarted run renames its images on the way
   Model second = load_model(path);
   CHECK(std::memcmp(second.space.tilt.data(), first.space.tilt.data(), sizeof first.space.tilt) == 0);
-  REQUIRE(run_cycles(second, *make_backend("serial", 1), 58, {}).done == 58);
+  REQUIRE(run_cycles(second, *make_pipeline("serial", 1), 58, {}).done == 58);
   CHECK(difference(picture(straight), picture(second)) == "");
   CHECK(std::memcmp(straight.space.tilt.data(), second.space.tilt.data(), sizeof straight.space.tilt) == 0);
   CHECK(straight.space.tilt[0] < 0);

@@ -45,7 +45,7 @@ TEST_CASE("physics: serial contact detection equals brute force on polydisperse 
     const std::size_t b = add_ball(model, 0, 1, 12 * u(rng), 12 * u(rng), 12 * u(rng), 0.1 + 0.9 * u(rng) * u(rng));
     model.balls.vx[b] = 40 * (u(rng) - 0.5); model.balls.vy[b] = 40 * (u(rng) - 0.5); model.balls.vz[b] = 40 * (u(rng) - 0.5);
   }
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   std::size_t checked = 0;
   for (int round = 0; round < 6; ++round) {
     // The states of a step describe the positions it started from.
@@ -69,7 +69,7 @@ TEST_CASE("physics: shear history survives pair-list rebuilds and ball insertion
   add_ball(model, 10, 1, 0, 0, 0, 1);
   add_ball(model, 20, 1, 1.99, 0, 0, 1);
   model.balls.vy[1] = 0.01;   // shears the contact
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE_FALSE(run_cycles(model, *backend, 50, {}).unstable);
   const double fs = model.contacts.fsy[0];
   REQUIRE(fs < 0);

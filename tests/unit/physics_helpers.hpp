@@ -4,10 +4,12 @@
 #include <cmath>
 #include <memory>
 
-#include "backends/backend.hpp"
+#include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
 #include "model/model.hpp"
-#include "physics/engine.hpp"
+#include "cycle/run.hpp"
+#include "physics/scene.hpp"
+#include "physics/timestep.hpp"
 
 namespace trubal::test {
 
@@ -27,7 +29,7 @@ inline Material hertz_material(double young, double poisson, double density, dou
 inline double sphere_mass(double density, double r) { return density * 4.0 / 3.0 * M_PI * r * r * r; }
 
 // Runs n cycles, failing the test on instability.
-inline CycleResult cycle(Model& model, Backend& backend, std::int64_t n, const CycleControl& control = {}) {
+inline CycleResult cycle(Model& model, Pipeline& backend, std::int64_t n, const CycleControl& control = {}) {
   return run_cycles(model, backend, n, control);
 }
 

@@ -29,7 +29,7 @@ Material with_restitution(Material m, double e) {
 }
 
 // Runs until the mover has touched and parted again (or n_max cycles); requires a stable run.
-void run_until_parted(Model& model, Backend& backend, const std::function<double(const Model&)>& gap) {
+void run_until_parted(Model& model, Pipeline& backend, const std::function<double(const Model&)>& gap) {
   bool touched = false;
   for (int k = 0; k < 200000; ++k) {
     REQUIRE_FALSE(test::cycle(model, backend, 1).unstable);
@@ -57,7 +57,7 @@ Rebound on_plane(const Material& mat, double r, double vn, double vt, double w, 
   model.balls.vx[1] = vt;
   model.balls.vz[1] = -vn;
   model.balls.wy[1] = -w;   // t x n = x cross z = -y
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   run_until_parted(model, *backend, [&](const Model& m) {
     const double x = m.balls.x[1], y = m.balls.y[1], z = m.balls.z[1];
     return std::sqrt(x * x + y * y + z * z) - big - r;
@@ -78,7 +78,7 @@ std::pair<Rebound, Rebound> pair_spinning(const Material& mat, double r, double 
   model.balls.vx[1] = -v;
   model.balls.wz[0] = w;
   model.balls.wz[1] = w;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   run_until_parted(model, *backend, [&](const Model& m) { return m.balls.x[1] - m.balls.x[0] - 2 * r; });
   const Balls& b = model.balls;
   // Ball 2 seen in its own frame: n = +x, t = -y, t x n = -y cross x = +z.

@@ -26,7 +26,7 @@ std::vector<Scene> scenes() {
 // Pictures taken after every 7th cycle. reads: whether the control says which cycles it reads
 // (lean steps elsewhere) or leaves it unset (every step writes everything).
 std::vector<Picture> record(Model model, const std::string& backend_name, int cycles, bool reads) {
-  auto backend = make_backend(backend_name, backend_name == "serial" ? 1 : 2);
+  auto backend = make_pipeline(backend_name, backend_name == "serial" ? 1 : 2);
   std::vector<Picture> pictures;
   CycleControl control;
   control.after_step = [&](const Model& m) {
@@ -61,7 +61,7 @@ TEST_CASE("lean steps: a run stopped by Ctrl-C ends on a step that wrote its con
   for (Scene& scene : scenes()) {
     INFO(scene.name);
     Model stopped = scene.model;
-    auto backend = make_backend("serial", 1);
+    auto backend = make_pipeline("serial", 1);
     std::atomic<bool> interrupt{false};
     CycleControl control;
     control.interrupt = &interrupt;
@@ -74,7 +74,7 @@ TEST_CASE("lean steps: a run stopped by Ctrl-C ends on a step that wrote its con
     CHECK(r.done == 42);
 
     Model straight = scene.model;
-    auto other = make_backend("serial", 1);
+    auto other = make_pipeline("serial", 1);
     REQUIRE(run_cycles(straight, *other, 42, {}).done == 42);
     CHECK(difference(picture(stopped), picture(straight)).empty());
   }

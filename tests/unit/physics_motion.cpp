@@ -13,7 +13,7 @@ TEST_CASE("physics: free fall is the central-difference closed form to round-off
   model.settings.fixed_dt = 1e-3;
   add_ball(model, 1, 1, 0, 0, 10, 0.1);
   model.balls.vz[0] = 2.0;   // v(-dt/2)
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   const int n = 1000;
   REQUIRE_FALSE(run_cycles(model, *backend, n, {}).unstable);
   const double dt = 1e-3, g = -9.81;
@@ -35,7 +35,7 @@ TEST_CASE("physics: a fixed ball's reaction is the force it carries", "[physics]
   add_ball(model, 1, 1, 0, 0, 0, 0.1);
   add_ball(model, 2, 1, 0, 0, 0.2, 0.1);
   model.balls.fixed[0] = kVel | kSpin;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE_FALSE(run_cycles(model, *backend, 20000, {}).unstable);
   const double m = model.balls.mass[0];
   // Settled: the bottom ball holds the top one's weight and its own; it has not moved.
@@ -63,7 +63,7 @@ Oblique oblique(double vn, double vt, double mu) {
   model.balls.fixed[0] = kVel | kSpin;
   model.balls.vz[1] = -vn;
   model.balls.vx[1] = vt;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   Oblique out;
   int last_state = 0;
   CycleControl control;

@@ -42,7 +42,7 @@ void cundall_damping(Model& model) {
 TEST_CASE("physics: Cundall's Rayleigh damping runs stably with the automatic step", "[physics]") {
   Model model = fcc_pack(4, 1e8);
   cundall_damping(model);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   const CycleResult r = run_cycles(model, *backend, 3000, {});
   INFO(r.message);
   REQUIRE_FALSE(r.unstable);
@@ -60,7 +60,7 @@ TEST_CASE("physics: an unstable step is caught by the guard and the model is lef
   Model model = fcc_pack(4, 1e8);
   if (damped) cundall_damping(model);
   model.settings.frac = damped ? 5 : 2;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   const CycleResult r = run_cycles(model, *backend, 5000, {});
   REQUIRE(r.unstable);
   INFO(r.message);
@@ -90,7 +90,7 @@ TEST_CASE("physics: an undamped frictionless gas keeps its energy", "[physics]")
     const std::size_t b = add_ball(model, 0, 1, 0.03 * (k % 6) - 0.075, 0.03 * ((k / 6) % 2), 0.02 + 0.03 * (k / 12), r);
     model.balls.vx[b] = 0.2 * u(rng); model.balls.vy[b] = 0.2 * u(rng); model.balls.vz[b] = 0.2 * u(rng);
   }
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE_FALSE(run_cycles(model, *backend, 1, {}).unstable);
   const double e0 = energy(model).total();
   const double k0 = energy(model).kinetic_translation;

@@ -26,7 +26,7 @@ Impact head_on(const Material& mat, double frac, double v, double r, double fixe
   add_ball(model, 2, 1, 2 * r + 3.7e-4 * r, 0, 0, r);
   model.balls.vx[0] = 0.5 * v;
   model.balls.vx[1] = -0.5 * v;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   Impact out;
   double prev_gap = model.balls.x[1] - model.balls.x[0] - 2 * r, prev_t = 0, start = -1;
   bool done = false;

@@ -6,9 +6,11 @@
 #include <cmath>
 #include <random>
 
-#include "backends/backend.hpp"
+#include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
-#include "physics/engine.hpp"
+#include "cycle/run.hpp"
+#include "physics/scene.hpp"
+#include "physics/timestep.hpp"
 #include "physics/measure.hpp"
 
 using namespace trubal;
@@ -44,7 +46,7 @@ Model make_gas(double frac) {
 // up. The guard must say so and name the fix, never let it run into garbage.
 TEST_CASE("hard: an undamped elastic gas at the default FRAC runs or stops with advice", "[hard][validation]") {
   Model m = make_gas(0.8);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   const CycleResult run = run_cycles(m, *backend, 100000, {});
   INFO(run.message);
   if (run.unstable) CHECK(run.message.find("try FRAC") != std::string::npos);
@@ -56,7 +58,7 @@ TEST_CASE("hard: an undamped elastic gas at the default FRAC runs or stops with 
 // (~9000 collisions), the size sqrt(collisions) x a collision's error predicts.
 TEST_CASE("hard: an undamped elastic gas at FRAC 0.05 keeps its energy over 1e6 steps", "[hard][validation]") {
   Model m = make_gas(0.05);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE_FALSE(run_cycles(m, *backend, 1, {}).unstable);
   const double e0 = energy(m).total();
   double lo = e0, hi = e0;

@@ -9,10 +9,12 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "backends/backend.hpp"
+#include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
 #include "physics/cell.hpp"
-#include "physics/engine.hpp"
+#include "cycle/run.hpp"
+#include "physics/scene.hpp"
+#include "physics/timestep.hpp"
 #include "physics/measure.hpp"
 
 using namespace trubal;
@@ -46,7 +48,7 @@ Model fcc_block(double f) {
 // Axisymmetric compression from the isotropic state: x and y held at the starting stress.
 Ratios axisymmetric(double f) {
   Model m = fcc_block(f);
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   REQUIRE(run_cycles(m, *backend, 10, {}).done == 10);
   auto L = m.space.length();
   const double p0 = average_stress(m, L[0] * L[1] * L[2])[0];
@@ -116,7 +118,7 @@ PlaneStrain plane_strain(double f, double squeeze, double p) {
         add_ball(m, 0, 1, (i + o + 0.25) * d, (j + o + 0.25) * d, (k + 0.25) * h, r);
       }
   m.settings.frac = 0.5;
-  auto backend = make_backend("serial", 1);
+  auto backend = make_pipeline("serial", 1);
   // Consolidation in x and z to p, y held (the default servo).
   m.space.servo_on = {true, false, true};
   m.space.servo_target = {p, 0, p};

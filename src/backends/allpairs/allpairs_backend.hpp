@@ -11,8 +11,8 @@
 
 namespace trubal {
 
-// threads <= 0: one per hardware thread.
-std::unique_ptr<Backend> make_allpairs_backend(int threads);
+// max_memory 0: default_allpairs_memory().
+std::unique_ptr<Backend> make_allpairs_backend(std::uint64_t max_memory);
 
 // The default limit on the pair slots' memory: 4 GiB or half the physical memory, the smaller.
 std::uint64_t default_allpairs_memory();

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "backends/grid_shape.hpp"
-#include "backends/pair_list.hpp"
+#include "backends/pair_candidates.hpp"
 #include "model/model.hpp"
 
 namespace trubal {

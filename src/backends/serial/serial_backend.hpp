@@ -1,5 +1,5 @@
-// TRUBAL's own way: space cut into boxes, balls hung on linked lists per box, a candidate pair
-// list with a skin (Verlet) rebuilt only when some ball has moved half the skin.
+// TRUBAL's own way of finding pairs: space cut into boxes, balls hung on linked lists per box
+// (backends/serial/box_grid.hpp); in a periodic cell the shared periodic search. One thread.
 #pragma once
 
 #include <memory>

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 
-#include "backends/threaded/parallel_step.hpp"
 
 namespace trubal {
 

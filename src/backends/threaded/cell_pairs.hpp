@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "backends/grid_shape.hpp"
-#include "backends/pair_list.hpp"
+#include "backends/pair_candidates.hpp"
 #include "support/thread_pool.hpp"
 #include "model/model.hpp"
 

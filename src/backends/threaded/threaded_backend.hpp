@@ -1,6 +1,6 @@
-// TRUBAL's boxes and Verlet pair list, as the serial backend keeps them but built in parallel, with
-// the contact and motion kernels spread over a pool of persistent threads. Same pairs, same blocks,
-// same order of sums: bitwise the serial answer for any thread count.
+// The boxes of the serial backend, sorted into cells in one pass and searched by the pipeline's
+// threads, each for its own range of balls (backends/threaded/cell_pairs.hpp); in a periodic cell
+// the shared periodic search on every thread. The list is the serial one, pair for pair.
 #pragma once
 
 #include <memory>
@@ -9,7 +9,6 @@
 
 namespace trubal {
 
-// threads <= 0: one per hardware thread.
-std::unique_ptr<Backend> make_threaded_backend(int threads);
+std::unique_ptr<Backend> make_threaded_backend();
 
 }  // namespace trubal

@@ -1,4 +1,4 @@
-#include "backends/pair_list.hpp"
+#include "cycle/pair_list.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -24,7 +24,7 @@ bool same(const ContactTable& t, std::size_t p, const PairCandidates& c, std::si
 
 }  // namespace
 
-void install_pairs(ContactTable& table, const PairCandidates& pairs, std::size_t ball_count) {
+void install_pairs(ContactTable& table, const PairCandidates& pairs) {
   const std::size_t old_size = table.size(), new_size = pairs.i.size();
   // A table whose arrays disagree in length (cleared by an edit) has nothing worth keeping.
   bool consistent = true;
@@ -50,21 +50,16 @@ void install_pairs(ContactTable& table, const PairCandidates& pairs, std::size_t
   table.image_x = pairs.image_x;
   table.image_y = pairs.image_y;
   table.image_z = pairs.image_z;
-  build_gather(table, ball_count);
-}
-
-void build_gather(ContactTable& table, std::size_t ball_count) {
   static std::atomic<std::uint64_t> versions{0};   // unique across tables (a restored copy keeps its own)
   table.list_version = ++versions;
-  const std::size_t n = table.size();
-  table.run_begin.assign(ball_count + 1, static_cast<std::uint32_t>(n));
-  for (std::size_t p = n; p-- > 0;) table.run_begin[table.i[p]] = static_cast<std::uint32_t>(p);
-  for (std::size_t b = ball_count; b-- > 0;) table.run_begin[b] = std::min(table.run_begin[b], table.run_begin[b + 1]);
-  table.ball_force.assign(ball_count, PairForce{});
-  table.fsx_next.assign(n, 0.0);
-  table.fsy_next.assign(n, 0.0);
-  table.fsz_next.assign(n, 0.0);
-  table.ball_cn.assign(ball_count, 0.0);
+}
+
+bool holds_pairs(const ContactTable& table, const PairCandidates& pairs) {
+  const std::size_t size = pairs.i.size();
+  bool consistent = true;
+  const_cast<ContactTable&>(table).for_each_pair_array([&](auto& v) { consistent = consistent && v.size() == size; });
+  return consistent && table.i == pairs.i && table.j == pairs.j && table.image_x == pairs.image_x &&
+         table.image_y == pairs.image_y && table.image_z == pairs.image_z;
 }
 
 }  // namespace trubal

@@ -1,5 +1,5 @@
-// One step's contact and motion kernels over a thread pool (every backend; the serial one uses a
-// pool of one). Thread t owns a contiguous range of balls, made of whole pair blocks (the pairs of
+// One step's contact and motion kernels over the pipeline's thread pool (a pool of one runs them
+// all on the calling thread). Thread t owns a contiguous range of balls, made of whole pair blocks (the pairs of
 // kContactBalls consecutive balls i): it zeroes its balls' sums and adds the pairs they have with
 // lower balls of earlier ranges (cross pairs, computed again from the same inputs), then runs its
 // pair blocks in list order, adding each pair to ball i and to ball j where it owns j. Every
@@ -10,32 +10,31 @@
 // gives each thread an equal share of the balls.
 //
 // Whether the threads share a step at all is timed (ParallelStep::share_now); the split itself is
-// by pair counts, not by measured thread speeds. A split that followed the measured
-// times (every 100 steps, damped, only for a thread slow three intervals running) was tried: on an
-// idle machine it gained nothing measurable (0.50 s for 888 steps at 13,500 balls either way), and
-// beside a busy process it lost (1.05-1.10 s -> 1.08-1.28 s), since the slow thread changes as the
-// scheduler moves work between cores.
+// by pair counts, not by measured thread speeds (a split by measured speeds was tried: no gain on
+// an idle machine, a loss beside a busy one, as the slow thread changes with the scheduler).
 #pragma once
 
 #include <atomic>
 #include <vector>
 
 #include "support/thread_pool.hpp"
-#include "backends/verlet.hpp"
+#include "cycle/kernels.hpp"
+#include "cycle/phase_times.hpp"
+#include "cycle/step_scratch.hpp"
+#include "cycle/verlet.hpp"
 #include "model/model.hpp"
-#include "physics/kernels.hpp"
 
 namespace trubal {
 
 class ParallelStep {
  public:
-  // Contacts over model.contacts (every pair), then motion over the balls; the time of each
-  // phase is added to model.timing (forces, motion).
+  // Contacts over model.contacts (every pair; `scratch` indexes it), then motion over the balls;
+  // the time of each phase is added to `times` (forces, motion).
   // With `moved`, each thread also measures, right after moving its balls, their largest squared
   // displacement from the reference positions of the pair list: the next step's stale-list test
   // (moved2()) costs no pass of its own.
-  void run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
-           const VerletReference* moved = nullptr);
+  void run(ThreadPool& pool, Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
+           PhaseTimes& times, const VerletReference* moved = nullptr);
   double moved2() const { return moved2_; }
   // Threads the steps share their work among: 1 where the rule or the last trial says one thread,
   // at most one per pair block, all of them while a trial runs; 0 before the first step.
@@ -51,7 +50,7 @@ class ParallelStep {
  private:
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
   // pairs it computes again (kept while the pair list stays the same).
-  void split(const ContactTable& c, std::size_t balls, int parts);
+  void split(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts);
   void cross_lists(const ContactTable& c, std::size_t balls, int parts);
 
   std::vector<StepSums> blocks_;

@@ -1,4 +1,4 @@
-#include "backends/threaded/parallel_step.hpp"
+#include "cycle/parallel_step.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -27,7 +27,7 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
+void ParallelStep::split(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts) {
   const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;
   split_version_ = c.list_version;
   split_parts_ = parts;
@@ -36,7 +36,7 @@ void ParallelStep::split(const ContactTable& c, std::size_t balls, int parts) {
   if (parts == 1) { cross_lists(c, balls, parts); return; }
   // start[k]: pairs before block k; cross[k]: pairs with i before block k and j in or after it.
   std::vector<std::size_t> start(blocks + 1), cross(blocks + 2, 0);
-  for (std::size_t k = 0; k <= blocks; ++k) start[k] = c.run_begin[std::min(balls, k * kContactBalls)];
+  for (std::size_t k = 0; k <= blocks; ++k) start[k] = scratch.run_begin[std::min(balls, k * kContactBalls)];
   for (std::size_t p = 0; p < c.size(); ++p) {
     const std::size_t bi = c.i[p] / kContactBalls, bj = c.j[p] / kContactBalls;
     if (bj > bi) { ++cross[bi + 1]; --cross[bj + 1]; }
@@ -106,20 +106,20 @@ void ParallelStep::cross_lists(const ContactTable& c, std::size_t balls, int par
   }
 }
 
-void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernels, StepSums& sums,
-                       const VerletReference* moved) {
+void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
+                       PhaseTimes& times, const VerletReference* moved) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   const ContactTable& c = model.contacts;
   const std::size_t balls = model.balls.size();
   const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;
   auto block_ball = [&](std::size_t k) { return std::min(balls, k * kContactBalls); };
-  auto block_pair = [&](std::size_t k) { return static_cast<std::size_t>(c.run_begin[block_ball(k)]); };
+  auto block_pair = [&](std::size_t k) { return static_cast<std::size_t>(scratch.run_begin[block_ball(k)]); };
 
   const int parts = static_cast<int>(std::min<std::size_t>(pool.size(), std::max<std::size_t>(blocks, 1)));
   if (c.list_version != split_version_ || parts != split_parts_ || first_block_.size() != static_cast<std::size_t>(parts) + 1 ||
       first_block_.back() != blocks)
-    split(c, balls, parts);
+    split(c, scratch, balls, parts);
   const bool parallel = parts > 1 && share_now(balls, parts);
   blocks_.assign(blocks, StepSums{});
   // The history is read from fsx.. and written to fsx_next..: a thread's cross pairs may belong to
@@ -128,20 +128,20 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
     pool.run([&](int t) {
       if (t >= parts) return;
       const std::size_t own_end = block_ball(first_block_[t + 1]);
-      kernels.cross(model, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
+      kernels.cross(model, scratch, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
       for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)
-        kernels.contacts(model, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
+        kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
     });
   } else {   // every block on this thread: no cross pairs
-    kernels.cross(model, kernels, 0, balls, nullptr, 0);
-    for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, kernels, block_pair(k), block_pair(k + 1), balls, blocks_[k]);
+    kernels.cross(model, scratch, kernels, 0, balls, nullptr, 0);
+    for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), balls, blocks_[k]);
   }
   for (const StepSums& block : blocks_) sums.add(block);
   if (kernels.features.friction) {
     ContactTable& table = model.contacts;
-    table.fsx.swap(table.fsx_next);
-    table.fsy.swap(table.fsy_next);
-    table.fsz.swap(table.fsz_next);
+    table.fsx.swap(scratch.fsx_next);
+    table.fsy.swap(scratch.fsy_next);
+    table.fsz.swap(scratch.fsz_next);
   }
   const auto t1 = Clock::now();
 
@@ -154,7 +154,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
     if (t >= motion_parts) return;
     const std::size_t first = split_point(motion_blocks, motion_parts, t), last = split_point(motion_blocks, motion_parts, t + 1);
     for (std::size_t k = first; k < last; ++k)
-      kernels.motion(model, kernels, k * kReduceBlock, std::min(balls, (k + 1) * kReduceBlock), blocks_[k]);
+      kernels.motion(model, scratch, kernels, k * kReduceBlock, std::min(balls, (k + 1) * kReduceBlock), blocks_[k]);
     if (moved)
       moved_[t] = moved->max_displacement2(model.balls, std::min(balls, first * kReduceBlock), std::min(balls, last * kReduceBlock));
   }, motion_parts > 1);
@@ -163,8 +163,8 @@ void ParallelStep::run(ThreadPool& pool, Model& model, const StepKernels& kernel
   for (const StepSums& block : blocks_) sums.add(block);
   const auto t2 = Clock::now();
   if (trial_step_ > 0) trial_time(parallel, std::chrono::duration<double>(t2 - t0).count());
-  model.timing.forces += std::chrono::duration<double>(t1 - t0).count();
-  model.timing.motion += std::chrono::duration<double>(t2 - t1).count();
+  times.forces += std::chrono::duration<double>(t1 - t0).count();
+  times.motion += std::chrono::duration<double>(t2 - t1).count();
 }
 
 }  // namespace trubal

@@ -16,7 +16,8 @@ namespace trubal {
 
 class VerletReference {
  public:
-  // Positions at the last rebuild, for wrap_into_cell to move with the balls.
+  // Positions at the last rebuild, for wrap_into_cell to move with the balls. The rule is checked
+  // only while the list it was recorded for is the table's (the pipeline's job).
   std::vector<double> x, y, z;
 
   // The squared displacement a ball may have made since the last rebuild, or a negative number when
@@ -32,8 +33,6 @@ class VerletReference {
   void invalidate() { valid_ = false; }
   double skin() const { return skin_; }
   std::size_t rebuilds() const { return rebuilds_; }
-  // PRINT info lines of a box-grid backend.
-  std::vector<std::pair<std::string, std::string>> info(const std::array<int, 3>& boxes, double box_size) const;
 
  private:
   std::vector<double> rad_;

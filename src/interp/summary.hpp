@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "model/model.hpp"
+#include "cycle/phase_times.hpp"
 
 namespace trubal {
 

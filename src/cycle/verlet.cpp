@@ -1,10 +1,9 @@
-#include "backends/verlet.hpp"
+#include "cycle/verlet.hpp"
 
 #include "model/periodic_cell.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 
 namespace trubal {
@@ -12,7 +11,7 @@ namespace trubal {
 double VerletReference::displacement_limit2(const Model& model) const {
   const Balls& b = model.balls;
   const std::size_t n = b.size();
-  if (!valid_ || x.size() != n || model.contacts.run_begin.size() != n + 1) return -1;
+  if (!valid_ || x.size() != n) return -1;
   if (n && std::memcmp(rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return -1;
   // Periodic space: an image pair also closes by the change of the cell's edge vectors (per axis,
   // the change of the edge length plus those of the tilts that shift that axis).
@@ -52,20 +51,6 @@ void VerletReference::record(const Model& model, double skin) {
   skin_ = skin;
   valid_ = true;
   ++rebuilds_;
-}
-
-std::vector<std::pair<std::string, std::string>> VerletReference::info(const std::array<int, 3>& boxes,
-                                                                       double box_size) const {
-  auto number = [](double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.4g", v);
-    return std::string(buf);
-  };
-  return {{"contact boxes", std::to_string(boxes[0]) + " x " + std::to_string(boxes[1]) + " x " +
-                                std::to_string(boxes[2])},
-          {"box size", number(box_size)},
-          {"pair list skin", number(skin_)},
-          {"pair list rebuilds", std::to_string(rebuilds_)}};
 }
 
 double periodic_skin(const Model& model, double skin) {

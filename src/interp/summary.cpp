@@ -1,4 +1,4 @@
-#include "io/summary.hpp"
+#include "interp/summary.hpp"
 
 #include <algorithm>
 #include <utility>

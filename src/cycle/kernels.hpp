@@ -1,5 +1,5 @@
 // The specialised loops of one time step, chosen once per CYCLE for the features a scene uses.
-// A backend calls them through ParallelStep (backends/threaded/parallel_step.hpp): `cross` and
+// The pipeline calls them through ParallelStep (cycle/parallel_step.hpp): `cross` and
 // `contacts` over pair blocks (the pairs of kContactBalls consecutive balls i), adding each pair to
 // its balls' sums in partner order, then `motion` over blocks of kReduceBlock balls (law of
 // motion). Each call returns its block's sums; they are added in ascending block order, so every
@@ -8,15 +8,16 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
+#include "cycle/step_scratch.hpp"
 #include "model/model.hpp"
 #include "physics/contact_law.hpp"
-#include "physics/engine.hpp"
+#include "physics/pair_laws.hpp"
+#include "physics/scene.hpp"
 
 namespace trubal {
 
@@ -50,14 +51,15 @@ struct StepSums {
 
 struct StepKernels;
 // Pairs [begin, end) of the list (whole runs of i), adding each to its balls' sums in
-// ContactTable::ball_force: ball i always, ball j if below own_end (a later thread owns the rest).
-using ContactLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, std::size_t own_end,
-                             StepSums&);
+// StepScratch::ball_force: ball i always, ball j if below own_end (a later thread owns the rest).
+using ContactLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t begin, std::size_t end,
+                             std::size_t own_end, StepSums&);
 // Zeroes the sums of balls [ball_begin, ball_end) and adds the pairs they have with lower balls
 // outside the range (cross pairs: `pairs`, `count` of them, in list order), before any ContactLoop.
-using CrossLoop = void (*)(Model&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end,
+using CrossLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end,
                            const std::uint32_t* pairs, std::size_t count);
-using MotionLoop = void (*)(Model&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&);
+using MotionLoop = void (*)(Model&, const StepScratch&, const StepKernels&, std::size_t begin, std::size_t end,
+                            StepSums&);
 
 // Pair blocks: the pairs of kContactBalls consecutive balls i (whole runs), the unit of the
 // contact sums and of the work a thread takes. Defined by balls, so the same for every backend
@@ -75,47 +77,17 @@ struct StepKernels {
   double dt = 0;                            // this step
   double beta = 0, alpha = 0, local = 0;    // damping
   std::array<double, 3> gravity{0, 0, 0};
-  // Contact laws by pair of compact type indices (type_count^2 entries).
-  int type_count = 1;
-  std::vector<std::uint16_t> ball_type;     // compact type index per ball
-  std::vector<PairLaw> laws;
-  // A ball without contacts counts as touching one ball of its own kind (per compact type).
-  std::vector<double> alone_kn, alone_ks, alone_xi;
+  PairLaws laws;                            // by pair of ball types
   // The contact loop this step runs: contacts_full also writes the per-pair results measurements
   // read (ContactTable normal, overlap, forces, stiffness, work, state); contacts_lean writes only
-  // what the next step needs (history, the sums per ball). The engine picks one per step; both
+  // what the next step needs (history, the sums per ball). run_cycles picks one per step; both
   // compute the same numbers.
   ContactLoop contacts = nullptr, contacts_full = nullptr, contacts_lean = nullptr;
   CrossLoop cross = nullptr;
   MotionLoop motion = nullptr, motion_full = nullptr, motion_lean = nullptr;   // full: also Balls::fx.. mz
-
-  const PairLaw& law(std::size_t i, std::size_t j) const {
-    return type_count == 1 ? laws[0] : laws[ball_type[i] * type_count + ball_type[j]];
-  }
 };
 
 // The kernels for the model as it is now (materials, damping, fixities, loads).
 StepKernels make_kernels(const Model& model);
-
-// Upper bound on the squared highest frequency of the modes that involve one ball: block
-// Gershgorin row sums of M^-1 K over the ball's contacts, spins measured as c R w with inertia
-// 2/5 m / c^2. Each contact couples a translation to its own and its partner's translation
-// (norm max(k_n, k_s)) and spin (k_s each, times c), and a spin to its own and its partner's spin
-// (k_s) and translation (k_s each, over c): translation row 2 sum max(k_n, k_s) + 2 c sum k_s, spin
-// row (2 + 2 / c) sum k_s / (2/5). Any c > 0 gives a bound (a diagonal similarity leaves the
-// eigenvalues alone); c = 2.5 balances the rows when k_n = k_s: 7 sum k / m, exact for the slip mode
-// of two equal balls (7 k_s / m), against 10 sum k / m with c = 1.
-inline constexpr double kSpinScale = 2.5;
-inline double ball_omega2(double mass, double sum_kmax, double sum_ks, bool rotation) {
-  const double row = rotation ? std::max(2 * sum_kmax + 2 * kSpinScale * sum_ks, (2 + 2 / kSpinScale) / 0.4 * sum_ks)
-                              : 2 * sum_kmax;
-  return row / mass;
-}
-
-// Critical step of a mode with frequency omega and damping ratio xi under central differences
-// with a lagged dashpot: (2 / omega)(sqrt(1 + xi^2) - xi).
-inline double damped_critical_step(double omega, double xi) {
-  return 2.0 / omega * (std::sqrt(1 + xi * xi) - xi);
-}
 
 }  // namespace trubal

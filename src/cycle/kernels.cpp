@@ -1,9 +1,10 @@
 // The per-contact loop (adding each pair to its balls' sums) and the per-ball law of motion
-// (PHYSICS.md "Law of motion"),
-// instantiated for every combination of features and picked once per CYCLE by make_kernels.
-#include "physics/kernels.hpp"
+// (doc/physics.md "Law of motion"), instantiated for every combination of features and picked once
+// per CYCLE by make_kernels.
+#include "cycle/kernels.hpp"
 
 #include "model/periodic_cell.hpp"
+#include "physics/timestep.hpp"
 
 #include <utility>
 
@@ -19,7 +20,7 @@ namespace {
 inline constexpr unsigned kDetails = contact_bits::kCount;
 
 template <unsigned F, bool kOneLaw>
-void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end,
+void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end,
                    StepSums& sums) {
   using namespace contact_bits;
   constexpr unsigned kLaw = F & (kCount - 1);
@@ -32,8 +33,8 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   TRUBAL_PTR(state, c.state);
-  TRUBAL_PTR(next_x, c.fsx_next); TRUBAL_PTR(next_y, c.fsy_next); TRUBAL_PTR(next_z, c.fsz_next);
-  TRUBAL_PTR(ball_sum, c.ball_force); TRUBAL_PTR(cn_sum, c.ball_cn);
+  TRUBAL_PTR(next_x, scratch.fsx_next); TRUBAL_PTR(next_y, scratch.fsy_next); TRUBAL_PTR(next_z, scratch.fsz_next);
+  TRUBAL_PTR(ball_sum, scratch.ball_force); TRUBAL_PTR(cn_sum, scratch.ball_cn);
   // Periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image (backends/periodic.hpp).
   const bool periodic = model.space.periodic;
   const CellFrame cell = cell_frame(model.space);
@@ -41,7 +42,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
   const std::int8_t* const img_y = c.image_y.data();
   const std::int8_t* const img_z = c.image_z.data();
   const double dt = k.dt, beta = k.beta;
-  const PairLaw& one_law = k.laws[0];
+  const PairLaw& one_law = k.laws.table[0];
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
   std::array<double, 6> force_moment{};
   std::array<double, 3> stiffness_moment{};
@@ -60,7 +61,7 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
     const std::size_t count = std::min(kBatch, end - p0);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q, i = pi[p], j = pj[p];
-      if constexpr (!kOneLaw) B.set_law(q, k.law(i, j));
+      if constexpr (!kOneLaw) B.set_law(q, k.laws.law(i, j));
       B.dx[q] = x[j] - x[i]; B.dy[q] = y[j] - y[i]; B.dz[q] = z[j] - z[i];
       B.ri[q] = rad[i]; B.rj[q] = rad[j];
       B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
@@ -143,10 +144,10 @@ void contact_range(Model& model, const StepKernels& k, std::size_t begin, std::s
 }
 
 template <unsigned F>
-void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end,
-                  StepSums& sums) {
-  if (k.type_count == 1) contact_range<F, true>(model, k, begin, end, own_end, sums);
-  else contact_range<F, false>(model, k, begin, end, own_end, sums);
+void contact_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
+                  std::size_t own_end, StepSums& sums) {
+  if (k.laws.type_count == 1) contact_range<F, true>(model, scratch, k, begin, end, own_end, sums);
+  else contact_range<F, false>(model, scratch, k, begin, end, own_end, sums);
 }
 
 // Pairs (i, j) with i below ball_begin and j in [ball_begin, ball_end), given in list order (so
@@ -154,13 +155,13 @@ void contact_loop(Model& model, const StepKernels& k, std::size_t begin, std::si
 // (lower partners come first in j's order), from the history before this step. The thread that
 // owns i computes the same pairs with the same arithmetic.
 template <unsigned F>
-void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end,
+void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end,
                 const std::uint32_t* pairs, std::size_t pair_count) {
   using namespace contact_bits;
   const Balls& b = model.balls;
   ContactTable& c = model.contacts;
-  std::fill(c.ball_force.begin() + ball_begin, c.ball_force.begin() + ball_end, PairForce{});
-  std::fill(c.ball_cn.begin() + ball_begin, c.ball_cn.begin() + ball_end, 0.0);
+  std::fill(scratch.ball_force.begin() + ball_begin, scratch.ball_force.begin() + ball_end, PairForce{});
+  std::fill(scratch.ball_cn.begin() + ball_begin, scratch.ball_cn.begin() + ball_end, 0.0);
   if (pair_count == 0) return;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
   TRUBAL_PTR(x, b.x); TRUBAL_PTR(y, b.y); TRUBAL_PTR(z, b.z); TRUBAL_PTR(rad, b.rad); TRUBAL_PTR(mass, b.mass);
@@ -175,7 +176,7 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
     const std::size_t count = std::min(kBatch, pair_count - q0);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = pairs[q0 + q], i = pi[p], j = pj[p];
-      if (k.type_count != 1) B.set_law(q, k.law(i, j));
+      if (k.laws.type_count != 1) B.set_law(q, k.laws.law(i, j));
       B.dx[q] = x[j] - x[i]; B.dy[q] = y[j] - y[i]; B.dz[q] = z[j] - z[i];
       B.ri[q] = rad[i]; B.rj[q] = rad[j];
       B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
@@ -197,15 +198,15 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
       if constexpr ((F & kShear) != 0) { hx[q] = fsx[p]; hy[q] = fsy[p]; hz[q] = fsz[p]; }
     }
     // The new history is the owner's to write: here it goes to a scratch copy.
-    if (k.type_count == 1) contact_forces<F, true>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
-    else contact_forces<F, false>(B, count, k.laws[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
+    if (k.laws.type_count == 1) contact_forces<F, true>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
+    else contact_forces<F, false>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];
-      PairForce& fj = c.ball_force[j];
+      PairForce& fj = scratch.ball_force[j];
       fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
       if constexpr ((F & kRotation) != 0) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
       fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q];
-      if constexpr ((F & kDashpot) != 0) c.ball_cn[j] += B.cn[q];
+      if constexpr ((F & kDashpot) != 0) scratch.ball_cn[j] += B.cn[q];
     }
   }
 }
@@ -216,14 +217,14 @@ void cross_loop(Model& model, const StepKernels& k, std::size_t ball_begin, std:
 inline constexpr unsigned kMotionCount = 72;
 
 template <unsigned M>
-void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::size_t end, StepSums& sums) {
+void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
+                 StepSums& sums) {
   constexpr bool kRot = (M & 1) != 0;
   constexpr bool kLoads = (M & 2) != 0;
   constexpr auto kDamp = static_cast<DampKind>((M / 4) % 3);
   constexpr auto kEstimate = static_cast<StepEstimate>((M / 12) % 3);
   constexpr bool kWriteForces = M >= 36;
   Balls& b = model.balls;
-  const ContactTable& c = model.contacts;
   const double dt = k.dt;
   // Mass-proportional damping, factor form: v' = (v (1 - a dt/2) + F/m dt) / (1 + a dt/2).
   const double keep = 1 - 0.5 * k.alpha * dt, shrink = 1 / (1 + 0.5 * k.alpha * dt);
@@ -261,14 +262,14 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
   for (std::size_t ball = begin; ball < end; ++ball) {
     double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
-    {   // the sums the contact loops made (ContactTable::ball_force)
-      const PairForce& pf = c.ball_force[ball];
+    {   // the sums the contact loops made (StepScratch::ball_force)
+      const PairForce& pf = scratch.ball_force[ball];
       fx = pf.fx; fy = pf.fy; fz = pf.fz;
       if constexpr (kRot) { tx = pf.tx; ty = pf.ty; tz = pf.tz; }
       if constexpr (kEstimate != StepEstimate::None) {
         sum_kmax = pf.kmax;
         sum_ks = pf.ks;
-        if constexpr (kEstimate == StepEstimate::Damped) sum_cn = c.ball_cn[ball];
+        if constexpr (kEstimate == StepEstimate::Damped) sum_cn = scratch.ball_cn[ball];
       }
     }
     const double m = b.mass[ball], inv_m = 1 / m;
@@ -302,13 +303,8 @@ void motion_loop(Model& model, const StepKernels& k, std::size_t begin, std::siz
       // A ball held in every component sets no step of its own.
       const bool held = (fixed & kVel) == kVel && (!kRot || (fixed & kSpin) == kSpin);
       if (!held) {
-        if (sum_kmax == 0) {   // no contact: as if touching one ball of its own type
-          const std::uint16_t t = k.type_count == 1 ? 0 : k.ball_type[ball];
-          const double kn = k.alone_kn[t];
-          sum_kmax = std::max(kn, k.alone_ks[t]);
-          sum_ks = k.alone_ks[t];
-          if constexpr (kEstimate == StepEstimate::Damped) sum_cn = 2 * k.alone_xi[t] * std::sqrt(kn * 0.5 * m);
-        }
+        if (sum_kmax == 0)   // no contact: as if touching one ball of its own type
+          alone_sums(k.laws, ball, m, sum_kmax, sum_ks, kEstimate == StepEstimate::Damped ? &sum_cn : nullptr);
         const double omega2 = ball_omega2(m, sum_kmax, sum_ks, kRot);
         if constexpr (kEstimate == StepEstimate::Undamped) {
           omega2_max = std::max(omega2_max, omega2);
@@ -345,55 +341,6 @@ constexpr auto kContactLoops = contact_loops(std::make_index_sequence<2 * contac
 constexpr auto kCrossLoops = cross_loops(std::make_index_sequence<contact_bits::kCount>{});
 constexpr auto kMotionLoops = motion_loops(std::make_index_sequence<kMotionCount>{});
 
-double series(double a, double b) { return a + b > 0 ? a * b / (a + b) : 0; }
-
-// Restitution of a linear spring-dashpot whose dashpot may not pull (Schwager & Poeschel,
-// Granular Matter 9:465, 2007): the contact ends when the force reaches zero, at phase
-// theta = atan2(2 xi s, 2 xi^2 - 1), s = sqrt(1 - xi^2); e = exp(-xi theta / s), continued
-// analytically past critical damping.
-double clamped_restitution(double xi) {
-  if (xi < 1) {
-    const double s = std::sqrt(1 - xi * xi);
-    return std::exp(-xi * std::atan2(2 * xi * s, 2 * xi * xi - 1) / s);
-  }
-  if (xi == 1) return std::exp(-2.0);
-  const double q = std::sqrt(xi * xi - 1);
-  return std::exp(-xi / q * std::atanh(2 * xi * q / (2 * xi * xi - 1)));
-}
-
-// The damping ratio that gives restitution e: for the linear law with the no-pull clamp (so that e
-// is exact, as PHYSICS.md intends); for Hertz the usual -ln e / sqrt(pi^2 + ln^2 e).
-double restitution_xi(double e, bool hertz) {
-  if (!(e < 1)) return 0;
-  const double log_e = std::log(e);
-  if (hertz) return -log_e / std::sqrt(M_PI * M_PI + log_e * log_e);
-  double lo = 0, hi = 1e3;   // clamped_restitution falls monotonically from 1
-  for (int k = 0; k < 200 && hi - lo > 1e-15 * hi; ++k) {
-    const double mid = 0.5 * (lo + hi);
-    (clamped_restitution(mid) > e ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
-// Mixes two materials (PHYSICS.md "mixed materials"); equal materials give their own values.
-PairLaw mix(const Material& a, const Material& b) {
-  PairLaw law;
-  law.kn = 2 * series(a.kn, b.kn);
-  law.ks = 2 * series(a.ks, b.ks);
-  law.friction = std::min(a.friction, b.friction);
-  law.cohesion = std::min(a.cohesion, b.cohesion);
-  if (a.hertz() && b.hertz()) {
-    // 1/E* = (1 - nu_a)/(2 G_a) + (1 - nu_b)/(2 G_b);  1/G* = (2 - nu_a)/G_a + (2 - nu_b)/G_b.
-    law.hertz_n = 4.0 / 3.0 * series(2 * a.shear_modulus / (1 - a.poisson), 2 * b.shear_modulus / (1 - b.poisson));
-    law.hertz_s = 8 * series(a.shear_modulus / (2 - a.poisson), b.shear_modulus / (2 - b.poisson));
-  }
-  if (a.has_restitution || b.has_restitution) {
-    const double e = std::min(a.has_restitution ? a.restitution : 1.0, b.has_restitution ? b.restitution : 1.0);
-    law.rest_xi = restitution_xi(e, law.hertz_n > 0);
-  }
-  return law;
-}
-
 }  // namespace
 
 StepKernels make_kernels(const Model& model) {
@@ -405,21 +352,7 @@ StepKernels make_kernels(const Model& model) {
   if (damping.kind == DampKind::Local) k.local = damping.local;
   if (f.gravity) k.gravity = model.settings.gravity;
 
-  // Compact type indices, in type-number order.
-  std::vector<int> types;
-  for (const auto& [type, material] : model.materials) types.push_back(type);
-  k.type_count = static_cast<int>(types.size());
-  k.ball_type.resize(model.balls.size());
-  for (std::size_t b = 0; b < model.balls.size(); ++b)
-    k.ball_type[b] = static_cast<std::uint16_t>(std::lower_bound(types.begin(), types.end(), model.balls.type[b]) - types.begin());
-  for (int ta : types)
-    for (int tb : types) k.laws.push_back(mix(model.materials.at(ta), model.materials.at(tb)));
-  for (int t : types) {
-    const Material& m = model.materials.at(t);
-    k.alone_kn.push_back(m.hertz() ? 0 : m.kn);
-    k.alone_ks.push_back(m.hertz() ? 0 : m.ks);
-    k.alone_xi.push_back(k.laws[k.alone_xi.size() * (types.size() + 1)].rest_xi);
-  }
+  k.laws = make_pair_laws(model);
 
   if (model.settings.fixed_dt > 0) k.estimate = StepEstimate::None;
   else k.estimate = f.stiffness_damping ? StepEstimate::Damped : StepEstimate::Undamped;

@@ -1,0 +1,120 @@
+#include "cycle/pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "cycle/pair_list.hpp"
+#include "model/periodic_cell.hpp"
+#include "support/format_number.hpp"
+
+namespace trubal {
+namespace {
+
+// Fewer balls than this are tested (outside the cell, displacement) on one thread: waking workers
+// costs more.
+constexpr std::size_t kParallelBalls = 8192;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads)
+    : backend_(std::move(backend)), pool_(threads > 0 ? threads : default_threads(backend_->name())) {}
+
+void Pipeline::invalidate() {
+  ref_.invalidate();
+  moved_known_ = false;
+  fresh_ = false;
+  model_ = nullptr;
+}
+
+bool Pipeline::any_outside(const Model& model) {
+  const std::size_t n = model.balls.size();
+  const int parts = pool_.size();
+  partial_.assign(parts, 0.0);
+  pool_.run([&](int t) {
+    partial_[t] = outside_cell(model, split_point(n, parts, t), split_point(n, parts, t + 1)) ? 1.0 : 0.0;
+  }, n >= kParallelBalls);
+  return std::any_of(partial_.begin(), partial_.end(), [](double m) { return m != 0; });
+}
+
+bool Pipeline::needs_rebuild(const Model& model) {
+  const bool known = moved_known_;   // the last step measured the displacements as it moved the balls
+  moved_known_ = false;
+  if (model_ != &model || !scratch_.fits(model.contacts, model.balls.size())) return true;
+  const double limit2 = ref_.displacement_limit2(model);
+  if (!(limit2 >= 0)) return true;
+  if (known) return !(step_.moved2() <= limit2);
+  const Balls& b = model.balls;
+  const std::size_t n = b.size();
+  const int parts = pool_.size();
+  partial_.assign(parts, 0.0);
+  pool_.run([&](int t) { partial_[t] = ref_.max_displacement2(b, split_point(n, parts, t), split_point(n, parts, t + 1)); },
+            n >= kParallelBalls);
+  double moved2 = 0;
+  for (double m : partial_) moved2 = std::max(moved2, m);   // a max is exact in any order
+  return !(moved2 <= limit2);
+}
+
+void Pipeline::rebuild(Model& model) {
+  const Balls& b = model.balls;
+  const std::size_t n = b.size();
+  double skin = 0;
+  if (backend_->keeps_list()) {
+    skin = VerletReference::skin_for(b);
+    if (model.space.periodic) skin = periodic_skin(model, skin);
+  }
+  check_periodic_cell(model);
+  backend_->find_pairs(model, skin, pool_, pairs_);
+  // A backend asked every step mostly finds the list it found before: nothing to carry over then.
+  if (backend_->keeps_list() || model_ != &model || !holds_pairs(model.contacts, pairs_)) install_pairs(model.contacts, pairs_);
+  if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
+  if (backend_->keeps_list()) ref_.record(model, skin);
+  model_ = &model;
+}
+
+void Pipeline::prepare(Model& model) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // The rare wrap itself is serial; the test for it is shared out.
+  if (model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
+  if (!backend_->keeps_list() || needs_rebuild(model)) rebuild(model);
+  fresh_ = true;
+  times_.detect += seconds_since(t0);
+}
+
+void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
+  // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
+  if (!fresh_ || model_ != &model) prepare(model);
+  fresh_ = false;
+  const bool measure = backend_->keeps_list() && ref_.x.size() == model.balls.size();
+  step_.run(pool_, model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
+  moved_known_ = measure;
+}
+
+PipelineCounters Pipeline::counters() const {
+  return {ref_.rebuilds(), step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0, backend_->pair_tests()};
+}
+
+std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
+  auto lines = backend_->info();
+  if (backend_->keeps_list()) {
+    lines.emplace_back("pair list skin", format_number(ref_.skin()));
+    lines.emplace_back("pair list rebuilds", std::to_string(ref_.rebuilds()));
+  }
+  const int used = step_.active();
+  if (used > 0 && used < pool_.size())
+    lines.emplace_back("threads used", std::to_string(used) +
+                                           (used > 1 ? " (one per block of 256 balls)"
+                                                     : " (the balls fill one block of 256, or sharing the step was "
+                                                       "timed no faster: a small scene, or balls near in space far "
+                                                       "apart in numbering)"));
+  return lines;
+}
+
+std::unique_ptr<Pipeline> make_pipeline(std::string_view backend, int threads, std::uint64_t max_memory) {
+  return std::make_unique<Pipeline>(make_backend(backend, {threads, max_memory}), threads);
+}
+
+}  // namespace trubal

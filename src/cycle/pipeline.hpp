@@ -1,0 +1,81 @@
+// The one step pipeline every run uses: wrap the balls into a periodic cell, keep the pair list
+// (the backend finds pairs; the skin rule of cycle/verlet.hpp says when), install it with its
+// history, then the contact loops and the law of motion over the thread pool (cycle/parallel_step.hpp).
+// Threads are a setting of the pipeline; the backend is only its pair search.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "backends/backend.hpp"
+#include "cycle/kernels.hpp"
+#include "cycle/parallel_step.hpp"
+#include "cycle/phase_times.hpp"
+#include "cycle/step_scratch.hpp"
+#include "cycle/verlet.hpp"
+#include "support/thread_pool.hpp"
+
+namespace trubal {
+
+// Counters for tests and PRINT info.
+struct PipelineCounters {
+  std::size_t rebuilds = 0;        // pair searches that built a new list
+  int threads_used = 0;            // threads the steps share their work among (0 before the first)
+  double skin = 0;                 // of the list now (0 for a backend that keeps none)
+  std::uint64_t pair_tests = 0;    // the backend's count, where it keeps one
+};
+
+class Pipeline {
+ public:
+  // threads <= 0: the backend's default.
+  Pipeline(std::unique_ptr<Backend> backend, int threads);
+
+  const Backend& backend() const { return *backend_; }
+  int threads() const { return pool_.size(); }
+
+  // Brings the pair list and its index up to date for the current positions (wrapping balls into
+  // a periodic cell first), without computing forces.
+  void prepare(Model& model);
+  // One step: prepare, contact forces and each ball's sums, motion.
+  void step(Model& model, const StepKernels& kernels, StepSums& sums);
+  // The balls or the table were changed outside cycling: the next step searches afresh.
+  void invalidate();
+
+  PipelineCounters counters() const;
+  std::vector<std::pair<std::string, std::string>> info() const;
+  // Time spent in each phase since reset_times().
+  const PhaseTimes& times() const { return times_; }
+  PhaseTimes& times() { return times_; }
+
+  // What run_cycles keeps between CYCLEs (its rescue copy of the state), so that each CYCLE does
+  // not fault in fresh pages for it.
+  template <class T> T& keep() {
+    if (!kept_) kept_ = std::make_shared<T>();
+    return *std::static_pointer_cast<T>(kept_);
+  }
+
+ private:
+  void rebuild(Model& model);
+  bool needs_rebuild(const Model& model);
+  bool any_outside(const Model& model);
+
+  std::unique_ptr<Backend> backend_;
+  ThreadPool pool_;
+  StepScratch scratch_;
+  ParallelStep step_;
+  VerletReference ref_;
+  PairCandidates pairs_;
+  PhaseTimes times_;
+  std::vector<double> partial_;     // per thread: a test's partial answer
+  const Model* model_ = nullptr;    // the model the list and index were made for
+  bool moved_known_ = false;        // step_.moved2() holds the displacements of the current positions
+  bool fresh_ = false;              // searched at the current positions (nothing moved since)
+  std::shared_ptr<void> kept_;
+};
+
+// A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument).
+std::unique_ptr<Pipeline> make_pipeline(std::string_view backend, int threads = 0, std::uint64_t max_memory = 0);
+
+}  // namespace trubal

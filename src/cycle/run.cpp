@@ -1,0 +1,180 @@
+// The loop over steps, its time step and its guard (cycle/run.hpp).
+#include "cycle/run.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "cycle/kernels.hpp"
+#include "cycle/pipeline.hpp"
+#include "physics/cell.hpp"
+#include "physics/scene.hpp"
+#include "physics/timestep.hpp"
+
+namespace trubal {
+namespace {
+
+// Everything a failed step must be able to go back to.
+struct Snapshot {
+  Balls balls;
+  ContactTable contacts;
+  Energy energy;
+  Space space;
+  std::int64_t cycle = 0;
+  double time = 0, dt = 0, critical_dt = 0;
+  void take(const Model& m) {
+    balls = m.balls; contacts = m.contacts; energy = m.energy; space = m.space;
+    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
+  }
+  void restore(Model& m) const {
+    m.balls = balls; m.contacts = contacts; m.energy = energy; m.space = space;
+    m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
+  }
+};
+
+constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs about one step's memory traffic
+constexpr double kProgressSeconds = 0.2;
+
+double resting_energy_floor(const Model& model) {
+  double sum = 0;
+  const Balls& b = model.balls;
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    auto it = model.materials.find(b.type[k]);
+    if (it == model.materials.end()) continue;
+    const Material& m = it->second;
+    const double stiffness = m.hertz() ? m.shear_modulus * b.rad[k] : m.kn;   // force per length
+    const double u = 1e-6 * b.rad[k];
+    sum += 0.5 * stiffness * u * u;
+  }
+  return sum;
+}
+
+}  // namespace
+
+CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control) {
+  CycleResult result;
+  if (n <= 0) return result;
+  check_ready(model);
+  update_mass(model);
+  StepKernels kernels = make_kernels(model);
+  const double cap = hertz_step_cap(model);
+  pipeline.prepare(model);
+  if (!(model.critical_dt > 0)) model.critical_dt = critical_timestep(model);
+  // The guard: energy in must balance energy out. A step beyond the stability limit creates
+  // energy from nothing; when that is half of all the energy in play, the run stops.
+  const double friction0 = model.energy.friction_work, damping0 = model.energy.damping_work;
+  const double boundary0 = model.energy.boundary_work, gross0 = model.space.gross_work;
+  double balance_ref = 0, potential_ref = 0, scale_max = 0;
+  // A scene at rest has almost no energy, and rounding alone then looks like a large relative
+  // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
+  // an unstable step grows exponentially and passes this within a few steps.
+  const double energy_floor = resting_energy_floor(model);
+  Snapshot& snapshot = pipeline.keep<Snapshot>();
+  snapshot.take(model);
+  using Clock = std::chrono::steady_clock;
+  const auto loop_start = Clock::now();
+  auto last_progress = loop_start;
+  const std::int64_t start_cycle = model.cycle;
+  PhaseTimes& timing = pipeline.times();
+  timing = PhaseTimes{};
+  // Copies the timings into the result whichever way the loop ends.
+  auto finish = [&]() -> CycleResult& {
+    result.seconds = std::chrono::duration<double>(Clock::now() - loop_start).count();
+    result.times = timing;
+    return result;
+  };
+
+  for (std::int64_t s = 1; s <= n; ++s) {
+    const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
+    kernels.dt = dt;
+    // The per-pair results measurements read are written only where someone will read them: the
+    // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (a restored model prints
+    // right) and the cycles history and dumps record.
+    const bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
+    const Space& space = model.space;
+    const bool details = s == n || stopping || s % kSnapshotEvery == 0 ||
+                         (control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1)));
+    // A servo reads the stress and stiffness of each force pass: the contact loops sum them.
+    kernels.moments = space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2]);
+    kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
+    kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
+    StepSums sums;
+    const auto step_start = Clock::now();
+    // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
+    cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr);
+    pipeline.step(model, kernels, sums);
+    model.space.servo_measured_valid = kernels.moments;
+    if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};
+    cell_after_step(model, dt, sums.image_power);    // periodic space: the cell's work, its new edges, the strain
+    timing.step += std::chrono::duration<double>(Clock::now() - step_start).count();
+    model.cycle += 1;
+    if (details) model.contacts.results_cycle = model.cycle;
+    model.time += dt;
+    model.dt = dt;
+    model.energy.friction_work += sums.friction_work;
+    model.energy.damping_work += sums.damping_work;
+    model.energy.boundary_work += sums.boundary_work;
+    if (kernels.estimate != StepEstimate::None) {
+      const double estimate = std::min(sums.critical_dt, cap);
+      if (std::isfinite(estimate))
+        model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, cap, kernels.features.hertz);
+    }
+
+    const double dissipated = model.energy.friction_work - friction0 + model.energy.damping_work - damping0;
+    const double boundary = model.energy.boundary_work - boundary0;
+    if (s == 1) potential_ref = sums.potential;
+    const double potential = sums.potential - potential_ref;
+    const double balance = sums.kinetic + sums.strain + potential + dissipated - boundary;
+    if (s == 1) balance_ref = balance;
+    const double scale = sums.kinetic + sums.strain + std::abs(potential) + std::abs(dissipated) + std::abs(boundary) +
+                         (model.space.gross_work - gross0);
+    // Against the most energy in play so far: a bouncing ball at the top of its flight has little
+    // energy, while the contact it left (a few coarse steps) may have shifted the balance a little.
+    scale_max = std::max(scale_max, scale);
+    if (!std::isfinite(balance) || std::abs(balance - balance_ref) > 0.5 * scale_max + energy_floor) {
+      const std::size_t ball = sums.fastest_ball < model.balls.size() ? sums.fastest_ball : 0;
+      const std::int64_t id = model.balls.size() ? model.balls.id[ball] : 0;
+      const double speed = std::sqrt(sums.fastest_speed2);
+      const std::int64_t bad_cycle = model.cycle;
+      snapshot.restore(model);
+      pipeline.invalidate();
+      const double frac = model.settings.frac;
+      std::string advice;
+      if (model.settings.fixed_dt > 0)
+        advice = fmt::format("try TSTEP {:.3g} (now {:.3g}; critical step about {:.3g})", 0.5 * critical_timestep(model),
+                             model.settings.fixed_dt, critical_timestep(model));
+      else
+        advice = fmt::format("try FRAC {:.3g} (now {:.3g})", std::min(0.8, 0.5 * frac), frac);
+      result.unstable = true;
+      result.done = model.cycle - start_cycle;
+      result.message = fmt::format(
+          "unstable at cycle {}: ball {} moved at {:.3g} and energy was created; the model is back at cycle {}, "
+          "its last good state; {}",
+          bad_cycle, id, speed, model.cycle, advice);
+      return finish();
+    }
+    result.done = s;
+    if (control.after_step) {
+      const auto output_start = Clock::now();
+      control.after_step(model);
+      timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
+    }
+    if (s % kSnapshotEvery == 0) snapshot.take(model);
+    if (control.progress && (s & 7) == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_progress).count() > kProgressSeconds) {
+        control.progress(s, n);
+        last_progress = now;
+      }
+    }
+    if (stopping) {   // seen before this step, which therefore wrote the details
+      result.interrupted = s < n;
+      break;
+    }
+  }
+  return finish();
+}
+
+}  // namespace trubal

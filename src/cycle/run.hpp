@@ -1,0 +1,50 @@
+// The loop over steps: CYCLE's n steps through the one pipeline (cycle/pipeline.hpp), the time
+// step, the instability guard and its rescue copy, observers between steps.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "cycle/phase_times.hpp"
+#include "model/model.hpp"
+
+namespace trubal {
+
+class Pipeline;
+
+struct CycleControl {
+  const std::atomic<bool>* interrupt = nullptr;   // set by Ctrl-C: stop at the end of the step
+  // Called after every completed step (history, dumps); keep it cheap.
+  std::function<void(const Model&)> after_step;
+  // Whether after_step will read the contacts' results (normal, overlap, forces, state) after the
+  // step that ends at this cycle; steps nobody reads skip writing them. Unset: every step.
+  std::function<bool(std::int64_t cycle)> reads_contacts;
+  // Called now and then for progress reports.
+  std::function<void(std::int64_t done, std::int64_t total)> progress;
+};
+
+struct CycleResult {
+  std::int64_t done = 0;
+  bool interrupted = false;
+  bool unstable = false;
+  std::string message;              // for an unstable run: cycle, ball, suggested FRAC
+  double seconds = 0;               // wall time of the loop
+  PhaseTimes times;                 // where it went
+};
+
+// Runs n steps (or until interrupted or unstable) on the pipeline. On instability the model is left
+// at the last good state, which can be printed and saved.
+//
+// What a step leaves current (the contract every reader relies on): positions at t + dt,
+// velocities and spins at t + dt/2, the shear history and the servo's moments of the force pass at
+// t, and model.cycle, time, dt, critical_dt, energy advanced. The per-contact results (normal,
+// overlap, forces, stiffness, work, state) and the balls' unbalanced forces and moments are those
+// of the force pass of the step that ended at cycle ContactTable::results_cycle: every CYCLE's
+// last step writes them, and so do the steps whose cycle an observer reads (reads_contacts), the
+// step a Ctrl-C ends and every 500th (the rescue copy's); other steps skip the writes and compute
+// the same numbers.
+CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control);
+
+}  // namespace trubal

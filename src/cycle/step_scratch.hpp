@@ -1,0 +1,38 @@
+// The working memory of a step, kept by the pipeline between steps and never saved: the index of
+// the pair list the contact loops walk, the per-ball contact sums, the next shear history.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+// The contact sums of one ball in one cache line: total contact force, sum of n x shear force
+// (the moment is -R t), and the stiffness sums the time-step estimate uses.
+struct alignas(64) PairForce {
+  double fx, fy, fz, tx, ty, tz;
+  double kmax, ks;                                      // max(k_n, k_s) and k_s now
+};
+
+struct StepScratch {
+  std::vector<std::uint32_t> run_begin;   // first pair with i >= b, for b = 0 .. balls
+  std::uint64_t list_version = 0;         // the ContactTable::list_version this index is of
+  // The contact sums per ball (sign for ball i included), added in the same order (lower partners
+  // ascending, then higher ones) whichever thread adds them, so they are the same to the bit.
+  std::vector<PairForce> ball_force;
+  std::vector<double> ball_cn;            // the dashpot coefficients' sum (time step with dashpots)
+  // The shear history a step writes (read from the table's, which other threads may still read
+  // for their cross pairs), swapped in after the contact pass.
+  std::vector<double> fsx_next, fsy_next, fsz_next;
+
+  // Whether the index is of this table, for this many balls.
+  bool fits(const ContactTable& table, std::size_t balls) const {
+    return list_version != 0 && list_version == table.list_version && run_begin.size() == balls + 1 && fsx_next.size() == table.size();
+  }
+  // Indexes the table's pair list (sorted by i, then j) for `balls` balls.
+  void index(const ContactTable& table, std::size_t balls);
+};
+
+}  // namespace trubal

@@ -1,0 +1,43 @@
+// The contact law of every pair of ball types, mixed once per CYCLE from the materials
+// (doc/physics.md "Mixed materials"), and what a ball without contacts counts as touching.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "model/model.hpp"
+#include "physics/contact_law.hpp"
+
+namespace trubal {
+
+struct PairLaws {
+  int type_count = 1;                       // materials, by compact index in type-number order
+  std::vector<std::uint16_t> ball_type;     // compact type index per ball
+  std::vector<PairLaw> table;               // by pair of compact indices (type_count^2 entries)
+  // A ball without contacts counts as touching one ball of its own kind (per compact type).
+  std::vector<double> alone_kn, alone_ks, alone_xi;
+
+  const PairLaw& law(std::size_t i, std::size_t j) const {
+    return type_count == 1 ? table[0] : table[ball_type[i] * type_count + ball_type[j]];
+  }
+};
+
+PairLaws make_pair_laws(const Model& model);
+
+// The stiffness sums of a ball with no contact (sum_kmax 0): those of one contact with a ball of
+// its own kind; its dashpot sum only where `sum_cn` is given.
+inline void alone_sums(const PairLaws& laws, std::size_t ball, double mass, double& sum_kmax, double& sum_ks,
+                       double* sum_cn) {
+  const std::uint16_t t = laws.type_count == 1 ? 0 : laws.ball_type[ball];
+  const double kn = laws.alone_kn[t];
+  sum_kmax = kn > laws.alone_ks[t] ? kn : laws.alone_ks[t];
+  sum_ks = laws.alone_ks[t];
+  if (sum_cn) *sum_cn = 2 * laws.alone_xi[t] * std::sqrt(kn * 0.5 * mass);
+}
+
+// The damping ratio that gives restitution e in a head-on impact (linear law with the no-pull
+// clamp: exact; Hertz: the usual -ln e / sqrt(pi^2 + ln^2 e)).
+double restitution_xi(double e, bool hertz);
+
+}  // namespace trubal

@@ -1,0 +1,100 @@
+#include "physics/scene.hpp"
+
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "model/periodic_cell.hpp"
+
+namespace trubal {
+
+static std::set<int> used_types(const Model& model) {
+  return std::set<int>(model.balls.type.begin(), model.balls.type.end());
+}
+
+std::string Features::describe() const {
+  std::string s = hertz ? "hertz-mindlin" : "linear";
+  if (friction) s += " shear";
+  if (rotation) s += " rotation";
+  if (stiffness_damping) s += " dashpots";
+  if (mass_damping == DampKind::Rayleigh) s += " mass-damping";
+  if (mass_damping == DampKind::Local) s += " local-damping";
+  if (gravity) s += " gravity";
+  if (applied) s += " applied-loads";
+  if (periodic) s += " periodic";
+  return s;
+}
+
+Features scene_features(const Model& model) {
+  Features f;
+  const Balls& b = model.balls;
+  const Damping& damping = model.settings.damping;
+  bool restitution = false;
+  f.friction = f.hertz = false;
+  for (int type : used_types(model)) {
+    const auto it = model.materials.find(type);
+    if (it == model.materials.end()) continue;
+    const Material& m = it->second;
+    f.hertz = f.hertz || m.hertz();
+    f.friction = f.friction || m.ks > 0 || m.hertz();
+    restitution = restitution || m.has_restitution;
+  }
+  f.stiffness_damping = restitution || (damping.kind == DampKind::Rayleigh && damping.beta > 0);
+  if (damping.kind == DampKind::Rayleigh && damping.alpha > 0) f.mass_damping = DampKind::Rayleigh;
+  else if (damping.kind == DampKind::Local && damping.local > 0) f.mass_damping = DampKind::Local;
+  const auto& g = model.settings.gravity;
+  f.gravity = g[0] != 0 || g[1] != 0 || g[2] != 0;
+  bool free_spin = false, spinning = false, moments = false;
+  f.applied = false;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    free_spin = free_spin || (b.fixed[i] & kSpin) != kSpin;
+    spinning = spinning || b.wx[i] != 0 || b.wy[i] != 0 || b.wz[i] != 0;
+    moments = moments || b.amx[i] != 0 || b.amy[i] != 0 || b.amz[i] != 0;
+    f.applied = f.applied || moments || b.ax[i] != 0 || b.ay[i] != 0 || b.az[i] != 0;
+  }
+  f.rotation = (f.friction && free_spin) || spinning || moments;
+  f.periodic = model.space.periodic;
+  return f;
+}
+
+void check_ready(const Model& model) {
+  check_periodic_cell(model);
+  bool hertz = false, linear = false;
+  for (int type : used_types(model)) {
+    const auto it = model.materials.find(type);
+    if (it == model.materials.end())
+      throw std::runtime_error(fmt::format("type {0} has no properties (PROP type {0} kn ... ks ... dens ...)", type));
+    const Material& m = it->second;
+    if (!(m.density > 0))
+      throw std::runtime_error(fmt::format("type {0} has no density (PROP type {0} dens ...)", type));
+    if (m.hertz()) {
+      if (!(m.poisson >= 0 && m.poisson < 0.5))
+        throw std::runtime_error(fmt::format("type {0} needs a Poisson ratio in [0, 0.5) (PROP type {0} poisson ...)", type));
+      hertz = true;
+    } else if (!(m.kn > 0)) {
+      throw std::runtime_error(fmt::format(
+          "type {0} has no stiffness (PROP type {0} kn ... ks ..., or shear ... poisson ...)", type));
+    } else {
+      linear = true;
+    }
+    if (m.has_restitution && !(m.restitution > 0 && m.restitution <= 1))
+      throw std::runtime_error(fmt::format("type {0}: restitution must be in (0, 1] (PROP type {0} rest ...)", type));
+  }
+  if (hertz && linear)
+    throw std::runtime_error("the balls mix Hertz-Mindlin and linear types; give every type the same law");
+}
+
+void update_mass(Model& model) {
+  Balls& b = model.balls;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    const auto it = model.materials.find(b.type[i]);
+    const double density = it == model.materials.end() ? 0 : it->second.density;
+    const double r = b.rad[i];
+    b.mass[i] = density * 4.0 / 3.0 * M_PI * r * r * r;
+    b.inertia[i] = 0.4 * b.mass[i] * r * r;
+  }
+}
+
+}  // namespace trubal

@@ -1,0 +1,30 @@
+// What a scene models, read off the model once per CYCLE: the features that choose the kernels,
+// the readiness checks, the masses.
+#pragma once
+
+#include <string>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+// What a scene uses; each flag off removes work from the kernels (chosen once per CYCLE).
+struct Features {
+  bool rotation = true;     // some ball has a free spin component and shear forces exist
+  bool friction = true;     // some material has ks > 0 (shear forces at all)
+  bool hertz = false;
+  bool stiffness_damping = false;   // Rayleigh beta or restitution dashpots
+  DampKind mass_damping = DampKind::None;
+  bool gravity = false;
+  bool applied = false;
+  bool periodic = false;
+  std::string describe() const;     // for PRINT info
+};
+
+Features scene_features(const Model& model);
+
+// Checks that every ball's type has density and stiffness; throws std::runtime_error naming the type.
+void check_ready(const Model& model);
+// Derives mass and moment of inertia from the type densities.
+void update_mass(Model& model);
+}  // namespace trubal

@@ -1,0 +1,96 @@
+#include "physics/timestep.hpp"
+
+#include <limits>
+
+#include "model/periodic_cell.hpp"
+#include "physics/contact_law.hpp"
+#include "physics/pair_laws.hpp"
+#include "physics/scene.hpp"
+
+namespace trubal {
+namespace {
+
+// The held critical step of a Hertz scene (see next_critical_step): shrunk only when the step would
+// exceed this fraction of the critical estimate (or FRAC itself, when FRAC is larger), and grown
+// within a contact episode only when the estimate has risen this many times above it.
+constexpr double kHeldStability = 0.9;
+constexpr double kHeldGrowth = 2.0;
+
+}  // namespace
+
+// pi R sqrt(rho/G) / (0.1631 nu + 0.8766) for the smallest Hertz ball.
+double hertz_step_cap(const Model& model) {
+  double cap = std::numeric_limits<double>::infinity();
+  const Balls& b = model.balls;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    const auto it = model.materials.find(b.type[i]);
+    if (it == model.materials.end() || !it->second.hertz()) continue;
+    const Material& m = it->second;
+    cap = std::min(cap, M_PI * b.rad[i] * std::sqrt(m.density / m.shear_modulus) / (0.1631 * m.poisson + 0.8766));
+  }
+  return cap;
+}
+
+double next_critical_step(double held, double estimate, double frac, double cap, bool hertz) {
+  if (!hertz || !(held > 0)) return estimate;
+  // Between contact episodes (nothing stiffer than a lone Hertz ball's cap) the step is free.
+  if (!(estimate < cap)) return estimate;
+  // Stability: the step frac * held must stay below kHeldStability (or frac) times the estimate.
+  if (frac * held > std::max(kHeldStability, frac) * estimate) return estimate;
+  // A much softer state (contacts unloaded): take the longer step, a bounded number of jumps.
+  if (estimate > kHeldGrowth * held) return estimate;
+  return held;
+}
+
+double critical_timestep(const Model& model) {
+  const PairLaws laws = make_pair_laws(model);
+  const Features features = scene_features(model);
+  const Damping& damping = model.settings.damping;
+  const double beta = damping.kind == DampKind::Rayleigh ? damping.beta : 0;
+  const Balls& b = model.balls;
+  const ContactTable& c = model.contacts;
+  const std::size_t n = b.size();
+  // Per-ball sums over the touching pairs, added in list order: ascending partner, as the gather.
+  struct Sums { double kmax = 0, ks = 0, cn = 0; };
+  std::vector<Sums> sums(n);
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const std::size_t i = c.i[p], j = c.j[p];
+    if (i >= n || j >= n) continue;   // a stale list: count what is still valid
+    const PairLaw& law = laws.law(i, j);
+    ContactInput in{};
+    in.dx = b.x[j] - b.x[i]; in.dy = b.y[j] - b.y[i]; in.dz = b.z[j] - b.z[i];
+    if (model.space.periodic && p < c.image_x.size()) {
+      double ox, oy, oz;
+      image_offset(cell_frame(model.space), c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
+      in.dx = image_delta(b.x[j], b.x[i], ox);
+      in.dy = image_delta(b.y[j], b.y[i], oy);
+      in.dz = image_delta(b.z[j], b.z[i], oz);
+    }
+    in.ri = b.rad[i]; in.rj = b.rad[j];
+    if (law.rest_xi > 0) in.mstar = b.mass[i] * b.mass[j] / (b.mass[i] + b.mass[j]);
+    using namespace contact_bits;
+    const ContactResult r = features.hertz ? contact_force<kHertz | kDashpot>(law, in, 0, 0)
+                                             : contact_force<kDashpot>(law, in, 0, 0);
+    if (r.state == 0) continue;
+    for (std::size_t ball : {i, j}) {
+      sums[ball].kmax += std::max(r.kn, r.ks);
+      sums[ball].ks += r.ks;
+      sums[ball].cn += r.cn;
+    }
+  }
+  const bool rotation = features.rotation;
+  double step = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool held = (b.fixed[i] & kVel) == kVel && (!rotation || (b.fixed[i] & kSpin) == kSpin);
+    if (held) continue;
+    double sum_kmax = sums[i].kmax, sum_ks = sums[i].ks, sum_cn = sums[i].cn;
+    if (sum_kmax == 0) alone_sums(laws, i, b.mass[i], sum_kmax, sum_ks, &sum_cn);
+    const double omega2 = ball_omega2(b.mass[i], sum_kmax, sum_ks, rotation);
+    if (!(omega2 > 0)) continue;
+    const double omega = std::sqrt(omega2);
+    step = std::min(step, damped_critical_step(omega, 0.5 * beta * omega + sum_cn / (b.mass[i] * omega)));
+  }
+  return std::min(step, hertz_step_cap(model));
+}
+
+}  // namespace trubal

@@ -1,0 +1,50 @@
+// The time step, in one place (doc/physics.md "Time step"): the critical step of a state, the
+// per-ball frequency bound the motion loop also uses, the Hertz cap, and the rule that holds a
+// Hertz scene's step through a contact episode.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "model/model.hpp"
+
+namespace trubal {
+
+// Critical time step of the current state (before FRAC), see PHYSICS.md "Time step".
+double critical_timestep(const Model& model);
+// The critical step the next cycle uses (its step is FRAC times this), from the one held now and the
+// estimate of the state just computed (both capped by the Rayleigh step of the Hertz balls, `cap`).
+// Linear law: the estimate, every cycle. Hertz: the tangent stiffness, and so the estimate, changes
+// every step of a contact, and a step that follows it costs central differences their time symmetry
+// (first-order impacts). So the held step is kept through a contact episode and replaced by the
+// estimate only (1) between episodes, when no contact is stiffer than the cap; (2) when stability
+// needs it: FRAC times the held step above max(0.9, FRAC) times the estimate; (3) when the estimate
+// has grown to twice the held step. The step then changes a bounded number of times per contact,
+// whatever FRAC, and the rebound is second order in the step.
+double next_critical_step(double held, double estimate, double frac, double cap, bool hertz);
+// The Rayleigh-wave time of the smallest Hertz ball: a Hertz contact has no stiffness at first
+// touch, so this caps the step (infinite without Hertz balls).
+double hertz_step_cap(const Model& model);
+
+// Upper bound on the squared highest frequency of the modes that involve one ball: block
+// Gershgorin row sums of M^-1 K over the ball's contacts, spins measured as c R w with inertia
+// 2/5 m / c^2. Each contact couples a translation to its own and its partner's translation
+// (norm max(k_n, k_s)) and spin (k_s each, times c), and a spin to its own and its partner's spin
+// (k_s) and translation (k_s each, over c): translation row 2 sum max(k_n, k_s) + 2 c sum k_s, spin
+// row (2 + 2 / c) sum k_s / (2/5). Any c > 0 gives a bound (a diagonal similarity leaves the
+// eigenvalues alone); c = 2.5 balances the rows when k_n = k_s: 7 sum k / m, exact for the slip mode
+// of two equal balls (7 k_s / m), against 10 sum k / m with c = 1.
+inline constexpr double kSpinScale = 2.5;
+inline double ball_omega2(double mass, double sum_kmax, double sum_ks, bool rotation) {
+  const double row = rotation ? std::max(2 * sum_kmax + 2 * kSpinScale * sum_ks, (2 + 2 / kSpinScale) / 0.4 * sum_ks)
+                              : 2 * sum_kmax;
+  return row / mass;
+}
+
+// Critical step of a mode with frequency omega and damping ratio xi under central differences
+// with a lagged dashpot: (2 / omega)(sqrt(1 + xi^2) - xi).
+inline double damped_critical_step(double omega, double xi) {
+  return 2.0 / omega * (std::sqrt(1 + xi * xi) - xi);
+}
+
+}  // namespace trubal
