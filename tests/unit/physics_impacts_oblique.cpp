@@ -92,9 +92,9 @@ TEST_CASE("physics: Chung & Ooi 4, Al oxide sliding on a plane at 45 deg spins a
   const Material al_oxide = with_restitution(test::hertz_material(3.8e11, 0.23, 4000, 0.092), 0.98);
   const double r = 0.0025, mu = 0.092, e = 0.98, speed = 3.9;
   const double vn = speed * std::cos(M_PI / 4), vt = speed * std::sin(M_PI / 4);
-  // 45 deg is beyond gross sliding, tan > 3.5 mu (1 + e) (32.5 deg): 502 rad/s (VALIDATION.md).
+  // 45 deg is beyond gross sliding, tan > 3.5 mu (1 + e) (32.5 deg): 502.35 rad/s (VALIDATION.md:
+  // 502.3), the value trubal's spin is checked against below.
   const double spin = 2.5 * mu * (1 + e) * vn / r, dv = mu * (1 + e) * vn;
-  CHECK(spin == Approx(502.3).epsilon(1e-3));
   // FRAC 0.1 (about 110 steps in the contact). What is left is the restitution dashpot: it reads the
   // approach speed half a step late (first order in the step), which moves the normal impulse and so
   // the friction impulse by ~4e-4 here (and its no-pull clamp by 4e-5): 0.2% holds it with room.

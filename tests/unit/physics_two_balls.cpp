@@ -98,14 +98,21 @@ TEST_CASE("physics: Hertz head-on impact matches the closed form", "[physics]") 
   const double r = 0.01, v = 20;
   const double m = 0.5 * test::sphere_mass(2800, r), rs = 0.5 * r;
   const double e_star = glass.shear_modulus / (1 - glass.poisson);
+  // The closed forms give 40.336 us and 274.11 um: the paper's values to their four figures.
   const double t_c = 2.868 * std::pow(m * m / (rs * e_star * e_star * v), 0.2);
   const double d_max = std::pow(15 * m * v * v / (16 * e_star * std::sqrt(rs)), 0.4);
-  CHECK(t_c == Approx(40.34e-6).epsilon(0.001));
-  CHECK(d_max == Approx(274.1e-6).epsilon(0.001));
   const Impact out = head_on(glass, 0.1, v, r);
   INFO("dt " << out.dt);
+  // Trubal's numbers against the paper's values themselves, which also pins the scene to test 1
+  // (a change of R, v or the material would move the closed form and trubal together). The paper
+  // rounds to four figures (1.2e-4); FRAC 0.1 (31 steps in the contact) left -4.3e-4 in the
+  // duration (second order in the step) and 5e-5 in the overlap: 0.2% and 0.1% hold them with room.
+  CHECK(out.duration == Approx(40.34e-6).epsilon(0.002));
+  CHECK(out.max_overlap == Approx(274.1e-6).epsilon(0.001));
+  // And against the closed form, loosely (1%: what any step error of this order must stay within).
   CHECK(out.duration == Approx(t_c).epsilon(0.01));
   CHECK(out.max_overlap == Approx(d_max).epsilon(0.01));
+  // No dissipation: the rebound is the approach speed but for the step's error (4e-5 measured).
   CHECK(out.rebound == Approx(v).epsilon(0.01));
 }
 

@@ -28,10 +28,12 @@ TEST_CASE("validation: Rowe's triaxial test, 403 balls, peak stress ratio and a 
   TempDir dir;
   WorkingDir here(dir.path());
   std::string deck = slurp(std::string(TRUBAL_SOURCE_DIR) + "/examples/rowe403.dat");
-  // Record often, so that the first row is at eps1 ~ 0 (the deck records every 10 cycles).
-  const auto at = deck.find("every 10 ");
+  // Record often, so that the first row is at eps1 ~ 0 (the deck records every 10 cycles), and the
+  // stress too: the average stress tensor of the contact forces (the virial, over the START box).
+  const std::string recorded = "contacts every 10 ";
+  const auto at = deck.find(recorded);
   REQUIRE(at != std::string::npos);
-  deck.replace(at, 9, "every 5 ");
+  deck.replace(at, recorded.size(), "contacts stress every 5 ");
   const auto plot = deck.find("\nplot ");
   if (plot != std::string::npos) deck.erase(plot + 1, deck.find('\n', plot + 1) - plot);
   Harness h;
@@ -43,10 +45,17 @@ TEST_CASE("validation: Rowe's triaxial test, 403 balls, peak stress ratio and a 
   const auto& table = *h.session.history().tables().front();
   REQUIRE(table.columns[2] == "ratio");
   REQUIRE(table.columns[3] == "axial");
-  double peak = 0, eps_peak = 0, eps_last = 0, max_unbal = 0;
+  auto column = [&](const std::string& name) {
+    const auto c = std::find(table.columns.begin(), table.columns.end(), name);
+    REQUIRE(c != table.columns.end());
+    return static_cast<std::size_t>(c - table.columns.begin());
+  };
+  const std::size_t s11 = column("s11"), s22 = column("s22"), s33 = column("s33");
+  double peak = 0, eps_peak = 0, eps_last = 0, max_unbal = 0, virial_peak = 0;
   for (const auto& row : table.rows) {
     REQUIRE(std::isfinite(row[2]));
     if (row[2] > peak) peak = row[2], eps_peak = row[3];
+    virial_peak = std::max(virial_peak, row[s33] / (0.5 * (row[s11] + row[s22])));
     eps_last = row[3];
     if (row[3] > 0.002) max_unbal = std::max(max_unbal, row[4]);   // past the start-up wave
   }
@@ -58,13 +67,19 @@ TEST_CASE("validation: Rowe's triaxial test, 403 balls, peak stress ratio and a 
   CHECK(table.rows.front()[2] < 1.3);
   // The deck goes to 10% axial strain.
   CHECK(eps_last == Approx(0.10).margin(0.005));
-  // The peak, at small strain, within 3% of the closed form for this sample (2.56 x 30/37), and
-  // the virial stress ratio within 5% of Rowe's 2.56.
+  // Rowe's 2 tan(45 + phi_mu) = 2 (1 + f) / (1 - f) = 2.5599 for f = tan 7 deg (his 2.56).
   const double closed_form = 2 * (1 + std::tan(7 * M_PI / 180)) / (1 - std::tan(7 * M_PI / 180));
-  CHECK(closed_form == Approx(2.56).margin(0.005));
-  INFO("peak R " << peak << " at eps1 " << eps_peak);
+  INFO("peak R " << peak << " at eps1 " << eps_peak << "; peak s33 / mean(s11, s22) " << virial_peak);
+  // The peak, at small strain, within 3% of the closed form for this sample (2.56 x 30/37); measured
+  // 2.057, -0.9%, the dashpots' share at this platen speed (README, "Rowe's triaxial test").
   CHECK(peak == Approx(closed_form * 30 / 37).epsilon(0.03));
-  CHECK(peak * 37 / 30 == Approx(2.56).epsilon(0.05));
+  // The stress tensor trubal sums from the contact forces (HIST stress: sum of f (x) l over the
+  // contacts; no area, no membrane cell, so the ratio needs no 30/37): with every inclined contact
+  // sliding and the in-plane ones open, each contact alone has s33 / s11 = 2 (1 + f) / (1 - f), so its
+  // s33 / mean(s11, s22) peaks at Rowe's 2.56. 5%: the sample is not wholly in that state at the
+  // peak (2% of the contacts still stick there, and the platen balls, moved at a fixed speed, and
+  // the membrane balls, with their spins fixed, are the pattern's edges); measured 2.475, -3.3%.
+  CHECK(virial_peak == Approx(closed_form).epsilon(0.05));
   CHECK(eps_peak > 0.002);
   CHECK(eps_peak < 0.03);
   // Stable and quasi-static: past the start-up the balls stay near equilibrium (mean unbalanced
