@@ -29,9 +29,11 @@ static void run_backend(Context& ctx, Args& args) {
 
 const Command backend_command = {
     "BACKEND", {}, "BACKEND serial|allpairs|threaded [threads n] [maxmem bytes]", "choose how contacts are found",
-    "Chooses the backend that finds contacts and sums forces; switching keeps balls, contacts and their shear "
-    "history, and every backend gives the same numbers, bitwise, for any thread count. serial: TRUBAL's boxes "
-    "and contact lists. threaded: the same lists, with forces and motion spread over `threads n` threads "
+    "Chooses how the pairs of balls that may touch are found, and on how many threads the step runs (the "
+    "contact forces, each ball's sums and the motion are one pipeline for every backend); switching keeps "
+    "balls, contacts and their shear history, and every backend gives the same numbers, bitwise, for any "
+    "thread count and however the run is cut into CYCLEs. serial: TRUBAL's boxes and linked lists, one thread. "
+    "threaded: the same pairs, the boxes searched and forces and motion spread over `threads n` threads "
     "(default: one per hardware thread); each thread takes a range of ball numbers, so balls near in space "
     "should be near in number (GEN numbers them so); whether sharing pays is timed in the first steps, and "
     "where it does not, one thread does the work and PRINT info says so. allpairs: TPM's arrangement, every pair of balls tested every cycle "

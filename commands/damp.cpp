@@ -27,7 +27,7 @@ static void run_damp(Context& ctx, Args& args) {
     d.lambda = args.real("lambda (fraction of critical damping)");
     d.freq = args.real("f (frequency, Hz)");
     if (d.lambda < 0 || !(d.freq > 0)) args.fail("DAMP lambda f needs lambda >= 0 and f > 0");
-    double omega = 2 * std::numbers::pi * d.freq;   // PHYSICS.md, Damping 1
+    double omega = 2 * std::numbers::pi * d.freq;   // doc/physics.md, Damping 1
     d.alpha = d.lambda * omega;
     d.beta = d.lambda / omega;
   }

@@ -43,9 +43,8 @@ void ParallelStep::split(const ContactTable& c, const StepScratch& scratch, std:
   }
   for (std::size_t k = 1; k <= blocks; ++k) cross[k] += cross[k - 1];
   // The smallest largest cost that `parts` runs of blocks can have, a run [a, b) costing
-  // start[b] - start[a] + cross[a] (its own pairs and, roughly, the cross pairs it redoes; a cross
-  // pair takes longer, 1.7 times on the periodic benchmark, but charging it 1.5 times made the
-  // 13,500-ball benchmark 3% slower in interleaved runs).
+  // start[b] - start[a] + cross[a] (its own pairs and, roughly, the cross pairs it redoes: a cross
+  // pair costs more, but weighting it made the split worse; bench/NOTES.md).
   auto fits = [&](std::size_t most, bool record) {
     std::size_t a = 0;
     for (int t = 0; t < parts; ++t) {

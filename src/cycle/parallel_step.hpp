@@ -10,8 +10,7 @@
 // gives each thread an equal share of the balls.
 //
 // Whether the threads share a step at all is timed (ParallelStep::share_now); the split itself is
-// by pair counts, not by measured thread speeds (a split by measured speeds was tried: no gain on
-// an idle machine, a loss beside a busy one, as the slow thread changes with the scheduler).
+// by pair counts, not by measured thread speeds (bench/NOTES.md says why).
 #pragma once
 
 #include <atomic>

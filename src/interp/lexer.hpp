@@ -1,4 +1,4 @@
-// The lexical rules of the command language (LANGUAGE.md "Lexical rules"): comments, continuation,
+// The lexical rules of the command language (doc/language.md "Lexical rules"): comments, continuation,
 // word separators, Fortran number forms, $variables, keyword abbreviation.
 #pragma once
 

@@ -1,4 +1,4 @@
-// RANGE phrases (LANGUAGE.md "Ranges"): which balls a command acts on.
+// RANGE phrases (doc/language.md "Ranges"): which balls a command acts on.
 #pragma once
 
 #include <array>

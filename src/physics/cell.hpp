@@ -1,4 +1,4 @@
-// Control of the periodic cell (PHYSICS.md "Periodic space"): strain rates (compression positive)
+// Control of the periodic cell (doc/physics.md "Periodic space"): strain rates (compression positive)
 // deform the cell about its centre, the shear rates as simple shear (the cell becomes a
 // parallelepiped, backends/periodic.hpp); ball velocities are total velocities and carry the
 // homogeneous field v = L (x - c), so a change of rate changes every ball's velocity; the servo

@@ -1,4 +1,4 @@
-// The force at one contact (PHYSICS.md "Contacts" and "Damping"). Every backend calls this one
+// The force at one contact (doc/physics.md "Contacts" and "Damping"). Every backend calls this one
 // function, so the arithmetic, and therefore the answer, is the same whichever pairs a backend
 // visits and however it spreads them over threads.
 #pragma once
@@ -18,7 +18,7 @@ inline constexpr unsigned kDashpot = 8;    // Rayleigh stiffness dashpots or res
 inline constexpr unsigned kCount = 16;
 }  // namespace contact_bits
 
-// Properties of a pair of ball types, already mixed (PHYSICS.md: springs in series, mu = min).
+// Properties of a pair of ball types, already mixed (doc/physics.md: springs in series, mu = min).
 struct PairLaw {
   double kn = 0, ks = 0;          // linear springs
   double friction = 0, cohesion = 0;

@@ -10,7 +10,7 @@
 
 namespace trubal {
 
-// Critical time step of the current state (before FRAC), see PHYSICS.md "Time step".
+// Critical time step of the current state (before FRAC), see doc/physics.md "Time step".
 double critical_timestep(const Model& model);
 // The critical step the next cycle uses (its step is FRAC times this), from the one held now and the
 // estimate of the state just computed (both capped by the Rayleigh step of the Hertz balls, `cap`).

@@ -9,11 +9,10 @@ namespace {
 // How long a waiting thread spins before it sleeps on the condition variable. A step's phases
 // follow each other within microseconds, and the serial work between steps (the stale-list test,
 // the engine's bookkeeping, most output) is short. A thread that sleeps costs a system call to wake
-// and, on a virtual machine, the hypervisor's wake-up of its core: with the old 0.1 ms spin the
-// two-thread step at N = 13,500 was 25% slower (trubal_bench --compare). Intel's OpenMP runtime
-// spins 200 ms by default (KMP_BLOCKTIME); we spin 20 ms, the first 50 us on the pause
-// instruction, the rest yielding the core between looks, so that an oversubscribed machine loses
-// little to the spinning thread.
+// and, on a virtual machine, the hypervisor's wake-up of its core (bench/NOTES.md has what a short
+// spin cost). Intel's OpenMP runtime spins 200 ms by default (KMP_BLOCKTIME); we spin 20 ms, the
+// first 50 us on the pause instruction, the rest yielding the core between looks, so that an
+// oversubscribed machine loses little to the spinning thread.
 constexpr std::chrono::microseconds kPauseSpin{50};
 constexpr std::chrono::milliseconds kYieldSpin{20};
 

@@ -54,7 +54,7 @@ TEST_CASE("commands: DAMP sets Rayleigh coefficients from lambda and f, or direc
   REQUIRE(h.deck("damp 0.05 0.5\n"));
   const auto& d = h.session.model().settings.damping;
   CHECK(d.kind == DampKind::Rayleigh);
-  CHECK(d.alpha == Approx(0.05 * 2 * std::numbers::pi * 0.5));   // PHYSICS.md: alpha = lambda omega
+  CHECK(d.alpha == Approx(0.05 * 2 * std::numbers::pi * 0.5));   // doc/physics.md: alpha = lambda omega
   CHECK(d.beta == Approx(0.05 / (2 * std::numbers::pi * 0.5)));   // beta = lambda / omega
   REQUIRE(h.deck("damp mass 2 stiff 3e-4\n"));
   CHECK(h.session.model().settings.damping.alpha == 2);

@@ -1,4 +1,4 @@
-// The lexical rules of LANGUAGE.md, one test per rule: first on the lexer's pieces, then through the
+// The lexical rules of doc/language.md, one test per rule: first on the lexer's pieces, then through the
 // interpreter where the rule shows in what a deck does.
 #include <catch2/catch.hpp>
 

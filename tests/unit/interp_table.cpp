@@ -47,12 +47,12 @@ TEST_CASE("interp table: entries are well formed and names are unique", "[interp
     }
     CHECK(&find_command(c->name) == c);
   }
-  // LANGUAGE.md's table: every command it lists is here (aliases included).
+  // doc/language.md's table: every command it lists is here (aliases included).
   for (const char* name : {"START", "GEN", "BALL", "CREATE", "LATTICE", "DELETE", "GROUP", "PROP", "DAMP", "FRAC",
                            "TSTEP", "GRAV", "FIX", "FREE", "INIT", "APPLY", "MEMBRANE", "STRAIN", "SERVO", "CYCLE",
                            "SOLVE", "PRINT", "HIST", "PLOT", "DUMP", "SAVE", "RESTART", "RESTORE", "BACKEND", "SET",
                            "CALL", "INCLUDE", "TITLE", "HELP", "STOP", "QUIT", "END", "EXIT"}) {
-    INFO("LANGUAGE.md command " << name);
+    INFO("doc/language.md command " << name);
     CHECK(seen.count(name) == 1);
   }
 }

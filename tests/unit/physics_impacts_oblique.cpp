@@ -1,4 +1,4 @@
-// Oblique and spinning Hertz-Mindlin impacts (VALIDATION.md 3, Chung & Ooi tests 4 and 7) against
+// Oblique and spinning Hertz-Mindlin impacts (doc/validation.md 3, Chung & Ooi tests 4 and 7) against
 // rigid-body theory in gross sliding: the tangential speed drops by mu (1 + e) Vn and the spin changes
 // by 2.5 mu (1 + e) Vn / R, whatever the elasticity, because the friction force is mu F_n all through
 // the contact and so its impulse is mu times the normal one.
@@ -92,7 +92,7 @@ TEST_CASE("physics: Chung & Ooi 4, Al oxide sliding on a plane at 45 deg spins a
   const Material al_oxide = with_restitution(test::hertz_material(3.8e11, 0.23, 4000, 0.092), 0.98);
   const double r = 0.0025, mu = 0.092, e = 0.98, speed = 3.9;
   const double vn = speed * std::cos(M_PI / 4), vt = speed * std::sin(M_PI / 4);
-  // 45 deg is beyond gross sliding, tan > 3.5 mu (1 + e) (32.5 deg): 502.35 rad/s (VALIDATION.md:
+  // 45 deg is beyond gross sliding, tan > 3.5 mu (1 + e) (32.5 deg): 502.35 rad/s (doc/validation.md:
   // 502.3), the value trubal's spin is checked against below.
   const double spin = 2.5 * mu * (1 + e) * vn / r, dv = mu * (1 + e) * vn;
   // FRAC 0.1 (about 110 steps in the contact). What is left is the restitution dashpot: it reads the

@@ -1,4 +1,4 @@
-// Law of motion: free fall, fixed balls' reactions, oblique impact with friction (VALIDATION.md 3).
+// Law of motion: free fall, fixed balls' reactions, oblique impact with friction (doc/validation.md 3).
 #include <catch2/catch.hpp>
 
 #include "physics/measure.hpp"

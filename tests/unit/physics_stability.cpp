@@ -1,4 +1,4 @@
-// Time step and the instability guard (VALIDATION.md 6), energy conservation.
+// Time step and the instability guard (doc/validation.md 6), energy conservation.
 #include <catch2/catch.hpp>
 
 #include <random>

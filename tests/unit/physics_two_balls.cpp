@@ -1,4 +1,4 @@
-// Two balls meeting head-on (VALIDATION.md 1 and 2): contact time, rebound, restitution, Hertz.
+// Two balls meeting head-on (doc/validation.md 1 and 2): contact time, rebound, restitution, Hertz.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -93,7 +93,7 @@ TEST_CASE("physics: restitution dashpot gives the set restitution (linear law)",
 }
 
 TEST_CASE("physics: Hertz head-on impact matches the closed form", "[physics]") {
-  // Glass, Chung & Ooi test 1: R = 10 mm, +/-10 m/s (VALIDATION.md 3: 274.1 um, 40.34 us).
+  // Glass, Chung & Ooi test 1: R = 10 mm, +/-10 m/s (doc/validation.md 3: 274.1 um, 40.34 us).
   const Material glass = test::hertz_material(4.8e10, 0.2, 2800);
   const double r = 0.01, v = 20;
   const double m = 0.5 * test::sphere_mass(2800, r), rs = 0.5 * r;

@@ -1,4 +1,4 @@
-// Rowe's triaxial test (VALIDATION.md section 5), Cundall's 403-ball sample, run from the example
+// Rowe's triaxial test (doc/validation.md section 5), Cundall's 403-ball sample, run from the example
 // deck as a user would, with Cundall's damping (lambda_min 0.05, f_min 0.5).
 //
 // What the peak must be. With all the inclined contacts sliding and the in-plane ones open, each
