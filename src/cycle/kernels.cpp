@@ -14,17 +14,14 @@ namespace {
 // Raw pointers, so that the compiler knows the stores into one array cannot move another's data.
 #define TRUBAL_PTR(name, vec) auto* __restrict name = (vec).data()
 
-// kDetails (a bit above the contact-law bits): also write what measurements read (normal,
-// overlap, forces, stiffness, dashpot coefficient, work, state). Without it a step writes only the
-// new shear history and the sums per ball (ContactTable::ball_force, ball_cn).
-inline constexpr unsigned kDetails = contact_bits::kCount;
-
-template <unsigned F, bool kOneLaw>
+// The pairs of [begin, end), by the law F composes; F.details: also write what measurements read
+// (normal, overlap, forces, stiffness, dashpot coefficient, work, state). Without it a step writes
+// only the new shear history and the sums per ball (StepScratch::ball_force, ball_cn).
+template <ContactFeatures F, bool kOneLaw>
 void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end,
                    StepSums& sums) {
-  using namespace contact_bits;
-  constexpr unsigned kLaw = F & (kCount - 1);
-  constexpr bool kFull = (F & kDetails) != 0;
+  constexpr ContactFeatures kLaw = F.law();
+  constexpr bool kFull = F.details;
   const Balls& b = model.balls;
   ContactTable& c = model.contacts;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
@@ -55,7 +52,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   auto flush = [&] {
     if (acc_ball == kNone) return;
     ball_sum[acc_ball] = acc;
-    if constexpr ((kLaw & kDashpot) != 0) cn_sum[acc_ball] = acc_cn;
+    if constexpr (kLaw.dashpot) cn_sum[acc_ball] = acc_cn;
   };
   for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
     const std::size_t count = std::min(kBatch, end - p0);
@@ -74,12 +71,12 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
         B.dz[q] = image_delta(z[j], z[i], oz);
         B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
       }
-      if constexpr ((kLaw & kRotation) != 0) {
+      if constexpr (kLaw.rotation) {
         B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
         B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
         B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
       }
-      if constexpr ((kLaw & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+      if constexpr (kLaw.dashpot) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
     }
     contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, next_x + p0, next_y + p0,
                                   next_z + p0);
@@ -95,18 +92,18 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
         flush();
         acc_ball = pi[p];
         acc = ball_sum[acc_ball];
-        if constexpr ((kLaw & kDashpot) != 0) acc_cn = cn_sum[acc_ball];
+        if constexpr (kLaw.dashpot) acc_cn = cn_sum[acc_ball];
       }
       acc.fx -= B.fx[q]; acc.fy -= B.fy[q]; acc.fz -= B.fz[q];
-      if constexpr ((kLaw & kRotation) != 0) { acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q]; }
+      if constexpr (kLaw.rotation) { acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q]; }
       acc.kmax += kmax; acc.ks += B.ks[q];
-      if constexpr ((kLaw & kDashpot) != 0) acc_cn += B.cn[q];
+      if constexpr (kLaw.dashpot) acc_cn += B.cn[q];
       if (pj[p] < own_end) {
         PairForce& fj = ball_sum[pj[p]];
         fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
-        if constexpr ((kLaw & kRotation) != 0) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
+        if constexpr (kLaw.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
         fj.kmax += kmax; fj.ks += B.ks[q];
-        if constexpr ((kLaw & kDashpot) != 0) cn_sum[pj[p]] += B.cn[q];
+        if constexpr (kLaw.dashpot) cn_sum[pj[p]] += B.cn[q];
       }
       if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
       if (k.moments) {   // force on j times the branch vector i -> j (zero where apart)
@@ -143,7 +140,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   for (int a = 0; a < 3; ++a) sums.stiffness_moment[a] += stiffness_moment[a];
 }
 
-template <unsigned F>
+template <ContactFeatures F>
 void contact_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
                   std::size_t own_end, StepSums& sums) {
   if (k.laws.type_count == 1) contact_range<F, true>(model, scratch, k, begin, end, own_end, sums);
@@ -154,10 +151,9 @@ void contact_loop(Model& model, StepScratch& scratch, const StepKernels& k, std:
 // ascending i for each j, and the owner's data read in order): their forces on j, added first
 // (lower partners come first in j's order), from the history before this step. The thread that
 // owns i computes the same pairs with the same arithmetic.
-template <unsigned F>
+template <ContactFeatures F>
 void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end,
                 const std::uint32_t* pairs, std::size_t pair_count) {
-  using namespace contact_bits;
   const Balls& b = model.balls;
   ContactTable& c = model.contacts;
   std::fill(scratch.ball_force.begin() + ball_begin, scratch.ball_force.begin() + ball_end, PairForce{});
@@ -189,13 +185,13 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
         B.dz[q] = image_delta(z[j], z[i], oz);
         B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
       }
-      if constexpr ((F & kRotation) != 0) {
+      if constexpr (F.rotation) {
         B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
         B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
         B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
       }
-      if constexpr ((F & kDashpot) != 0) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
-      if constexpr ((F & kShear) != 0) { hx[q] = fsx[p]; hy[q] = fsy[p]; hz[q] = fsz[p]; }
+      if constexpr (F.dashpot) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+      if constexpr (F.shear) { hx[q] = fsx[p]; hy[q] = fsy[p]; hz[q] = fsz[p]; }
     }
     // The new history is the owner's to write: here it goes to a scratch copy.
     if (k.laws.type_count == 1) contact_forces<F, true>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
@@ -204,26 +200,21 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       const std::size_t j = pj[pairs[q0 + q]];
       PairForce& fj = scratch.ball_force[j];
       fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
-      if constexpr ((F & kRotation) != 0) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
+      if constexpr (F.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
       fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q];
-      if constexpr ((F & kDashpot) != 0) scratch.ball_cn[j] += B.cn[q];
+      if constexpr (F.dashpot) scratch.ball_cn[j] += B.cn[q];
     }
   }
 }
 
-// Motion variant index: rotation + 2 loads + 4 damping kind (0..2) + 12 estimate (0..2).
-// + 36: also write each ball's unbalanced force and moment (Balls::fx.. mz), which only output
-// reads (the steps that write the contacts' details).
-inline constexpr unsigned kMotionCount = 72;
-
-template <unsigned M>
+template <MotionFeatures M>
 void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
                  StepSums& sums) {
-  constexpr bool kRot = (M & 1) != 0;
-  constexpr bool kLoads = (M & 2) != 0;
-  constexpr auto kDamp = static_cast<DampKind>((M / 4) % 3);
-  constexpr auto kEstimate = static_cast<StepEstimate>((M / 12) % 3);
-  constexpr bool kWriteForces = M >= 36;
+  constexpr bool kRot = M.rotation;
+  constexpr bool kLoads = M.loads;
+  constexpr DampKind kDamp = M.damping;
+  constexpr StepEstimate kEstimate = M.estimate;
+  constexpr bool kWriteForces = M.write_forces;
   Balls& b = model.balls;
   const double dt = k.dt;
   // Mass-proportional damping, factor form: v' = (v (1 - a dt/2) + F/m dt) / (1 + a dt/2).
@@ -327,19 +318,21 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
 
 template <std::size_t... I>
 constexpr std::array<ContactLoop, sizeof...(I)> contact_loops(std::index_sequence<I...>) {
-  return {&contact_loop<I>...};
+  return {&contact_loop<ContactFeatures::from_index(I)>...};
 }
 template <std::size_t... I>
 constexpr std::array<CrossLoop, sizeof...(I)> cross_loops(std::index_sequence<I...>) {
-  return {&cross_loop<I>...};
+  return {&cross_loop<ContactFeatures::from_index(I)>...};
 }
 template <std::size_t... I>
 constexpr std::array<MotionLoop, sizeof...(I)> motion_loops(std::index_sequence<I...>) {
-  return {&motion_loop<I>...};
+  return {&motion_loop<MotionFeatures::from_index(I)>...};
 }
-constexpr auto kContactLoops = contact_loops(std::make_index_sequence<2 * contact_bits::kCount>{});
-constexpr auto kCrossLoops = cross_loops(std::make_index_sequence<contact_bits::kCount>{});
-constexpr auto kMotionLoops = motion_loops(std::make_index_sequence<kMotionCount>{});
+// Every entry of each table, by index (ContactFeatures and MotionFeatures own the encoding). The
+// cross loop never writes details: half its table is never picked.
+constexpr auto kContactLoops = contact_loops(std::make_index_sequence<ContactFeatures::kCount>{});
+constexpr auto kCrossLoops = cross_loops(std::make_index_sequence<ContactFeatures::kCount / 2>{});
+constexpr auto kMotionLoops = motion_loops(std::make_index_sequence<MotionFeatures::kCount>{});
 
 }  // namespace
 
@@ -357,17 +350,16 @@ StepKernels make_kernels(const Model& model) {
   if (model.settings.fixed_dt > 0) k.estimate = StepEstimate::None;
   else k.estimate = f.stiffness_damping ? StepEstimate::Damped : StepEstimate::Undamped;
 
-  using namespace contact_bits;
-  const unsigned contact = (f.rotation ? kRotation : 0) | (f.friction ? kShear : 0) | (f.hertz ? kHertz : 0) |
-                           (f.stiffness_damping ? kDashpot : 0);
-  k.contacts_lean = kContactLoops[contact];
-  k.contacts_full = kContactLoops[contact | kDetails];
+  ContactFeatures contact{f.rotation, f.friction, f.hertz, f.stiffness_damping, false};
+  k.contacts_lean = kContactLoops[contact.index()];
+  k.cross = kCrossLoops[contact.index()];
+  contact.details = true;
+  k.contacts_full = kContactLoops[contact.index()];
   k.contacts = k.contacts_full;
-  k.cross = kCrossLoops[contact];
-  const unsigned motion = (f.rotation ? 1 : 0) + (f.gravity || f.applied ? 2 : 0) +
-                          4 * static_cast<unsigned>(f.mass_damping) + 12 * static_cast<unsigned>(k.estimate);
-  k.motion_lean = kMotionLoops[motion];
-  k.motion_full = kMotionLoops[motion + 36];
+  MotionFeatures motion{f.rotation, f.gravity || f.applied, f.mass_damping, k.estimate, false};
+  k.motion_lean = kMotionLoops[motion.index()];
+  motion.write_forces = true;
+  k.motion_full = kMotionLoops[motion.index()];
   k.motion = k.motion_full;
   return k;
 }

@@ -15,6 +15,7 @@
 
 #include "cycle/step_scratch.hpp"
 #include "model/model.hpp"
+#include "physics/contact/features.hpp"
 #include "physics/contact_law.hpp"
 #include "physics/pair_laws.hpp"
 #include "physics/scene.hpp"
@@ -68,6 +69,26 @@ inline constexpr std::size_t kContactBalls = 256;
 
 // How the motion loop estimates the next step.
 enum class StepEstimate : unsigned { None = 0, Undamped = 1, Damped = 2 };
+
+// What the motion loop computes, as a type (its template parameter), with the one encoding to its
+// table's index.
+struct MotionFeatures {
+  bool rotation = false;                         // spins move
+  bool loads = false;                            // gravity or applied loads
+  DampKind damping = DampKind::None;             // mass-proportional or local damping
+  StepEstimate estimate = StepEstimate::None;    // the next step's estimate
+  bool write_forces = false;                     // also each ball's unbalanced force and moment (output reads them)
+
+  static constexpr unsigned kCount = 2 * 2 * 3 * 3 * 2;
+  constexpr unsigned index() const {
+    return (rotation ? 1u : 0u) + (loads ? 2u : 0u) + 4 * static_cast<unsigned>(damping) +
+           12 * static_cast<unsigned>(estimate) + (write_forces ? 36u : 0u);
+  }
+  static constexpr MotionFeatures from_index(unsigned i) {
+    return {(i & 1u) != 0, (i & 2u) != 0, static_cast<DampKind>(i / 4 % 3), static_cast<StepEstimate>(i / 12 % 3),
+            i >= 36};
+  }
+};
 
 struct StepKernels {
   Features features;

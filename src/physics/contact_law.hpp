@@ -7,16 +7,9 @@
 #include <cstddef>
 #include <cstdint>
 
-namespace trubal {
+#include "physics/contact/models.hpp"
 
-// Feature bits of the contact kernel; each bit off removes work (chosen once per CYCLE).
-namespace contact_bits {
-inline constexpr unsigned kRotation = 1;   // spins enter the relative velocity
-inline constexpr unsigned kShear = 2;      // shear springs, friction (some ks > 0)
-inline constexpr unsigned kHertz = 4;      // Hertz-Mindlin instead of linear springs
-inline constexpr unsigned kDashpot = 8;    // Rayleigh stiffness dashpots or restitution dashpots
-inline constexpr unsigned kCount = 16;
-}  // namespace contact_bits
+namespace trubal {
 
 // Properties of a pair of ball types, already mixed (doc/physics.md: springs in series, mu = min).
 struct PairLaw {
@@ -26,10 +19,6 @@ struct PairLaw {
   double hertz_s = 0;             // Mindlin: k_s = hertz_s sqrt(R* U), hertz_s = 8 G*
   double rest_xi = 0;             // restitution dashpot damping ratio (0: none)
 };
-
-// Linear law: c = 2 xi sqrt(k m*), exact restitution for a head-on impact. Hertz (Tsuji-type, as
-// LIGGGHTS and Antypov & Elliott 2011): c = 2 sqrt(5/6) xi sqrt(k_tangent m*).
-inline constexpr double kHertzDashpotFactor = 1.8257418583505538;   // 2 sqrt(5/6)
 
 // What the kernel needs of one pair, gathered from the ball arrays.
 struct ContactInput {
@@ -79,23 +68,23 @@ struct ContactBatch {
   }
 };
 
-// The forces of lanes [0, count) of a batch. one_law: every pair has `law` (a scene of one
-// material, or all pairs of one pair of types); else each lane's law is in the batch.
-// beta: Rayleigh stiffness-proportional coefficient (0 without). dt: this step.
-// (kShear) h*_in: the lanes' shear force history; h*_out: where the new history goes.
-template <unsigned F, bool kOneLaw>
+// The forces of lanes [0, count) of a batch, by the law the features compose (contact/models.hpp).
+// one_law: every pair has `law` (a scene of one material, or all pairs of one pair of types); else
+// each lane's law is in the batch. beta: Rayleigh stiffness-proportional coefficient (0 without).
+// dt: this step. (F.shear) h*_in: the lanes' shear force history; h*_out: where the new history goes.
+template <ContactFeatures F, bool kOneLaw>
 inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta,
                            const double* __restrict hx_in, const double* __restrict hy_in,
                            const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
                            double* __restrict hz_out) {
-  using namespace contact_bits;
+  using Model = ContactModel<F.law()>;
+  using Normal = typename Model::Normal;
+  using Tangential = typename Model::Tangential;
+  using Damping = typename Model::Damping;
   for (std::size_t q = 0; q < count; ++q) {
-    const double law_kn = kOneLaw ? law.kn : B.kn_law[q], law_ks = kOneLaw ? law.ks : B.ks_law[q];
-    const double law_friction = kOneLaw ? law.friction : B.friction[q];
-    const double law_cohesion = kOneLaw ? law.cohesion : B.cohesion[q];
-    const double law_hertz_n = kOneLaw ? law.hertz_n : B.hertz_n[q];
-    const double law_hertz_s = kOneLaw ? law.hertz_s : B.hertz_s[q];
-    const double law_rest_xi = kOneLaw ? law.rest_xi : B.rest_xi[q];
+    const LaneLaw L = kOneLaw ? LaneLaw{law.kn, law.ks, law.friction, law.cohesion, law.hertz_n, law.hertz_s, law.rest_xi}
+                              : LaneLaw{B.kn_law[q], B.ks_law[q], B.friction[q], B.cohesion[q], B.hertz_n[q],
+                                        B.hertz_s[q], B.rest_xi[q]};
     const double dx = B.dx[q], dy = B.dy[q], dz = B.dz[q], ri = B.ri[q], rj = B.rj[q];
     const double d2 = dx * dx + dy * dy + dz * dz;
     const double rsum = ri + rj;
@@ -109,7 +98,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
 
     // Relative velocity of j's contact point against i's: V = v_j - v_i - (R_i w_i + R_j w_j) x n.
     double vx = B.vx[q], vy = B.vy[q], vz = B.vz[q];
-    if constexpr ((F & kRotation) != 0) {
+    if constexpr (Model::kRotation) {
       const double sx = B.sx[q], sy = B.sy[q], sz = B.sz[q];
       vx -= sy * nz - sz * ny;
       vy -= sz * nx - sx * nz;
@@ -117,70 +106,24 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     }
     const double vn = vx * nx + vy * ny + vz * nz;
 
-    double kn, ks, fn_spring;
-    if constexpr ((F & kHertz) != 0) {
-      const double root = std::sqrt(touching ? ri * rj / rsum * u : 0.0);   // sqrt(R* U)
-      fn_spring = law_hertz_n * root * u;
-      kn = 1.5 * law_hertz_n * root;                                        // dF_n/dU
-      ks = law_hertz_s * root;
-    } else {
-      kn = law_kn;
-      ks = law_ks;
-      fn_spring = kn * u;
-    }
+    const Springs k = Normal::springs(L, ri, rj, rsum, u, touching);
+    double work_damping = 0, cn = 0;
+    const double fn = Damping::template normal<Normal>(k.fn, k.kn, F.dashpot ? B.mstar[q] : 0.0, L.rest_xi, beta, vn, dt, cn, work_damping);
 
-    double fn = fn_spring;
-    double work_damping = 0;
-    double cn = 0;
-    if constexpr ((F & kDashpot) != 0) {
-      const double factor = (F & kHertz) != 0 ? kHertzDashpotFactor : 2.0;
-      const double km = kn * B.mstar[q];
-      cn = law_rest_xi > 0 ? factor * law_rest_xi * std::sqrt(km > 0 ? km : 0.0) : 0.0;
-      double f_dash = (beta * kn + cn) * -vn;                         // dU/dt = -V.n
-      f_dash = cn > 0 && fn_spring + f_dash < 0 ? -fn_spring : f_dash;   // a restitution dashpot never pulls
-      fn = fn_spring + f_dash;
-      work_damping = f_dash * -vn * dt;
-    }
-
-    double fsx = 0, fsy = 0, fsz = 0, sx = 0, sy = 0, sz = 0;
-    double work_friction = 0, strain_shear = 0;
-    double state = 1;
-    if constexpr ((F & kShear) != 0) {
-      // Last step's shear force, turned onto the new contact plane at its old length.
-      const double hx = hx_in[q], hy = hy_in[q], hz = hz_in[q];
-      const double old2 = hx * hx + hy * hy + hz * hz;
-      const double h_n = hx * nx + hy * ny + hz * nz;
-      const double px = hx - h_n * nx, py = hy - h_n * ny, pz = hz - h_n * nz;
-      const double new2 = px * px + py * py + pz * pz;
-      const bool turn = old2 > 0, rescale = turn && new2 > 0;
-      const double scale = rescale ? std::sqrt(old2 / (rescale ? new2 : 1.0)) : 1.0;
-      fsx = turn ? (rescale ? px * scale : px) : hx;
-      fsy = turn ? (rescale ? py * scale : py) : hy;
-      fsz = turn ? (rescale ? pz * scale : pz) : hz;
-      const double vsx = vx - vn * nx, vsy = vy - vn * ny, vsz = vz - vn * nz;
-      const double kdt = ks * dt;
-      fsx -= kdt * vsx; fsy -= kdt * vsy; fsz -= kdt * vsz;
-      // Coulomb limit on the spring force (the dashpots act beside it).
-      const double limit = law_friction * fn_spring + law_cohesion;
-      const double fs2 = fsx * fsx + fsy * fsy + fsz * fsz;
-      const bool slide = fs2 > limit * limit;
-      const double fs = std::sqrt(fs2);
-      const double cut = slide ? limit / (slide ? fs : 1.0) : 1.0;
-      fsx = slide ? fsx * cut : fsx; fsy = slide ? fsy * cut : fsy; fsz = slide ? fsz * cut : fsz;
-      const double ks_safe = ks > 0 ? ks : 1.0;
-      work_friction = slide && ks > 0 ? limit * (fs - limit) / ks_safe : 0.0;   // force times plastic slip
-      state = slide ? 2 : 1;
-      strain_shear = ks > 0 ? (fsx * fsx + fsy * fsy + fsz * fsz) / (2 * ks_safe) : 0.0;
+    double sx = 0, sy = 0, sz = 0, work_friction = 0, strain_shear = 0, state = 1;
+    double fsx = 0, fsy = 0, fsz = 0;
+    if constexpr (Tangential::kOn) {
+      ShearState s;
+      Tangential::force(hx_in[q], hy_in[q], hz_in[q], nx, ny, nz, vx, vy, vz, vn, k.ks, dt, L.friction * k.fn + L.cohesion, s);
+      fsx = s.fsx; fsy = s.fsy; fsz = s.fsz;
+      work_friction = s.work_friction;
+      strain_shear = s.strain;
+      state = s.slide ? 2 : 1;
       sx = fsx; sy = fsy; sz = fsz;
-      if constexpr ((F & kDashpot) != 0) {
-        const double c = beta * ks;
-        sx -= c * vsx; sy -= c * vsy; sz -= c * vsz;
-        work_damping += c * (vsx * vsx + vsy * vsy + vsz * vsz) * dt;
-      }
+      Damping::shear(beta, k.ks, s.vsx, s.vsy, s.vsz, sx, sy, sz, work_damping, dt);
     }
 
-    // Spring energy: linear 1/2 F_n U, Hertz 2/5 F_n U; shear |F_s|^2 / (2 k_s).
-    const double strain = ((F & kHertz) != 0 ? 0.4 : 0.5) * fn_spring * u + strain_shear;
+    const double strain = Normal::kEnergy * k.fn * u + strain_shear;
     B.nx[q] = touching ? nx : 0.0; B.ny[q] = touching ? ny : 0.0; B.nz[q] = touching ? nz : 0.0;
     B.overlap[q] = touching ? u : 0.0;
     B.fn[q] = touching ? fn : 0.0;
@@ -190,8 +133,8 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     B.tx[q] = touching ? ny * sz - nz * sy : 0.0;
     B.ty[q] = touching ? nz * sx - nx * sz : 0.0;
     B.tz[q] = touching ? nx * sy - ny * sx : 0.0;
-    B.kn[q] = touching ? kn : 0.0; B.ks[q] = touching ? ks : 0.0; B.cn[q] = touching ? cn : 0.0;
-    if constexpr ((F & kShear) != 0) {
+    B.kn[q] = touching ? k.kn : 0.0; B.ks[q] = touching ? k.ks : 0.0; B.cn[q] = touching ? cn : 0.0;
+    if constexpr (Tangential::kOn) {
       hx_out[q] = touching ? fsx : 0.0; hy_out[q] = touching ? fsy : 0.0; hz_out[q] = touching ? fsz : 0.0;
     }
     B.work_friction[q] = touching ? work_friction : 0.0;
@@ -202,7 +145,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
 }
 
 // The force at one contact: the batch kernel on one lane (for the time-step estimate and tests).
-template <unsigned F>
+template <ContactFeatures F>
 inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, double dt, double beta) {
   ContactBatch B;
   B.dx[0] = in.dx; B.dy[0] = in.dy; B.dz[0] = in.dz; B.ri[0] = in.ri; B.rj[0] = in.rj;
@@ -214,7 +157,7 @@ inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, d
   r.nx = B.nx[0]; r.ny = B.ny[0]; r.nz = B.nz[0]; r.overlap = B.overlap[0]; r.fn = B.fn[0];
   r.fx = B.fx[0]; r.fy = B.fy[0]; r.fz = B.fz[0]; r.tx = B.tx[0]; r.ty = B.ty[0]; r.tz = B.tz[0];
   r.kn = B.kn[0]; r.ks = B.ks[0]; r.cn = B.cn[0];
-  if constexpr ((F & contact_bits::kShear) != 0) { r.fsx = hx; r.fsy = hy; r.fsz = hz; }
+  if constexpr (F.shear) { r.fsx = hx; r.fsy = hy; r.fsz = hz; }
   r.work_friction = B.work_friction[0]; r.work_damping = B.work_damping[0]; r.strain = B.strain[0];
   r.state = static_cast<std::uint8_t>(B.state[0]);
   return r;

@@ -68,9 +68,8 @@ double critical_timestep(const Model& model) {
     }
     in.ri = b.rad[i]; in.rj = b.rad[j];
     if (law.rest_xi > 0) in.mstar = b.mass[i] * b.mass[j] / (b.mass[i] + b.mass[j]);
-    using namespace contact_bits;
-    const ContactResult r = features.hertz ? contact_force<kHertz | kDashpot>(law, in, 0, 0)
-                                             : contact_force<kDashpot>(law, in, 0, 0);
+    const ContactResult r = features.hertz ? contact_force<ContactFeatures{.hertz = true, .dashpot = true}>(law, in, 0, 0)
+                                           : contact_force<ContactFeatures{.dashpot = true}>(law, in, 0, 0);
     if (r.state == 0) continue;
     for (std::size_t ball : {i, j}) {
       sums[ball].kmax += std::max(r.kn, r.ks);

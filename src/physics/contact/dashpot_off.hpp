@@ -1,0 +1,15 @@
+// Damping part, off: no contact dashpot (mass and local damping act in the law of motion).
+#pragma once
+
+namespace trubal {
+
+struct NoDashpot {
+  // Normal force with the dashpot, its coefficient (time step) and the work it dissipates.
+  template <class Normal>
+  [[gnu::always_inline]] static double normal(double fn_spring, double, double, double, double, double, double, double&, double&) {
+    return fn_spring;
+  }
+  [[gnu::always_inline]] static void shear(double, double, double, double, double, double&, double&, double&, double&, double) {}
+};
+
+}  // namespace trubal

@@ -1,0 +1,46 @@
+// Tangential part, the incremental shear spring with the Coulomb limit (doc/physics.md "Contacts"):
+// last step's shear force turned onto the new contact plane at its old length, plus -k_s V_s dt,
+// capped at mu F_n + cohesion. With the linear law k_s is the pair's; with Hertz it is Mindlin's
+// no-slip stiffness 8 G* sqrt(R* U) (the normal part gives it).
+#pragma once
+
+#include <cmath>
+
+namespace trubal {
+
+struct ShearState {
+  double fsx, fsy, fsz;          // the new shear spring force (the history)
+  double vsx, vsy, vsz;          // the sliding velocity
+  double work_friction;          // force times plastic slip this step
+  double strain;                 // |F_s|^2 / (2 k_s)
+  bool slide;
+};
+
+struct CoulombSpring {
+  static constexpr bool kOn = true;
+  [[gnu::always_inline]] static void force(double hx, double hy, double hz, double nx, double ny, double nz, double vx, double vy,
+                    double vz, double vn, double ks, double dt, double limit, ShearState& s) {
+    const double old2 = hx * hx + hy * hy + hz * hz;
+    const double h_n = hx * nx + hy * ny + hz * nz;
+    const double px = hx - h_n * nx, py = hy - h_n * ny, pz = hz - h_n * nz;
+    const double new2 = px * px + py * py + pz * pz;
+    const bool turn = old2 > 0, rescale = turn && new2 > 0;
+    const double scale = rescale ? std::sqrt(old2 / (rescale ? new2 : 1.0)) : 1.0;
+    double fsx = turn ? (rescale ? px * scale : px) : hx;
+    double fsy = turn ? (rescale ? py * scale : py) : hy;
+    double fsz = turn ? (rescale ? pz * scale : pz) : hz;
+    s.vsx = vx - vn * nx; s.vsy = vy - vn * ny; s.vsz = vz - vn * nz;
+    const double kdt = ks * dt;
+    fsx -= kdt * s.vsx; fsy -= kdt * s.vsy; fsz -= kdt * s.vsz;
+    const double fs2 = fsx * fsx + fsy * fsy + fsz * fsz;
+    s.slide = fs2 > limit * limit;
+    const double fs = std::sqrt(fs2);
+    const double cut = s.slide ? limit / (s.slide ? fs : 1.0) : 1.0;
+    s.fsx = s.slide ? fsx * cut : fsx; s.fsy = s.slide ? fsy * cut : fsy; s.fsz = s.slide ? fsz * cut : fsz;
+    const double ks_safe = ks > 0 ? ks : 1.0;
+    s.work_friction = s.slide && ks > 0 ? limit * (fs - limit) / ks_safe : 0.0;
+    s.strain = ks > 0 ? (s.fsx * s.fsx + s.fsy * s.fsy + s.fsz * s.fsz) / (2 * ks_safe) : 0.0;
+  }
+};
+
+}  // namespace trubal
