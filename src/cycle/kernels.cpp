@@ -14,6 +14,45 @@ namespace {
 // Raw pointers, so that the compiler knows the stores into one array cannot move another's data.
 #define TRUBAL_PTR(name, vec) auto* __restrict name = (vec).data()
 
+// The ball data the contact loops read, and the one gather of a pair's inputs into a batch lane.
+struct PairInputs {
+  const double *x, *y, *z, *rad, *mass, *vx, *vy, *vz, *wx, *wy, *wz;
+  const std::int8_t *img_x, *img_y, *img_z;
+  bool periodic;
+  CellFrame cell;   // periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image
+  PairInputs(const Model& model)
+      : x(model.balls.x.data()), y(model.balls.y.data()), z(model.balls.z.data()), rad(model.balls.rad.data()),
+        mass(model.balls.mass.data()), vx(model.balls.vx.data()), vy(model.balls.vy.data()), vz(model.balls.vz.data()),
+        wx(model.balls.wx.data()), wy(model.balls.wy.data()), wz(model.balls.wz.data()),
+        img_x(model.contacts.image_x.data()), img_y(model.contacts.image_y.data()), img_z(model.contacts.image_z.data()),
+        periodic(model.space.periodic), cell(cell_frame(model.space)) {}
+
+  // Lane q of B gets pair p (balls i < j): separation, radii, relative velocity (image included),
+  // the spin term, m*, and the pair's law where the scene has several.
+  template <ContactFeatures F, bool kOneLaw>
+  void gather(ContactBatch& B, std::size_t q, const StepKernels& k, std::size_t p, std::size_t i, std::size_t j) const {
+    if constexpr (!kOneLaw) B.set_law(q, k.laws.law(i, j));
+    B.dx[q] = x[j] - x[i]; B.dy[q] = y[j] - y[i]; B.dz[q] = z[j] - z[i];
+    B.ri[q] = rad[i]; B.rj[q] = rad[j];
+    B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
+    if (periodic) {
+      double ox, oy, oz;
+      image_offset(cell, img_x[p], img_y[p], img_z[p], ox, oy, oz);
+      image_velocity(cell, img_x[p], img_y[p], img_z[p], B.ivx[q], B.ivy[q], B.ivz[q]);
+      B.dx[q] = image_delta(x[j], x[i], ox);
+      B.dy[q] = image_delta(y[j], y[i], oy);
+      B.dz[q] = image_delta(z[j], z[i], oz);
+      B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
+    }
+    if constexpr (F.rotation) {
+      B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
+      B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
+      B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
+    }
+    if constexpr (F.dashpot) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+  }
+};
+
 // The pairs of [begin, end), by the law F composes; F.details: also write what measurements read
 // (normal, overlap, forces, stiffness, dashpot coefficient, work, state). Without it a step writes
 // only the new shear history and the sums per ball (StepScratch::ball_force, ball_cn).
@@ -22,22 +61,14 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
                    StepSums& sums) {
   constexpr ContactFeatures kLaw = F.law();
   constexpr bool kFull = F.details;
-  const Balls& b = model.balls;
   ContactTable& c = model.contacts;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
-  TRUBAL_PTR(x, b.x); TRUBAL_PTR(y, b.y); TRUBAL_PTR(z, b.z); TRUBAL_PTR(rad, b.rad); TRUBAL_PTR(mass, b.mass);
-  TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
-  TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   TRUBAL_PTR(state, c.state);
   TRUBAL_PTR(next_x, scratch.fsx_next); TRUBAL_PTR(next_y, scratch.fsy_next); TRUBAL_PTR(next_z, scratch.fsz_next);
   TRUBAL_PTR(ball_sum, scratch.ball_force); TRUBAL_PTR(cn_sum, scratch.ball_cn);
-  // Periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image (backends/periodic.hpp).
-  const bool periodic = model.space.periodic;
-  const CellFrame cell = cell_frame(model.space);
-  const std::int8_t* const img_x = c.image_x.data();
-  const std::int8_t* const img_y = c.image_y.data();
-  const std::int8_t* const img_z = c.image_z.data();
+  const PairInputs in(model);
+  const bool periodic = in.periodic;
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws.table[0];
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
@@ -57,26 +88,8 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
     const std::size_t count = std::min(kBatch, end - p0);
     for (std::size_t q = 0; q < count; ++q) {
-      const std::size_t p = p0 + q, i = pi[p], j = pj[p];
-      if constexpr (!kOneLaw) B.set_law(q, k.laws.law(i, j));
-      B.dx[q] = x[j] - x[i]; B.dy[q] = y[j] - y[i]; B.dz[q] = z[j] - z[i];
-      B.ri[q] = rad[i]; B.rj[q] = rad[j];
-      B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
-      if (periodic) {
-        double ox, oy, oz;
-        image_offset(cell, img_x[p], img_y[p], img_z[p], ox, oy, oz);
-        image_velocity(cell, img_x[p], img_y[p], img_z[p], B.ivx[q], B.ivy[q], B.ivz[q]);
-        B.dx[q] = image_delta(x[j], x[i], ox);
-        B.dy[q] = image_delta(y[j], y[i], oy);
-        B.dz[q] = image_delta(z[j], z[i], oz);
-        B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
-      }
-      if constexpr (kLaw.rotation) {
-        B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
-        B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
-        B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
-      }
-      if constexpr (kLaw.dashpot) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+      const std::size_t p = p0 + q;
+      in.gather<kLaw, kOneLaw>(B, q, k, p, pi[p], pj[p]);
     }
     contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, next_x + p0, next_y + p0,
                                   next_z + p0);
@@ -154,47 +167,26 @@ void contact_loop(Model& model, StepScratch& scratch, const StepKernels& k, std:
 template <ContactFeatures F>
 void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end,
                 const std::uint32_t* pairs, std::size_t pair_count) {
-  const Balls& b = model.balls;
   ContactTable& c = model.contacts;
   std::fill(scratch.ball_force.begin() + ball_begin, scratch.ball_force.begin() + ball_end, PairForce{});
   std::fill(scratch.ball_cn.begin() + ball_begin, scratch.ball_cn.begin() + ball_end, 0.0);
   if (pair_count == 0) return;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
-  TRUBAL_PTR(x, b.x); TRUBAL_PTR(y, b.y); TRUBAL_PTR(z, b.z); TRUBAL_PTR(rad, b.rad); TRUBAL_PTR(mass, b.mass);
-  TRUBAL_PTR(vx, b.vx); TRUBAL_PTR(vy, b.vy); TRUBAL_PTR(vz, b.vz);
-  TRUBAL_PTR(wx, b.wx); TRUBAL_PTR(wy, b.wy); TRUBAL_PTR(wz, b.wz);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
-  const bool periodic = model.space.periodic;
-  const CellFrame cell = cell_frame(model.space);
+  const PairInputs in(model);
+  const bool one_law = k.laws.type_count == 1;
   ContactBatch B;
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
   for (std::size_t q0 = 0; q0 < pair_count; q0 += kBatch) {
     const std::size_t count = std::min(kBatch, pair_count - q0);
     for (std::size_t q = 0; q < count; ++q) {
-      const std::size_t p = pairs[q0 + q], i = pi[p], j = pj[p];
-      if (k.laws.type_count != 1) B.set_law(q, k.laws.law(i, j));
-      B.dx[q] = x[j] - x[i]; B.dy[q] = y[j] - y[i]; B.dz[q] = z[j] - z[i];
-      B.ri[q] = rad[i]; B.rj[q] = rad[j];
-      B.vx[q] = vx[j] - vx[i]; B.vy[q] = vy[j] - vy[i]; B.vz[q] = vz[j] - vz[i];
-      if (periodic) {
-        double ox, oy, oz;
-        image_offset(cell, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
-        image_velocity(cell, c.image_x[p], c.image_y[p], c.image_z[p], B.ivx[q], B.ivy[q], B.ivz[q]);
-        B.dx[q] = image_delta(x[j], x[i], ox);
-        B.dy[q] = image_delta(y[j], y[i], oy);
-        B.dz[q] = image_delta(z[j], z[i], oz);
-        B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
-      }
-      if constexpr (F.rotation) {
-        B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
-        B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
-        B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
-      }
-      if constexpr (F.dashpot) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+      const std::size_t p = pairs[q0 + q];
+      if (one_law) in.gather<F, true>(B, q, k, p, pi[p], pj[p]);
+      else in.gather<F, false>(B, q, k, p, pi[p], pj[p]);
       if constexpr (F.shear) { hx[q] = fsx[p]; hy[q] = fsy[p]; hz[q] = fsz[p]; }
     }
     // The new history is the owner's to write: here it goes to a scratch copy.
-    if (k.laws.type_count == 1) contact_forces<F, true>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
+    if (one_law) contact_forces<F, true>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
     else contact_forces<F, false>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];

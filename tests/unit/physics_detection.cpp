@@ -57,9 +57,7 @@ TEST_CASE("physics: serial contact detection equals brute force on polydisperse 
     REQUIRE_FALSE(run_cycles(model, *backend, 400, {}).unstable);   // move on (rebuilds on the way)
   }
   CHECK(checked > 300);
-  bool rebuilt = false;
-  for (const auto& [key, value] : backend->info()) rebuilt = rebuilt || (key == "pair list rebuilds" && value != "1");
-  CHECK(rebuilt);
+  CHECK(backend->counters().rebuilds > 6);   // rebuilt on the way, not only once per CYCLE
 }
 
 TEST_CASE("physics: shear history survives pair-list rebuilds and ball insertion", "[physics]") {
