@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "physics/contact/energy.hpp"
 #include "physics/contact/models.hpp"
 
 namespace trubal {
@@ -123,7 +124,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
       Damping::shear(beta, k.ks, s.vsx, s.vsy, s.vsz, sx, sy, sz, work_damping, dt);
     }
 
-    const double strain = Normal::kEnergy * k.fn * u + strain_shear;
+    const double strain = normal_spring_energy<Normal>(k.fn, u) + strain_shear;
     B.nx[q] = touching ? nx : 0.0; B.ny[q] = touching ? ny : 0.0; B.nz[q] = touching ? nz : 0.0;
     B.overlap[q] = touching ? u : 0.0;
     B.fn[q] = touching ? fn : 0.0;

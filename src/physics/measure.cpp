@@ -5,6 +5,10 @@
 #include <cmath>
 #include <limits>
 
+#include "physics/contact/energy.hpp"
+#include "physics/contact/normal_hertz.hpp"
+#include "physics/contact/normal_linear.hpp"
+
 namespace trubal {
 namespace {
 
@@ -60,10 +64,10 @@ EnergyReport energy(const Model& model) {
   for (std::size_t p = 0; p < c.size(); ++p) {
     if (!touching(c, p)) continue;
     const double u = c.overlap[p];
-    // Linear: F_n^2 / (2 k_n) = k_n U^2 / 2. Hertz: 2/5 F_n U with F_n = 2/3 k_tangent U.
-    e.strain += (is_hertz(model, c.i[p]) ? 4.0 / 15.0 : 0.5) * c.kn_eff[p] * u * u;
-    if (c.ks_eff[p] > 0)
-      e.strain += (c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]) / (2 * c.ks_eff[p]);
+    const double kn = c.kn_eff[p];
+    e.strain += is_hertz(model, c.i[p]) ? normal_spring_energy<HertzNormal>(HertzNormal::spring_force(kn, u), u)
+                                        : normal_spring_energy<LinearNormal>(LinearNormal::spring_force(kn, u), u);
+    e.strain += shear_spring_energy(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p], c.ks_eff[p]);
   }
   e.friction_work = model.energy.friction_work;
   e.damping_work = model.energy.damping_work;

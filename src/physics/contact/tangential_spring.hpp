@@ -6,6 +6,8 @@
 
 #include <cmath>
 
+#include "physics/contact/energy.hpp"
+
 namespace trubal {
 
 struct ShearState {
@@ -39,7 +41,7 @@ struct CoulombSpring {
     s.fsx = s.slide ? fsx * cut : fsx; s.fsy = s.slide ? fsy * cut : fsy; s.fsz = s.slide ? fsz * cut : fsz;
     const double ks_safe = ks > 0 ? ks : 1.0;
     s.work_friction = s.slide && ks > 0 ? limit * (fs - limit) / ks_safe : 0.0;
-    s.strain = ks > 0 ? (s.fsx * s.fsx + s.fsy * s.fsy + s.fsz * s.fsz) / (2 * ks_safe) : 0.0;
+    s.strain = shear_spring_energy(s.fsx * s.fsx + s.fsy * s.fsy + s.fsz * s.fsz, ks);
   }
 };
 
