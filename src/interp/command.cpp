@@ -23,6 +23,8 @@ std::string Args::word(std::string_view what) {
 double Args::real(std::string_view what) {
   if (empty()) fail(fmt::format("missing {} (a number)", what));
   auto v = parse_real(words_[pos_]);
+  if (!v && real_out_of_range(words_[pos_]))
+    fail(fmt::format("{} is out of range: '{}' is beyond the largest number, 1.8e308", what, printable(words_[pos_])));
   if (!v) fail(fmt::format("expected a number for {}, got '{}'", what, printable(words_[pos_])));
   ++pos_;
   return *v;

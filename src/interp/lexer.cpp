@@ -1,5 +1,7 @@
 #include "interp/lexer.hpp"
 
+#include <cmath>
+
 #include <cctype>
 #include <charconv>
 #include <cstdlib>
@@ -121,7 +123,10 @@ std::string expand_variables(std::string_view line,
   return out;
 }
 
-std::optional<double> parse_real(std::string_view w) {
+namespace {
+
+// The number a word spells, or nothing; a number beyond the doubles comes out infinite.
+std::optional<double> convert_real(std::string_view w) {
   // Grammar first (strtod alone would take "inf", "nan", hex and "1e"); then convert.
   std::size_t k = 0, n = w.size();
   if (k < n && (w[k] == '+' || w[k] == '-')) ++k;
@@ -147,6 +152,19 @@ std::optional<double> parse_real(std::string_view w) {
   double v = std::strtod(text.c_str(), &end);
   if (end != text.c_str() + text.size()) return std::nullopt;
   return v;
+}
+
+}  // namespace
+
+std::optional<double> parse_real(std::string_view w) {
+  const auto v = convert_real(w);
+  if (!v || !std::isfinite(*v)) return std::nullopt;
+  return v;
+}
+
+bool real_out_of_range(std::string_view w) {
+  const auto v = convert_real(w);
+  return v && !std::isfinite(*v);
 }
 
 std::optional<std::int64_t> parse_integer(std::string_view w) {

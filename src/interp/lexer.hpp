@@ -49,6 +49,9 @@ std::string expand_variables(std::string_view line,
 
 // Fortran number forms: 20, 20., .5, 1.5e9, 1.5E+09, 1.5d9, 1.5D+09 (and a sign).
 std::optional<double> parse_real(std::string_view word);
+// Whether the word is written as a number but is beyond what a double holds (|x| > 1.8e308): an
+// input error, never infinity.
+bool real_out_of_range(std::string_view word);
 // A whole number: digits with an optional sign, nothing else.
 std::optional<std::int64_t> parse_integer(std::string_view word);
 

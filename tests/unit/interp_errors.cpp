@@ -62,6 +62,21 @@ TEST_CASE("interp errors: a real where a count is needed", "[interp][errors]") {
   CHECK(negative.starts_with("deck.dat:1: error: n (number of cycles) must be at least 0, got -3"));
 }
 
+TEST_CASE("interp errors: a number beyond the doubles is an input error, not infinity", "[interp][errors]") {
+  // strtod gives infinity for these; the run would then fail later with a NaN.
+  auto step = deck_error("start box 0 1 0 1 0 1\ntstep 1e999\n");
+  CHECK(step.starts_with("deck.dat:2: error: "));
+  CHECK(step.find("is out of range: '1e999' is beyond the largest number, 1.8e308") != std::string::npos);
+  auto radius = deck_error("start box 0 1 0 1 0 1\nball 0 0 0 1e400\n");
+  CHECK(radius.starts_with("deck.dat:2: error: "));
+  CHECK(radius.find("'1e400'") != std::string::npos);
+  auto negative = deck_error("start box 0 1 0 1 0 1\ngrav 0 0 -1d309\n");
+  CHECK(negative.find("is out of range: '-1d309'") != std::string::npos);
+  // The largest double itself, and numbers that underflow to 0 or a denormal, are numbers.
+  Harness h;
+  CHECK(h.deck("start box 0 1 0 1 0 1\nset volume 1.7976931348623157e308\ngrav 0 0 1e-400\n"));
+}
+
 TEST_CASE("interp errors: a continuation that runs into the end of the file names the line it started on",
           "[interp][errors]") {
   auto e = deck_error("set echo off\n\nstart 1 1 &\n  ; only a comment follows\n\n");

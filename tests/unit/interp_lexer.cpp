@@ -191,6 +191,11 @@ TEST_CASE("interp lexer: every Fortran number form is read and malformed numbers
   CHECK(reals.real("y") == 0.5);
   Args counts("CYCLE n", {"1.5"});
   CHECK_THROWS_WITH(counts.count("n"), Catch::Contains("whole number") && Catch::Contains("real '1.5'"));
+  CHECK_FALSE(parse_real("1e999").has_value());   // beyond the doubles: not infinity
+  CHECK(real_out_of_range("1e999"));
+  CHECK(real_out_of_range("-2.5D+400"));
+  CHECK_FALSE(real_out_of_range("1e308"));
+  CHECK_FALSE(real_out_of_range("nan"));
   Args junk("GRAV gx gy gz", {"nan"});
   CHECK_THROWS_WITH(junk.real("gx"), Catch::Contains("expected a number for gx, got 'nan'"));
 }
