@@ -67,14 +67,18 @@ const Command servo_command = {
     "SERVO", {}, "SERVO s11 s22 s33 [gain g] [max r]  |  SERVO xx s [yy s] [zz s] [gain g] [max r]  |  SERVO off",
     "stress servo of the periodic space",
     "Drives the strain rates of the periodic cell so that the average stress (over the cell volume, "
-    "compression positive) approaches the targets, each axis on its own: before every step rate = g (target - "
-    "sigma), limited to +-max. The keyword form servoes only the axes named; the others keep their STRAIN "
-    "rate (STRAIN zz r with SERVO xx s yy s is drained triaxial compression). The default gain (gain 0 or "
-    "absent) is recomputed every step from the touching contacts: g = 0.01 / (M dt) with M = (1/V) sum "
-    "k_n (l n_a)^2, so that the stress would close 1% of its error per step if it followed the contact "
-    "stiffness at once (slow enough for the assembly's inertia). The default max rate is 1e-4 / dt (the "
-    "cell changes by at most 1e-4 of its size per step), which is also the rate used while nothing "
-    "touches. `SERVO off` stops the servo; its axes stop straining.",
+    "compression positive) holds the targets, each axis on its own, by proportional-integral control: before "
+    "every step rate = g (target - sigma) + I, where the integral term I grows each step by f/4 times the "
+    "proportional rate, f = g M dt the fraction of the error the gain closes per step (critical damping if "
+    "the stress followed the contact stiffness at once), so that a steady loading (STRAIN on another axis, "
+    "dilation under shear) is held without offset; the rate is limited to +-max and changes by at most max/4 "
+    "per step, and I does not grow past the limits. The keyword form servoes only the axes named; the others "
+    "keep their STRAIN rate (STRAIN zz r with SERVO xx s yy s is drained triaxial compression). The default "
+    "gain (gain 0 or absent) is recomputed every step from the last force pass: g = 0.15 / (M dt) with "
+    "M = (1/V) sum k_n (l n_a)^2 over the touching contacts, so that the stress would close 15% of its error "
+    "per step (PFC's gain rule in stress form). The default max rate is 1e-4 / dt (the cell changes by at "
+    "most 1e-4 of its size per step), which is also the rate used while nothing touches (I is then 0). "
+    "`SERVO off` stops the servo; its axes stop straining. The integral is state: SAVE keeps it.",
     {"xx", "yy", "zz", "gain", "max", "off"}, run_servo};
 
 }  // namespace trubal

@@ -93,7 +93,9 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.space.strain_rate); io.pod(m.space.strain);
   io.pod(m.space.servo_on); io.pod(m.space.servo_target);
   io.pod(m.space.servo_gain); io.pod(m.space.servo_max_rate);
-  if (version >= 4) { io.pod(m.space.servo_measured); io.pod(m.space.servo_measured_valid); }
+  if (version >= 4) {
+    io.pod(m.space.servo_measured); io.pod(m.space.servo_measured_valid); io.pod(m.space.servo_integral);
+  }
   std::uint64_t nmat = m.materials.size();
   io.pod(nmat);
   if constexpr (std::is_same_v<IO, Reader>) {

@@ -124,6 +124,9 @@ struct Space {
   // servo's first step: it then reads the contact table.
   ContactMoments servo_measured;
   bool servo_measured_valid = false;
+  // The servo's integral term per axis (a strain rate): what it has learnt the loading needs beyond
+  // the proportional part (physics/cell.hpp). State, saved.
+  std::array<double, 3> servo_integral{};
   // Energy the cell control moved in and out, counted without sign (not saved): the instability
   // guard's scale, as a servo stopping a fast cell takes much out in one step.
   double gross_work = 0;

@@ -64,7 +64,7 @@ static double servo_gain_for(double m, double dt) {
   return kServoFraction / (m * dt);
 }
 
-double default_servo_gain(const Model& model, int axis, double dt) {
+double servo_stiffness(const Model& model, int axis) {
   const ContactTable& c = model.contacts;
   const Balls& b = model.balls;
   const auto L = model.space.length();
@@ -76,7 +76,7 @@ double default_servo_gain(const Model& model, int axis, double dt) {
     const double l = (b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p]) * (*normal[axis])[p];
     m += c.kn_eff[p] * l * l;
   }
-  return servo_gain_for(m / volume, dt);
+  return m / volume;
 }
 
 double default_servo_max_rate(double dt) { return dt > 0 ? 1e-4 / dt : 0; }
@@ -94,13 +94,27 @@ void cell_before_step(Model& model, double dt, const ContactMoments* last) {
   std::array<double, 3> rates{s.strain_rate[0], s.strain_rate[1], s.strain_rate[2]};
   const double most = s.servo_max_rate > 0 ? s.servo_max_rate : default_servo_max_rate(dt);
   for (int a = 0; a < 3; ++a) {
-    if (!s.servo_on[a]) continue;
-    const double gain = s.servo_gain > 0 ? s.servo_gain
-                        : last ? servo_gain_for(last->stiffness[a] / volume, dt)
-                               : default_servo_gain(model, a, dt);
+    double& integral = s.servo_integral[a];
+    if (!s.servo_on[a]) { integral = 0; continue; }
+    const double m = last ? last->stiffness[a] / volume : servo_stiffness(model, a);
+    const double gain = s.servo_gain > 0 ? s.servo_gain : servo_gain_for(m, dt);
     const double error = s.servo_target[a] - stress[a];   // too little compression: compress (rate > 0)
-    double r = gain * error;
-    if (!std::isfinite(r)) r = error > 0 ? most : (error < 0 ? -most : 0);
+    const double proportional = gain * error;
+    // The fraction of the error this gain closes per step where the stress follows the contact
+    // stiffness at once: kServoFraction by default; the integral grows by a quarter of it.
+    const double closes = m > 0 && dt > 0 ? std::min(1.0, gain * m * dt) : 0.0;
+    double r;
+    if (!std::isfinite(proportional)) {   // nothing touches: as fast as allowed, nothing learnt
+      r = error > 0 ? most : (error < 0 ? -most : 0);
+      integral = 0;
+    } else {
+      const double step = kServoIntegral * closes * proportional;
+      r = proportional + integral + step;
+      // No winding up: where the limits cut the rate, the integral does not grow past them.
+      const double limited = std::clamp(r, -most, most);
+      if (!(limited != r && (step > 0) == (r > limited))) integral += step;
+      integral = std::clamp(integral, -most, most);
+    }
     // The rate changes by at most a quarter of the max rate per step: a velocity field switched
     // within one step would be accounted with the spring energy its last step made still missing.
     const double slew = 0.25 * most, old = s.strain_rate[a];

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <cstdlib>
 
 #include "model/model.hpp"
 
@@ -22,12 +23,20 @@ void set_strain_rates(Model& model, const std::array<double, 3>& rates);
 // The centre of the periodic cell, about which it deforms.
 std::array<double, 3> cell_centre(const Space& space);
 
-// Servo gain (strain rate per unit stress error) that the default uses for an axis: the stress
-// would close kServoFraction of its error in one step if it followed the contact stiffness at once,
-// sigma change = M rate dt with M_a = (1/V) sum k_n (l n_a)^2 over the touching contacts.
-// Infinite when nothing touches (the rate is then the max rate).
-inline constexpr double kServoFraction = 0.01;
-double default_servo_gain(const Model& model, int axis, double dt);
+// The servo (doc/physics.md "Periodic space"): proportional-integral, per axis. The proportional
+// rate is G (target - stress); by default G closes kServoFraction of the error in one step if the
+// stress followed the contact stiffness at once, G = kServoFraction / (M dt) with
+// M_a = (1/V) sum k_n (l n_a)^2 over the touching contacts (PFC's rule G = alpha A / (k_n N_c dt) in
+// stress form). The integral term (Space::servo_integral, a rate) grows each step by
+// kServoIntegral times the fraction f = G M dt the gain closes, times the proportional rate: with
+// kServoIntegral = 1/4 the loop is critically damped on that ideal plant (both poles at 1 - f/2),
+// and a steady loading (a strain on another axis, dilation under shear) is held with no offset.
+// It does not grow while the rate limits cut the rate (no wind-up), and is 0 while nothing
+// touches (the rate is then the max rate toward the target). Measured with tools/servo_hold.py.
+inline constexpr double kServoFraction = 0.15;
+inline constexpr double kServoIntegral = 0.25;
+// M_a of the contact table's per-pair results (the servo's first step, before a force pass summed it).
+double servo_stiffness(const Model& model, int axis);
 // Default largest servo rate: rate dt <= 1e-4, the cell changes by at most 1e-4 of its size per step.
 double default_servo_max_rate(double dt);
 

@@ -196,3 +196,42 @@ TEST_CASE("periodic: a loose assembly under the servo is bitwise equal on every 
     CHECK(difference(expected, run_deck(b)) == "");
   }
 }
+
+TEST_CASE("periodic: SERVO holds its targets through simple shear (the integral term)", "[periodic][servo]") {
+  // examples/periodic_simple_shear.dat, shortened: 400 loose balls compressed to 100 kPa, then
+  // sheared at e12 rate 8 /s with all three normal stresses servoed. Shear dilates the assembly, so
+  // the servo must keep expanding the cell: a proportional servo needs an error to drive that rate
+  // (s33 fell 14.8% below target with the old 0.01 gain, tools/servo_hold.py), the integral term
+  // learns it. Bound: 1% on every record past e12 = 0.02 (the issue's target; measured 0.4% on the
+  // full example), mean within 0.2%.
+  test::TempDir dir;
+  test::WorkingDir cd(dir.path());
+  test::Harness h;
+  REQUIRE(h.deck("start 0.01 0.01 0.01\nprop kn 1e5 ks 1e5 fric 26.57 dens 2650\ngen 400 0.0004 0.0006 seed 7\n"
+                 "damp local 0.7\nservo 1e5 1e5 1e5\ncycle 20000\nstrain xy 8\n"
+                 "hist stress strain every 50 file h.csv\ncycle 15000\n"));
+  const auto lines = test::lines_of(test::slurp(dir.path() / "h.csv"));
+  REQUIRE(lines.size() > 100);
+  // columns: cycle,time,s11,s22,s33,s12,s13,s23,e11,e22,e33,e12,...
+  std::size_t held = 0;
+  double worst = 0, sum[3] = {0, 0, 0};
+  for (std::size_t l = 1; l < lines.size(); ++l) {
+    std::vector<double> v;
+    std::stringstream row(lines[l]);
+    for (std::string c; std::getline(row, c, ',');) v.push_back(std::stod(c));
+    REQUIRE(v.size() >= 12);
+    if (v[11] < 0.02) continue;
+    ++held;
+    for (int a = 0; a < 3; ++a) {
+      const double error = (v[2 + a] - 1e5) / 1e5;
+      worst = std::max(worst, std::abs(error));
+      sum[a] += error;
+    }
+  }
+  REQUIRE(held > 50);
+  CHECK(worst < 0.01);
+  for (int a = 0; a < 3; ++a) CHECK(std::abs(sum[a] / held) < 0.002);
+  // What the integral learnt is a rate of the order of the shear's volume change (this loose sample
+  // contracts as it shears: positive, compression positive).
+  CHECK(std::abs(h.session.model().space.servo_integral[2]) > 0.1);
+}
