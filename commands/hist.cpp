@@ -69,7 +69,7 @@ const Command hist_command = {
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33 e12 e13 e23), "
     "volumetric (evol = e11 + e22 + e33, compression positive), "
-    "ratio, axial, platen, energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
+    "ratio, sratio, axial, platen, energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
     "range holding the top and bottom platens (the balls above and below the middle of its height): ratio "
@@ -78,10 +78,14 @@ const Command hist_command = {
     "(or `area a` and `pressure p`); axial is eps1 = 2 delta / dh, the platens' approach over their first "
     "distance apart (delta the displacement of one platen, dh the distance between their centres when HIST "
     "is given). Without a range, ratio is s33 over the mean of s11 and s22 and axial is the cell strain e33. "
+    "sratio is sigma1/sigma3 of the assembly itself: s33 over the mean of s11 and s22 of its average stress "
+    "from the contact forces (Love's formula over every contact; the volume cancels), which for Rowe's "
+    "test is F1 / (S sigma2) with S the section through the perimeter balls' centres, where the membrane "
+    "acts (README). "
     "platen is the z reaction force of the balls in the range (all balls without one). With `file` the rows "
     "are written as CSV (header cycle,time,... then one row per record, flushed as they come). `HIST reset` "
     "forgets all histories.",
-    {"stress", "strain", "volumetric", "ratio", "axial", "platen", "energy", "unbal", "contacts", "time", "every", "file", "area",
+    {"stress", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "every", "file", "area",
      "pressure", "reset", "range"},
     run_hist};
 

@@ -13,8 +13,8 @@
 namespace trubal {
 
 const std::vector<std::string_view>& History::item_names() {
-  static const std::vector<std::string_view> names = {"stress", "strain", "volumetric", "ratio", "axial", "platen",
-                                                      "energy", "unbal", "contacts", "time"};
+  static const std::vector<std::string_view> names = {"stress", "strain", "volumetric", "ratio", "sratio", "axial",
+                                                      "platen", "energy", "unbal", "contacts", "time"};
   return names;
 }
 
@@ -82,6 +82,12 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       const Sym6& s = get_stress();
       double lateral = 0.5 * (s[0] + s[1]);
       row.push_back(lateral != 0 ? s[2] / lateral : 0.0);
+    } else if (item == "sratio") {
+      // sigma1 / sigma3 of the assembly's own average stress, from the contact forces (Love: the sum
+      // of f (x) l over the contacts; the volume cancels): s33 over the mean of s11 and s22.
+      const Sym6 s = average_stress(model, 1.0);
+      const double lateral = 0.5 * (s[0] + s[1]);
+      row.push_back(lateral != 0 ? s[2] / lateral : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "axial" && !t.platen_ids.empty()) {
       // eps1 = 2 delta / dh: the platens' approach over their first distance apart.
       const Platens p = platens(model, platen_balls(model, t));

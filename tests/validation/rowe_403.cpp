@@ -30,10 +30,10 @@ TEST_CASE("validation: Rowe's triaxial test, 403 balls, peak stress ratio and a 
   std::string deck = slurp(std::string(TRUBAL_SOURCE_DIR) + "/examples/rowe403.dat");
   // Record often, so that the first row is at eps1 ~ 0 (the deck records every 10 cycles), and the
   // stress too: the average stress tensor of the contact forces (the virial, over the START box).
-  const std::string recorded = "contacts every 10 ";
+  const std::string recorded = "contacts sratio every 10 ";
   const auto at = deck.find(recorded);
   REQUIRE(at != std::string::npos);
-  deck.replace(at, recorded.size(), "contacts stress every 5 ");
+  deck.replace(at, recorded.size(), "contacts sratio stress every 5 ");
   const auto plot = deck.find("\nplot ");
   if (plot != std::string::npos) deck.erase(plot + 1, deck.find('\n', plot + 1) - plot);
   Harness h;
@@ -50,12 +50,14 @@ TEST_CASE("validation: Rowe's triaxial test, 403 balls, peak stress ratio and a 
     REQUIRE(c != table.columns.end());
     return static_cast<std::size_t>(c - table.columns.begin());
   };
-  const std::size_t s11 = column("s11"), s22 = column("s22"), s33 = column("s33");
+  const std::size_t s11 = column("s11"), s22 = column("s22"), s33 = column("s33"), sratio = column("sratio");
   double peak = 0, eps_peak = 0, eps_last = 0, max_unbal = 0, virial_peak = 0;
   for (const auto& row : table.rows) {
     REQUIRE(std::isfinite(row[2]));
     if (row[2] > peak) peak = row[2], eps_peak = row[3];
     virial_peak = std::max(virial_peak, row[s33] / (0.5 * (row[s11] + row[s22])));
+    // HIST sratio is that ratio (the contact stress over a volume of 1: the volume cancels).
+    CHECK(row[sratio] == Approx(row[s33] / (0.5 * (row[s11] + row[s22]))).epsilon(1e-12));
     eps_last = row[3];
     if (row[3] > 0.002) max_unbal = std::max(max_unbal, row[4]);   // past the start-up wave
   }
