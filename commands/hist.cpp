@@ -20,6 +20,7 @@ static void run_hist(Context& ctx, Args& args) {
   std::int64_t every = 10;
   std::string file;
   double area = 0, pressure = 0;
+  bool membrane_area = false;
   const auto& names = History::item_names();
   while (!args.empty() && !match_keyword(args.peek(), {"range"})) {
     if (args.accept("every")) { every = args.count("every", 1); continue; }
@@ -45,7 +46,7 @@ static void run_hist(Context& ctx, Args& args) {
     if (rowe && !p.two)
       args.fail("`ratio` and `axial` with a range need both platens in it (balls at two heights)");
     gap0 = p.gap;
-    if (area == 0) area = model.membrane.area;
+    if (area == 0) { area = model.membrane.area; membrane_area = area > 0; }
     if (pressure == 0) pressure = model.membrane.pressure;
     if (has("ratio") && !(area > 0 && pressure > 0))
       args.fail("`ratio` with a range needs the area and the confining pressure: give MEMBRANE first, or "
@@ -55,6 +56,7 @@ static void run_hist(Context& ctx, Args& args) {
   t.platen_ids = std::move(ids);
   t.platen_gap0 = gap0;
   t.area = area;
+  t.membrane_area = membrane_area;
   t.pressure = pressure;
   ctx.out << fmt::format("recording {} every {} cycles{}\n", fmt::join(t.columns, ","), every,
                          file.empty() ? "" : " to " + file);

@@ -9,6 +9,8 @@ static void run_membrane(Context& ctx, Args& args) {
   ctx.session.require_started();
   const double pressure = args.real("pressure p");
   if (pressure < 0) args.fail("the confining pressure must not be negative (0 removes the membrane)");
+  std::int64_t follow = 0;
+  if (args.accept("follow")) follow = args.accept("every") ? args.count("every", 1) : 1;
   Range range = read_range(args);
   auto sel = ctx.session.select(range);
   if (sel.empty()) {
@@ -35,16 +37,28 @@ static void run_membrane(Context& ctx, Args& args) {
     m.balls.ay[k] = loads.fy[q];
     m.balls.fixed[k] |= kSpin;
   }
-  m.membrane = {pressure, loads.area};
+  m.membrane = {};
+  m.membrane.pressure = pressure;
+  m.membrane.area = loads.area;
+  m.membrane.follow_every = follow;
+  m.membrane.cell = loads.cell;
+  for (std::size_t k : loads.balls) m.membrane.ids.push_back(m.balls.id[k]);
+  m.membrane.face_x = loads.face_x;
+  m.membrane.face_y = loads.face_y;
+  m.membrane.layer = loads.layer;
+  m.membrane.extent_x = loads.extent_x;
+  m.membrane.extent_y = loads.extent_y;
+  m.membrane.layer_cells = loads.layer_cells;
   ctx.out << fmt::format(
       "membrane: pressure {:.6g} on {} perimeter balls of {} of {} layers (their spins fixed); "
-      "area {:.6g} = {:.6g} d^2\n",
+      "area {:.6g} = {:.6g} d^2{}\n",
       pressure, loads.balls.size(), loads.loaded_layers, loads.layers, loads.area,
-      loads.area / (loads.cell * loads.cell));
+      loads.area / (loads.cell * loads.cell),
+      follow > 0 ? fmt::format("; following the sample every {} cycle{}", follow, follow == 1 ? "" : "s") : "");
 }
 
 const Command membrane_command = {
-    "MEMBRANE", {}, "MEMBRANE p [range ...]", "confining pressure on the outer balls (Rowe's triaxial test)",
+    "MEMBRANE", {}, "MEMBRANE p [follow [every n]] [range ...]", "confining pressure on the outer balls (Rowe's triaxial test)",
     "Confining pressure p as constant horizontal forces on the perimeter balls of the sample's outermost "
     "square layers (Rowe's large layers: those that reach the sample's widest extent; the layers half a "
     "diameter inside are not loaded). Each ball owns the square cell of side d (its diameter) about it; "
@@ -55,7 +69,12 @@ const Command membrane_command = {
     "stress is p on the cross section A, the union of the cells (76 d^2 for Rowe's layer of 76, 37 d^2 for "
     "Cundall's of 37), which HIST ratio uses. The loaded balls' spins are fixed (FREE spin releases them). "
     "The forces are computed once, from the positions now, and replace the range's x and y applied "
-    "loads; `MEMBRANE 0` removes them. Balls must be of one size, each loaded layer on a square grid.",
-    {"range"}, run_membrane};
+    "loads (valid for small strains only, as the seed paper notes); with `follow` they are recomputed "
+    "every n cycles (default 1; on cycles that are multiples of n, so however the run is cut) from the "
+    "positions then: each loaded layer's tributary height from the loaded layers' heights, each face "
+    "grown with its layer's extent across it, so that every side of the bulging sample still carries p "
+    "times its area, and HIST ratio's A follows the widest layer's extent. `MEMBRANE 0` removes them. "
+    "Balls must be of one size, each loaded layer on a square grid.",
+    {"follow", "every", "range"}, run_membrane};
 
 }  // namespace trubal

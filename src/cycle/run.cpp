@@ -10,6 +10,7 @@
 #include "cycle/kernels.hpp"
 #include "cycle/pipeline.hpp"
 #include "physics/cell.hpp"
+#include "physics/membrane.hpp"
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
 
@@ -102,6 +103,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
     StepSums sums;
     const auto step_start = Clock::now();
+    // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
+    // (the same steps however the run is cut).
+    if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) follow_membrane(model);
     // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
     cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr);
     pipeline.step(model, kernels, sums);

@@ -75,7 +75,7 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       row.push_back(model.space.strain[0] + model.space.strain[1] + model.space.strain[2]);
     } else if (item == "ratio" && !t.platen_ids.empty()) {
       // Rowe's R = sigma1 / sigma2 = F1 / (A sigma2).
-      const double load = t.area * t.pressure;
+      const double load = (t.membrane_area ? model.membrane.area : t.area) * t.pressure;
       row.push_back(load > 0 ? platens(model, platen_balls(model, t)).force / load
                              : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "ratio") {

@@ -25,6 +25,7 @@ struct HistoryTable {
   std::vector<std::int64_t> platen_ids;
   double platen_gap0 = 0;
   double area = 0, pressure = 0;           // A and sigma2 of `ratio`
+  bool membrane_area = false;               // A is the membrane's, read at each record (it follows the sample)
   std::vector<std::vector<double>> rows;
   std::unique_ptr<std::ofstream> out;
 };

@@ -20,7 +20,7 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // 2: the membrane's pressure and area. 3: the periodic cell's tilts (shear); version 2 files are
 // read as cells without tilt. 4: the servo's last measured moments (Space::servo_measured), so
 // that a restarted servo takes the steps an unbroken run takes; older files start it from the
-// contact table; and the cycle the contacts' results are of.
+// contact table; the cycle the contacts' results are of; a following membrane.
 constexpr std::uint32_t kVersion = 4;
 constexpr std::uint32_t kOldestVersion = 2;
 
@@ -120,7 +120,12 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
   io.pod(m.settings.damping);
   io.pod(m.energy);
-  io.pod(m.membrane);
+  io.pod(m.membrane.pressure); io.pod(m.membrane.area);
+  if (version >= 4) {
+    io.pod(m.membrane.follow_every); io.pod(m.membrane.cell);
+    io.vec(m.membrane.ids); io.vec(m.membrane.face_x); io.vec(m.membrane.face_y); io.vec(m.membrane.layer);
+    io.vec(m.membrane.extent_x); io.vec(m.membrane.extent_y); io.vec(m.membrane.layer_cells);
+  }
   std::uint64_t ngroups = m.groups.size();
   io.pod(ngroups);
   if constexpr (std::is_same_v<IO, Reader>) {

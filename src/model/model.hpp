@@ -158,9 +158,20 @@ struct Energy {
 
 // MEMBRANE: its pressure and the cross-section area its forces are consistent with (the union of
 // the loaded layers' square cells), so that HIST ratio can form F1 / (A sigma2). 0: no membrane.
+// With `follow`, the forces are recomputed from the positions every follow_every cycles
+// (physics/membrane.hpp), from what was fixed when MEMBRANE was given: the loaded balls, the open
+// cell faces of each, its layer, and each loaded layer's first extent; the area then follows the
+// widest loaded layer's extent.
 struct Membrane {
   double pressure = 0;
   double area = 0;
+  std::int64_t follow_every = 0;           // 0: the forces stay as computed
+  double cell = 0;                         // d, the side of a ball's square cell
+  std::vector<std::int64_t> ids;           // loaded balls
+  std::vector<std::int8_t> face_x, face_y; // per loaded ball: open faces, -1 .. 1 (force direction)
+  std::vector<std::int32_t> layer;         // per loaded ball: its loaded layer, 0 = lowest
+  std::vector<double> extent_x, extent_y;  // per loaded layer: the x and y extent of its centres then
+  std::vector<double> layer_cells;         // per loaded layer: its cells, times d^2 its area
 };
 
 struct Model {

@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include "model/edit.hpp"
+
 namespace trubal {
 
 MembraneLoads membrane_loads(const Model& model, const std::vector<std::size_t>& selection, double pressure) {
@@ -48,7 +50,13 @@ MembraneLoads membrane_loads(const Model& model, const std::vector<std::size_t>&
     if (reach[k] >= widest - 0.5 * r) loaded.push_back(k);
   out.loaded_layers = loaded.size();
 
-  std::vector<std::pair<std::size_t, std::array<double, 2>>> forces;
+  struct Loaded {
+    std::size_t ball;
+    std::array<double, 2> force;
+    std::int8_t face_x, face_y;
+    std::int32_t layer;
+  };
+  std::vector<Loaded> forces;
   std::size_t most_cells = 0;
   for (std::size_t n = 0; n < loaded.size(); ++n) {
     const auto& layer = layers[loaded[n]];
@@ -69,21 +77,75 @@ MembraneLoads membrane_loads(const Model& model, const std::vector<std::size_t>&
       cell_of.push_back({ix, iy});
     }
     most_cells = std::max(most_cells, cells.size());
+    double xmin = b.x[layer.front()], xmax = xmin, ymin = b.y[layer.front()], ymax = ymin;
+    for (std::size_t i : layer) {
+      xmin = std::min(xmin, b.x[i]); xmax = std::max(xmax, b.x[i]);
+      ymin = std::min(ymin, b.y[i]); ymax = std::max(ymax, b.y[i]);
+    }
+    out.extent_x.push_back(xmax - xmin);
+    out.extent_y.push_back(ymax - ymin);
+    out.layer_cells.push_back(static_cast<double>(cells.size()));
     for (std::size_t q = 0; q < layer.size(); ++q) {
       const auto [ix, iy] = cell_of[q];
-      auto open = [&](long dx, long dy) { return cells.count({ix + dx, iy + dy}) == 0 ? 1.0 : 0.0; };
-      const double fx = face * (open(-1, 0) - open(1, 0)), fy = face * (open(0, -1) - open(0, 1));
-      if (open(-1, 0) + open(1, 0) + open(0, -1) + open(0, 1) > 0) forces.push_back({layer[q], {fx, fy}});
+      auto open = [&](long dx, long dy) { return cells.count({ix + dx, iy + dy}) == 0 ? 1 : 0; };
+      const int face_x = open(-1, 0) - open(1, 0), face_y = open(0, -1) - open(0, 1);
+      if (open(-1, 0) + open(1, 0) + open(0, -1) + open(0, 1) > 0)
+        forces.push_back({layer[q], {face * face_x, face * face_y}, static_cast<std::int8_t>(face_x),
+                          static_cast<std::int8_t>(face_y), static_cast<std::int32_t>(n)});
     }
   }
-  std::sort(forces.begin(), forces.end(), [](const auto& a, const auto& c) { return a.first < c.first; });
-  for (const auto& [i, f] : forces) {
-    out.balls.push_back(i);
-    out.fx.push_back(f[0]);
-    out.fy.push_back(f[1]);
+  std::sort(forces.begin(), forces.end(), [](const Loaded& a, const Loaded& c) { return a.ball < c.ball; });
+  for (const Loaded& f : forces) {
+    out.balls.push_back(f.ball);
+    out.fx.push_back(f.force[0]);
+    out.fy.push_back(f.force[1]);
+    out.face_x.push_back(f.face_x);
+    out.face_y.push_back(f.face_y);
+    out.layer.push_back(f.layer);
   }
   out.area = static_cast<double>(most_cells) * d * d;
   return out;
+}
+
+void follow_membrane(Model& model) {
+  Membrane& m = model.membrane;
+  Balls& b = model.balls;
+  const std::size_t layers = m.extent_x.size();
+  if (!(m.pressure > 0) || layers == 0) return;
+  // The loaded balls now (a deleted one no longer carries a load), their layers' heights and extents.
+  std::vector<std::int64_t> index(m.ids.size(), -1);
+  std::vector<double> z_sum(layers, 0), count(layers, 0);
+  std::vector<double> xmin(layers, 0), xmax(layers, 0), ymin(layers, 0), ymax(layers, 0);
+  for (std::size_t q = 0; q < m.ids.size(); ++q) {
+    const std::int64_t k = find_ball(model, m.ids[q]);
+    if (k < 0) continue;
+    index[q] = k;
+    const std::size_t L = static_cast<std::size_t>(m.layer[q]);
+    const double x = b.x[k], y = b.y[k];
+    if (count[L] == 0) { xmin[L] = xmax[L] = x; ymin[L] = ymax[L] = y; }
+    xmin[L] = std::min(xmin[L], x); xmax[L] = std::max(xmax[L], x);
+    ymin[L] = std::min(ymin[L], y); ymax[L] = std::max(ymax[L], y);
+    z_sum[L] += b.z[k];
+    count[L] += 1;
+  }
+  std::vector<double> z(layers, 0), stretch_x(layers, 1), stretch_y(layers, 1);
+  for (std::size_t L = 0; L < layers; ++L) {
+    z[L] = count[L] > 0 ? z_sum[L] / count[L] : 0;
+    if (m.extent_x[L] > 0 && count[L] > 0) stretch_x[L] = (xmax[L] - xmin[L]) / m.extent_x[L];
+    if (m.extent_y[L] > 0 && count[L] > 0) stretch_y[L] = (ymax[L] - ymin[L]) / m.extent_y[L];
+  }
+  std::size_t widest = 0;
+  for (std::size_t L = 0; L < layers; ++L) {
+    const double height = layers > 1 ? 0.5 * (z[L + 1 < layers ? L + 1 : L] - z[L > 0 ? L - 1 : L]) : m.cell;
+    const double face = m.pressure * m.cell * height;
+    for (std::size_t q = 0; q < m.ids.size(); ++q) {
+      if (index[q] < 0 || static_cast<std::size_t>(m.layer[q]) != L) continue;
+      b.ax[index[q]] = face * stretch_y[L] * m.face_x[q];   // a face normal to x spans y
+      b.ay[index[q]] = face * stretch_x[L] * m.face_y[q];
+    }
+    if (m.layer_cells[L] > m.layer_cells[widest]) widest = L;
+  }
+  m.area = m.layer_cells[widest] * m.cell * m.cell * stretch_x[widest] * stretch_y[widest];
 }
 
 }  // namespace trubal

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "model/model.hpp"
@@ -29,10 +30,22 @@ struct MembraneLoads {
   std::size_t layers = 0, loaded_layers = 0;
   double cell = 0;                     // d
   double area = 0;                     // union of the cells of the largest loaded layer
+  // What following the sample needs (Membrane): per loaded ball its open faces and loaded layer,
+  // per loaded layer its centres' extent and its cells.
+  std::vector<std::int8_t> face_x, face_y;
+  std::vector<std::int32_t> layer;
+  std::vector<double> extent_x, extent_y, layer_cells;
 };
 
 // The loads for pressure p on the selected balls (ascending indices). Throws std::runtime_error when
 // the balls are not of one size or a loaded layer is not on a square grid of spacing d.
 MembraneLoads membrane_loads(const Model& model, const std::vector<std::size_t>& selection, double pressure);
+
+// MEMBRANE p follow: the same loads from the positions now. Each loaded layer's tributary height is
+// taken from the loaded layers' heights now, and each face grows with its layer's extent across it
+// (a face normal to x with the layer's y extent over the first one, and so on), so the forces on
+// each side stay p times its area as the sample bulges; the area A of HIST ratio follows the widest
+// layer's extent (its cells times both stretches). The balls' x and y applied loads are set.
+void follow_membrane(Model& model);
 
 }  // namespace trubal

@@ -53,7 +53,8 @@ apply xforce 1e-3 zmom 1e-7 range z 0.1 0.2
 cycle 300
 )", "hist energy every 5 file h.csv\n", 400};
 
-// Rowe's test on a small FCC sample: the membrane, held platens moving at a fixed speed, linear
+// Rowe's test on a small FCC sample: the membrane (following the sample every 3 cycles), held
+// platens moving at a fixed speed, linear
 // springs, Rayleigh damping.
 const Scene kMembrane = {"membrane", R"(start box -200 440 -200 440 -100 450
 prop kn 1.5e9 ks 1.5e9 fric 7 dens 2000
@@ -62,7 +63,7 @@ lattice fcc 40 7 7 13 layers odd  range octagon 120 120 120 99
 group bottom range z -10 10
 group top range z 330 350
 group platens range not z 10 330
-membrane 5e4
+membrane 5e4 follow every 3
 damp 0.05 0.5
 apply zforce -8e7 range group top
 apply zforce 8e7 range group bottom
