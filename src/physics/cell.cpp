@@ -83,7 +83,10 @@ double default_servo_max_rate(double dt) { return dt > 0 ? 1e-4 / dt : 0; }
 
 void cell_before_step(Model& model, double dt, const ContactMoments* last) {
   Space& s = model.space;
-  if (!s.periodic || !(s.servo_on[0] || s.servo_on[1] || s.servo_on[2])) return;
+  if (!s.periodic || !(s.servo_on[0] || s.servo_on[1] || s.servo_on[2])) {
+    s.servo_integral = {0, 0, 0};   // a servo switched on again starts afresh
+    return;
+  }
   const auto L = s.length();
   const double volume = L[0] * L[1] * L[2];
   Sym6 stress;
