@@ -36,6 +36,7 @@ static void print_info(Context& ctx) {
   o << fmt::format("timestep: {}\n", m.dt);
   o << fmt::format("frac: {}\n", m.settings.frac);
   if (m.settings.fixed_dt > 0) o << fmt::format("fixed timestep: {}\n", m.settings.fixed_dt);
+  if (m.space.destroyed > 0) o << fmt::format("balls destroyed: {} (they left the box)\n", m.space.destroyed);
   o << fmt::format("backend: {}\n", s.pipeline().backend().name());
   o << fmt::format("threads: {}\n", s.pipeline().threads());
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';

@@ -42,12 +42,14 @@ void Session::start(const Space& space) {
   pipeline_->invalidate();
 }
 
-void Session::start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+void Session::start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                        const std::array<Outside, 3>& outside) {
   for (int a = 0; a < 3; ++a)
     if (!(hi[a] > lo[a])) throw std::runtime_error(fmt::format("START box: upper bound must exceed lower bound on axis {}", "xyz"[a]));
   Space space;
   space.lo = lo;
   space.hi = hi;
+  space.outside = outside;
   start(space);
 }
 

@@ -42,7 +42,8 @@ class Session {
   void set_backend(const std::string& name, int threads, std::uint64_t max_memory = 0);
 
   // START: a new model (the backend choice and the interpreter's variables stay).
-  void start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi);
+  void start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                 const std::array<Outside, 3>& outside = {Outside::Stop, Outside::Stop, Outside::Stop});
   void start_periodic(const std::array<double, 3>& length, const std::array<int, 3>& boxes);
   void require_started() const;
 

@@ -9,6 +9,7 @@
 
 #include "cycle/kernels.hpp"
 #include "cycle/pipeline.hpp"
+#include "model/edit.hpp"
 #include "physics/cell.hpp"
 #include "physics/membrane.hpp"
 #include "physics/scene.hpp"
@@ -50,6 +51,34 @@ double resting_energy_floor(const Model& model) {
     sum += 0.5 * stiffness * u * u;
   }
   return sum;
+}
+
+// START box: the first ball (by index) whose centre is outside across a `stop` face, and every ball
+// outside across a `destroy` face (marked). A NaN centre is the guard's, not this.
+struct Escapes {
+  std::size_t stop_ball = ~std::size_t{0};
+  int stop_axis = 0;
+  std::vector<bool> destroy;
+  std::size_t destroy_count = 0;
+};
+Escapes find_escapes(const Model& model) {
+  Escapes e;
+  const Space& s = model.space;
+  const Balls& b = model.balls;
+  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  for (std::size_t k = 0; k < b.size(); ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double x = (*pos[a])[k];
+      if (!(x < s.lo[a] || x > s.hi[a])) continue;
+      if (s.outside[a] == Outside::Stop) {
+        if (e.stop_ball == ~std::size_t{0}) { e.stop_ball = k; e.stop_axis = a; }
+      } else {
+        if (e.destroy.empty()) e.destroy.assign(b.size(), false);
+        e.destroy_count += !e.destroy[k];
+        e.destroy[k] = true;
+      }
+    }
+  return e;
 }
 
 }  // namespace
@@ -160,6 +189,41 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       return finish();
     }
     result.done = s;
+    if (model.started && !model.space.periodic) {
+      Escapes escaped = find_escapes(model);
+      if (escaped.destroy_count > 0) {
+        // What the leaving balls carry out is boundary work, so the balance stays closed.
+        const Balls& b = model.balls;
+        const auto& g = model.settings.gravity;
+        for (std::size_t k = 0; k < b.size(); ++k)
+          if (escaped.destroy[k])
+            model.energy.boundary_work -=
+                0.5 * b.mass[k] * (b.vx[k] * b.vx[k] + b.vy[k] * b.vy[k] + b.vz[k] * b.vz[k]) +
+                0.5 * b.inertia[k] * (b.wx[k] * b.wx[k] + b.wy[k] * b.wy[k] + b.wz[k] * b.wz[k]) -
+                b.mass[k] * (g[0] * b.x[k] + g[1] * b.y[k] + g[2] * b.z[k]);
+        if (escaped.stop_ball != ~std::size_t{0} && escaped.destroy[escaped.stop_ball]) escaped.stop_ball = ~std::size_t{0};
+        const double held = model.critical_dt;   // fewer balls make no contact stiffer: keep the step
+        remove_balls(model, escaped.destroy);
+        model.critical_dt = held;
+        model.space.destroyed += static_cast<std::int64_t>(escaped.destroy_count);
+        result.destroyed += escaped.destroy_count;
+        pipeline.invalidate();
+        kernels.laws = make_pair_laws(model);   // per-ball type indices
+        if (escaped.stop_ball != ~std::size_t{0}) escaped = find_escapes(model);
+      }
+      if (escaped.stop_ball != ~std::size_t{0}) {
+        const std::size_t k = escaped.stop_ball;
+        const int a = escaped.stop_axis;
+        const double x = (a == 0 ? model.balls.x : a == 1 ? model.balls.y : model.balls.z)[k];
+        result.left_box = true;
+        result.message = fmt::format(
+            "ball {} left the box through {} = {:.6g} at cycle {} (it is at {} = {:.9g}); the model is kept at that "
+            "cycle: DELETE the ball, make the box larger, or let such balls go with START box ... destroy",
+            model.balls.id[k], "xyz"[a], x < model.space.lo[a] ? model.space.lo[a] : model.space.hi[a], model.cycle,
+            "xyz"[a], x);
+        return finish();
+      }
+    }
     if (control.after_step) {
       const auto output_start = Clock::now();
       control.after_step(model);

@@ -29,6 +29,8 @@ struct CycleResult {
   std::int64_t done = 0;
   bool interrupted = false;
   bool unstable = false;
+  bool left_box = false;            // a ball left a START box across a `stop` face (message says which)
+  std::size_t destroyed = 0;        // balls deleted for leaving across a `destroy` face
   std::string message;              // for an unstable run: cycle, ball, suggested FRAC
   double seconds = 0;               // wall time of the loop
   PhaseTimes times;                 // where it went

@@ -95,6 +95,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.space.servo_gain); io.pod(m.space.servo_max_rate);
   if (version >= 4) {
     io.pod(m.space.servo_measured); io.pod(m.space.servo_measured_valid); io.pod(m.space.servo_integral);
+    io.pod(m.space.outside); io.pod(m.space.destroyed);
   }
   std::uint64_t nmat = m.materials.size();
   io.pod(nmat);

@@ -104,6 +104,9 @@ struct ContactMoments {
   std::array<double, 3> stiffness{};
 };
 
+// What happens to a ball whose centre leaves a free region (START box) across one axis's faces.
+enum class Outside : std::uint8_t { Stop, Destroy };
+
 // Where the balls live: a free region (START box) or a periodic cell (START x y z).
 struct Space {
   bool periodic = false;
@@ -112,6 +115,9 @@ struct Space {
   // with edge vectors a = (Lx, 0, 0), b = (xy, Ly, 0), c = (xz, yz, Lz), L = hi - lo: these tilts.
   std::array<double, 3> tilt{0, 0, 0};              // xy xz yz
   std::array<int, 3> boxes{0, 0, 0};                // contact-detection boxes asked for (0: auto)
+  // START box: per axis, CYCLE stops when a centre leaves (the default), or the ball is deleted.
+  std::array<Outside, 3> outside{Outside::Stop, Outside::Stop, Outside::Stop};
+  std::int64_t destroyed = 0;                       // balls deleted for leaving, since START
   // Periodic cell control (compression positive): xx yy zz xy xz yz.
   std::array<double, 6> strain_rate{};
   std::array<double, 6> strain{};                   // accumulated

@@ -66,3 +66,45 @@ TEST_CASE("commands: DAMP sets Rayleigh coefficients from lambda and f, or direc
   CHECK_FALSE(h.deck("damp local 1.5\n"));
   CHECK_FALSE(h.deck("damp 0.05 0\n"));
 }
+
+TEST_CASE("commands: a ball leaving the START box stops CYCLE, or is destroyed and counted", "[commands][domain]") {
+  // One ball flying along +x at 9.9 m/s from x = 0.5 in a unit box, and one at rest: it crosses x = 1
+  // in the 51st step (x = 0.995 after 50, 1.0049 after 51).
+  const std::string scene = "prop kn 1e4 ks 1e4 dens 1000\nball 0.5 0.5 0.5 0.05\nball 0.2 0.2 0.2 0.05\n"
+                            "init xvel 9.9 range id 1\ntstep 1e-3\n";
+  {
+    Harness h;   // the default: stop, with the ball, the face and the cycle; the model kept
+    CHECK_FALSE(h.deck("start box 0 1 0 1 0 1\n" + scene + "cycle 100\n"));
+    const std::string e = h.first_error_line();
+    INFO(e);
+    CHECK(e.starts_with("deck.dat:7: error: ball 1 left the box through x = 1 at cycle 51"));
+    CHECK(e.find("START box ... destroy") != std::string::npos);
+    CHECK(h.session.model().cycle == 51);
+    CHECK(h.session.model().balls.size() == 2);
+    CHECK(h.session.model().balls.x[0] > 1);
+  }
+  {
+    Harness h;   // destroy: deleted after the step it left in, counted, the energy carried out booked
+    REQUIRE(h.deck("start box 0 1 0 1 0 1 destroy\n" + scene + "cycle 100\nprint info\n"));
+    CHECK(h.out.str().find("1 ball left the box and was destroyed (1 since START)") != std::string::npos);
+    CHECK(h.out.str().find("balls destroyed: 1 (they left the box)") != std::string::npos);
+    const Model& m = h.session.model();
+    CHECK(m.cycle == 100);
+    REQUIRE(m.balls.size() == 1);
+    CHECK(m.balls.id[0] == 2);
+    CHECK(m.space.destroyed == 1);
+    // Its kinetic energy, 1/2 m v^2, left as boundary work (nothing else did any).
+    const double mass = 1000 * 4.0 / 3.0 * M_PI * 0.05 * 0.05 * 0.05;
+    CHECK(m.energy.boundary_work == Approx(-0.5 * mass * 9.9 * 9.9).epsilon(1e-12));
+  }
+  {
+    Harness h;   // per axis: y and z stop, x destroys
+    REQUIRE(h.deck("start box 0 1 0 1 0 1 stop x destroy\n" + scene + "cycle 100\n"));
+    CHECK(h.session.model().space.destroyed == 1);
+    CHECK_FALSE(h.deck("start box 0 1 0 1 0 1 destroy y stop\n" + scene + "init xvel 0 yvel 9.9 range id 1\ncycle 100\n"));
+    CHECK(h.first_error_line().find("left the box through y = 1 at cycle 51") != std::string::npos);
+    Harness bad;
+    CHECK_FALSE(bad.deck("start box 0 1 0 1 0 1 vanish\n"));
+    CHECK(bad.first_error_line().starts_with("deck.dat:1: error: "));
+  }
+}

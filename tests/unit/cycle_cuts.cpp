@@ -40,8 +40,8 @@ strain zz 2 xy 1
 )", "hist stress strain contacts every 7 file h.csv\ndump vtk d every 50\n", 400};
 
 // Hertz-Mindlin balls with restitution dashpots and Rayleigh damping falling under gravity onto a held
-// floor, some pushed sideways and spun by applied loads.
-const Scene kHertzDrop = {"hertz_drop", R"(start box -0.1 0.1 -0.1 0.1 -0.02 0.25
+// floor, some pushed sideways and spun by applied loads; balls that bounce out of the box are destroyed.
+const Scene kHertzDrop = {"hertz_drop", R"(start box -0.1 0.1 -0.1 0.1 -0.02 0.25 destroy
 prop shear 3e7 poisson 0.3 fric 20 dens 2650 rest 0.6
 lattice fcc 0.01 18 18 1 origin -0.09 -0.09 0
 fix vel spin range z -0.005 0.005
