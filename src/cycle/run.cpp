@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -86,6 +87,8 @@ Escapes find_escapes(const Model& model) {
 CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control) {
   CycleResult result;
   if (n <= 0) return result;
+  if (model.balls.size() == 0)
+    throw std::runtime_error("there are no balls to cycle (GEN, BALL or LATTICE first)");
   check_ready(model);
   update_mass(model);
   StepKernels kernels = make_kernels(model);
@@ -118,6 +121,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
 
   for (std::int64_t s = 1; s <= n; ++s) {
     const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
+    // Before anything moves: a step that would shear or squash the periodic cell by more than half an
+    // edge is refused (no tilt reduction could follow it; the run stays at its last step).
+    check_cell_step(model.space, dt);
     kernels.dt = dt;
     // The per-pair results measurements read are written only where someone will read them: the
     // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (a restored model prints

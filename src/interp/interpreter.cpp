@@ -140,6 +140,12 @@ void Interpreter::call_file(const std::string& path) {
     fs::path beside = fs::path(frames_.back().canonical).parent_path() / p;
     if (fs::exists(beside)) p = beside;
   }
+  // Each CALL nests the interpreter once more: a bounded depth, so a long chain of files is an error
+  // rather than a stack overflow.
+  constexpr std::size_t kMaxCallDepth = 100;
+  if (frames_.size() >= kMaxCallDepth)
+    throw InputError(fmt::format("CALL nested more than {} files deep (at '{}'): a chain of decks calling each other?",
+                                 kMaxCallDepth, printable(path)));
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) throw InputError(fmt::format("cannot open the file '{}' to CALL", printable(path)));
   std::string canonical = fs::weakly_canonical(p, ec).string();

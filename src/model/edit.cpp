@@ -1,6 +1,7 @@
 #include "model/edit.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -15,7 +16,12 @@ std::int64_t find_ball(const Model& model, std::int64_t id) {
 std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y, double z, double rad) {
   Balls& b = model.balls;
   if (!(rad > 0)) throw std::invalid_argument("ball radius must be positive");
-  if (id <= 0) id = b.size() ? b.id.back() + 1 : 1;
+  if (id <= 0) {
+    if (b.size() && b.id.back() == std::numeric_limits<std::int64_t>::max())
+      throw std::invalid_argument("no ball id is left after " + std::to_string(b.id.back()) +
+                                  ": give the new ball its id (BALL ... id n)");
+    id = b.size() ? b.id.back() + 1 : 1;
+  }
   auto pos = std::lower_bound(b.id.begin(), b.id.end(), id) - b.id.begin();
   if (static_cast<std::size_t>(pos) < b.size() && b.id[pos] == id)
     throw std::invalid_argument("ball id " + std::to_string(id) + " is taken");

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "model/periodic_cell.hpp"
 #include "physics/scene.hpp"
@@ -124,6 +127,19 @@ void cell_before_step(Model& model, double dt, const ContactMoments* last) {
     rates[a] = std::clamp(std::clamp(r, -most, most), old - slew, old + slew);
   }
   set_strain_rates(model, rates);
+}
+
+void check_cell_step(const Space& s, double dt) {
+  if (!s.periodic) return;
+  const CellFrame f = cell_frame(s);
+  const double change[6] = {f.vlx * dt / f.lx, f.vly * dt / f.ly, f.vlz * dt / f.lz,
+                            f.vxy * dt / f.lx, f.vxz * dt / f.lx, f.vyz * dt / f.ly};
+  static const char* what[6] = {"x edge", "y edge", "z edge", "xy tilt", "xz tilt", "yz tilt"};
+  for (int k = 0; k < 6; ++k)
+    if (!(std::abs(change[k]) <= 0.5))
+      throw std::runtime_error(fmt::format(
+          "the strain rates would change the cell's {} by {:.3g} of an edge in one step (at most 0.5); "
+          "STRAIN asked for more than any loading can be: lower the rate", what[k], change[k]));
 }
 
 void cell_after_step(Model& model, double dt, double image_power) {

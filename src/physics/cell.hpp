@@ -40,6 +40,10 @@ double servo_stiffness(const Model& model, int axis);
 // Default largest servo rate: rate dt <= 1e-4, the cell changes by at most 1e-4 of its size per step.
 double default_servo_max_rate(double dt);
 
+// Throws std::runtime_error when the strain rates would change any edge or tilt of the periodic cell
+// by more than half an edge in one step of dt (a rate beyond any physical loading).
+void check_cell_step(const Space& space, double dt);
+
 // Before a step in a periodic space: the servo's new rates, from the last force pass's stress
 // (`last`, or the contact table's per-pair results when it is null).
 void cell_before_step(Model& model, double dt, const ContactMoments* last = nullptr);

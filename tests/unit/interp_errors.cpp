@@ -2,6 +2,8 @@
 // NAME:LINE: error:, a batch run stops there, and nothing crashes.
 #include <catch2/catch.hpp>
 
+#include <fmt/format.h>
+
 #include <random>
 
 #include "interp/lexer.hpp"
@@ -220,4 +222,27 @@ TEST_CASE("interp errors: batch mode echoes each command and STOP ends the deck"
   REQUIRE(h.deck("echo one ; comment\nstop\necho two\n"));
   CHECK(h.out.str() == "trubal> echo one\none\ntrubal> stop\n");
   CHECK(h.err.str().empty());
+}
+
+TEST_CASE("interp errors: inputs that hung, overflowed or ran on nothing are errors now", "[interp][errors][hard]") {
+  // A shear rate that moves the cell by more than half an edge a step: the tilt reduction could
+  // never catch up (past 2^53 the subtraction changed nothing, and CYCLE hung).
+  auto shear = deck_error("start 1 1 1\nprop kn 1e4 ks 1e4 dens 1000\ngen 20 0.1 0.1 seed 1\nstrain xy 1e20\ncycle 5\n");
+  CHECK(shear.starts_with("deck.dat:5: error: the strain rates would change the cell's xy tilt by"));
+  // The next free id after the largest possible one (signed overflow before).
+  auto ids = deck_error("start box -5 5 -5 5 -5 5\nball 0 0 0 1 id 9223372036854775807\nball 3 0 0 1\n");
+  CHECK(ids.starts_with("deck.dat:3: error: no ball id is left after 9223372036854775807"));
+  // Cycling nothing set time and step to inf for good.
+  auto empty = deck_error("start box 0 1 0 1 0 1\ncycle 10\n");
+  CHECK(empty.starts_with("deck.dat:2: error: there are no balls to cycle"));
+}
+
+TEST_CASE("interp errors: a chain of CALLs is limited in depth, not by the stack", "[interp][errors][hard]") {
+  TempDir dir;
+  // deck k calls deck k+1, 150 of them (distinct files, so no self-call): 5,570 of them crashed.
+  for (int k = 0; k < 150; ++k) dir.write(fmt::format("d{}.dat", k), fmt::format("call d{}.dat\n", k + 1));
+  dir.write("d150.dat", "echo bottom\n");
+  Harness h;
+  CHECK_FALSE(h.deck("call " + (dir.path() / "d0.dat").string() + "\n"));
+  CHECK(h.err.str().find("CALL nested more than 100 files deep") != std::string::npos);
 }
