@@ -91,6 +91,11 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     throw std::runtime_error("there are no balls to cycle (GEN, BALL or LATTICE first)");
   check_ready(model);
   update_mass(model);
+  for (std::size_t k = 0; k < model.balls.size(); ++k)
+    if (!(model.balls.mass[k] > 0 && std::isfinite(1 / model.balls.mass[k]) && model.balls.inertia[k] > 0))
+      throw std::runtime_error(fmt::format(
+          "ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger radius or "
+          "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
   StepKernels kernels = make_kernels(model);
   const double cap = hertz_step_cap(model);
   pipeline.prepare(model);

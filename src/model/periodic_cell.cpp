@@ -93,6 +93,17 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
   std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
   std::vector<double>* vel[3] = {&b.vx, &b.vy, &b.vz};
   std::vector<double>* ref[3] = {ref_x, ref_y, ref_z};
+  // A ball a million cells away (it crossed them in one step) has no image to speak of and its shift
+  // no integer: the run is broken, say so before anything is moved rather than overflow.
+  for (std::size_t k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double x = (*pos[a])[k];
+      if (std::isfinite(x) && !(std::abs(x - s.lo[a]) <= 1e6 * (std::abs(edge[a][a]) + std::abs(s.tilt[0]) + std::abs(s.tilt[1]) + std::abs(s.tilt[2]))))
+        throw std::runtime_error(fmt::format(
+            "ball {} is {:.3g} edge lengths of the periodic cell away along {} after one step (at {:.6g}): a load or "
+            "velocity far beyond the scene's; nothing was wrapped",
+            b.id[k], std::abs(x - s.lo[a]) / edge[a][a], "xyz"[a], x));
+    }
   // Edge vectors each ball moved by, per axis (made when the first ball moves).
   std::vector<std::array<int, 3>> moved;
   bool any = false;
@@ -108,6 +119,7 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
       // The ball moves to its own image inside the cell: minus shift edge vectors.
       const double shift = std::floor((t - s.lo[a]) / edge[a][a]);
       if (shift == 0) continue;   // rounding at the upper face
+
       for (int e = 0; e <= a; ++e) (*pos[e])[k] -= shift * edge[a][e];
       // Rounding can land a tiny negative offset on hi: keep the shift, stay inside.
       if (x - tilt >= s.hi[a]) x = std::nextafter(s.hi[a], s.lo[a]) + tilt;

@@ -246,3 +246,24 @@ TEST_CASE("interp errors: a chain of CALLs is limited in depth, not by the stack
   CHECK_FALSE(h.deck("call " + (dir.path() / "d0.dat").string() + "\n"));
   CHECK(h.err.str().find("CALL nested more than 100 files deep") != std::string::npos);
 }
+
+TEST_CASE("interp errors: a ball thrown across the periodic space, all balls held, a massless ball", "[interp][errors][hard]") {
+  // apply zforce -1e15: the ball crosses ~1e10 cells in a step; its image shift overflowed (UB) and the
+  // run ended with exit 0 and the ball at z = -7e9 in a unit cell.
+  auto thrown = deck_error("start 1 1 1\nprop kn 1e4 ks 1e4 dens 1000\ngen 20 0.1 0.1 seed 1\n"
+                           "apply zforce -1e15 range id 1\ncycle 5\n");
+  CHECK(thrown.starts_with("deck.dat:5: error: ball 1 is "));
+  CHECK(thrown.find("edge lengths of the periodic cell away along z") != std::string::npos);
+  // Every ball held: no free ball sets a step, so the step is that of the balls as if free (it was
+  // infinite, and the run ended in a false "unstable").
+  Harness held;
+  REQUIRE(held.deck("start box -1 2 -1 2 -1 2\nprop kn 1e4 ks 1e4 dens 1000\nball 0 0 0 0.1\nball 0.19 0 0 0.1\n"
+                    "fix vel spin\ncycle 5\n"));
+  const double mass = 1000 * 4.0 / 3.0 * M_PI * 1e-3;
+  // The free-ball bound of a ball in one contact without rotation (the spins are fixed):
+  // 2 / sqrt(2 k / m) (doc/physics.md "Time step"), times FRAC 0.8.
+  CHECK(held.session.model().dt == Approx(0.8 * 2 / std::sqrt(2 * 1e4 / mass)).epsilon(1e-9));
+  // A ball whose mass rounds to zero is an input error, not an instability.
+  auto massless = deck_error("start box -1 2 -1 2 -1 2\nprop kn 1e4 ks 1e4 dens 1e-300\nball 0 0 0 1e-120\ncycle 5\n");
+  CHECK(massless.starts_with("deck.dat:4: error: ball 1 has mass 0"));
+}
