@@ -1,6 +1,9 @@
 // trubal: runs decks of TRUBAL's command language, or an interactive shell.
 #include <unistd.h>
 
+#include <cstdio>
+#include <cstring>
+
 #include <chrono>
 #include <iostream>
 
@@ -61,5 +64,10 @@ int main(int argc, char** argv) {
                                       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                                       t.times)
                << std::flush;
+  // Output nobody received is a failure, not a success (trubal deck.dat > /dev/full).
+  if (const int err = output.screen_error()) {
+    std::fprintf(stderr, "trubal: cannot write the standard output: %s\n", std::strerror(err));
+    return 1;
+  }
   return status;
 }

@@ -53,12 +53,15 @@ void Interpreter::execute(const std::string& line) {
   auto words = split_words(expanded);
   if (words.empty()) return;
   const Command& command = find_command(words[0]);
-  if (echo && !interactive) output_.out() << "trubal> " << printable(expanded, 400) << '\n';
+  // Flushed before it runs: a long or hung command shows its own line.
+  if (echo && !interactive) output_.out() << "trubal> " << printable(expanded, 400) << '\n' << std::flush;
   words.erase(words.begin());
   Args args(command.usage, std::move(words));
   Context ctx{session_, *this, output_.out()};
   command.run(ctx, args);
   output_.out().flush();
+  const std::string log_failure = output_.take_log_failure();
+  if (!log_failure.empty()) output_.err() << "warning: " << log_failure << '\n';
 }
 
 bool Interpreter::run_frames(std::istream& in, const std::string& name, const std::string& canonical) {

@@ -1,23 +1,52 @@
 #include "interp/output.hpp"
 
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 
 namespace trubal {
 
+namespace {
+int error_now() { return errno ? errno : EIO; }
+}  // namespace
+
 int TeeBuffer::overflow(int c) {
   if (c == traits_type::eof()) return traits_type::not_eof(c);
-  if (copy_) copy_->sputc(static_cast<char>(c));
-  return primary_->sputc(static_cast<char>(c));
+  if (copy_ && copy_->sputc(static_cast<char>(c)) == traits_type::eof() && !copy_error_) copy_error_ = error_now();
+  const int r = primary_->sputc(static_cast<char>(c));
+  if (r == traits_type::eof() && !primary_error_) primary_error_ = error_now();
+  return r;
 }
 
 std::streamsize TeeBuffer::xsputn(const char* s, std::streamsize n) {
-  if (copy_) copy_->sputn(s, n);
-  return primary_->sputn(s, n);
+  if (copy_ && copy_->sputn(s, n) < n && !copy_error_) copy_error_ = error_now();
+  const std::streamsize r = primary_->sputn(s, n);
+  if (r < n && !primary_error_) primary_error_ = error_now();
+  return r;
 }
 
 int TeeBuffer::sync() {
-  if (copy_) copy_->pubsync();
-  return primary_->pubsync();
+  if (copy_ && copy_->pubsync() == -1 && !copy_error_) copy_error_ = error_now();
+  const int r = primary_->pubsync();
+  if (r == -1 && !primary_error_) primary_error_ = error_now();
+  return r;
+}
+
+std::string Output::take_log_failure() {
+  if (!log_) return "";
+  out_.flush();
+  err_.flush();
+  const int err = out_buf_.copy_error() ? out_buf_.copy_error() : err_buf_.copy_error();
+  if (!err) return "";
+  const std::string path = log_path_;
+  set_log("");
+  return "the log file '" + path + "' could not be written (" + std::strerror(err) + "); logging stopped";
+}
+
+int Output::screen_error() {
+  out_.flush();
+  err_.flush();
+  return out_buf_.primary_error() ? out_buf_.primary_error() : err_buf_.primary_error();
 }
 
 Output::Output(std::ostream& out, std::ostream& err)

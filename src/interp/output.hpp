@@ -12,7 +12,10 @@ namespace trubal {
 class TeeBuffer : public std::streambuf {
  public:
   explicit TeeBuffer(std::streambuf* primary) : primary_(primary) {}
-  void set_copy(std::streambuf* copy) { copy_ = copy; }
+  void set_copy(std::streambuf* copy) { copy_ = copy; copy_error_ = 0; }
+  // The errno of the first failed write to the copy (the log) or to the screen stream; 0: none.
+  int copy_error() const { return copy_error_; }
+  int primary_error() const { return primary_error_; }
 
  protected:
   int overflow(int c) override;
@@ -22,6 +25,7 @@ class TeeBuffer : public std::streambuf {
  private:
   std::streambuf* primary_;
   std::streambuf* copy_ = nullptr;
+  int copy_error_ = 0, primary_error_ = 0;
 };
 
 class Output {
@@ -32,6 +36,10 @@ class Output {
   // Starts (or, with an empty path, stops) copying everything shown to a log file.
   void set_log(const std::string& path);
   const std::string& log_path() const { return log_path_; }
+  // After a write to the log failed (a full disk): stops logging and says why, once; "" otherwise.
+  std::string take_log_failure();
+  // The errno of the first failed write to the screen streams (0: none), after flushing them.
+  int screen_error();
   // The screen stream is a terminal (main sets it; false for captured output): progress may
   // redraw one line there. A log file, or any other stream, gets plain lines only.
   bool terminal = false;

@@ -1,5 +1,6 @@
 #include "io/atomic_file.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -12,15 +13,27 @@
 
 namespace trubal {
 
+void check_replaceable(const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return;   // absent (or unreadable: the write will say)
+  if (S_ISREG(st.st_mode)) return;
+  const char* what = S_ISLNK(st.st_mode) ? "a symbolic link" : S_ISDIR(st.st_mode) ? "a directory" : "not a regular file";
+  throw std::runtime_error(fmt::format(
+      "will not replace '{}': it is {} (name a regular file, or a new one)", path, what));
+}
+
 void write_file_atomically(const std::string& path, const std::string& text) {
+  check_replaceable(path);
   const std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    errno = 0;
     f.write(text.data(), static_cast<std::streamsize>(text.size()));
     f.close();
     if (!f) {
+      const int err = errno;
       std::remove(tmp.c_str());
-      throw std::runtime_error(fmt::format("cannot write '{}'", path));
+      throw std::runtime_error(fmt::format("cannot write '{}': {}", path, err ? std::strerror(err) : "write failed"));
     }
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {

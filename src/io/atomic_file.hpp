@@ -10,4 +10,8 @@ namespace trubal {
 // SAVE syncs, io/save.cpp). Throws std::runtime_error naming the file; the temporary is removed.
 void write_file_atomically(const std::string& path, const std::string& text);
 
+// Throws std::runtime_error unless `path` is absent or a regular file: a write through a temporary
+// and a rename would replace a symbolic link or a device node with a regular file.
+void check_replaceable(const std::string& path);
+
 }  // namespace trubal

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -41,8 +43,12 @@ HistoryTable& History::add(std::vector<std::string> items, std::int64_t every, c
   if (!file.empty()) {
     t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
     if (!*t->out) throw std::runtime_error(fmt::format("cannot write the history file '{}'", file));
+    errno = 0;
     for (std::size_t k = 0; k < t->columns.size(); ++k) *t->out << (k ? "," : "") << t->columns[k];
     *t->out << '\n' << std::flush;
+    if (!*t->out)
+      throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", file,
+                                           errno ? std::strerror(errno) : "write failed"));
   }
   tables_.push_back(std::move(t));
   return *tables_.back();
@@ -112,8 +118,13 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
     }
   }
   if (t.out) {
+    errno = 0;
     for (std::size_t k = 0; k < row.size(); ++k) *t.out << (k ? "," : "") << csv_real(row[k]);
     *t.out << '\n' << std::flush;
+    if (!*t.out)
+      throw std::runtime_error(fmt::format("cannot write the history file '{}' ({}): the rows from cycle {} on are "
+                                           "not in it", t.file, errno ? std::strerror(errno) : "write failed",
+                                           model.cycle));
   }
   t.rows.push_back(std::move(row));
 }

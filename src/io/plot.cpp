@@ -1,5 +1,7 @@
 #include "io/plot.hpp"
 
+#include "io/atomic_file.hpp"
+
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -180,6 +182,7 @@ void render_plot(const History& history, const PlotRequest& request) {
   // notitle is a keyword, not a string: drop the `title` before it.
   for (std::size_t at; (at = plots.find("title notitle")) != std::string::npos;) plots.replace(at, 13, "notitle");
 
+  check_replaceable(request.file);
   const std::string partial = fmt::format("{}.tmp-{}", request.file, ::getpid());
   std::string script;
   if (ext == ".png")

@@ -12,6 +12,8 @@
 
 #include <fmt/format.h>
 
+#include "io/atomic_file.hpp"
+
 namespace trubal {
 
 namespace {
@@ -159,6 +161,7 @@ void save_model(const Model& model, const std::string& path) {
   header.append(reinterpret_cast<const char*>(&size), sizeof size);
   header.append(reinterpret_cast<const char*>(&sum), sizeof sum);
 
+  check_replaceable(path);
   std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (fd < 0) throw std::runtime_error(fmt::format("cannot write '{}': {}", path, std::strerror(errno)));

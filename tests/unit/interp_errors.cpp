@@ -267,3 +267,36 @@ TEST_CASE("interp errors: a ball thrown across the periodic space, all balls hel
   auto massless = deck_error("start box -1 2 -1 2 -1 2\nprop kn 1e4 ks 1e4 dens 1e-300\nball 0 0 0 1e-120\ncycle 5\n");
   CHECK(massless.starts_with("deck.dat:4: error: ball 1 has mass 0"));
 }
+
+TEST_CASE("interp errors: outputs never replace a link, and a failed write is reported", "[interp][errors][hard]") {
+  TempDir dir;
+  const std::string target = dir.write("target.txt", "keep me\n");
+  const std::string link = (dir.path() / "link.csv").string();
+  REQUIRE(::symlink(target.c_str(), link.c_str()) == 0);
+  // PRINT ... file and SAVE write a temporary and rename it: over a link that would have turned the
+  // link into a regular file.
+  for (const std::string& command : {"print balls file " + link, "save " + link}) {
+    INFO(command);
+    auto e = deck_error("start box 0 1 0 1 0 1\n" + command + "\n");
+    CHECK(e.find("will not replace '" + link + "': it is a symbolic link") != std::string::npos);
+    CHECK(std::filesystem::is_symlink(link));
+    CHECK(trubal::test::slurp(target) == "keep me\n");
+  }
+  // A HIST file that cannot take its rows (a full disk: /dev/full) stops the run and says so.
+  if (std::filesystem::exists("/dev/full")) {
+    auto full = deck_error("start box 0 1 0 1 0 1\nprop kn 1e4 dens 1000\nball 0.5 0.5 0.5 0.1\n"
+                           "hist time every 1 file /dev/full\ncycle 3\n");
+    CHECK(full.find("cannot write the history file '/dev/full' (No space left on device)") != std::string::npos);
+    // SET log on a full disk: a warning, once, and logging stops; the deck goes on.
+    Harness h;
+    REQUIRE(h.deck("set log /dev/full\necho one\necho two\n"));
+    CHECK(h.err.str().find("warning: the log file '/dev/full' could not be written (No space left on device); "
+                           "logging stopped") != std::string::npos);
+    CHECK(h.out.str().find("two") != std::string::npos);
+    // Standard output on a full disk: exit status 1 and the reason, not 0.
+    const std::string deck = dir.write("ok.dat", "echo hello\n");
+    CHECK(trubal::test::shell(trubal::test::quote(TRUBAL_EXE) + " " + trubal::test::quote(deck) + " > /dev/full 2> " + trubal::test::quote(dir.str() + "/err.txt")) == 1);
+    CHECK(trubal::test::slurp(dir.path() / "err.txt").find("cannot write the standard output: No space left on device") !=
+          std::string::npos);
+  }
+}
