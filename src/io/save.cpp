@@ -3,6 +3,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -57,6 +59,16 @@ class Reader {
     need(sizeof v);
     std::memcpy(&v, data_.data() + pos_, sizeof v);
     pos_ += sizeof v;
+  }
+  // A bool is one byte, 0 or 1: any other byte would be a bool with no value (undefined behaviour).
+  void pod(bool& v) {
+    std::uint8_t byte = 0;
+    pod(byte);
+    if (byte > 1) corrupt();
+    v = byte != 0;
+  }
+  template <std::size_t N> void pod(std::array<bool, N>& v) {
+    for (bool& b : v) pod(b);
   }
   template <class T> void vec(std::vector<T>& v) {
     std::uint64_t n = 0;
@@ -150,6 +162,57 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.started);
 }
 
+// A bool inside a struct read whole: its byte must be 0 or 1 (read as bytes, which is allowed).
+bool valid_bool(const bool& b) { return *reinterpret_cast<const unsigned char*>(&b) <= 1; }
+
+// What must hold of a model for it to run: what a checksum cannot vouch for (a file written by
+// hand or by another program). "" when it holds, else what does not.
+std::string invalid_model(const Model& m) {
+  auto finite = [](double v) { return std::isfinite(v); };
+  const Balls& b = m.balls;
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    if (!(b.id[k] > 0) || (k > 0 && !(b.id[k] > b.id[k - 1])))
+      return fmt::format("ball ids are not positive and ascending (ball {} at position {})", b.id[k], k);
+    if (!(b.rad[k] > 0) || !finite(b.rad[k])) return fmt::format("ball {} has radius {}", b.id[k], b.rad[k]);
+    for (double v : {b.x[k], b.y[k], b.z[k], b.vx[k], b.vy[k], b.vz[k], b.wx[k], b.wy[k], b.wz[k]})
+      if (!finite(v)) return fmt::format("ball {} has a position or velocity that is not a number", b.id[k]);
+    if (b.fixed[k] > kVel + kSpin) return fmt::format("ball {} has fixities {}", b.id[k], int(b.fixed[k]));
+  }
+  const ContactTable& c = m.contacts;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    if (!(c.i[p] < c.j[p])) return fmt::format("contact {} is not i < j", p);
+    if (p > 0 && (c.i[p] < c.i[p - 1] || (c.i[p] == c.i[p - 1] && c.j[p] < c.j[p - 1])))
+      return fmt::format("the contacts are not sorted (at {})", p);
+    if (c.state[p] > 2) return fmt::format("contact {} has state {}", p, int(c.state[p]));
+  }
+  const Space& s = m.space;
+  for (int a = 0; a < 3; ++a) {
+    if (m.started && !(s.hi[a] > s.lo[a] && finite(s.lo[a]) && finite(s.hi[a])))
+      return fmt::format("the space's {} bounds are [{}, {}]", "xyz"[a], s.lo[a], s.hi[a]);
+    if (static_cast<unsigned>(s.outside[a]) > 1) return "a box condition is neither stop nor destroy";
+  }
+  for (double v : s.tilt) if (!finite(v)) return "the cell's tilts are not numbers";
+  for (double v : s.strain_rate) if (!finite(v)) return "the strain rates are not numbers";
+  for (const auto& [type, mat] : m.materials)
+    if (!valid_bool(mat.has_restitution) || !finite(mat.kn) || !finite(mat.ks) || !finite(mat.density))
+      return fmt::format("type {} has properties that are not numbers", type);
+  const Settings& st = m.settings;
+  if (!(st.frac > 0) || !finite(st.frac)) return fmt::format("FRAC is {}", st.frac);
+  if (!(st.fixed_dt >= 0) || !finite(st.fixed_dt)) return fmt::format("TSTEP is {}", st.fixed_dt);
+  if (static_cast<unsigned>(st.damping.kind) > 2) return "the damping kind is unknown";
+  if (!(m.cycle >= 0) || !(m.dt >= 0) || !finite(m.dt) || !finite(m.time) || !(m.critical_dt >= 0))
+    return "the cycle count, time or step are not valid";
+  const Membrane& mb = m.membrane;
+  const std::size_t loaded = mb.ids.size();
+  if (mb.face_x.size() != loaded || mb.face_y.size() != loaded || mb.layer.size() != loaded ||
+      mb.extent_x.size() != mb.extent_y.size() || mb.extent_x.size() != mb.layer_cells.size())
+    return "the membrane's records do not match";
+  for (std::int32_t L : mb.layer)
+    if (L < 0 || static_cast<std::size_t>(L) >= mb.extent_x.size()) return "the membrane's layers do not match";
+  if (mb.follow_every < 0) return "the membrane's follow period is negative";
+  return "";
+}
+
 }  // namespace
 
 void save_model(const Model& model, const std::string& path) {
@@ -219,7 +282,11 @@ Model load_model(const std::string& path) {
   m.balls.for_each_array([&](const auto& v) { consistent = consistent && v.size() == n; });
   for (std::size_t p = 0; p < m.contacts.i.size(); ++p)
     consistent = consistent && m.contacts.i[p] < n && m.contacts.j[p] < n;
+  m.contacts.for_each_pair_array([&](const auto& v) { consistent = consistent && v.size() == m.contacts.i.size(); });
   if (!consistent) r.corrupt();
+  const std::string wrong = invalid_model(m);
+  if (!wrong.empty())
+    throw std::runtime_error(fmt::format("'{}' holds no valid model: {} (not restarted)", path, wrong));
   return m;
 }
 
