@@ -17,7 +17,9 @@ static void run_gen(Context& ctx, Args& args) {
   }
   Range range = read_range(args);
   auto placed = ctx.session.generate(static_cast<std::size_t>(n), rlo, rhi, type, seed, range);
-  if (placed < static_cast<std::size_t>(n))
+  if (ctx.session.gen_interrupted)
+    ctx.warn(fmt::format("GEN interrupted by Ctrl-C: {} of {} balls placed (kept)", placed, n));
+  else if (placed < static_cast<std::size_t>(n))
     ctx.warn(fmt::format("GEN placed only {} of {} balls: no room for more without overlap", placed, n));
   ctx.out << fmt::format("{} balls generated (type {}, seed {})\n", placed, type, seed);
 }

@@ -117,7 +117,9 @@ class PlacementGrid {
         }
     return false;
   }
-  long cell_of(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  // Clamped: in a box far larger than the balls the quotient passes what a long holds (the keys wrap
+  // anyway; a clamped cell only costs distance tests).
+  long cell_of(double v) const { return static_cast<long>(std::clamp(std::floor(v / cell_), -1e18, 1e18)); }
   static std::uint64_t key(long x, long y, long z) {
     return (static_cast<std::uint64_t>(x & 0x1FFFFF) << 42) | (static_cast<std::uint64_t>(y & 0x1FFFFF) << 21) |
            static_cast<std::uint64_t>(z & 0x1FFFFF);
@@ -139,12 +141,33 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   PlacementGrid grid(s, 2 * rmax);
   const Balls& b = model_.balls;
   for (std::size_t k = 0; k < b.size(); ++k) grid.insert(b.x[k], b.y[k], b.z[k], b.rad[k]);
+  // More balls than the densest packing of the smallest could hold is no run at all: say so at once.
+  {
+    const auto L = s.length();
+    double volume = 1;
+    for (int a = 0; a < 3; ++a) volume *= s.periodic ? L[a] : std::max(0.0, L[a]);
+    const double most = 0.7405 * volume / (4.0 / 3.0 * M_PI * rlo * rlo * rlo);
+    if (static_cast<double>(n) > most)
+      throw std::runtime_error(fmt::format(
+          "GEN: {} balls of radius {} or more cannot fit in the space (at most {:.3g} even packed as densely as "
+          "spheres can be)", n, rlo, most));
+  }
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::size_t placed = 0;
   const std::size_t max_tries = 2000 * n + 10000;
+  // Give up after this many failed tries in a row (the space is as full as random placing gets), and
+  // look at Ctrl-C now and then: GEN keeps what it placed and says how many.
+  constexpr std::size_t kFailuresInARow = 200000;
+  std::size_t failures = 0;
+  gen_interrupted = false;
   std::vector<std::array<double, 4>> made;
-  for (std::size_t tries = 0; placed < n && tries < max_tries; ++tries) {
+  for (std::size_t tries = 0; placed < n && tries < max_tries && failures < kFailuresInARow; ++tries) {
+    if ((tries & 4095) == 0 && interrupt_requested().load()) {
+      interrupt_requested() = false;
+      gen_interrupted = true;
+      break;
+    }
     double r = rlo + (rhi - rlo) * unit(rng);
     double p[3];
     for (int a = 0; a < 3; ++a) {
@@ -152,8 +175,11 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
       if (hi < lo) throw std::runtime_error("GEN: the balls do not fit in the START box");
       p[a] = lo + (hi - lo) * unit(rng);
     }
-    if (!holds(model_, range, {0, type, p[0], p[1], p[2]})) continue;
-    if (grid.overlaps(p[0], p[1], p[2], r)) continue;
+    if (!holds(model_, range, {0, type, p[0], p[1], p[2]}) || grid.overlaps(p[0], p[1], p[2], r)) {
+      ++failures;
+      continue;
+    }
+    failures = 0;
     grid.insert(p[0], p[1], p[2], r);
     made.push_back({p[0], p[1], p[2], r});
     ++placed;
@@ -181,6 +207,11 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
   if (!(d > 0)) throw std::runtime_error("LATTICE: the diameter must be positive");
   const bool periodic = model_.space.periodic;
   const double layer = d / std::sqrt(2.0);
+  // Sized before it is built: a lattice of 1e15 points would take all memory first.
+  constexpr double kMostPoints = 1e8;
+  if (static_cast<double>(nx) * ny * nz > kMostPoints)
+    throw std::runtime_error(fmt::format("LATTICE: {} x {} x {} = {:.3g} points is more than {:.0e}", nx, ny, nz,
+                                         static_cast<double>(nx) * ny * nz, kMostPoints));
   std::vector<std::array<double, 3>> points;
   for (int k = 0; k < nz; ++k) {
     bool odd = k % 2 == 1;

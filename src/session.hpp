@@ -89,6 +89,7 @@ class Session {
   void restart(const std::string& path);
 
   std::uint64_t seed = 12345;          // SET seed: default seed of GEN
+  bool gen_interrupted = false;        // the last GEN was stopped by Ctrl-C
   double volume = 0;                   // SET volume: volume for stress in free space (0: the box)
   // Volume used for the average stress: SET volume, else the periodic cell or START box.
   double stress_volume() const;

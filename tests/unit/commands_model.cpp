@@ -152,9 +152,16 @@ TEST_CASE("commands: GEN places non-overlapping balls reproducibly and says when
     }
   }
   Harness c;
-  REQUIRE(c.deck("start box 0 10 0 10 0 10\ngen 1000 2 2 seed 1\n"));   // far more than fit
-  CHECK(c.session.model().balls.size() < 1000);
+  // 20 is below what the densest packing could hold (22 in this box) but more than random placing
+  // reaches: GEN gives up after 200,000 failed tries in a row and says how many it placed.
+  REQUIRE(c.deck("start box 0 10 0 10 0 10\ngen 20 2 2 seed 1\n"));
+  CHECK(c.session.model().balls.size() < 20);
+  CHECK(c.session.model().balls.size() > 3);
   CHECK(c.err.str().find("placed only") != std::string::npos);
+  // Far more than could ever fit is an error at once (it tried 2000 n times before).
+  Harness d;
+  CHECK_FALSE(d.deck("start box 0 10 0 10 0 10\ngen 1000 2 2 seed 1\n"));
+  CHECK(d.first_error_line().find("1000 balls of radius 2 or more cannot fit in the space (at most 22.1") != std::string::npos);
 }
 
 TEST_CASE("commands: GEN numbers its balls in space order", "[commands]") {

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "interp/lexer.hpp"
+#include "interp/signals.hpp"
 #include "interp_support.hpp"
 
 using namespace trubal;
@@ -299,4 +300,23 @@ TEST_CASE("interp errors: outputs never replace a link, and a failed write is re
     CHECK(trubal::test::slurp(dir.path() / "err.txt").find("cannot write the standard output: No space left on device") !=
           std::string::npos);
   }
+}
+
+TEST_CASE("interp errors: GEN and LATTICE check their size first and heed Ctrl-C", "[interp][errors][hard]") {
+  // GEN of 1e8 in a 20^3 box tried 2000 n times (hours); a LATTICE of 1e15 points built first.
+  auto gen = deck_error("start box 0 20 0 20 0 20\ngen 100000000 1 1\n");
+  CHECK(gen.starts_with("deck.dat:2: error: GEN: 100000000 balls of radius 1 or more cannot fit"));
+  auto lattice = deck_error("start box 0 20 0 20 0 20\nlattice fcc 1 100000 100000 100000\n");
+  CHECK(lattice.starts_with("deck.dat:2: error: LATTICE: 100000 x 100000 x 100000 = 1e+15 points is more than"));
+  // A box far larger than its balls overflowed GEN's placement cells (UB); now the balls are placed.
+  Harness wide;
+  REQUIRE(wide.deck("start 1e23 0.01 0.01\ngen 10 0.001 0.001\n"));
+  CHECK(wide.session.model().balls.size() == 10);
+  // Ctrl-C during GEN: it stops, keeps what it placed, and says so.
+  Harness h;
+  REQUIRE(h.deck("start box 0 20 0 20 0 20\n"));
+  interrupt_requested() = true;
+  REQUIRE(h.deck("gen 100 0.5 0.5\n"));
+  CHECK(h.err.str().find("GEN interrupted by Ctrl-C: 0 of 100 balls placed (kept)") != std::string::npos);
+  CHECK_FALSE(interrupt_requested().load());
 }
