@@ -29,8 +29,9 @@ const Command gen_command = {
     "generate n balls at random non-overlapping positions",
     "Generates n balls with radii uniform in [rlo, rhi] at random positions that overlap no ball, inside "
     "the START box (whole balls) or anywhere in the periodic space, and where the range holds. The same "
-    "seed gives the same balls (default seed: SET seed). If there is no room for all, it says how many it "
-    "placed. The new balls are numbered in space order (by cells of the largest diameter: z slowest, then y, "
+    "seed gives the same balls (default seed: SET seed). More balls than the densest packing of spheres of "
+    "radius rlo could hold is an error at once; if there is no room for all (200,000 failed tries in a row), "
+    "it says how many it placed, and Ctrl-C stops it keeping those placed. The new balls are numbered in space order (by cells of the largest diameter: z slowest, then y, "
     "then x), so that balls near in space are near in number, as the threaded backend needs.",
     {"type", "seed", "range"}, run_gen};
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
+#include <string>
 
 namespace trubal {
 namespace {
@@ -45,10 +47,20 @@ int ThreadPool::hardware_threads() { return std::max(1u, std::thread::hardware_c
 
 ThreadPool::ThreadPool(int threads) : size_(std::max(1, threads)) {
   workers_.reserve(size_ - 1);
-  for (int t = 1; t < size_; ++t) workers_.emplace_back([this, t] { work(t); });
+  for (int t = 1; t < size_; ++t) {
+    try {
+      workers_.emplace_back([this, t] { work(t); });
+    } catch (const std::exception& e) {
+      // The system would not start more (memory, limits): stop and join the ones that started, as
+      // the destructor would, and say so (a constructor that throws runs no destructor).
+      stop_workers();
+      throw std::runtime_error(std::string("could not start thread ") + std::to_string(t + 1) + " of " +
+                               std::to_string(size_) + " (" + e.what() + "); ask for fewer threads");
+    }
+  }
 }
 
-ThreadPool::~ThreadPool() {
+void ThreadPool::stop_workers() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
@@ -56,7 +68,10 @@ ThreadPool::~ThreadPool() {
   }
   wake_.notify_all();
   for (auto& w : workers_) w.join();
+  workers_.clear();
 }
+
+ThreadPool::~ThreadPool() { stop_workers(); }
 
 void ThreadPool::run(const std::function<void(int)>& task) {
   if (size_ == 1) { task(0); return; }

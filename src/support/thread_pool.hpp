@@ -15,6 +15,7 @@ namespace trubal {
 
 class ThreadPool {
  public:
+  // Throws std::runtime_error when the system will not start all the threads (none is left running).
   explicit ThreadPool(int threads);
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
@@ -36,6 +37,7 @@ class ThreadPool {
 
  private:
   void work(int t);
+  void stop_workers();   // wakes the workers to stop and joins them
 
   int size_;
   std::vector<std::thread> workers_;

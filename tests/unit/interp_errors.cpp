@@ -320,3 +320,22 @@ TEST_CASE("interp errors: GEN and LATTICE check their size first and heed Ctrl-C
   CHECK(h.err.str().find("GEN interrupted by Ctrl-C: 0 of 100 balls placed (kept)") != std::string::npos);
   CHECK_FALSE(interrupt_requested().load());
 }
+
+TEST_CASE("interp errors: BACKEND threads the system cannot start is an error, not a hang", "[interp][errors][hard]") {
+  // Under a 4 GB address-space limit 4096 threads' stacks do not fit: the pool used to destroy the
+  // condition variable its started workers waited on, and hung. In a child process, with a timeout.
+  TempDir dir;
+  const std::string deck = dir.write("threads.dat", "backend threaded threads 4096\necho after\n");
+  const int status = trubal::test::shell("ulimit -v 4000000; timeout 120 " + trubal::test::quote(TRUBAL_EXE) + " " +
+                                         trubal::test::quote(deck) + " > " + trubal::test::quote(dir.str() + "/out.txt") +
+                                         " 2>&1");
+  const std::string out = trubal::test::slurp(dir.path() / "out.txt");
+  INFO(out);
+  if (out.find("backend threaded (4096 threads)") != std::string::npos) {
+    SUCCEED("this machine started 4096 threads under the limit: nothing to check");
+    return;
+  }
+  CHECK(status == 1);   // not 124 (the timeout) nor a signal
+  CHECK(out.find("threads.dat:1: error: could not start thread") != std::string::npos);
+  CHECK(out.find("ask for fewer threads") != std::string::npos);
+}
