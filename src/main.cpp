@@ -30,7 +30,14 @@ int main(int argc, char** argv) {
   app.add_option("-i,--interactive", interactive_deck, "run this deck, then stay in the shell");
   app.add_flag("-V,--version", version, "print the version and exit");
   app.add_flag("--man-commands", man_commands, "print the COMMANDS section of the man page (roff)")->group("");
-  CLI11_PARSE(app, argc, argv);
+  // Exit status: 0 success (and --help), 1 an error in the run, 2 a bad command line (CLI11 would
+  // return its own codes, 105 to 113).
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
   if (man_commands) {
     fmt::print("{}", trubal::man_commands_section());
     return 0;

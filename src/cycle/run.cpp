@@ -190,7 +190,10 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
         advice = fmt::format("try TSTEP {:.3g} (now {:.3g}; critical step about {:.3g})", 0.5 * critical_timestep(model),
                              model.settings.fixed_dt, critical_timestep(model));
       else
-        advice = fmt::format("try FRAC {:.3g} (now {:.3g})", std::min(0.8, 0.5 * frac), frac);
+        advice = frac < 1e-3
+                     ? fmt::format("FRAC is {:.3g} already, so the step is not the cause: look at the loads, "
+                                   "velocities, properties and the servo's rates", frac)
+                     : fmt::format("try FRAC {:.3g} (now {:.3g})", std::min(0.8, 0.5 * frac), frac);
       result.unstable = true;
       result.done = model.cycle - start_cycle;
       result.message = fmt::format(

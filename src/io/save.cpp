@@ -1,12 +1,14 @@
 #include "io/save.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <array>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
@@ -162,6 +164,24 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.started);
 }
 
+// PATH.tmp-PID files of SAVEs that were killed (kill -9) mid-write: nothing else removes them. Only
+// those whose process is gone.
+void remove_stale_temporaries(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  const std::string prefix = target.filename().string() + ".tmp-";
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string pid_text = name.substr(prefix.size());
+    if (pid_text.empty() || pid_text.find_first_not_of("0123456789") != std::string::npos || pid_text.size() > 9) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(pid_text));
+    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove(entry.path(), ec);
+  }
+}
+
 // A bool inside a struct read whole: its byte must be 0 or 1 (read as bytes, which is allowed).
 bool valid_bool(const bool& b) { return *reinterpret_cast<const unsigned char*>(&b) <= 1; }
 
@@ -225,6 +245,7 @@ void save_model(const Model& model, const std::string& path) {
   header.append(reinterpret_cast<const char*>(&sum), sizeof sum);
 
   check_replaceable(path);
+  remove_stale_temporaries(path);
   std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (fd < 0) throw std::runtime_error(fmt::format("cannot write '{}': {}", path, std::strerror(errno)));

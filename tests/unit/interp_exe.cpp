@@ -126,3 +126,20 @@ TEST_CASE("interp exe: -i runs the deck then the shell which ends cleanly at end
   CHECK(stops.status == 0);
   CHECK(stops.out.find("should not run") == std::string::npos);
 }
+
+TEST_CASE("exe: exit status 2 for a bad command line, and SAVE clears the temporaries of killed saves", "[interp][exe]") {
+  TempDir dir;
+  // CLI11's own codes (109 for an unknown option) are not what the man page says.
+  CHECK(shell(quote(TRUBAL_EXE) + " --no-such-option 2>/dev/null") == 2);
+  CHECK(shell(quote(TRUBAL_EXE) + " --help >/dev/null") == 0);
+  // A SAVE killed mid-write (kill -9) leaves x.sav.tmp-PID; the next SAVE of x.sav removes those whose
+  // process is gone, and keeps one whose process runs (here: the test runner's parent).
+  const std::string gone = dir.write("m.sav.tmp-999999999", "half a save");
+  const std::string alive = dir.write("m.sav.tmp-" + std::to_string(::getppid()), "another save in progress");
+  WorkingDir cd(dir.path());
+  Harness h;
+  REQUIRE(h.deck("start box 0 1 0 1 0 1\nsave m.sav\n"));
+  CHECK_FALSE(fs::exists(gone));
+  CHECK(fs::exists(alive));
+  CHECK(fs::exists(dir.path() / "m.sav"));
+}
