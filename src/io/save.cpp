@@ -272,6 +272,9 @@ void save_model(const Model& model, const std::string& path) {
 }
 
 Model load_model(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw std::runtime_error(fmt::format("'{}' is a directory, not a save file", path));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(fmt::format("cannot open the save file '{}'", path));
   std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -79,3 +79,8 @@ TEST_CASE("io restart: a bool byte that is neither 0 nor 1 is a damaged file, no
   std::ofstream(path, std::ios::binary | std::ios::trunc) << data;
   CHECK_THROWS_WITH(load_model(path), Catch::Contains("is damaged"));
 }
+
+TEST_CASE("io restart: a directory is not a save file", "[io][restart]") {
+  TempDir dir;
+  CHECK_THROWS_WITH(load_model(dir.str()), Catch::Contains("is a directory, not a save file"));
+}
