@@ -284,7 +284,7 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     if (!(speed2 <= fastest2)) { fastest2 = speed2; fastest = ball; }
     if constexpr (kEstimate != StepEstimate::None) {
       // A ball held in every component sets no step of its own.
-      const bool held = (fixed & kVel) == kVel && (!kRot || (fixed & kSpin) == kSpin);
+      const bool held = ball_held(fixed, kRot);
       if (!held) {
         if (sum_kmax == 0)   // no contact: as if touching one ball of its own type
           alone_sums(k.laws, ball, m, sum_kmax, sum_ks, kEstimate == StepEstimate::Damped ? &sum_cn : nullptr);

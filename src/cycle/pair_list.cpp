@@ -57,7 +57,7 @@ void install_pairs(ContactTable& table, const PairCandidates& pairs) {
 bool holds_pairs(const ContactTable& table, const PairCandidates& pairs) {
   const std::size_t size = pairs.i.size();
   bool consistent = true;
-  const_cast<ContactTable&>(table).for_each_pair_array([&](auto& v) { consistent = consistent && v.size() == size; });
+  table.for_each_pair_array([&](const auto& v) { consistent = consistent && v.size() == size; });
   return consistent && table.i == pairs.i && table.j == pairs.j && table.image_x == pairs.image_x &&
          table.image_y == pairs.image_y && table.image_z == pairs.image_z;
 }

@@ -13,6 +13,7 @@
 #include "cycle/kernels.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
+#include "cycle/snapshot.hpp"
 #include "cycle/step_scratch.hpp"
 #include "cycle/verlet.hpp"
 #include "support/thread_pool.hpp"
@@ -49,12 +50,8 @@ class Pipeline {
   const PhaseTimes& times() const { return times_; }
   PhaseTimes& times() { return times_; }
 
-  // What run_cycles keeps between CYCLEs (its rescue copy of the state), so that each CYCLE does
-  // not fault in fresh pages for it.
-  template <class T> T& keep() {
-    if (!kept_) kept_ = std::make_shared<T>();
-    return *std::static_pointer_cast<T>(kept_);
-  }
+  // run_cycles' rescue copy of the state, kept between CYCLEs (cycle/snapshot.hpp).
+  Snapshot& rescue() { return rescue_; }
 
  private:
   void rebuild(Model& model);
@@ -72,7 +69,7 @@ class Pipeline {
   const Model* model_ = nullptr;    // the model the list and index were made for
   bool moved_known_ = false;        // step_.moved2() holds the displacements of the current positions
   bool fresh_ = false;              // searched at the current positions (nothing moved since)
-  std::shared_ptr<void> kept_;
+  Snapshot rescue_;
 };
 
 // A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument).

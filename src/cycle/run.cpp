@@ -19,24 +19,6 @@
 namespace trubal {
 namespace {
 
-// Everything a failed step must be able to go back to.
-struct Snapshot {
-  Balls balls;
-  ContactTable contacts;
-  Energy energy;
-  Space space;
-  std::int64_t cycle = 0;
-  double time = 0, dt = 0, critical_dt = 0;
-  void take(const Model& m) {
-    balls = m.balls; contacts = m.contacts; energy = m.energy; space = m.space;
-    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
-  }
-  void restore(Model& m) const {
-    m.balls = balls; m.contacts = contacts; m.energy = energy; m.space = space;
-    m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
-  }
-};
-
 constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs about one step's memory traffic
 constexpr double kProgressSeconds = 0.2;
 
@@ -109,7 +91,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
   // an unstable step grows exponentially and passes this within a few steps.
   const double energy_floor = resting_energy_floor(model);
-  Snapshot& snapshot = pipeline.keep<Snapshot>();
+  Snapshot& snapshot = pipeline.rescue();
   snapshot.take(model);
   using Clock = std::chrono::steady_clock;
   const auto loop_start = Clock::now();

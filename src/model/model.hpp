@@ -95,6 +95,9 @@ struct ContactTable {
                     &kn_eff, &ks_eff, &cn_eff, &work_friction, &work_damping})
       f(*v);
   }
+  template <class F> void for_each_pair_array(F&& f) const {
+    const_cast<ContactTable*>(this)->for_each_pair_array([&](auto& v) { f(static_cast<const decltype(v)&>(v)); });
+  }
 };
 
 // What the servo reads of a force pass, summed by the contact loops: sum of F (x) l (symmetric part,

@@ -82,11 +82,10 @@ double critical_timestep(const Model& model) {
   // fixed velocities), the step is that of the balls as if free.
   bool any_free = false;
   for (std::size_t i = 0; i < n && !any_free; ++i)
-    any_free = !((b.fixed[i] & kVel) == kVel && (!rotation || (b.fixed[i] & kSpin) == kSpin));
+    any_free = !ball_held(b.fixed[i], rotation);
   double step = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n; ++i) {
-    const bool held = (b.fixed[i] & kVel) == kVel && (!rotation || (b.fixed[i] & kSpin) == kSpin);
-    if (held && any_free) continue;
+    if (any_free && ball_held(b.fixed[i], rotation)) continue;
     double sum_kmax = sums[i].kmax, sum_ks = sums[i].ks, sum_cn = sums[i].cn;
     if (sum_kmax == 0) alone_sums(laws, i, b.mass[i], sum_kmax, sum_ks, &sum_cn);
     const double omega2 = ball_omega2(b.mass[i], sum_kmax, sum_ks, rotation);

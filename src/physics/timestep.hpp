@@ -5,10 +5,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "model/model.hpp"
 
 namespace trubal {
+
+// Whether a ball is held in every component the step moves (its velocity, and its spin where
+// the scene rotates): such a ball sets no step of its own.
+inline bool ball_held(std::uint8_t fixed, bool rotation) {
+  return (fixed & kVel) == kVel && (!rotation || (fixed & kSpin) == kSpin);
+}
 
 // Critical time step of the current state (before FRAC), see doc/physics.md "Time step".
 double critical_timestep(const Model& model);
