@@ -27,7 +27,15 @@ static void run_hist(Context& ctx, Args& args) {
     if (args.accept("file")) { file = args.word("file name"); continue; }
     if (args.accept("area")) { area = args.real("area"); continue; }
     if (args.accept("pressure")) { pressure = args.real("pressure"); continue; }
-    items.emplace_back(names[args.expect(names, "history item")]);
+    std::string item(names[args.expect(names, "history item")]);
+    if (item == "wall") {
+      const std::int64_t id = args.count("wall id", 1);
+      const auto& walls = ctx.session.model().walls;
+      if (std::none_of(walls.begin(), walls.end(), [&](const Wall& w) { return w.id == id; }))
+        args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
+      item = fmt::format("wall {}", id);
+    }
+    items.push_back(std::move(item));
   }
   if (items.empty()) args.fail("name at least one quantity to record");
   Range range = read_range(args);
@@ -71,7 +79,8 @@ const Command hist_command = {
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33 e12 e13 e23), "
     "volumetric (evol = e11 + e22 + e33, compression positive), "
-    "ratio, sratio, axial, platen, energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
+    "ratio, sratio, axial, platen, wall n (w<n>_fx w<n>_fy w<n>_fz: the force on wall n; w<n>_stress; w<n>_pos: a "
+    "cylinder's radius, else the plane's offset point.normal), energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
     "range holding the top and bottom platens (the balls above and below the middle of its height): ratio "

@@ -5,6 +5,8 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "model/wall_shape.hpp"
+#include "physics/walls.hpp"
 #include "io/atomic_file.hpp"
 #include "io/csv.hpp"
 #include "physics/measure.hpp"
@@ -13,7 +15,7 @@ namespace trubal {
 
 static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
                                                      "energy", "fabric", "coordination", "prop", "damp",
-                                                     "history"};
+                                                     "history", "walls"};
 
 static void print_info(Context& ctx) {
   const Session& s = ctx.session;
@@ -31,6 +33,11 @@ static void print_info(Context& ctx) {
   }
   o << fmt::format("balls: {}\n", m.balls.size());
   o << fmt::format("contacts: {}\n", contact_count(m));
+  if (!m.walls.empty()) {
+    std::size_t touching = 0;
+    for (auto st : m.wall_contacts.state) touching += st != 0;
+    o << fmt::format("walls: {} ({} ball-wall contacts)\n", m.walls.size(), touching);
+  }
   o << fmt::format("cycle: {}\n", m.cycle);
   o << fmt::format("time: {}\n", m.time);
   o << fmt::format("timestep: {}\n", m.dt);
@@ -134,11 +141,53 @@ static void print_history(Context& ctx) {
   }
 }
 
+static void print_walls(Context& ctx, const std::string& file) {
+  const Model& m = ctx.session.model();
+  if (!file.empty()) {
+    std::ostringstream csv;
+    csv << "id,kind,type,x,y,z,nx,ny,nz,radius,vx,vy,vz,wx,wy,wz,rrate,fx,fy,fz,mx,my,mz,stress,contacts,work\n";
+    for (const Wall& w : m.walls) {
+      const Vec3 c = wall_centre(w);
+      csv << w.id << ',' << wall_kind_name(w.kind) << ',' << w.type;
+      for (double v : {c[0], c[1], c[2], w.normal[0], w.normal[1], w.normal[2], w.radius, w.velocity[0], w.velocity[1],
+                       w.velocity[2], w.spin[0], w.spin[1], w.spin[2], w.radius_rate, w.force[0], w.force[1], w.force[2],
+                       w.moment[0], w.moment[1], w.moment[2], wall_stress(w)})
+        csv << ',' << csv_real(v);
+      csv << ',' << w.contacts << ',' << csv_real(w.work) << '\n';
+    }
+    write_file_atomically(file, csv.str());
+    ctx.out << fmt::format("{} walls written to {}\n", m.walls.size(), file);
+    return;
+  }
+  if (m.walls.empty()) { ctx.out << "no walls (WALL makes them)\n"; return; }
+  for (const Wall& w : m.walls) {
+    const Vec3 c = wall_centre(w);
+    ctx.out << fmt::format("wall {} ({} of type {}): centre ({:.6g}, {:.6g}, {:.6g}), {} ({:.6g}, {:.6g}, {:.6g})", w.id,
+                           wall_kind_name(w.kind), w.type, c[0], c[1], c[2], w.kind == WallKind::Cylinder ? "axis" : "normal",
+                           w.normal[0], w.normal[1], w.normal[2]);
+    if (w.kind == WallKind::Cylinder)
+      ctx.out << fmt::format(", radius {:.6g}, length {:.6g}, balls {}", w.radius, w.length, w.inside ? "inside" : "outside");
+    if (w.kind == WallKind::Polygon) ctx.out << fmt::format(", {} vertices", w.vertices.size());
+    ctx.out << '\n';
+    ctx.out << fmt::format("  velocity ({:.6g}, {:.6g}, {:.6g})  spin ({:.6g}, {:.6g}, {:.6g})", w.velocity[0], w.velocity[1],
+                           w.velocity[2], w.spin[0], w.spin[1], w.spin[2]);
+    if (w.kind == WallKind::Cylinder) ctx.out << fmt::format("  radius rate {:.6g}", w.radius_rate);
+    if (w.servo_on) ctx.out << fmt::format("  servo to {:.6g}", w.servo_target);
+    ctx.out << '\n';
+    const double area = wall_servo_area(w);
+    ctx.out << fmt::format("  force ({:.6g}, {:.6g}, {:.6g})  moment ({:.6g}, {:.6g}, {:.6g})  stress {}  contacts {}  "
+                           "work {:.6g}\n",
+                           w.force[0], w.force[1], w.force[2], w.moment[0], w.moment[1], w.moment[2],
+                           area > 0 ? fmt::format("{:.6g}", wall_stress(w)) : std::string("(no area)"), w.contacts, w.work);
+  }
+}
+
 static void run_print(Context& ctx, Args& args) {
   auto item = args.expect(kItems, "PRINT item");
   std::string file;
   if (args.accept("file")) file = args.word("file name");
-  if (!file.empty() && item != 1 && item != 2) args.fail("`file` goes with PRINT balls and PRINT contacts");
+  if (!file.empty() && item != 1 && item != 2 && item != 11)
+    args.fail("`file` goes with PRINT balls, contacts and walls");
   const Model& m = ctx.session.model();
   switch (item) {
     case 0: args.done(); print_info(ctx); return;
@@ -207,11 +256,12 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
     case 10: args.done(); print_history(ctx); return;
+    case 11: args.done(); print_walls(ctx, file); return;
   }
 }
 
 const Command print_command = {
-    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history [file f] [range ...]",
+    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
@@ -222,9 +272,15 @@ const Command print_command = {
     "compression positive. strain: the periodic space's accumulated strain (xx yy zz xy xz yz, tensor "
     "components). energy: the energy terms and "
     "their balance. fabric: the fabric tensor. coordination: coordination number, sliding fraction and "
-    "unbalanced-force ratio. prop, damp: the settings. history: the recorded histories.",
+    "unbalanced-force ratio. prop, damp: the settings. history: the recorded histories. walls: each wall's "
+    "shape, motion, and the loads of the last step (force and moment on it, the moment about its spin point; "
+    "its stress, touching contacts, and the work it has done on the balls); with `file f.csv`: "
+    "id,kind,type,x,y,z,nx,ny,nz,radius,vx,vy,vz,wx,wy,wz,rrate,fx,fy,fz,mx,my,mz,stress,contacts,work (x y z "
+    "its centre). The coordination number counts ball pairs only; stress and the unbalanced-force ratio "
+    "include the wall contacts (a wall contact's branch vector runs from the ball's centre to the contact "
+    "point).",
     {"info", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp", "history",
-     "file", "volume", "range"},
+     "walls", "file", "volume", "range"},
     run_print};
 
 }  // namespace trubal

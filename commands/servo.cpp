@@ -1,4 +1,5 @@
 // SERVO: the periodic cell's strain rates driven toward target average stresses.
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -6,12 +7,57 @@
 
 #include "commands/common.hpp"
 #include "physics/cell.hpp"
+#include "physics/walls.hpp"
 
 namespace trubal {
 
 Model& periodic_model(Context& ctx, Args& args, std::string_view command);
 
+// SERVO wall n ...: the wall's speed along its normal (a cylinder: its radius) holds a stress.
+static void servo_wall(Context& ctx, Args& args) {
+  ctx.session.require_started();
+  const std::int64_t id = args.count("wall id", 1);
+  const Model& now = ctx.session.model();
+  const auto it = std::find_if(now.walls.begin(), now.walls.end(), [&](const Wall& w) { return w.id == id; });
+  if (it == now.walls.end()) args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
+  const std::size_t k = static_cast<std::size_t>(it - now.walls.begin());
+  Wall w = *it;
+  if (args.accept("off")) {
+    args.done();
+    Model& m = ctx.session.edit();
+    m.walls[k].servo_on = false;
+    m.walls[k].servo_integral = 0;
+    // The servo's motion stops with it.
+    if (w.kind == WallKind::Cylinder) m.walls[k].radius_rate = 0;
+    else {
+      const double along = w.velocity[0] * w.normal[0] + w.velocity[1] * w.normal[1] + w.velocity[2] * w.normal[2];
+      for (int a = 0; a < 3; ++a) m.walls[k].velocity[a] -= along * w.normal[a];
+    }
+    ctx.out << fmt::format("wall {}: servo off\n", id);
+    return;
+  }
+  args.expect({"stress"}, "`stress s` (the target, compression positive) or `off`");
+  w.servo_target = args.real("target stress");
+  while (!args.empty()) {
+    const auto opt = args.expect({"gain", "max", "area"}, "SERVO wall option");
+    const double v = args.real(opt == 0 ? "gain" : opt == 1 ? "max speed" : "area");
+    if (!(v >= 0) || !std::isfinite(v)) args.fail("gain, max speed and area must be finite and not negative (0: default)");
+    (opt == 0 ? w.servo_gain : opt == 1 ? w.servo_max_speed : w.servo_area) = v;
+  }
+  if (!std::isfinite(w.servo_target)) args.fail("the target stress must be finite");
+  if (!(wall_servo_area(w) > 0))
+    args.fail("an infinite plane has no area of its own: give `area a` (the platen's loaded area)");
+  w.servo_on = true;
+  Model& m = ctx.session.edit();
+  m.walls[k] = w;
+  ctx.out << fmt::format("wall {}: servo to stress {:.6g} over area {:.6g}, gain {}, max speed {}\n", id,
+                         w.servo_target, wall_servo_area(w),
+                         w.servo_gain > 0 ? fmt::format("{:.4g}", w.servo_gain) : std::string("default"),
+                         w.servo_max_speed > 0 ? fmt::format("{:.4g}", w.servo_max_speed) : std::string("default"));
+}
+
 static void run_servo(Context& ctx, Args& args) {
+  if (args.accept("wall")) return servo_wall(ctx, args);
   const Model& now = ctx.session.model();
   std::array<bool, 3> on = now.space.servo_on;
   std::array<double, 3> target = now.space.servo_target;
@@ -64,8 +110,9 @@ static void run_servo(Context& ctx, Args& args) {
 }
 
 const Command servo_command = {
-    "SERVO", {}, "SERVO s11 s22 s33 [gain g] [max r]  |  SERVO xx s [yy s] [zz s] [gain g] [max r]  |  SERVO off",
-    "stress servo of the periodic space",
+    "SERVO", {}, "SERVO s11 s22 s33 [gain g] [max r]  |  SERVO xx s [yy s] [zz s] [gain g] [max r]  |  SERVO off  "
+    "|  SERVO wall n stress s [gain g] [max v] [area a]  |  SERVO wall n off",
+    "stress servo of the periodic space, or of a wall",
     "Drives the strain rates of the periodic cell so that the average stress (over the cell volume, "
     "compression positive) holds the targets, each axis on its own, by proportional-integral control: before "
     "every step rate = g (target - sigma) + I, where the integral term I grows each step by f/4 times the "
@@ -78,7 +125,16 @@ const Command servo_command = {
     "M = (1/V) sum k_n (l n_a)^2 over the touching contacts, so that the stress would close 15% of its error "
     "per step (PFC's gain rule in stress form). The default max rate is 1e-4 / dt (the cell changes by at "
     "most 1e-4 of its size per step), which is also the rate used while nothing touches (I is then 0). "
-    "`SERVO off` stops the servo; its axes stop straining. The integral is state: SAVE keeps it.",
-    {"xx", "yy", "zz", "gain", "max", "off"}, run_servo};
+    "`SERVO off` stops the servo; its axes stop straining. The integral is state: SAVE keeps it. "
+    "`SERVO wall n stress s` drives wall n instead (PFC's servo-controlled platen): its speed along its normal "
+    "(toward the balls for a plane; the right-hand normal of a polygon's vertex order, so order them to face "
+    "the balls), or for a cylinder its radius rate (shrinking for balls inside), follows the same "
+    "proportional-integral law on the wall's stress: the sum of its contacts' normal forces over its area "
+    "(a polygon's own, a cylinder's lateral 2 pi r l; a plane has none, so `area a` is needed, and `area` "
+    "overrides the others). The default gain is G = 0.15 A / (sum k_n dt) over the wall's touching "
+    "contacts; the default max speed 1e-4 of the smallest ball radius per step, also the speed at which a "
+    "wall touching nothing approaches. The other velocity components stay as WALL set them. `SERVO wall n "
+    "off` stops it (and its motion along the normal).",
+    {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area"}, run_servo};
 
 }  // namespace trubal

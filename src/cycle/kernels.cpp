@@ -5,6 +5,7 @@
 
 #include "model/periodic_cell.hpp"
 #include "physics/timestep.hpp"
+#include "physics/walls.hpp"
 
 #include <utility>
 
@@ -199,6 +200,80 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   }
 }
 
+
+// The ball-wall contacts [begin, end) by the pair law (physics/walls.hpp: the wall as a partner j of
+// radius 2R), each added to its ball's sum after the ball's pairs (so in wall order) and to its
+// wall's load; the wall's work on the balls is boundary work.
+template <ContactFeatures F>
+void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
+               StepSums& sums, WallLoad* loads) {
+  constexpr ContactFeatures kLaw = F.law();
+  if (begin >= end) return;
+  WallContacts& c = model.wall_contacts;
+  const Balls& b = model.balls;
+  const std::vector<Wall>& walls = model.walls;
+  ContactBatch B;
+  alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
+  Vec3 point[kBatch], surface[kBatch];
+  double work_friction = 0, work_damping = 0, strain = 0, boundary = 0;
+  for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
+    const std::size_t count = std::min(kBatch, end - p0);
+    for (std::size_t q = 0; q < count; ++q) {
+      const std::size_t p = p0 + q, i = c.ball[p];
+      const WallLane lane = wall_lane(walls[c.wall[p]], {b.x[i], b.y[i], b.z[i]}, b.rad[i]);
+      B.set_law(q, k.laws.wall_law(i, c.wall[p]));
+      B.dx[q] = lane.dx; B.dy[q] = lane.dy; B.dz[q] = lane.dz;
+      B.ri[q] = lane.r; B.rj[q] = lane.r;
+      B.vx[q] = lane.velocity[0] - b.vx[i]; B.vy[q] = lane.velocity[1] - b.vy[i]; B.vz[q] = lane.velocity[2] - b.vz[i];
+      if constexpr (kLaw.rotation) {
+        B.sx[q] = b.rad[i] * b.wx[i]; B.sy[q] = b.rad[i] * b.wy[i]; B.sz[q] = b.rad[i] * b.wz[i];
+      }
+      if constexpr (kLaw.dashpot) B.mstar[q] = b.mass[i];
+      point[q] = lane.point;
+      surface[q] = lane.velocity;
+    }
+    contact_forces<kLaw, false>(B, count, k.laws.table[0], k.dt, k.beta, c.fsx.data() + p0, c.fsy.data() + p0,
+                                c.fsz.data() + p0, hx, hy, hz);
+    for (std::size_t q = 0; q < count; ++q) {
+      const std::size_t p = p0 + q, i = c.ball[p];
+      if constexpr (kLaw.shear) { c.fsx[p] = hx[q]; c.fsy[p] = hy[q]; c.fsz[p] = hz[q]; }
+      PairForce& fi = scratch.ball_force[i];
+      fi.fx -= B.fx[q]; fi.fy -= B.fy[q]; fi.fz -= B.fz[q];
+      if constexpr (kLaw.rotation) { fi.tx += B.tx[q]; fi.ty += B.ty[q]; fi.tz += B.tz[q]; }
+      fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q];
+      if constexpr (kLaw.dashpot) scratch.ball_cn[i] += B.cn[q];
+      const Wall& w = walls[c.wall[p]];
+      WallLoad& load = loads[c.wall[p]];
+      const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q];
+      const double ax = point[q][0] - w.spin_point[0], ay = point[q][1] - w.spin_point[1], az = point[q][2] - w.spin_point[2];
+      const double power = -(fx * surface[q][0] + fy * surface[q][1] + fz * surface[q][2]);   // the wall's on the ball
+      load.fx += fx; load.fy += fy; load.fz += fz;
+      load.mx += ay * fz - az * fy; load.my += az * fx - ax * fz; load.mz += ax * fy - ay * fx;
+      load.normal_force += B.fn[q];
+      load.stiffness += B.kn[q];
+      load.work += power * k.dt;
+      load.contacts += B.state[q] != 0;
+      boundary += power * k.dt;
+      work_friction += B.work_friction[q];
+      work_damping += B.work_damping[q];
+      strain += B.strain[q];
+    }
+    if constexpr (F.details) {
+      for (std::size_t q = 0; q < count; ++q) {
+        const std::size_t p = p0 + q;
+        c.nx[p] = B.nx[q]; c.ny[p] = B.ny[q]; c.nz[p] = B.nz[q]; c.overlap[p] = B.overlap[q]; c.fn[p] = B.fn[q];
+        c.fx[p] = B.fx[q]; c.fy[p] = B.fy[q]; c.fz[p] = B.fz[q];
+        c.kn_eff[p] = B.kn[q]; c.ks_eff[p] = B.ks[q];
+        c.state[p] = static_cast<std::uint8_t>(B.state[q]);
+      }
+    }
+  }
+  sums.friction_work += work_friction;
+  sums.damping_work += work_damping;
+  sums.strain += strain;
+  sums.boundary_work += boundary;
+}
+
 template <MotionFeatures M>
 void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
                  StepSums& sums) {
@@ -317,6 +392,10 @@ constexpr std::array<CrossLoop, sizeof...(I)> cross_loops(std::index_sequence<I.
   return {&cross_loop<ContactFeatures::from_index(I)>...};
 }
 template <std::size_t... I>
+constexpr std::array<WallLoop, sizeof...(I)> wall_loops(std::index_sequence<I...>) {
+  return {&wall_loop<ContactFeatures::from_index(I)>...};
+}
+template <std::size_t... I>
 constexpr std::array<MotionLoop, sizeof...(I)> motion_loops(std::index_sequence<I...>) {
   return {&motion_loop<MotionFeatures::from_index(I)>...};
 }
@@ -324,6 +403,7 @@ constexpr std::array<MotionLoop, sizeof...(I)> motion_loops(std::index_sequence<
 // cross loop never writes details: half its table is never picked.
 constexpr auto kContactLoops = contact_loops(std::make_index_sequence<ContactFeatures::kCount>{});
 constexpr auto kCrossLoops = cross_loops(std::make_index_sequence<ContactFeatures::kCount / 2>{});
+constexpr auto kWallLoops = wall_loops(std::make_index_sequence<ContactFeatures::kCount>{});
 constexpr auto kMotionLoops = motion_loops(std::make_index_sequence<MotionFeatures::kCount>{});
 
 }  // namespace
@@ -345,8 +425,11 @@ StepKernels make_kernels(const Model& model) {
   ContactFeatures contact{f.rotation, f.friction, f.hertz, f.stiffness_damping, false};
   k.contacts_lean = kContactLoops[contact.index()];
   k.cross = kCrossLoops[contact.index()];
+  k.walls_lean = kWallLoops[contact.index()];
   contact.details = true;
   k.contacts_full = kContactLoops[contact.index()];
+  k.walls_full = kWallLoops[contact.index()];
+  k.walls = k.walls_full;
   k.contacts = k.contacts_full;
   MotionFeatures motion{f.rotation, f.gravity || f.applied, f.mass_damping, k.estimate, false};
   k.motion_lean = kMotionLoops[motion.index()];

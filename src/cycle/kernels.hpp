@@ -59,6 +59,21 @@ using ContactLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size
 // outside the range (cross pairs: `pairs`, `count` of them, in list order), before any ContactLoop.
 using CrossLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end,
                            const std::uint32_t* pairs, std::size_t count);
+// What the wall contacts of one pair block add to each wall (ParallelStep adds the blocks in order).
+struct WallLoad {
+  double fx = 0, fy = 0, fz = 0;      // force on the wall
+  double mx = 0, my = 0, mz = 0;      // its moment about the wall's spin point
+  double normal_force = 0, stiffness = 0, work = 0;
+  std::int64_t contacts = 0;
+  void add(const WallLoad& o) {
+    fx += o.fx; fy += o.fy; fz += o.fz; mx += o.mx; my += o.my; mz += o.mz;
+    normal_force += o.normal_force; stiffness += o.stiffness; work += o.work; contacts += o.contacts;
+  }
+};
+// Wall contacts [begin, end) of Model::wall_contacts (whole runs of balls, after all of their ball
+// pairs): added to their balls' sums in wall order, to `loads` (one per wall) and to `sums`.
+using WallLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&,
+                          WallLoad* loads);
 using MotionLoop = void (*)(Model&, const StepScratch&, const StepKernels&, std::size_t begin, std::size_t end,
                             StepSums&);
 
@@ -105,6 +120,7 @@ struct StepKernels {
   // compute the same numbers.
   ContactLoop contacts = nullptr, contacts_full = nullptr, contacts_lean = nullptr;
   CrossLoop cross = nullptr;
+  WallLoop walls = nullptr, walls_full = nullptr, walls_lean = nullptr;   // full: also the wall contacts' results
   MotionLoop motion = nullptr, motion_full = nullptr, motion_lean = nullptr;   // full: also Balls::fx.. mz
 };
 

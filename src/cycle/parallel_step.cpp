@@ -121,6 +121,15 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     split(c, scratch, balls, parts);
   const bool parallel = parts > 1 && share_now(balls, parts);
   blocks_.assign(blocks, StepSums{});
+  const std::size_t wall_count = model.walls.size();
+  auto block_wall = [&](std::size_t k) { return static_cast<std::size_t>(scratch.wall_run_begin[block_ball(k)]); };
+  if (wall_count) wall_loads_.assign(blocks * wall_count, WallLoad{});
+  // After all of a thread's blocks (every sum of its balls is then complete): its balls' wall contacts.
+  auto walls = [&](std::size_t first, std::size_t last) {
+    if (!wall_count) return;
+    for (std::size_t k = first; k < last; ++k)
+      kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), blocks_[k], &wall_loads_[k * wall_count]);
+  };
   // The history is read from fsx.. and written to fsx_next..: a thread's cross pairs may belong to
   // a thread that is already writing, so the two passes need no barrier between them.
   if (parallel) {
@@ -130,12 +139,29 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
       kernels.cross(model, scratch, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
       for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)
         kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
+      walls(first_block_[t], first_block_[t + 1]);
     });
   } else {   // every block on this thread: no cross pairs
     kernels.cross(model, scratch, kernels, 0, balls, nullptr, 0);
     for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), balls, blocks_[k]);
+    walls(0, blocks);
   }
   for (const StepSums& block : blocks_) sums.add(block);
+  if (wall_count) {   // each wall's load, added block by block in ascending order
+    std::vector<WallLoad>& total = wall_total_;
+    total.assign(wall_count, WallLoad{});
+    for (std::size_t k = 0; k < blocks; ++k)
+      for (std::size_t w = 0; w < wall_count; ++w) total[w].add(wall_loads_[k * wall_count + w]);
+    for (std::size_t w = 0; w < wall_count; ++w) {
+      Wall& wall = model.walls[w];
+      wall.force = {total[w].fx, total[w].fy, total[w].fz};
+      wall.moment = {total[w].mx, total[w].my, total[w].mz};
+      wall.normal_force = total[w].normal_force;
+      wall.stiffness = total[w].stiffness;
+      wall.contacts = total[w].contacts;
+      wall.work += total[w].work;
+    }
+  }
   if (kernels.features.friction) {
     ContactTable& table = model.contacts;
     table.fsx.swap(scratch.fsx_next);

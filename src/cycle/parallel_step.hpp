@@ -53,6 +53,8 @@ class ParallelStep {
   void cross_lists(const ContactTable& c, std::size_t balls, int parts);
 
   std::vector<StepSums> blocks_;
+  std::vector<WallLoad> wall_loads_;       // per block, per wall
+  std::vector<WallLoad> wall_total_;
   std::vector<std::size_t> first_block_;   // per thread, then the block count
   std::vector<std::vector<std::uint32_t>> cross_;   // per thread: its cross pairs, in list order
   std::uint64_t split_version_ = 0;

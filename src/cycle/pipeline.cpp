@@ -4,6 +4,8 @@
 #include <chrono>
 
 #include "cycle/pair_list.hpp"
+#include "cycle/wall_list.hpp"
+#include "model/wall_shape.hpp"
 #include "model/periodic_cell.hpp"
 #include "support/format_number.hpp"
 
@@ -43,7 +45,11 @@ bool Pipeline::any_outside(const Model& model) {
 bool Pipeline::needs_rebuild(const Model& model) {
   const bool known = moved_known_;   // the last step measured the displacements as it moved the balls
   moved_known_ = false;
-  if (model_ != &model || !scratch_.fits(model.contacts, model.balls.size())) return true;
+  if (model_ != &model || !scratch_.fits(model.contacts, model.balls.size()) ||
+      !scratch_.fits_walls(model.wall_contacts, model.balls.size()))
+    return true;
+  // A ball and a wall each moving half the skin can just close the gap of a candidate.
+  if (!(wall_travel_ <= 0.5 * ref_.skin())) return true;
   const double limit2 = ref_.displacement_limit2(model);
   if (!(limit2 >= 0)) return true;
   if (known) return !(step_.moved2() <= limit2);
@@ -71,6 +77,9 @@ void Pipeline::rebuild(Model& model) {
   // A backend asked every step mostly finds the list it found before: nothing to carry over then.
   if (backend_->keeps_list() || model_ != &model || !holds_pairs(model.contacts, pairs_)) install_pairs(model.contacts, pairs_);
   if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
+  if (!model.walls.empty() || model.wall_contacts.size() > 0) find_wall_contacts(model, skin, pool_);
+  if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
+  wall_travel_ = 0;
   if (backend_->keeps_list()) ref_.record(model, skin);
   model_ = &model;
 }
@@ -91,6 +100,10 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   const bool measure = backend_->keeps_list() && ref_.x.size() == model.balls.size();
   step_.run(pool_, model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
   moved_known_ = measure;
+  // The walls move with the balls (their velocities are those of the step, like the balls' at t + dt/2).
+  double most = 0;
+  for (Wall& w : model.walls) most = std::max(most, move_wall(w, kernels.dt));
+  wall_travel_ += most;
 }
 
 PipelineCounters Pipeline::counters() const {

@@ -69,6 +69,7 @@ class Pipeline {
   const Model* model_ = nullptr;    // the model the list and index were made for
   bool moved_known_ = false;        // step_.moved2() holds the displacements of the current positions
   bool fresh_ = false;              // searched at the current positions (nothing moved since)
+  double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
   Snapshot rescue_;
 };
 

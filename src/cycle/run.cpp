@@ -15,6 +15,7 @@
 #include "physics/membrane.hpp"
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
+#include "physics/walls.hpp"
 
 namespace trubal {
 namespace {
@@ -123,6 +124,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     kernels.moments = space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2]);
     kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
     kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
+    kernels.walls = details ? kernels.walls_full : kernels.walls_lean;
     StepSums sums;
     const auto step_start = Clock::now();
     // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
@@ -130,6 +132,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) follow_membrane(model);
     // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
     cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr);
+    if (!model.walls.empty()) walls_before_step(model, dt);
     pipeline.step(model, kernels, sums);
     model.space.servo_measured_valid = kernels.moments;
     if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};

@@ -15,6 +15,8 @@ namespace trubal {
 struct Snapshot {
   Balls balls;
   ContactTable contacts;
+  std::vector<Wall> walls;
+  WallContacts wall_contacts;
   Energy energy;
   Space space;
   Membrane membrane;                                          // a following membrane's area
@@ -22,12 +24,12 @@ struct Snapshot {
   std::int64_t cycle = 0;
   double time = 0, dt = 0, critical_dt = 0;
   void take(const Model& m) {
-    balls = m.balls; contacts = m.contacts; energy = m.energy; space = m.space;
+    balls = m.balls; contacts = m.contacts; walls = m.walls; wall_contacts = m.wall_contacts; energy = m.energy; space = m.space;
     membrane = m.membrane; groups = m.groups;
     cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
   }
   void restore(Model& m) const {
-    m.balls = balls; m.contacts = contacts; m.energy = energy; m.space = space;
+    m.balls = balls; m.contacts = contacts; m.walls = walls; m.wall_contacts = wall_contacts; m.energy = energy; m.space = space;
     m.membrane = membrane; m.groups = groups;
     m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
   }

@@ -17,4 +17,12 @@ void StepScratch::index(const ContactTable& table, std::size_t balls) {
   fsz_next.assign(n, 0.0);
 }
 
+void StepScratch::index_walls(const WallContacts& walls, std::size_t balls) {
+  wall_list_version = walls.list_version;
+  const std::size_t n = walls.size();
+  wall_run_begin.assign(balls + 1, static_cast<std::uint32_t>(n));
+  for (std::size_t p = n; p-- > 0;) wall_run_begin[walls.ball[p]] = static_cast<std::uint32_t>(p);
+  for (std::size_t b = balls; b-- > 0;) wall_run_begin[b] = std::min(wall_run_begin[b], wall_run_begin[b + 1]);
+}
+
 }  // namespace trubal

@@ -26,11 +26,18 @@ struct StepScratch {
   // The shear history a step writes (read from the table's, which other threads may still read
   // for their cross pairs), swapped in after the contact pass.
   std::vector<double> fsx_next, fsy_next, fsz_next;
+  // The wall contacts' index: the first with ball >= b, for b = 0 .. balls.
+  std::vector<std::uint32_t> wall_run_begin;
+  std::uint64_t wall_list_version = 0;
 
   // Whether the index is of this table, for this many balls.
   bool fits(const ContactTable& table, std::size_t balls) const {
     return list_version != 0 && list_version == table.list_version && run_begin.size() == balls + 1 && fsx_next.size() == table.size();
   }
+  bool fits_walls(const WallContacts& walls, std::size_t balls) const {
+    return wall_list_version == walls.list_version && wall_run_begin.size() == balls + 1;
+  }
+  void index_walls(const WallContacts& walls, std::size_t balls);
   // Indexes the table's pair list (sorted by i, then j) for `balls` balls.
   void index(const ContactTable& table, std::size_t balls);
 };

@@ -11,12 +11,13 @@
 
 #include "io/csv.hpp"
 #include "physics/measure.hpp"
+#include "physics/walls.hpp"
 
 namespace trubal {
 
 const std::vector<std::string_view>& History::item_names() {
   static const std::vector<std::string_view> names = {"stress", "strain", "volumetric", "ratio", "sratio", "axial",
-                                                      "platen", "energy", "unbal", "contacts", "time"};
+                                                      "platen", "energy", "unbal", "contacts", "time", "wall"};
   return names;
 }
 
@@ -27,6 +28,12 @@ static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work"};
   if (item == "contacts") return {"contacts", "sliding", "coordination"};
   if (item == "time") return {};   // cycle and time lead every row
+  if (item.rfind("wall ", 0) == 0) {   // "wall <id>": its force, stress and place
+    const std::string id = item.substr(5);
+    std::vector<std::string> out;
+    for (const char* what : {"fx", "fy", "fz", "stress", "pos"}) out.push_back(fmt::format("w{}_{}", id, what));
+    return out;
+  }
   return {item};
 }
 
@@ -109,6 +116,16 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       for (double v : {e.kinetic_translation + e.kinetic_rotation, e.strain, e.friction_work, e.damping_work,
                        e.boundary_work})
         row.push_back(v);
+    } else if (item.rfind("wall ", 0) == 0) {
+      const std::int64_t id = std::stoll(item.substr(5));
+      const auto it = std::find_if(model.walls.begin(), model.walls.end(), [&](const Wall& w) { return w.id == id; });
+      if (it == model.walls.end()) {   // deleted since: the row says so rather than stopping
+        for (int k = 0; k < 5; ++k) row.push_back(std::numeric_limits<double>::quiet_NaN());
+      } else {
+        row.push_back(it->force[0]); row.push_back(it->force[1]); row.push_back(it->force[2]);
+        row.push_back(wall_servo_area(*it) > 0 ? wall_stress(*it) : std::numeric_limits<double>::quiet_NaN());
+        row.push_back(wall_position(*it));
+      }
     } else if (item == "unbal") {
       row.push_back(unbalanced_force(model).mean_ratio);
     } else if (item == "contacts") {

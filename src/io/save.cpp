@@ -16,6 +16,8 @@
 
 #include <fmt/format.h>
 
+#include "model/wall_shape.hpp"
+
 #include "io/atomic_file.hpp"
 
 namespace trubal {
@@ -26,8 +28,9 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // 2: the membrane's pressure and area. 3: the periodic cell's tilts (shear); version 2 files are
 // read as cells without tilt. 4: the servo's last measured moments (Space::servo_measured), so
 // that a restarted servo takes the steps an unbroken run takes; older files start it from the
-// contact table; the cycle the contacts' results are of; a following membrane.
-constexpr std::uint32_t kVersion = 4;
+// contact table; the cycle the contacts' results are of; a following membrane. 5: walls, their
+// motion, servo and last loads, and the ball-wall contacts with their history.
+constexpr std::uint32_t kVersion = 5;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -162,6 +165,24 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.cycle); io.pod(m.time); io.pod(m.dt); io.pod(m.critical_dt);
   io.str(m.title);
   io.pod(m.started);
+  if (version >= 5) {
+    std::uint64_t nwalls = m.walls.size();
+    io.pod(nwalls);
+    if constexpr (std::is_same_v<IO, Reader>) {
+      if (nwalls > 1000000) io.corrupt();
+      m.walls.assign(nwalls, Wall{});
+    }
+    for (Wall& w : m.walls) {
+      io.pod(w.id); io.pod(w.type); io.pod(w.kind); io.pod(w.point); io.pod(w.normal); io.vec(w.vertices);
+      io.pod(w.radius); io.pod(w.length); io.pod(w.inside);
+      io.pod(w.velocity); io.pod(w.spin); io.pod(w.spin_point); io.pod(w.radius_rate);
+      io.pod(w.servo_on); io.pod(w.servo_target); io.pod(w.servo_gain); io.pod(w.servo_max_speed);
+      io.pod(w.servo_integral); io.pod(w.servo_area);
+      io.pod(w.force); io.pod(w.moment); io.pod(w.normal_force); io.pod(w.stiffness); io.pod(w.contacts);
+      io.pod(w.work);
+    }
+    m.wall_contacts.for_each_array([&](auto& v) { io.vec(v); });
+  }
 }
 
 // PATH.tmp-PID files of SAVEs that were killed (kill -9) mid-write: nothing else removes them. Only
@@ -230,6 +251,25 @@ std::string invalid_model(const Model& m) {
   for (std::int32_t L : mb.layer)
     if (L < 0 || static_cast<std::size_t>(L) >= mb.extent_x.size()) return "the membrane's layers do not match";
   if (mb.follow_every < 0) return "the membrane's follow period is negative";
+  for (std::size_t k = 0; k < m.walls.size(); ++k) {
+    Wall w = m.walls[k];
+    if (k > 0 && !(w.id > m.walls[k - 1].id)) return "the wall ids are not ascending";
+    if (static_cast<unsigned>(w.kind) > 2) return fmt::format("wall {} has an unknown kind", w.id);
+    const std::string problem = complete_wall(w);
+    if (!problem.empty()) return fmt::format("wall {}: {}", w.id, problem);
+    for (double v : {w.velocity[0], w.velocity[1], w.velocity[2], w.spin[0], w.spin[1], w.spin[2], w.radius_rate,
+                     w.servo_target, w.servo_integral, w.work})
+      if (!finite(v)) return fmt::format("wall {} has a motion or load that is not a number", w.id);
+  }
+  const WallContacts& wc = m.wall_contacts;
+  bool sizes = true;
+  const_cast<WallContacts&>(wc).for_each_array([&](auto& v) { sizes = sizes && v.size() == wc.size(); });
+  if (!sizes) return "the wall contacts' records do not match";
+  for (std::size_t p = 0; p < wc.size(); ++p) {
+    if (wc.ball[p] >= b.size() || wc.wall[p] >= m.walls.size() || b.id[wc.ball[p]] != wc.ball_id[p] ||
+        m.walls[wc.wall[p]].id != wc.wall_id[p] || wc.state[p] > 2)
+      return fmt::format("wall contact {} does not match the balls and walls", p);
+  }
   return "";
 }
 

@@ -30,6 +30,8 @@ std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y
     for (auto& v : model.contacts.i) v += (v >= pos);
     for (auto& v : model.contacts.j) v += (v >= pos);
     model.contacts.list_version = 0;   // a list nobody has indexed
+    for (auto& v : model.wall_contacts.ball) v += (v >= pos);
+    model.wall_contacts.list_version = 0;
   }
   model.critical_dt = 0;   // the new ball may be stiffer or lighter than any before
   b.for_each_array([&](auto& v) { v.insert(v.begin() + pos, typename std::decay_t<decltype(v)>::value_type{}); });
@@ -68,6 +70,18 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   for (auto& v : c.i) v = static_cast<std::uint32_t>(new_index[v]);
   for (auto& v : c.j) v = static_cast<std::uint32_t>(new_index[v]);
   c.list_version = 0;   // a list nobody has indexed
+  WallContacts& w = model.wall_contacts;
+  std::vector<bool> keep_wall(w.size());
+  for (std::size_t p = 0; p < w.size(); ++p) keep_wall[p] = w.ball[p] < new_index.size() && new_index[w.ball[p]] >= 0;
+  w.for_each_array([&](auto& v) {
+    if (v.size() != keep_wall.size()) { v.clear(); return; }
+    std::size_t k = 0;
+    for (std::size_t p = 0; p < v.size(); ++p)
+      if (keep_wall[p]) v[k++] = v[p];
+    v.resize(k);
+  });
+  for (auto& v : w.ball) v = static_cast<std::uint32_t>(new_index[v]);
+  w.list_version = 0;
   for (auto& [name, ids] : model.groups)
     std::erase_if(ids, [&](std::int64_t id) { return find_ball(model, id) < 0; });
   return removed;

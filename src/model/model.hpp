@@ -142,6 +142,61 @@ struct Space {
   std::array<double, 3> length() const { return {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}; }
 };
 
+// WALL: a rigid surface balls touch with the contact law of their types (doc/physics.md "Walls").
+// A plane is one-sided: balls live on the side its normal points to. A polygon (planar, its
+// vertices in order) and a cylinder (finite, balls inside or outside) touch from either side
+// and at their edges. Geometry and motion are state (saved); the loads are those of the last
+// force pass.
+enum class WallKind : std::uint8_t { Plane, Polygon, Cylinder };
+
+struct Wall {
+  std::int64_t id = 0;
+  int type = 1;                                 // material (PROP type), mixed with the ball's
+  WallKind kind = WallKind::Plane;
+  std::array<double, 3> point{};                // plane: a point on it; cylinder: its axis starts here
+  std::array<double, 3> normal{0, 0, 1};        // plane: unit normal toward the balls; polygon: of its
+                                                // plane (right hand of the vertex order); cylinder: unit axis
+  std::vector<std::array<double, 3>> vertices;  // polygon
+  double radius = 0, length = 0;                // cylinder: radius, length along the axis from point
+  bool inside = true;                           // cylinder: balls inside (a container) or outside
+  // Motion, constant within a step: a translation, a spin about an axis through spin_point, and
+  // (cylinder) a rate of change of the radius. spin_point moves with the wall.
+  std::array<double, 3> velocity{}, spin{}, spin_point{};
+  double radius_rate = 0;
+  // SERVO wall: the velocity along `normal` (cylinder: the radius rate) drives the wall's stress
+  // (compression positive) toward the target; proportional-integral as the cell's servo.
+  bool servo_on = false;
+  double servo_target = 0, servo_gain = 0, servo_max_speed = 0, servo_integral = 0;
+  double servo_area = 0;                        // given area (0: the wall's own, physics/walls.hpp)
+  // Loads of the last force pass, and the work the wall has done on the balls since START.
+  std::array<double, 3> force{}, moment{};      // on the wall; moment about spin_point
+  double normal_force = 0;                      // sum of the contacts' normal forces (compression > 0)
+  double stiffness = 0;                         // sum of the touching contacts' k_n
+  std::int64_t contacts = 0;                    // touching
+  double work = 0;
+};
+
+// Ball-wall contacts that may touch, sorted by (ball, wall): candidates within the pair-list skin.
+// Only those with positive overlap carry force; the shear history is carried over by (ball id,
+// wall id), like a ball pair's.
+struct WallContacts {
+  std::vector<std::uint32_t> ball, wall;        // ball index, index into Model::walls
+  std::vector<std::int64_t> ball_id, wall_id;   // what the history is keyed by
+  std::vector<double> fsx, fsy, fsz;            // shear force on the wall (history)
+  // Results of the last force pass that wrote details (ContactTable::results_cycle says which):
+  std::vector<double> nx, ny, nz;               // unit normal, ball -> wall
+  std::vector<double> overlap, fn, fx, fy, fz;  // fx..: force on the wall (on the ball: minus this)
+  std::vector<double> kn_eff, ks_eff;           // stiffness now
+  std::vector<std::uint8_t> state;              // 0 apart, 1 touching, 2 sliding
+  // Unique to each list installed (as ContactTable::list_version); not saved.
+  std::uint64_t list_version = 0;
+  std::size_t size() const { return ball.size(); }
+  template <class F> void for_each_array(F&& f) {
+    f(ball); f(wall); f(ball_id); f(wall_id); f(state);
+    for (auto* v : {&fsx, &fsy, &fsz, &nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &kn_eff, &ks_eff}) f(*v);
+  }
+};
+
 enum class DampKind { None, Rayleigh, Local };
 
 struct Damping {
@@ -188,6 +243,8 @@ struct Model {
   std::map<int, Material> materials;      // by type number
   Balls balls;
   ContactTable contacts;
+  std::vector<Wall> walls;                // by ascending id
+  WallContacts wall_contacts;
   Settings settings;
   Energy energy;
   Membrane membrane;

@@ -84,6 +84,26 @@ double servo_stiffness(const Model& model, int axis) {
 
 double default_servo_max_rate(double dt) { return dt > 0 ? 1e-4 / dt : 0; }
 
+double servo_rate(double error, double gain, double closes, double& integral, double most, double old) {
+  const double proportional = gain * error;
+  double r;
+  if (!std::isfinite(proportional)) {   // nothing touches: as fast as allowed, nothing learnt
+    r = error > 0 ? most : (error < 0 ? -most : 0);
+    integral = 0;
+  } else {
+    const double step = kServoIntegral * closes * proportional;   // the integral grows by a quarter of it
+    r = proportional + integral + step;
+    // No winding up: where the limits cut the rate, the integral does not grow past them.
+    const double limited = std::clamp(r, -most, most);
+    if (!(limited != r && (step > 0) == (r > limited))) integral += step;
+    integral = std::clamp(integral, -most, most);
+  }
+  // The rate changes by at most a quarter of the max rate per step: a velocity field switched
+  // within one step would be accounted with the spring energy its last step made still missing.
+  const double slew = 0.25 * most;
+  return std::clamp(std::clamp(r, -most, most), old - slew, old + slew);
+}
+
 void cell_before_step(Model& model, double dt, const ContactMoments* last) {
   Space& s = model.space;
   if (!s.periodic || !(s.servo_on[0] || s.servo_on[1] || s.servo_on[2])) {
@@ -105,26 +125,10 @@ void cell_before_step(Model& model, double dt, const ContactMoments* last) {
     const double m = last ? last->stiffness[a] / volume : servo_stiffness(model, a);
     const double gain = s.servo_gain > 0 ? s.servo_gain : servo_gain_for(m, dt);
     const double error = s.servo_target[a] - stress[a];   // too little compression: compress (rate > 0)
-    const double proportional = gain * error;
     // The fraction of the error this gain closes per step where the stress follows the contact
-    // stiffness at once: kServoFraction by default; the integral grows by a quarter of it.
+    // stiffness at once: kServoFraction by default.
     const double closes = m > 0 && dt > 0 ? std::min(1.0, gain * m * dt) : 0.0;
-    double r;
-    if (!std::isfinite(proportional)) {   // nothing touches: as fast as allowed, nothing learnt
-      r = error > 0 ? most : (error < 0 ? -most : 0);
-      integral = 0;
-    } else {
-      const double step = kServoIntegral * closes * proportional;
-      r = proportional + integral + step;
-      // No winding up: where the limits cut the rate, the integral does not grow past them.
-      const double limited = std::clamp(r, -most, most);
-      if (!(limited != r && (step > 0) == (r > limited))) integral += step;
-      integral = std::clamp(integral, -most, most);
-    }
-    // The rate changes by at most a quarter of the max rate per step: a velocity field switched
-    // within one step would be accounted with the spring energy its last step made still missing.
-    const double slew = 0.25 * most, old = s.strain_rate[a];
-    rates[a] = std::clamp(std::clamp(r, -most, most), old - slew, old + slew);
+    rates[a] = servo_rate(error, gain, closes, integral, most, s.strain_rate[a]);
   }
   set_strain_rates(model, rates);
 }

@@ -35,6 +35,11 @@ std::array<double, 3> cell_centre(const Space& space);
 // touches (the rate is then the max rate toward the target). Measured with tools/servo_hold.py.
 inline constexpr double kServoFraction = 0.15;
 inline constexpr double kServoIntegral = 0.25;
+// One step of the PI law: the new rate from the error (target - measured), the proportional gain,
+// the fraction of the error it closes per step, the integral term (updated), the largest rate and
+// the rate now (the rate changes by at most a quarter of the largest per step). An infinite
+// proportional rate (nothing touches) moves at the largest rate toward the target.
+double servo_rate(double error, double gain, double closes, double& integral, double most, double old);
 // M_a of the contact table's per-pair results (the servo's first step, before a force pass summed it).
 double servo_stiffness(const Model& model, int axis);
 // Default largest servo rate: rate dt <= 1e-4, the cell changes by at most 1e-4 of its size per step.

@@ -40,6 +40,14 @@ Sym6 average_stress(const Model& model, double volume) {
     const double d = b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p];
     add_dyad(s, c.fx[p], c.fy[p], c.fz[p], d * c.nx[p], d * c.ny[p], d * c.nz[p]);
   }
+  // Ball-wall contacts: the force on the wall and the branch from the ball's centre to the contact point.
+  const WallContacts& w = model.wall_contacts;
+  if (w.fx.size() == w.size() && w.overlap.size() == w.size())
+    for (std::size_t p = 0; p < w.size(); ++p) {
+      if (w.state[p] == 0 || w.ball[p] >= b.size()) continue;
+      const double d = b.rad[w.ball[p]] - w.overlap[p];
+      add_dyad(s, w.fx[p], w.fy[p], w.fz[p], d * w.nx[p], d * w.ny[p], d * w.nz[p]);
+    }
   for (double& v : s) v /= volume;
   return s;
 }
@@ -69,6 +77,15 @@ EnergyReport energy(const Model& model) {
                                         : normal_spring_energy<LinearNormal>(LinearNormal::spring_force(kn, u), u);
     e.strain += shear_spring_energy(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p], c.ks_eff[p]);
   }
+  const WallContacts& w = model.wall_contacts;
+  if (w.kn_eff.size() == w.size() && w.overlap.size() == w.size())
+    for (std::size_t p = 0; p < w.size(); ++p) {
+      if (w.state[p] == 0 || w.ball[p] >= b.size()) continue;
+      const double u = w.overlap[p], kn = w.kn_eff[p];
+      e.strain += is_hertz(model, w.ball[p]) ? normal_spring_energy<HertzNormal>(HertzNormal::spring_force(kn, u), u)
+                                             : normal_spring_energy<LinearNormal>(LinearNormal::spring_force(kn, u), u);
+      e.strain += shear_spring_energy(w.fsx[p] * w.fsx[p] + w.fsy[p] * w.fsy[p] + w.fsz[p] * w.fsz[p], w.ks_eff[p]);
+    }
   e.friction_work = model.energy.friction_work;
   e.damping_work = model.energy.damping_work;
   e.boundary_work = model.energy.boundary_work;
@@ -112,6 +129,12 @@ Unbalanced unbalanced_force(const Model& model) {
   for (std::size_t p = 0; p < c.size(); ++p) {
     if (!touching(c, p)) continue;
     contact_sum += std::sqrt(c.fx[p] * c.fx[p] + c.fy[p] * c.fy[p] + c.fz[p] * c.fz[p]);
+    ++contacts;
+  }
+  const WallContacts& w = model.wall_contacts;   // a ball resting on a wall is balanced by it
+  for (std::size_t p = 0; p < w.size() && w.fx.size() == w.size(); ++p) {
+    if (w.state[p] == 0) continue;
+    contact_sum += std::sqrt(w.fx[p] * w.fx[p] + w.fy[p] * w.fy[p] + w.fz[p] * w.fz[p]);
     ++contacts;
   }
   // Only free velocity components count: a fixed one's force is a reaction, not an imbalance.

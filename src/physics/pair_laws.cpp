@@ -68,6 +68,9 @@ PairLaws make_pair_laws(const Model& model) {
   k.ball_type.resize(model.balls.size());
   for (std::size_t b = 0; b < model.balls.size(); ++b)
     k.ball_type[b] = static_cast<std::uint16_t>(std::lower_bound(types.begin(), types.end(), model.balls.type[b]) - types.begin());
+  k.wall_type.resize(model.walls.size());
+  for (std::size_t w = 0; w < model.walls.size(); ++w)
+    k.wall_type[w] = static_cast<std::uint16_t>(std::lower_bound(types.begin(), types.end(), model.walls[w].type) - types.begin());
   for (int ta : types)
     for (int tb : types) k.table.push_back(mix(model.materials.at(ta), model.materials.at(tb)));
   for (int t : types) {

@@ -14,12 +14,17 @@ namespace trubal {
 struct PairLaws {
   int type_count = 1;                       // materials, by compact index in type-number order
   std::vector<std::uint16_t> ball_type;     // compact type index per ball
+  std::vector<std::uint16_t> wall_type;     // compact type index per wall (Model::walls order)
   std::vector<PairLaw> table;               // by pair of compact indices (type_count^2 entries)
   // A ball without contacts counts as touching one ball of its own kind (per compact type).
   std::vector<double> alone_kn, alone_ks, alone_xi;
 
   const PairLaw& law(std::size_t i, std::size_t j) const {
     return type_count == 1 ? table[0] : table[ball_type[i] * type_count + ball_type[j]];
+  }
+  // Ball `ball` against wall `wall` (an index into Model::walls).
+  const PairLaw& wall_law(std::size_t ball, std::size_t wall) const {
+    return type_count == 1 ? table[0] : table[ball_type[ball] * type_count + wall_type[wall]];
   }
 };
 

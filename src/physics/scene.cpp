@@ -1,6 +1,7 @@
 #include "physics/scene.hpp"
 
 #include <cmath>
+#include <algorithm>
 #include <set>
 #include <stdexcept>
 
@@ -10,8 +11,11 @@
 
 namespace trubal {
 
+// The types of the balls and of the walls (a wall's material mixes with the balls').
 static std::set<int> used_types(const Model& model) {
-  return std::set<int>(model.balls.type.begin(), model.balls.type.end());
+  std::set<int> types(model.balls.type.begin(), model.balls.type.end());
+  for (const Wall& w : model.walls) types.insert(w.type);
+  return types;
 }
 
 std::string Features::describe() const {
@@ -67,7 +71,8 @@ void check_ready(const Model& model) {
     if (it == model.materials.end())
       throw std::runtime_error(fmt::format("type {0} has no properties (PROP type {0} kn ... ks ... dens ...)", type));
     const Material& m = it->second;
-    if (!(m.density > 0))
+    const bool wall_only = std::find(model.balls.type.begin(), model.balls.type.end(), type) == model.balls.type.end();
+    if (!(m.density > 0) && !wall_only)
       throw std::runtime_error(fmt::format("type {0} has no density (PROP type {0} dens ...)", type));
     if (m.hertz()) {
       if (!(m.poisson >= 0 && m.poisson < 0.5))

@@ -6,6 +6,7 @@
 #include "physics/contact_law.hpp"
 #include "physics/pair_laws.hpp"
 #include "physics/scene.hpp"
+#include "physics/walls.hpp"
 
 namespace trubal {
 namespace {
@@ -76,6 +77,24 @@ double critical_timestep(const Model& model) {
       sums[ball].ks += r.ks;
       sums[ball].cn += r.cn;
     }
+  }
+  // Wall contacts, after the ball's pairs (the kernels' order).
+  const WallContacts& wc = model.wall_contacts;
+  for (std::size_t p = 0; p < wc.size(); ++p) {
+    const std::size_t i = wc.ball[p], w = wc.wall[p];
+    if (i >= n || w >= model.walls.size()) continue;
+    const WallLane lane = wall_lane(model.walls[w], {b.x[i], b.y[i], b.z[i]}, b.rad[i]);
+    ContactInput in{};
+    in.dx = lane.dx; in.dy = lane.dy; in.dz = lane.dz;
+    in.ri = in.rj = lane.r;
+    in.mstar = b.mass[i];
+    const PairLaw& law = laws.wall_law(i, w);
+    const ContactResult r = features.hertz ? contact_force<ContactFeatures{.hertz = true, .dashpot = true}>(law, in, 0, 0)
+                                           : contact_force<ContactFeatures{.dashpot = true}>(law, in, 0, 0);
+    if (r.state == 0) continue;
+    sums[i].kmax += std::max(r.kn, r.ks);
+    sums[i].ks += r.ks;
+    sums[i].cn += r.cn;
   }
   const bool rotation = features.rotation;
   // Held balls set no step of their own; where every ball is held (the balls may still move at their

@@ -1,0 +1,77 @@
+#include "cycle/wall_list.hpp"
+
+#include <atomic>
+#include <type_traits>
+
+#include "model/wall_shape.hpp"
+
+namespace trubal {
+namespace {
+
+// Fewer balls than this are searched on one thread.
+constexpr std::size_t kParallelBalls = 8192;
+
+}  // namespace
+
+void find_wall_contacts(Model& model, double reach, ThreadPool& pool) {
+  WallContacts& table = model.wall_contacts;
+  const Balls& b = model.balls;
+  const std::size_t n = b.size(), walls = model.walls.size();
+  // Per thread, the candidates of its share of the balls, then joined in ball order.
+  const int parts = n >= kParallelBalls ? pool.size() : 1;
+  std::vector<std::vector<std::uint32_t>> found(parts);
+  pool.run([&](int t) {
+    if (t >= parts) return;
+    std::vector<std::uint32_t>& out = found[t];
+    for (std::size_t i = split_point(n, parts, t); i < split_point(n, parts, t + 1); ++i)
+      for (std::size_t w = 0; w < walls; ++w) {
+        const WallTouch touch = wall_touch(model.walls[w], {b.x[i], b.y[i], b.z[i]});
+        // A one-sided wall's centre may be past the surface by less than R (still touching).
+        if (touch.gap < b.rad[i] + reach && touch.gap > -b.rad[i]) {
+          out.push_back(static_cast<std::uint32_t>(i));
+          out.push_back(static_cast<std::uint32_t>(w));
+        }
+      }
+  }, parts > 1);
+  WallContacts next;
+  for (const auto& part : found)
+    for (std::size_t k = 0; k < part.size(); k += 2) {
+      next.ball.push_back(part[k]);
+      next.wall.push_back(part[k + 1]);
+      next.ball_id.push_back(b.id[part[k]]);
+      next.wall_id.push_back(model.walls[part[k + 1]].id);
+    }
+  const std::size_t size = next.ball.size();
+  for (auto* v : {&next.fsx, &next.fsy, &next.fsz, &next.nx, &next.ny, &next.nz, &next.overlap, &next.fn, &next.fx,
+                  &next.fy, &next.fz, &next.kn_eff, &next.ks_eff})
+    v->assign(size, 0.0);
+  next.state.assign(size, 0);
+  // The history by (ball id, wall id): both lists are in that order (ball index order is id order,
+  // walls are kept by ascending id).
+  const std::size_t old = table.ball_id.size();
+  bool consistent = table.wall_id.size() == old && table.fsx.size() == old && table.fsy.size() == old &&
+                    table.fsz.size() == old && table.state.size() == old;
+  if (consistent) {
+    std::size_t p = 0;
+    for (std::size_t q = 0; q < size; ++q) {
+      while (p < old && (table.ball_id[p] < next.ball_id[q] ||
+                         (table.ball_id[p] == next.ball_id[q] && table.wall_id[p] < next.wall_id[q])))
+        ++p;
+      if (p < old && table.ball_id[p] == next.ball_id[q] && table.wall_id[p] == next.wall_id[q]) {
+        next.fsx[q] = table.fsx[p]; next.fsy[q] = table.fsy[p]; next.fsz[q] = table.fsz[p];
+        if (table.nx.size() == old) {   // the last results stay readable until the next pass
+          next.nx[q] = table.nx[p]; next.ny[q] = table.ny[p]; next.nz[q] = table.nz[p];
+          next.overlap[q] = table.overlap[p]; next.fn[q] = table.fn[p];
+          next.fx[q] = table.fx[p]; next.fy[q] = table.fy[p]; next.fz[q] = table.fz[p];
+        }
+        if (table.kn_eff.size() == old) { next.kn_eff[q] = table.kn_eff[p]; next.ks_eff[q] = table.ks_eff[p]; }
+        next.state[q] = table.state[p];
+      }
+    }
+  }
+  static std::atomic<std::uint64_t> versions{0};
+  next.list_version = ++versions;
+  table = std::move(next);
+}
+
+}  // namespace trubal
