@@ -20,20 +20,28 @@ static void run_dump(Context& ctx, Args& args) {
   ctx.session.dump_vtk(file, every);
   const VtkSeries& d = *ctx.session.dumps();
   const auto cycle = ctx.session.model().cycle;
-  ctx.out << fmt::format("wrote {} and {} ({}){}\n", d.balls_path(cycle), d.contacts_path(cycle), d.pvd_path(),
+  const std::string files = ctx.session.model().walls.empty()
+                                ? fmt::format("{} and {}", d.balls_path(cycle), d.contacts_path(cycle))
+                                : fmt::format("{}, {} and {}", d.balls_path(cycle), d.contacts_path(cycle),
+                                              d.walls_path(cycle));
+  ctx.out << fmt::format("wrote {} ({}){}\n", files, d.pvd_path(),
                          every > 0 ? fmt::format("; again every {} cycles", every) : "");
 }
 
 const Command dump_command = {
-    "DUMP", {}, "DUMP vtk file [every n]  |  DUMP off", "ParaView files of balls and contact forces",
-    "Writes the balls and the contact forces as VTK XML PolyData files for ParaView, now and, with `every n`, "
-    "every n cycles from then on (`DUMP off` stops). Each dump is two files named by the cycle: "
-    "file_000123.vtp, the balls as points with id, type, radius, velocity, spin and force (show them with "
-    "the Point Gaussian representation or a Glyph scaled by radius), and file_contacts_000123.vtp, the force "
-    "chains: a line between the centres of each pair of touching balls with its normal_force (magnitude), "
-    "force and ball ids as cell data. file.pvd lists all dumps with their times (open it to step through "
-    "the run); it is rewritten after each dump. Arrays are binary (appended raw, little-endian); every file "
-    "is written under a temporary name and renamed. START and RESTART stop periodic dumps.",
+    "DUMP", {}, "DUMP vtk file [every n]  |  DUMP off", "ParaView files of balls, contact forces and walls",
+    "Writes the balls, the contact forces and the walls as VTK XML PolyData files for ParaView, now and, with "
+    "`every n`, every n cycles from then on (`DUMP off` stops). Each dump is two files named by the cycle, "
+    "three when the model has walls: file_000123.vtp, the balls as points with id, type, radius, velocity, spin "
+    "and force (show them with the Point Gaussian representation or a Glyph scaled by radius); "
+    "file_contacts_000123.vtp, the force chains: a line between the centres of each pair of touching balls with "
+    "its normal_force (magnitude), force and ball ids as cell data; and file_walls_000123.vtp, the walls' "
+    "surfaces as polygon cells with the wall's id and the force on the wall (that of the last force pass) as "
+    "cell data: a plane as a square centred on its point, its side the diagonal of the START box; a polygon as "
+    "one cell of its vertices; a cylinder as 48 quads around, one band along its length. file.pvd lists all "
+    "dumps with their times (open it to step through the run; part 0 the balls, 1 the contacts, 2 the walls); "
+    "it is rewritten after each dump. Arrays are binary (appended raw, little-endian); every file is written "
+    "under a temporary name and renamed. START and RESTART stop periodic dumps.",
     {"vtk", "every", "off"}, run_dump};
 
 }  // namespace trubal

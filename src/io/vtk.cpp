@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "model/periodic_cell.hpp"
+#include "model/wall_shape.hpp"
 #include "io/atomic_file.hpp"
 
 namespace trubal {
@@ -37,15 +38,15 @@ class PolyDataWriter {
     array(section, type, name, components, v.data(), v.size() * sizeof(T));
   }
 
-  std::string finish(std::size_t points, std::size_t verts, std::size_t lines) {
+  std::string finish(std::size_t points, std::size_t verts, std::size_t lines, std::size_t polys = 0) {
     std::string out =
         "<?xml version=\"1.0\"?>\n"
         "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
         "  <PolyData>\n";
     out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" "
-                       "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n",
-                       points, verts, lines);
-    for (const char* s : {"PointData", "CellData", "Points", "Verts", "Lines"}) {
+                       "NumberOfStrips=\"0\" NumberOfPolys=\"{}\">\n",
+                       points, verts, lines, polys);
+    for (const char* s : {"PointData", "CellData", "Points", "Verts", "Lines", "Polys"}) {
       auto it = sections_.find(s);
       if (it == sections_.end()) continue;
       out += fmt::format("      <{}>\n{}      </{}>\n", s, it->second, s);
@@ -73,6 +74,19 @@ std::vector<std::int64_t> iota64(std::size_t n, std::int64_t step, std::int64_t 
   std::vector<std::int64_t> v(n);
   for (std::size_t k = 0; k < n; ++k) v[k] = first + static_cast<std::int64_t>(k) * step;
   return v;
+}
+
+// Two unit vectors perpendicular to the unit vector n and to each other, with u x v = n: u from
+// the coordinate axis least aligned with n.
+void perpendicular_pair(const Vec3& n, Vec3& u, Vec3& v) {
+  const double ax = std::abs(n[0]), ay = std::abs(n[1]), az = std::abs(n[2]);
+  const Vec3 e = ax <= ay && ax <= az ? Vec3{1, 0, 0} : ay <= az ? Vec3{0, 1, 0} : Vec3{0, 0, 1};
+  // u = e - (e.n) n, normalised
+  const double en = e[0] * n[0] + e[1] * n[1] + e[2] * n[2];
+  u = {e[0] - en * n[0], e[1] - en * n[1], e[2] - en * n[2]};
+  const double lu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  for (double& c : u) c /= lu;
+  v = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};   // n x u
 }
 
 }  // namespace
@@ -126,6 +140,72 @@ void write_contacts_vtp(const Model& model, const std::string& path) {
   write_file_atomically(path, w.finish(2 * lines, 0, lines));
 }
 
+void write_walls_vtp(const Model& model, const std::string& path) {
+  const auto box = model.space.length();
+  const double side = std::sqrt(box[0] * box[0] + box[1] * box[1] + box[2] * box[2]);
+  std::vector<double> points, force;
+  std::vector<std::int64_t> connectivity, offsets, id;
+  auto point = [&](const Vec3& p) {
+    points.insert(points.end(), {p[0], p[1], p[2]});
+    return static_cast<std::int64_t>(points.size() / 3 - 1);
+  };
+  auto cell = [&](const Wall& w, const std::vector<std::int64_t>& corners) {
+    connectivity.insert(connectivity.end(), corners.begin(), corners.end());
+    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+    id.push_back(w.id);
+    force.insert(force.end(), {w.force[0], w.force[1], w.force[2]});
+  };
+  for (const Wall& w : model.walls) {
+    switch (w.kind) {
+      case WallKind::Plane: {   // a square of side `side` centred on the point, counter-clockwise about n
+        Vec3 u, v;
+        perpendicular_pair(w.normal, u, v);
+        const double h = side / 2;
+        std::int64_t k[4];
+        const double su[4] = {-h, h, h, -h}, sv[4] = {-h, -h, h, h};
+        for (int c = 0; c < 4; ++c)
+          k[c] = point({w.point[0] + su[c] * u[0] + sv[c] * v[0], w.point[1] + su[c] * u[1] + sv[c] * v[1],
+                        w.point[2] + su[c] * u[2] + sv[c] * v[2]});
+        cell(w, {k[0], k[1], k[2], k[3]});
+        break;
+      }
+      case WallKind::Polygon: {   // one cell, the vertices in their order
+        std::vector<std::int64_t> corners;
+        for (const Vec3& p : w.vertices) corners.push_back(point(p));
+        if (!corners.empty()) cell(w, corners);   // complete_wall rejects fewer than three
+        break;
+      }
+      case WallKind::Cylinder: {   // kCylinderSegments quads around, one band along the axis, facing out
+        Vec3 u, v;
+        perpendicular_pair(w.normal, u, v);
+        const std::int64_t first = static_cast<std::int64_t>(points.size() / 3);
+        for (int end = 0; end < 2; ++end) {
+          const double along = end ? w.length : 0.0;
+          for (int s = 0; s < kCylinderSegments; ++s) {
+            const double a = 2 * M_PI * s / kCylinderSegments, cu = w.radius * std::cos(a), sv = w.radius * std::sin(a);
+            point({w.point[0] + along * w.normal[0] + cu * u[0] + sv * v[0],
+                   w.point[1] + along * w.normal[1] + cu * u[1] + sv * v[1],
+                   w.point[2] + along * w.normal[2] + cu * u[2] + sv * v[2]});
+          }
+        }
+        for (int s = 0; s < kCylinderSegments; ++s) {
+          const std::int64_t a = first + s, b = first + (s + 1) % kCylinderSegments;
+          cell(w, {a, b, b + kCylinderSegments, a + kCylinderSegments});
+        }
+        break;
+      }
+    }
+  }
+  const std::size_t polys = offsets.size();
+  PolyDataWriter wr;
+  wr.array("Points", "Float64", "Points", points, 3);
+  wr.array("Polys", "Int64", "connectivity", connectivity);
+  wr.array("Polys", "Int64", "offsets", offsets);
+  wr.array("CellData", "Int64", "id", id);
+  wr.array("CellData", "Float64", "force", force, 3);
+  write_file_atomically(path, wr.finish(points.size() / 3, 0, 0, polys));
+}
+
 VtkSeries::VtkSeries(std::string base, std::int64_t every) : base_(std::move(base)), every_(every) {
   for (const char* ext : {".vtp", ".pvd", ".VTP", ".PVD"})
     if (base_.size() > 4 && base_.ends_with(ext)) base_.resize(base_.size() - 4);
@@ -138,12 +218,16 @@ std::string VtkSeries::contacts_path(std::int64_t cycle) const {
   return fmt::format("{}_contacts_{:06d}.vtp", base_, cycle);
 }
 
+std::string VtkSeries::walls_path(std::int64_t cycle) const { return fmt::format("{}_walls_{:06d}.vtp", base_, cycle); }
+
 void VtkSeries::write(const Model& model) {
   write_balls_vtp(model, balls_path(model.cycle));
   write_contacts_vtp(model, contacts_path(model.cycle));
+  const bool walls = !model.walls.empty();
+  if (walls) write_walls_vtp(model, walls_path(model.cycle));
   // A second dump at the same cycle replaces the first.
   if (!entries_.empty() && entries_.back().cycle == model.cycle) entries_.pop_back();
-  entries_.push_back({model.cycle, model.time});
+  entries_.push_back({model.cycle, model.time, walls});
   write_pvd();
 }
 
@@ -171,6 +255,8 @@ void VtkSeries::write_pvd() const {
     xml += fmt::format("    <DataSet timestep=\"{}\" part=\"0\" file=\"{}\"/>\n", e.time, leaf(balls_path(e.cycle)));
     xml += fmt::format("    <DataSet timestep=\"{}\" part=\"1\" file=\"{}\"/>\n", e.time,
                        leaf(contacts_path(e.cycle)));
+    if (e.walls)
+      xml += fmt::format("    <DataSet timestep=\"{}\" part=\"2\" file=\"{}\"/>\n", e.time, leaf(walls_path(e.cycle)));
   }
   xml += "  </Collection>\n</VTKFile>\n";
   write_file_atomically(pvd_path(), xml);

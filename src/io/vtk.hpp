@@ -3,8 +3,13 @@
 //                             type, radius, velocity, spin, force
 //   BASE_contacts_000123.vtp  force chains: one line cell per touching pair, from centre to centre;
 //                             cell data normal_force (magnitude), force (vector on j), id_i, id_j
-// and rewrites BASE.pvd, the collection (part 0 balls, part 1 contacts) with each dump's time, so
-// ParaView opens the whole series at once. Arrays are binary, appended raw (little-endian, UInt64
+// and, when the model has walls, a third,
+//   BASE_walls_000123.vtp     walls: polygon cells; a plane as a square centred on its point, side
+//                             the START box's diagonal; a polygon as one cell of its vertices; a
+//                             cylinder as kCylinderSegments quads around, one band along its length,
+//                             facing out; cell data id (the wall's), force (on the wall)
+// and rewrites BASE.pvd, the collection (part 0 balls, part 1 contacts, part 2 walls where a dump
+// has them) with each dump's time, so ParaView opens the whole series at once. Arrays are binary, appended raw (little-endian, UInt64
 // byte counts). Every file is written to a temporary name and renamed, so a reader never sees
 // half a file.
 #pragma once
@@ -17,10 +22,14 @@
 
 namespace trubal {
 
-// Writes the ball and contact files of one dump. Throws std::runtime_error if a file cannot be
-// written.
+// The quads around a cylinder wall in the walls file.
+inline constexpr int kCylinderSegments = 48;
+
+// Writes the ball, contact and wall files of one dump. Throws std::runtime_error if a file cannot
+// be written.
 void write_balls_vtp(const Model& model, const std::string& path);
 void write_contacts_vtp(const Model& model, const std::string& path);
+void write_walls_vtp(const Model& model, const std::string& path);
 
 class VtkSeries {
  public:
@@ -37,12 +46,14 @@ class VtkSeries {
   // The file names of the dump at a cycle.
   std::string balls_path(std::int64_t cycle) const;
   std::string contacts_path(std::int64_t cycle) const;
+  std::string walls_path(std::int64_t cycle) const;   // written only when the model has walls
   std::size_t dumps() const { return entries_.size(); }
 
  private:
   struct Entry {
     std::int64_t cycle;
     double time;
+    bool walls;   // a walls file was written
   };
   void write_pvd() const;
   std::string base_;
