@@ -124,6 +124,15 @@ static void run_wall(Context& ctx, Args& args) {
   if (w.kind == WallKind::Cylinder)
     ctx.out << fmt::format(", radius {:.6g}, length {:.6g}, balls {}", w.radius, w.length, w.inside ? "inside" : "outside");
   ctx.out << "\n";
+  // Balls the new wall cuts into would be thrown off at the first step: say so.
+  std::size_t cut = 0;
+  for (std::size_t k = 0; k < m.balls.size(); ++k) {
+    const WallTouch t = wall_touch(w, {m.balls.x[k], m.balls.y[k], m.balls.z[k]});
+    cut += t.gap < m.balls.rad[k] && t.gap > -m.balls.rad[k];
+  }
+  if (cut > 0)
+    ctx.warn(fmt::format("{} balls overlap wall {} now: they will be pushed off hard at the first step (place the "
+                         "wall clear of them, or move it in)", cut, id));
 }
 
 const Command wall_command = {

@@ -74,8 +74,26 @@ init zvel -0.05 range group top
 init zvel 0.05 range group bottom
 )", "hist ratio axial unbal contacts every 10 file h.csv range group platens\n", 400};
 
+// Balls settling with local damping onto a floor plane inside a container cylinder, then a servo
+// platen coming down on them while the cylinder spins about its axis and a triangle falls and
+// turns: walls of every kind, moving, servo-driven, of two materials, with friction and dashpots.
+const Scene kWalls = {"walls", R"(start box -0.05 0.05 -0.05 0.05 -0.01 0.2 destroy
+prop type 1 kn 1e5 ks 1e5 fric 20 dens 2650 rest 0.5
+prop type 2 kn 2e5 ks 1e5 fric 10
+wall id 1 plane 0 0 0 0 0 1 type 2
+wall id 2 cylinder 0 0 0 0 0 1 radius 0.03 length 0.15 type 2
+gen 250 0.002 0.003 seed 5 range x -0.018 0.018 y -0.018 0.018 z 0.004 0.03
+grav 0 0 -9.81
+damp local 0.7
+cycle 20000
+wall id 3 plane 0 0 0.022 0 0 -1 type 2
+servo wall 3 stress 200 area 0.0028274 max 0.05
+wall id 2 spin 0 0 0.5
+wall id 4 polygon -0.01 -0.01 0.05  0.01 -0.01 0.05  0.01 0.01 0.05 velocity 0 0 -0.3 spin 1 0 0
+)", "hist wall 3 wall 2 energy every 7 file h.csv\n", 3000};
+
 struct Result {
-  std::string balls, contacts, history;
+  std::string balls, contacts, history, walls;
 };
 
 // Runs the scene with `cycling` (its cycle lines) after the setup, on `backend`.
@@ -84,12 +102,13 @@ Result run(const Scene& scene, const std::string& backend, const std::string& cy
   WorkingDir cd(dir.path());
   Harness h;
   const std::string deck = "backend " + backend + "\n" + scene.setup + scene.during + cycling +
-                           "print balls file balls.csv\nprint contacts file contacts.csv\n";
+                           "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\n";
   const bool ok = h.deck(deck);
   INFO(deck);
   INFO(h.err.str());
   REQUIRE(ok);
-  return {slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv")};
+  return {slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
+          slurp(dir.path() / "walls.csv")};
 }
 
 // The cuts of a run of n cycles. `keeps_history`: the history file is the unbroken one's (RESTART
@@ -144,6 +163,8 @@ constexpr double kRelative = 1e-9;
 void check_reference(const Scene& scene, const Result& r) {
   auto sums = column_sums("balls", r.balls);
   for (const auto& kv : column_sums("contacts", r.contacts)) sums.insert(kv);
+  if (lines_of(r.walls).size() > 1)
+    for (const auto& kv : column_sums("walls", r.walls)) sums.insert(kv);
   const std::string path = std::string(TRUBAL_TEST_DIR) + "/reference/" + scene.name + ".ref";
   if (std::getenv("TRUBAL_UPDATE_REFERENCES")) {
     std::ofstream f(path);
@@ -189,6 +210,7 @@ void check_scene(const Scene& scene) {
       const Result other = run(scene, backend, cut.lines);
       CHECK(other.balls == serial.balls);
       CHECK(other.contacts == serial.contacts);
+      CHECK(other.walls == serial.walls);
       if (cut.keeps_history) CHECK(other.history == serial.history);
     }
   }
@@ -206,4 +228,8 @@ TEST_CASE("cycle cuts: Hertz, dashpots, Rayleigh damping, gravity and applied lo
 
 TEST_CASE("cycle cuts: Rowe's test with the membrane and moving platens", "[cuts][backends]") {
   check_scene(kMembrane);
+}
+
+TEST_CASE("cycle cuts: walls of every kind, moving and servo-driven", "[cuts][backends][walls]") {
+  check_scene(kWalls);
 }
