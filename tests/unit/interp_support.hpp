@@ -89,8 +89,11 @@ struct Harness {
     return interp.run_deck(in, name);
   }
   bool line(const std::string& text, int line_no = 1) { return interp.run_interactive_line(text, line_no); }
+  // The first line that reports an error (warnings before it skipped), else the first line.
   std::string first_error_line() const {
     auto l = lines_of(err.str());
+    for (const auto& line : l)
+      if (line.find(": error: ") != std::string::npos) return line;
     return l.empty() ? std::string() : l.front();
   }
 };
