@@ -151,7 +151,7 @@ static void print_walls(Context& ctx, const std::string& file) {
       csv << w.id << ',' << wall_kind_name(w.kind) << ',' << w.type;
       for (double v : {c[0], c[1], c[2], w.normal[0], w.normal[1], w.normal[2], w.radius, w.velocity[0], w.velocity[1],
                        w.velocity[2], w.spin[0], w.spin[1], w.spin[2], w.radius_rate, w.force[0], w.force[1], w.force[2],
-                       w.moment[0], w.moment[1], w.moment[2], wall_stress(w)})
+                       w.moment[0], w.moment[1], w.moment[2], wall_stress(m, w)})
         csv << ',' << csv_real(v);
       csv << ',' << w.contacts << ',' << csv_real(w.work) << '\n';
     }
@@ -174,11 +174,11 @@ static void print_walls(Context& ctx, const std::string& file) {
     if (w.kind == WallKind::Cylinder) ctx.out << fmt::format("  radius rate {:.6g}", w.radius_rate);
     if (w.servo_on) ctx.out << fmt::format("  servo to {:.6g}", w.servo_target);
     ctx.out << '\n';
-    const double area = wall_servo_area(w);
+    const double area = wall_servo_area(m, w);
     ctx.out << fmt::format("  force ({:.6g}, {:.6g}, {:.6g})  moment ({:.6g}, {:.6g}, {:.6g})  stress {}  contacts {}  "
                            "work {:.6g}\n",
                            w.force[0], w.force[1], w.force[2], w.moment[0], w.moment[1], w.moment[2],
-                           area > 0 ? fmt::format("{:.6g}", wall_stress(w)) : std::string("(no area)"), w.contacts, w.work);
+                           area > 0 ? fmt::format("{:.6g}", wall_stress(m, w)) : std::string("(no area)"), w.contacts, w.work);
   }
 }
 

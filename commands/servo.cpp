@@ -38,20 +38,44 @@ static void servo_wall(Context& ctx, Args& args) {
   }
   args.expect({"stress"}, "`stress s` (the target, compression positive) or `off`");
   w.servo_target = args.real("target stress");
+  auto wall_id = [&](const char* what) {
+    const std::int64_t other = args.count(what, 1);
+    if (!find_wall(now, other)) args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", other));
+    if (other == id) args.fail("a wall's area cannot come from itself");
+    return other;
+  };
   while (!args.empty()) {
-    const auto opt = args.expect({"gain", "max", "area"}, "SERVO wall option");
+    const auto opt = args.expect({"gain", "max", "area", "in", "between"}, "SERVO wall option");
+    if (opt == 3) {   // a platen in a cylinder: pi r^2
+      if (w.kind == WallKind::Cylinder) args.fail("`in c` is for a platen (a plane or polygon) in cylinder c");
+      w.area_walls = {wall_id("cylinder id"), 0};
+      if (find_wall(now, w.area_walls[0])->kind != WallKind::Cylinder) args.fail("`in c` names a cylinder");
+      w.servo_area = 0;
+      continue;
+    }
+    if (opt == 4) {   // a cylinder between two platens: 2 pi r h
+      if (w.kind != WallKind::Cylinder) args.fail("`between a b` is for a cylinder between platens a and b");
+      w.area_walls[0] = wall_id("platen id");
+      w.area_walls[1] = wall_id("platen id");
+      w.servo_area = 0;
+      continue;
+    }
     const double v = args.real(opt == 0 ? "gain" : opt == 1 ? "max speed" : "area");
     if (!(v >= 0) || !std::isfinite(v)) args.fail("gain, max speed and area must be finite and not negative (0: default)");
     (opt == 0 ? w.servo_gain : opt == 1 ? w.servo_max_speed : w.servo_area) = v;
   }
   if (!std::isfinite(w.servo_target)) args.fail("the target stress must be finite");
-  if (!(wall_servo_area(w) > 0))
-    args.fail("an infinite plane has no area of its own: give `area a` (the platen's loaded area)");
+  Model probe;   // the area with this wall's new settings
+  probe.walls = now.walls;
+  probe.walls[k] = w;
+  if (!(wall_servo_area(probe, w) > 0))
+    args.fail("an infinite plane has no area of its own: give `area a` (the platen's loaded area) or `in c` "
+              "(the cross-section of cylinder c)");
   w.servo_on = true;
   Model& m = ctx.session.edit();
   m.walls[k] = w;
   ctx.out << fmt::format("wall {}: servo to stress {:.6g} over area {:.6g}, gain {}, max speed {}\n", id,
-                         w.servo_target, wall_servo_area(w),
+                         w.servo_target, wall_servo_area(probe, w),
                          w.servo_gain > 0 ? fmt::format("{:.4g}", w.servo_gain) : std::string("default"),
                          w.servo_max_speed > 0 ? fmt::format("{:.4g}", w.servo_max_speed) : std::string("default"));
 }
@@ -111,7 +135,7 @@ static void run_servo(Context& ctx, Args& args) {
 
 const Command servo_command = {
     "SERVO", {}, "SERVO s11 s22 s33 [gain g] [max r]  |  SERVO xx s [yy s] [zz s] [gain g] [max r]  |  SERVO off  "
-    "|  SERVO wall n stress s [gain g] [max v] [area a]  |  SERVO wall n off",
+    "|  SERVO wall n stress s [gain g] [max v] [area a | in c | between a b]  |  SERVO wall n off",
     "stress servo of the periodic space, or of a wall",
     "Drives the strain rates of the periodic cell so that the average stress (over the cell volume, "
     "compression positive) holds the targets, each axis on its own, by proportional-integral control: before "
@@ -131,10 +155,13 @@ const Command servo_command = {
     "the balls), or for a cylinder its radius rate (shrinking for balls inside), follows the same "
     "proportional-integral law on the wall's stress: the sum of its contacts' normal forces over its area "
     "(a polygon's own, a cylinder's lateral 2 pi r l; a plane has none, so `area a` is needed, and `area` "
-    "overrides the others). The default gain is G = 0.15 A / (sum k_n dt) over the wall's touching "
+    "overrides the others). For a triaxial test in a cylinder the areas follow the sample: `in c` gives a "
+    "platen the cross-section pi r^2 of cylinder c, `between a b` gives a cylinder 2 pi r h, h the distance "
+    "between platens a and b along its axis; the areas stay for PRINT walls and HIST wall after SERVO wall "
+    "off. The default gain is G = 0.15 A / (sum k_n dt) over the wall's touching "
     "contacts; the default max speed 1e-4 of the smallest ball radius per step, also the speed at which a "
     "wall touching nothing approaches. The other velocity components stay as WALL set them. `SERVO wall n "
     "off` stops it (and its motion along the normal).",
-    {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area"}, run_servo};
+    {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area", "in", "between"}, run_servo};
 
 }  // namespace trubal

@@ -123,7 +123,7 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
         for (int k = 0; k < 5; ++k) row.push_back(std::numeric_limits<double>::quiet_NaN());
       } else {
         row.push_back(it->force[0]); row.push_back(it->force[1]); row.push_back(it->force[2]);
-        row.push_back(wall_servo_area(*it) > 0 ? wall_stress(*it) : std::numeric_limits<double>::quiet_NaN());
+        row.push_back(wall_servo_area(model, *it) > 0 ? wall_stress(model, *it) : std::numeric_limits<double>::quiet_NaN());
         row.push_back(wall_position(*it));
       }
     } else if (item == "unbal") {

@@ -168,6 +168,10 @@ struct Wall {
   bool servo_on = false;
   double servo_target = 0, servo_gain = 0, servo_max_speed = 0, servo_integral = 0;
   double servo_area = 0;                        // given area (0: the wall's own, physics/walls.hpp)
+  // The area from other walls (0: none): a plane's or polygon's is pi r^2 of cylinder area_walls[0]
+  // (a platen in a cylinder); a cylinder's is 2 pi r times the distance along its axis between walls
+  // area_walls[0] and [1] (the platens), so the stress is over the loaded height.
+  std::array<std::int64_t, 2> area_walls{0, 0};
   // Loads of the last force pass, and the work the wall has done on the balls since START.
   std::array<double, 3> force{}, moment{};      // on the wall; moment about spin_point
   double normal_force = 0;                      // sum of the contacts' normal forces (compression > 0)

@@ -40,12 +40,16 @@ inline WallLane wall_lane(const Wall& wall, const Vec3& centre, double radius) {
 
 // The stress a wall carries (compression positive): the sum of its contacts' normal forces
 // (Wall::normal_force) over wall_servo_area.
-double wall_stress(const Wall& wall);
+double wall_stress(const Model& model, const Wall& wall);
 // Where a wall is, as one number (HIST wall's pos): a cylinder's radius; a plane's or polygon's
 // offset along its normal, point . normal (for a platen with normal +z or -z: +-its height).
 double wall_position(const Wall& wall);
-// The SERVO's `area`, or the wall's own (model/wall_shape.hpp wall_area; 0 for a plane).
-double wall_servo_area(const Wall& wall);
+// The area the stress is over: the SERVO's `area`, or from other walls (Wall::area_walls: a platen
+// inside a cylinder, a cylinder between platens), or the wall's own (model/wall_shape.hpp
+// wall_area; 0 for a plane).
+double wall_servo_area(const Model& model, const Wall& wall);
+// The wall with this id, or nullptr.
+const Wall* find_wall(const Model& model, std::int64_t id);
 
 // The wall servo, proportional-integral as the cell's (physics/cell.hpp: kServoFraction,
 // kServoIntegral): before a step, each servo-driven wall's speed along its normal (a cylinder: its

@@ -218,3 +218,22 @@ TEST_CASE("walls: bad WALL and SERVO wall input is an error that says what is wr
     CHECK_THAT(h.first_error_line(), Catch::StartsWith("deck.dat:"));
   }
 }
+
+TEST_CASE("walls: a platen's area is its cylinder's cross-section, the cylinder's its radius times the platens' gap", "[walls]") {
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1 dens 1\nwall id 1 plane 0 0 0 0 0 1\n"
+                 "wall id 2 plane 0 0 0.3 0 0 -1\nwall id 3 cylinder 0 0 -0.1 0 0 1 radius 0.2 length 0.5\n"
+                 "servo wall 1 stress 10 in 3\nservo wall 3 stress 10 between 1 2\n"));
+  const Model& m = h.session.model();
+  CHECK(wall_servo_area(m, m.walls[0]) == Approx(kPi * 0.04));
+  CHECK(wall_servo_area(m, m.walls[2]) == Approx(2 * kPi * 0.2 * 0.3));
+  // The areas follow the walls: the platen moves, the cylinder's radius changes.
+  REQUIRE(h.deck("servo wall 1 off\nservo wall 3 off\nwall id 2 velocity 0 0 -1\nwall id 3 rrate 0.5\n"
+                 "ball 0 0 0.5 0.01\ntstep 0.01\ncycle 10\n"));
+  CHECK(wall_servo_area(m, m.walls[0]) == Approx(kPi * 0.25 * 0.25));
+  CHECK(wall_servo_area(m, m.walls[2]) == Approx(2 * kPi * 0.25 * 0.2));
+  Harness bad;
+  CHECK_FALSE(bad.deck("start box -1 1 -1 1 -1 1\nprop kn 1 dens 1\nwall id 1 plane 0 0 0 0 0 1\n"
+                       "wall id 2 plane 0 0 0.3 0 0 -1\nservo wall 1 stress 10 in 2\n"));
+  CHECK_THAT(bad.first_error_line(), Catch::Contains("names a cylinder"));
+}
