@@ -24,7 +24,14 @@ static void print_info(Context& ctx) {
   if (!m.title.empty()) o << "title: " << m.title << '\n';
   if (m.started) {
     auto L = m.space.length();
-    o << fmt::format("space: {} {} x {} x {}\n", m.space.periodic ? "periodic" : "box", L[0], L[1], L[2]);
+    std::string kind = m.space.periodic ? "periodic" : "box";
+    if (m.space.mixed()) {
+      kind = "box, periodic in";
+      for (int a = 0; a < 3; ++a)
+        if (m.space.wraps(a)) kind += std::string(" ") + "xyz"[a];
+      kind += ":";
+    }
+    o << fmt::format("space: {} {} x {} x {}\n", kind, L[0], L[1], L[2]);
     const auto& t = m.space.tilt;
     if (m.space.periodic && (t[0] != 0 || t[1] != 0 || t[2] != 0))
       o << fmt::format("cell tilt: xy {:.6g}  xz {:.6g}  yz {:.6g}\n", t[0], t[1], t[2]);

@@ -120,6 +120,10 @@ static void run_servo(Context& ctx, Args& args) {
   options();
   for (double t : target)
     if (!std::isfinite(t)) args.fail("target stresses must be finite");
+  for (int a = 0; a < 3; ++a)
+    if (on[a] && now.space.periodic && !now.space.wraps(a))
+      args.fail(fmt::format("the space is bounded across {0}: the servo can drive only its periodic axes (SERVO wall "
+                            "drives a wall across {0})", "xyz"[a]));
   Model& m = periodic_model(ctx, args, "SERVO");
   m.space.servo_on = on;
   m.space.servo_target = target;

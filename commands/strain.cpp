@@ -48,6 +48,16 @@ static void run_strain(Context& ctx, Args& args) {
     }
     args.done();
   }
+  {   // a mixed space: only the periodic axes deform (a shear component needs both of its axes)
+    const Space& s = now.space;
+    const char* names[6] = {"xx", "yy", "zz", "xy", "xz", "yz"};
+    const int axes[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    for (int k = 0; k < 6; ++k)
+      if (rates[k] != 0 && s.periodic && !(s.wraps(axes[k][0]) && s.wraps(axes[k][1])))
+        args.fail(fmt::format("STRAIN {} needs {} periodic; this space is bounded across {} (move walls instead)",
+                              names[k], k < 3 ? "that axis" : "both of its axes",
+                              std::string(1, "xyz"[s.wraps(axes[k][0]) ? axes[k][1] : axes[k][0]])));
+  }
   Model& m = periodic_model(ctx, args, "STRAIN");
   for (int a = 0; a < 3; ++a)
     if (given[a]) m.space.servo_on[a] = false;   // STRAIN takes an axis back from the servo

@@ -45,8 +45,12 @@ static void read_options(Args& args, Wall& w, bool& about_given) {
 
 static void run_wall(Context& ctx, Args& args) {
   ctx.session.require_started();
-  if (ctx.session.model().space.periodic)
-    args.fail("walls need a free region (START box ...): a periodic space has no room for them");
+  {
+    const Space& s = ctx.session.model().space;
+    if (s.periodic && !s.mixed())
+      args.fail("walls need a free region (START box ..., with some axis bounded): a periodic space has no room for "
+                "them");
+  }
   if (args.accept("delete")) {
     args.expect({"all"}, "`all` (or WALL id n delete)");
     args.done();

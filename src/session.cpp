@@ -43,13 +43,15 @@ void Session::start(const Space& space) {
 }
 
 void Session::start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi,
-                        const std::array<Outside, 3>& outside) {
+                        const std::array<Outside, 3>& outside, const std::array<bool, 3>& periodic) {
   for (int a = 0; a < 3; ++a)
     if (!(hi[a] > lo[a])) throw std::runtime_error(fmt::format("START box: upper bound must exceed lower bound on axis {}", "xyz"[a]));
   Space space;
   space.lo = lo;
   space.hi = hi;
   space.outside = outside;
+  space.periodic = periodic[0] || periodic[1] || periodic[2];
+  space.periodic_axis = space.periodic ? periodic : std::array<bool, 3>{true, true, true};
   start(space);
 }
 
@@ -67,8 +69,8 @@ std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, dou
   require_started();
   const Space& s = model_.space;
   double p[3] = {x, y, z};
-  if (!s.periodic)
-    for (int a = 0; a < 3; ++a)
+  for (int a = 0; a < 3; ++a)
+    if (!s.wraps(a))
       if (p[a] < s.lo[a] || p[a] > s.hi[a])
         throw std::runtime_error(fmt::format("ball centre {} = {} is outside the START box [{}, {}]", "xyz"[a], p[a],
                                              s.lo[a], s.hi[a]));
@@ -95,9 +97,11 @@ class PlacementGrid {
     auto L = space_.length();
     const auto& t = space_.tilt;   // a sheared cell: images along its edge vectors, two deep
     const int reach = t[0] == 0 && t[1] == 0 && t[2] == 0 ? 1 : 2;
-    for (int i = -reach; i <= reach; ++i)
-      for (int j = -reach; j <= reach; ++j)
-        for (int k = -reach; k <= reach; ++k)
+    int most[3];                   // a bounded axis of a mixed space has no images
+    for (int a = 0; a < 3; ++a) most[a] = space_.wraps(a) ? reach : 0;
+    for (int i = -most[0]; i <= most[0]; ++i)
+      for (int j = -most[1]; j <= most[1]; ++j)
+        for (int k = -most[2]; k <= most[2]; ++k)
           if (overlaps_here(x + i * L[0] + j * t[0] + k * t[1], y + j * L[1] + k * t[2], z + k * L[2], r)) return true;
     return false;
   }
@@ -171,7 +175,7 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
     double r = rlo + (rhi - rlo) * unit(rng);
     double p[3];
     for (int a = 0; a < 3; ++a) {
-      double lo = s.lo[a] + (s.periodic ? 0 : r), hi = s.hi[a] - (s.periodic ? 0 : r);
+      double lo = s.lo[a] + (s.wraps(a) ? 0 : r), hi = s.hi[a] - (s.wraps(a) ? 0 : r);
       if (hi < lo) throw std::runtime_error("GEN: the balls do not fit in the START box");
       p[a] = lo + (hi - lo) * unit(rng);
     }
@@ -205,7 +209,7 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
                                  const Range& range, Layers layers) {
   require_started();
   if (!(d > 0)) throw std::runtime_error("LATTICE: the diameter must be positive");
-  const bool periodic = model_.space.periodic;
+  const bool periodic_x = model_.space.wraps(0), periodic_y = model_.space.wraps(1);
   const double layer = d / std::sqrt(2.0);
   // Sized before it is built: a lattice of 1e15 points would take all memory first.
   constexpr double kMostPoints = 1e8;
@@ -216,7 +220,7 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
   for (int k = 0; k < nz; ++k) {
     bool odd = k % 2 == 1;
     if ((layers == Layers::Even && odd) || (layers == Layers::Odd && !odd)) continue;
-    int mx = odd && !periodic ? nx - 1 : nx, my = odd && !periodic ? ny - 1 : ny;
+    int mx = odd && !periodic_x ? nx - 1 : nx, my = odd && !periodic_y ? ny - 1 : ny;
     double shift = odd ? 0.5 * d : 0.0;
     for (int j = 0; j < my; ++j)
       for (int i = 0; i < mx; ++i) {
@@ -227,7 +231,7 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
   const Space& s = model_.space;
   for (const auto& p : points)
     for (int a = 0; a < 3; ++a)
-      if (!s.periodic && (p[a] < s.lo[a] || p[a] > s.hi[a]))
+      if (!s.wraps(a) && (p[a] < s.lo[a] || p[a] > s.hi[a]))
         throw std::runtime_error(fmt::format("LATTICE: a ball centre ({}, {}, {}) falls outside the START box", p[0],
                                              p[1], p[2]));
   Model& m = edit();

@@ -42,8 +42,10 @@ class Session {
   void set_backend(const std::string& name, int threads, std::uint64_t max_memory = 0);
 
   // START: a new model (the backend choice and the interpreter's variables stay).
+  // periodic: the axes whose faces are periodic (mixed periodicity); the others are bounded.
   void start_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi,
-                 const std::array<Outside, 3>& outside = {Outside::Stop, Outside::Stop, Outside::Stop});
+                 const std::array<Outside, 3>& outside = {Outside::Stop, Outside::Stop, Outside::Stop},
+                 const std::array<bool, 3>& periodic = {false, false, false});
   void start_periodic(const std::array<double, 3>& length, const std::array<int, 3>& boxes);
   void require_started() const;
 

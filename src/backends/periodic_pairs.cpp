@@ -94,20 +94,25 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
   // reach (less than half of every width) only one image of j can be, and it is that one, the one
   // nearest_image() finds; so the test below takes the image from the bin and skips the rounding,
   // with the same arithmetic from there on (same pairs, same images, same bits).
+  // A bounded axis of a mixed space has no image: its bins do not wrap.
+  const std::array<bool, 3> wraps{s.periodic_axis[0], s.periodic_axis[1], s.periodic_axis[2]};
   auto search_bins = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
     std::vector<Hit> near;
     for (std::size_t i = begin; i < end; ++i) {
       near.clear();
       for (int dz = -1; dz <= 1; ++dz) {
         int cz = where[i][2] + dz;
+        if (!wraps[2] && (cz < 0 || cz >= dims[2])) continue;
         const std::int8_t iz = cz < 0 ? std::int8_t{-1} : (cz >= dims[2] ? std::int8_t{1} : std::int8_t{0});
         cz -= iz * dims[2];
         for (int dy = -1; dy <= 1; ++dy) {
           int cy = where[i][1] + dy;
+          if (!wraps[1] && (cy < 0 || cy >= dims[1])) continue;
           const std::int8_t iy = cy < 0 ? std::int8_t{-1} : (cy >= dims[1] ? std::int8_t{1} : std::int8_t{0});
           cy -= iy * dims[1];
           for (int dx = -1; dx <= 1; ++dx) {
             int cx = where[i][0] + dx;
+            if (!wraps[0] && (cx < 0 || cx >= dims[0])) continue;
             const std::int8_t ix = cx < 0 ? std::int8_t{-1} : (cx >= dims[0] ? std::int8_t{1} : std::int8_t{0});
             cx -= ix * dims[0];
             double ox, oy, oz;

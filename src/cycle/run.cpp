@@ -37,8 +37,9 @@ double resting_energy_floor(const Model& model) {
   return sum;
 }
 
-// START box: the first ball (by index) whose centre is outside across a `stop` face, and every ball
-// outside across a `destroy` face (marked). A NaN centre is the guard's, not this.
+// START box (its bounded axes, in a mixed space): the first ball (by index) whose centre is outside
+// across a `stop` face, and every ball outside across a `destroy` face (marked). A NaN centre is
+// the guard's, not this.
 struct Escapes {
   std::size_t stop_ball = ~std::size_t{0};
   int stop_axis = 0;
@@ -52,6 +53,7 @@ Escapes find_escapes(const Model& model) {
   const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
   for (std::size_t k = 0; k < b.size(); ++k)
     for (int a = 0; a < 3; ++a) {
+      if (s.wraps(a)) continue;   // a periodic axis wraps the ball instead
       const double x = (*pos[a])[k];
       if (!(x < s.lo[a] || x > s.hi[a])) continue;
       if (s.outside[a] == Outside::Stop) {
@@ -188,7 +190,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       return finish();
     }
     result.done = s;
-    if (model.started && !model.space.periodic) {
+    if (model.started && (!model.space.periodic || model.space.mixed())) {
       Escapes escaped = find_escapes(model);
       if (escaped.destroy_count > 0) {
         // What the leaving balls carry out is boundary work, so the balance stays closed.

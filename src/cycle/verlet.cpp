@@ -57,7 +57,8 @@ double periodic_skin(const Model& model, double skin) {
   const auto w = cell_widths(model.space);
   const double reach = 2 * model.balls.max_radius();
   double most = skin;
-  for (int a = 0; a < 3; ++a) most = std::min(most, 0.5 * (0.5 * w[a] - reach));
+  for (int a = 0; a < 3; ++a)
+    if (model.space.periodic_axis[a]) most = std::min(most, 0.5 * (0.5 * w[a] - reach));
   return std::max(0.0, most);
 }
 

@@ -26,8 +26,9 @@ void find_wall_contacts(Model& model, double reach, ThreadPool& pool) {
     for (std::size_t i = split_point(n, parts, t); i < split_point(n, parts, t + 1); ++i)
       for (std::size_t w = 0; w < walls; ++w) {
         const WallTouch touch = wall_touch(model.walls[w], {b.x[i], b.y[i], b.z[i]});
-        // A one-sided wall's centre may be past the surface by less than R (still touching).
-        if (touch.gap < b.rad[i] + reach && touch.gap > -b.rad[i]) {
+        // A one-sided wall touches a centre up to R past its surface (physics/walls.hpp), so a
+        // centre may come into contact from behind too: the skin on both sides.
+        if (touch.gap < b.rad[i] + reach && touch.gap > -b.rad[i] - reach) {
           out.push_back(static_cast<std::uint32_t>(i));
           out.push_back(static_cast<std::uint32_t>(w));
         }

@@ -29,7 +29,8 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // read as cells without tilt. 4: the servo's last measured moments (Space::servo_measured), so
 // that a restarted servo takes the steps an unbroken run takes; older files start it from the
 // contact table; the cycle the contacts' results are of; a following membrane. 5: walls, their
-// motion, servo and last loads, and the ball-wall contacts with their history.
+// motion, servo and last loads, and the ball-wall contacts with their history; the periodic
+// axes (mixed periodicity; older files are all periodic or all bounded).
 constexpr std::uint32_t kVersion = 5;
 constexpr std::uint32_t kOldestVersion = 2;
 
@@ -182,6 +183,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
       io.pod(w.work);
     }
     m.wall_contacts.for_each_array([&](auto& v) { io.vec(v); });
+    io.pod(m.space.periodic_axis);
   }
 }
 

@@ -112,13 +112,19 @@ enum class Outside : std::uint8_t { Stop, Destroy };
 
 // Where the balls live: a free region (START box) or a periodic cell (START x y z).
 struct Space {
-  bool periodic = false;
+  bool periodic = false;                            // some axis is periodic (the image arithmetic is on)
+  // Per axis, with `periodic`: whether balls meet images across that axis's faces. START x y z: all;
+  // START box ... x periodic ...: those named (mixed periodicity); the others are bounded like a
+  // box's, with its `outside` conditions, and hold no images (model/periodic_cell.hpp).
+  std::array<bool, 3> periodic_axis{true, true, true};
+  bool wraps(int a) const { return periodic && periodic_axis[a]; }
+  bool mixed() const { return periodic && !(periodic_axis[0] && periodic_axis[1] && periodic_axis[2]); }
   std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};   // region, or periodic cell [lo, hi)
   // A sheared periodic cell (STRAIN with shear rates) is the parallelepiped lo + H s, s in [0, 1)^3,
   // with edge vectors a = (Lx, 0, 0), b = (xy, Ly, 0), c = (xz, yz, Lz), L = hi - lo: these tilts.
   std::array<double, 3> tilt{0, 0, 0};              // xy xz yz
   std::array<int, 3> boxes{0, 0, 0};                // contact-detection boxes asked for (0: auto)
-  // START box: per axis, CYCLE stops when a centre leaves (the default), or the ball is deleted.
+  // Per bounded axis: CYCLE stops when a centre leaves (the default), or the ball is deleted.
   std::array<Outside, 3> outside{Outside::Stop, Outside::Stop, Outside::Stop};
   std::int64_t destroyed = 0;                       // balls deleted for leaving, since START
   // Periodic cell control (compression positive): xx yy zz xy xz yz.

@@ -11,7 +11,11 @@ namespace trubal {
 CellFrame cell_frame(const Space& s) {
   CellFrame f;
   if (!s.periodic) return f;
-  const auto L = s.length();
+  auto L = s.length();
+  // A bounded axis of a mixed space: an edge three times the extent, so that no image along it is
+  // ever nearest or within reach (its image numbers stay 0, and 0 times the edge is an exact 0).
+  for (int a = 0; a < 3; ++a)
+    if (!s.periodic_axis[a]) L[a] *= 3;
   f.lx = L[0]; f.ly = L[1]; f.lz = L[2];
   f.xy = s.tilt[0]; f.xz = s.tilt[1]; f.yz = s.tilt[2];
   const auto g = velocity_gradient(s.strain_rate);
@@ -43,7 +47,7 @@ void check_periodic_cell(const Model& model) {
   const double d = 2 * model.balls.max_radius();
   const auto w = cell_widths(model.space);
   for (int a = 0; a < 3; ++a)
-    if (!(w[a] >= 2 * d))
+    if (model.space.periodic_axis[a] && !(w[a] >= 2 * d))
       throw std::runtime_error(fmt::format(
           "periodic cell too small: {} {} is {:.6g}, less than twice the largest ball diameter ({:.6g}); "
           "a ball could touch two images of another. Use a larger cell (START x y z) or smaller balls",
@@ -72,6 +76,7 @@ bool outside_cell(const Model& model, std::size_t begin, std::size_t end) {
   const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
   for (std::size_t k = begin; k < end; ++k)
     for (int a = 2; a >= 0; --a) {   // the test wrap_into_cell makes, on unmoved coordinates
+      if (!s.periodic_axis[a]) continue;
       const double x = (*pos[a])[k];
       if (!std::isfinite(x)) continue;
       const double t = x - tilt_terms(s, f, b, k, a);
@@ -97,6 +102,7 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
   // no integer: the run is broken, say so before anything is moved rather than overflow.
   for (std::size_t k = 0; k < n; ++k)
     for (int a = 0; a < 3; ++a) {
+      if (!s.periodic_axis[a]) continue;   // a bounded axis: the box's conditions see to it
       const double x = (*pos[a])[k];
       if (std::isfinite(x) && !(std::abs(x - s.lo[a]) <= 1e6 * (std::abs(edge[a][a]) + std::abs(s.tilt[0]) + std::abs(s.tilt[1]) + std::abs(s.tilt[2]))))
         throw std::runtime_error(fmt::format(
@@ -111,6 +117,7 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
   for (std::size_t k = 0; k < n; ++k) {
     // z first: moving along c shifts y and x; then y (b shifts x); then x.
     for (int a = 2; a >= 0; --a) {
+      if (!s.periodic_axis[a]) continue;
       double& x = (*pos[a])[k];
       if (!std::isfinite(x)) continue;   // the guard reports it
       const double tilt = tilt_terms(s, f, b, k, a);
