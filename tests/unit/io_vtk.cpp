@@ -41,28 +41,9 @@ while lines.GetNextCell(ids):
     n += 1
 )PY";
 
-using Fields = std::map<std::string, std::vector<double>>;
 
 Fields read_vtp(const TempDir& dir, const std::string& file) {
-  const std::string py = python_with_vtk();
-  if (py.empty())
-    FAIL("these tests read the VTK files with VTK itself: install python3-vtk9 (apt-get install -y python3-vtk9; "
-         ".ci/deps lists it) so that /usr/bin/python3 can `import vtk`");
-  const std::string script = dir.write("read_vtp.py", kReadVtp);
-  const std::string out = (dir.path() / "read.txt").string();
-  const int status = shell(py + " " + quote(script) + " " + quote(file) + " >" + quote(out) + " 2>&1");
-  INFO(slurp(out));
-  REQUIRE(status == 0);
-  Fields fields;
-  for (const auto& line : lines_of(slurp(out))) {
-    std::istringstream in(line);
-    std::string name;
-    in >> name;
-    std::vector<double> values;
-    for (double v; in >> v;) values.push_back(v);
-    fields[name] = values;
-  }
-  return fields;
+  return read_with_vtk(dir, "read_vtp.py", kReadVtp, file);
 }
 
 // An array's values (the component count that leads the line dropped).
