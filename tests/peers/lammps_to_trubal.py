@@ -4,16 +4,19 @@
 
     lammps_to_trubal.py IN.data --balls OUT.dat [--walls] [--data WALLED.data] [--seed S]
 
---balls OUT.dat   one `ball x y z rad id i` line per sphere, in id order (CALL it from a deck)
---walls           the scene is periodic in x and y, trubal's container is not: put walls on the x
-                  and y faces of the box. The centres closer to a face than their radius (the
-                  spheres the periodic faces cut) are moved inward until they just clear it;
-                  any sphere that then overlaps another is placed again at random (random
-                  sequential addition, seed S) in the walled box, at a height within the initial
-                  slab. Reports how many of each.
+--balls OUT.dat   one `ball x y z rad id i` line per sphere, in id order (CALL it from a deck);
+                  without --walls every sphere is kept where the data file puts it (trubal's
+                  START box ... x periodic y periodic is LAMMPS's boundary p p: nothing to move)
+--walls           for a container with walls on the x and y faces of the box instead of periodic
+                  x and y (settle_vs_lammps.py --container walls). The centres closer to a face
+                  than their radius (the spheres the periodic faces cut) are moved inward until
+                  they just clear it; any sphere that then overlaps another is placed again at
+                  random (random sequential addition, seed S) in the walled box, at a height
+                  within the initial slab. Reports how many of each.
 --data W.data     write the positions used as a LAMMPS data file too, so that LAMMPS can run the
                   walled scene from the very same state.
-Prints one line `box xlo xhi ylo yhi zlo zhi n N radius R density RHO` for the caller.
+Prints one line `box xlo xhi ylo yhi zlo zhi n N radius R density RHO top ZMAX` for the caller
+(ZMAX the highest centre).
 """
 import argparse
 import math
@@ -140,6 +143,10 @@ def main():
         sys.exit("lammps_to_trubal.py: %s: no box or no Atoms section" % a.data)
     if len({at[1] for at in atoms}) != 1 or len({at[3] for at in atoms}) != 1:
         sys.exit("lammps_to_trubal.py: one atom type and one density expected (PROP type 1)")
+    (x0, x1), (y0, y1), (z0, z1) = box["x"], box["y"], box["z"]
+    out = [at[0] for at in atoms if not (x0 <= at[4] < x1 and y0 <= at[5] < y1 and z0 <= at[6] <= z1)]
+    if out:
+        sys.exit("lammps_to_trubal.py: %d centres outside the box (first: id %d)" % (len(out), out[0]))
     if a.walls:
         moved, replaced = fit_walls(box, atoms, a.seed)
         print("walls: %d spheres cut by the x/y faces, %d moved inward, %d placed again"
@@ -151,8 +158,9 @@ def main():
         for i, t, d, rho, x, y, z in atoms:
             f.write("ball %.17g %.17g %.17g %.17g id %d\n" % (x, y, z, d / 2, i))
     radii = {at[2] / 2 for at in atoms}
-    print("box %.17g %.17g %.17g %.17g %.17g %.17g n %d radius %.17g density %.17g"
-          % (box["x"] + box["y"] + box["z"] + (len(atoms), max(radii), atoms[0][3])))
+    print("box %.17g %.17g %.17g %.17g %.17g %.17g n %d radius %.17g density %.17g top %.17g"
+          % (box["x"] + box["y"] + box["z"] + (len(atoms), max(radii), atoms[0][3],
+                                               max(at[6] for at in atoms))))
 
 
 if __name__ == "__main__":
