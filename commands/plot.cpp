@@ -2,6 +2,7 @@
 #include <fmt/ranges.h>
 
 #include "commands/common.hpp"
+#include "support/comm.hpp"
 #include "io/plot.hpp"
 
 namespace trubal {
@@ -34,8 +35,10 @@ static void run_plot(Context& ctx, Args& args) {
         request.height = static_cast<int>(args.count("height (pixels)", 16, 10000));
         break;
       case 4:
-        do from_files.adopt(read_history_csv(args.word("history CSV file")));
-        while (!args.empty() && !is_option(args.peek()));
+        do {
+          const std::string csv = args.word("history CSV file");
+          if (comm::root()) from_files.adopt(read_history_csv(csv));   // rank 0 reads and draws
+        } while (!args.empty() && !is_option(args.peek()));
         request.every_table = true;
         break;
     }

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "support/comm.hpp"
 #include "model/wall_shape.hpp"
 #include "physics/walls.hpp"
 #include "io/atomic_file.hpp"
@@ -53,6 +54,7 @@ static void print_info(Context& ctx) {
   if (m.space.destroyed > 0) o << fmt::format("balls destroyed: {} (they left the box)\n", m.space.destroyed);
   o << fmt::format("backend: {}\n", s.pipeline().backend().name());
   o << fmt::format("threads: {}\n", s.pipeline().threads());
+  if (comm::size() > 1) o << fmt::format("ranks: {}\n", comm::size());
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);
   o << fmt::format("physics: {}\n", f.describe());

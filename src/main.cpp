@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <iostream>
+#include <sstream>
+#include <streambuf>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -17,8 +19,31 @@
 #include "interp/signals.hpp"
 #include "interp/summary.hpp"
 #include "session.hpp"
+#include "support/comm.hpp"
+
+namespace {
+
+// Where the other ranks' words go: nowhere (rank 0 alone prints).
+class NullBuffer : public std::streambuf {
+ protected:
+  int overflow(int c) override { return c == EOF ? 0 : c; }
+  std::streamsize xsputn(const char*, std::streamsize n) override { return n; }
+};
+
+int run(int argc, char** argv);
+
+}  // namespace
 
 int main(int argc, char** argv) {
+  trubal::comm::init(argc, argv);
+  const int status = run(argc, argv);
+  trubal::comm::finalize();
+  return status;
+}
+
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"trubal: discrete element simulation of spheres in TRUBAL's command language.\n"
                "Runs DECK as a batch (stops at the first error, exit status 1), or opens an interactive\n"
                "shell when no deck is given and standard input is a terminal. `-` reads a deck from\n"
@@ -48,18 +73,25 @@ int main(int argc, char** argv) {
   }
 
   const auto start = std::chrono::steady_clock::now();
-  trubal::Output output(std::cout, std::cerr);
-  output.terminal = ::isatty(STDOUT_FILENO);
+  NullBuffer nothing;
+  std::ostream null_out(&nothing), null_err(&nothing);
+  const bool root = trubal::comm::root();
+  trubal::Output output(root ? std::cout : null_out, root ? std::cerr : null_err);
+  output.terminal = root && ::isatty(STDOUT_FILENO);
   trubal::Session session;
   trubal::Interpreter interp(session, output);
   trubal::install_interrupt_handler();
 
   int status = 0;
+  // What to run is rank 0's choice (its standard input is the terminal; the others' is not).
+  std::int64_t stdin_deck = deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO)) ? 1 : 0;
+  trubal::comm::broadcast(stdin_deck);
   if (!interactive_deck.empty()) {
     interp.run_file(interactive_deck);   // errors are reported; the shell opens anyway
     if (!interp.stopped()) trubal::run_shell(interp);
-  } else if (deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO))) {
-    status = interp.run_deck(std::cin, "<stdin>") ? 0 : 1;
+  } else if (stdin_deck) {
+    std::istringstream in(trubal::Interpreter::read_stream_on_root(std::cin));   // rank 0 reads it
+    status = interp.run_deck(in, "<stdin>") ? 0 : 1;
   } else if (!deck.empty()) {
     status = interp.run_file(deck) ? 0 : 1;
   } else {
@@ -78,3 +110,5 @@ int main(int argc, char** argv) {
   }
   return status;
 }
+
+}  // namespace

@@ -2,18 +2,60 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
+#include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "interp/command.hpp"
 #include "interp/lexer.hpp"
+#include "support/comm.hpp"
 
 namespace trubal {
 
 namespace fs = std::filesystem;
 
 Interpreter::Interpreter(Session& session, Output& output) : session_(session), output_(output) {}
+
+namespace {
+
+// A file as rank 0 read it: its text and canonical path, or what went wrong. In a distributed run
+// only rank 0 touches the file system for input; the others get its answer (support/comm.hpp).
+struct FileText {
+  bool ok = false;
+  std::string error, canonical, text;
+};
+
+FileText read_on_root(const std::function<FileText()>& read) {
+  FileText f;
+  if (comm::root()) f = read();
+  if (comm::size() == 1) return f;
+  std::string packed = f.ok ? "1" + f.canonical + '\0' + f.text : "0" + f.error;
+  comm::broadcast(packed);
+  FileText out;
+  out.ok = !packed.empty() && packed[0] == '1';
+  if (!out.ok) {
+    out.error = packed.substr(1);
+    return out;
+  }
+  const std::size_t cut = packed.find('\0', 1);
+  out.canonical = packed.substr(1, cut - 1);
+  out.text = packed.substr(cut + 1);
+  return out;
+}
+
+std::string read_all(std::istream& in) { return std::string(std::istreambuf_iterator<char>(in), {}); }
+
+}  // namespace
+
+std::string Interpreter::read_stream_on_root(std::istream& in) {
+  std::string text;
+  if (comm::root()) text = read_all(in);
+  comm::broadcast(text);
+  return text;
+}
 
 void Interpreter::set_variable(const std::string& name, const std::string& value) { variables_[to_lower(name)] = value; }
 
@@ -58,7 +100,26 @@ void Interpreter::execute(const std::string& line) {
   words.erase(words.begin());
   Args args(command.usage, std::move(words));
   Context ctx{session_, *this, output_.out()};
-  command.run(ctx, args);
+  if (comm::size() == 1) {
+    command.run(ctx, args);
+  } else {
+    // Every rank ran the command; they agree whether it failed, so that they stay in step (a file
+    // only rank 0 writes may fail there alone). The first failing rank's message is everyone's.
+    bool failed = false, reported = false;
+    std::string message;
+    try {
+      command.run(ctx, args);
+    } catch (const ReportedError&) {
+      failed = reported = true;
+    } catch (const std::exception& e) {
+      failed = true;
+      message = e.what();
+    }
+    if (comm::first_failure(failed, message) >= 0) {
+      if (reported || message.empty()) throw ReportedError{};
+      throw std::runtime_error(message);
+    }
+  }
   output_.out().flush();
   const std::string log_failure = output_.take_log_failure();
   if (!log_failure.empty()) output_.err() << "warning: " << log_failure << '\n';
@@ -101,20 +162,31 @@ bool Interpreter::run_deck(std::istream& in, const std::string& name) {
 }
 
 bool Interpreter::run_file(const std::string& path) {
-  std::error_code dir_ec;
-  if (fs::is_directory(path, dir_ec)) {   // an ifstream opens a directory and reads nothing: no silent success
-    output_.err() << fmt::format("error: cannot open the deck '{}': it is a directory\n", path);
+  const FileText file = read_on_root([&] {
+    FileText f;
+    std::error_code dir_ec;
+    if (fs::is_directory(path, dir_ec)) {   // an ifstream opens a directory and reads nothing: no silent success
+      f.error = fmt::format("cannot open the deck '{}': it is a directory", path);
+      return f;
+    }
+    std::ifstream in(path);
+    if (!in) {
+      f.error = fmt::format("cannot open the deck '{}'", path);
+      return f;
+    }
+    std::error_code ec;
+    f.canonical = fs::weakly_canonical(path, ec).string();
+    f.text = read_all(in);
+    f.ok = true;
+    return f;
+  });
+  if (!file.ok) {
+    output_.err() << "error: " << file.error << '\n';
     return false;
   }
-  std::ifstream in(path);
-  if (!in) {
-    output_.err() << fmt::format("error: cannot open the deck '{}'\n", path);
-    return false;
-  }
-  std::error_code ec;
-  auto canonical = fs::weakly_canonical(path, ec).string();
+  std::istringstream in(file.text);
   try {
-    return run_frames(in, path, canonical);
+    return run_frames(in, path, file.canonical);
   } catch (const ReportedError&) {
     return false;
   }
@@ -137,27 +209,42 @@ bool Interpreter::run_interactive_line(const std::string& line, int line_no) {
 }
 
 void Interpreter::call_file(const std::string& path) {
-  // Relative names are looked up in the working directory, then beside the calling file.
-  fs::path p(path);
-  if (p.is_relative() && !fs::exists(p) && !frames_.empty() && !frames_.back().canonical.empty()) {
-    fs::path beside = fs::path(frames_.back().canonical).parent_path() / p;
-    if (fs::exists(beside)) p = beside;
-  }
   // Each CALL nests the interpreter once more: a bounded depth, so a long chain of files is an error
   // rather than a stack overflow.
   constexpr std::size_t kMaxCallDepth = 100;
   if (frames_.size() >= kMaxCallDepth)
     throw InputError(fmt::format("CALL nested more than {} files deep (at '{}'): a chain of decks calling each other?",
                                  kMaxCallDepth, printable(path)));
-  std::error_code ec;
-  if (!fs::is_regular_file(p, ec)) throw InputError(fmt::format("cannot open the file '{}' to CALL", printable(path)));
-  std::string canonical = fs::weakly_canonical(p, ec).string();
+  const std::string caller = frames_.empty() ? std::string() : frames_.back().canonical;
+  const FileText file = read_on_root([&] {
+    FileText f;
+    // Relative names are looked up in the working directory, then beside the calling file.
+    fs::path p(path);
+    if (p.is_relative() && !fs::exists(p) && !caller.empty()) {
+      fs::path beside = fs::path(caller).parent_path() / p;
+      if (fs::exists(beside)) p = beside;
+    }
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec)) {
+      f.error = fmt::format("cannot open the file '{}' to CALL", printable(path));
+      return f;
+    }
+    f.canonical = fs::weakly_canonical(p, ec).string();
+    std::ifstream in(p);
+    if (!in) {
+      f.error = fmt::format("cannot read the file '{}'", printable(path));
+      return f;
+    }
+    f.text = read_all(in);
+    f.ok = true;
+    return f;
+  });
+  if (!file.ok) throw InputError(file.error);
   for (const auto& f : frames_)
-    if (f.canonical == canonical)
+    if (f.canonical == file.canonical)
       throw InputError(fmt::format("'{}' calls itself (include cycle through {})", printable(path), f.name));
-  std::ifstream in(p);
-  if (!in) throw InputError(fmt::format("cannot read the file '{}'", printable(path)));
-  run_frames(in, path, canonical);
+  std::istringstream in(file.text);
+  run_frames(in, path, file.canonical);
 }
 
 }  // namespace trubal

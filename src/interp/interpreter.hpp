@@ -27,6 +27,9 @@ class Interpreter {
   // One line typed at the prompt: errors are reported, the session goes on. Returns false on error.
   bool run_interactive_line(const std::string& line, int line_no);
 
+  // A whole stream (a deck on standard input) as rank 0 read it, on every rank.
+  static std::string read_stream_on_root(std::istream& in);
+
   // For CALL: runs a file as part of the current command. Throws ReportedError after reporting
   // an error inside it.
   void call_file(const std::string& path);

@@ -1,4 +1,5 @@
 #include "interp/output.hpp"
+#include "support/comm.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -60,6 +61,8 @@ void Output::set_log(const std::string& path) {
   log_.reset();
   log_path_.clear();
   if (path.empty()) return;
+  log_path_ = path;
+  if (!comm::root()) return;   // rank 0 alone prints, and logs
   auto file = std::make_unique<std::ofstream>(path, std::ios::app);
   if (!*file) throw std::runtime_error("cannot open the log file '" + path + "' for writing");
   log_ = std::move(file);

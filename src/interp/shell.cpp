@@ -10,6 +10,8 @@
 #include <readline/history.h>
 #include <readline/readline.h>
 
+#include "support/comm.hpp"
+
 #include <fmt/format.h>
 
 #include "interp/command.hpp"
@@ -106,7 +108,23 @@ std::string history_path() {
   return std::string(home && *home ? home : ".") + "/.trubal_history";
 }
 
+// The other ranks of a distributed run: rank 0's shell hands them each line it runs.
+static int follow_shell(Interpreter& interp) {
+  interp.interactive = true;
+  int failures = 0;
+  while (!interp.stopped()) {
+    std::string packed;
+    comm::broadcast(packed);
+    if (packed.empty() || packed[0] != 'L') break;   // rank 0's shell ended
+    const std::size_t cut = packed.find('\n');
+    const int line_no = std::stoi(packed.substr(1, cut - 1));
+    if (!interp.run_interactive_line(packed.substr(cut + 1), line_no)) ++failures;
+  }
+  return failures;
+}
+
 int run_shell(Interpreter& interp) {
+  if (!comm::root()) return follow_shell(interp);
   interp.interactive = true;
   rl_readline_name = "trubal";
   rl_attempted_completion_function = complete;
@@ -158,7 +176,15 @@ int run_shell(Interpreter& interp) {
     }
     if (eof) {
       std::fputs("\n", stdout);
+      if (comm::size() > 1) {
+        std::string end = "E";
+        comm::broadcast(end);
+      }
       break;
+    }
+    if (comm::size() > 1) {
+      std::string packed = fmt::format("L{}\n{}", line_no, logical);
+      comm::broadcast(packed);
     }
     interrupt_requested() = false;
     if (!interp.run_interactive_line(logical, line_no)) ++failures;

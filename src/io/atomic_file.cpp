@@ -1,4 +1,5 @@
 #include "io/atomic_file.hpp"
+#include "support/comm.hpp"
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -23,6 +24,7 @@ void check_replaceable(const std::string& path) {
 }
 
 void write_file_atomically(const std::string& path, const std::string& text) {
+  if (!comm::root()) return;   // a distributed run's files are rank 0's to write
   check_replaceable(path);
   const std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
   {

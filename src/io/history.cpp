@@ -1,4 +1,5 @@
 #include "io/history.hpp"
+#include "support/comm.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -48,6 +49,7 @@ HistoryTable& History::add(std::vector<std::string> items, std::int64_t every, c
   t->file = file;
   t->platen_range = std::move(platen_range);
   if (!file.empty()) {
+    if (!comm::root()) { tables_.push_back(std::move(t)); return *tables_.back(); }   // rank 0 writes it
     t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
     if (!*t->out) throw std::runtime_error(fmt::format("cannot write the history file '{}'", file));
     errno = 0;

@@ -1,4 +1,5 @@
 #include "io/plot.hpp"
+#include "support/comm.hpp"
 
 #include "io/atomic_file.hpp"
 
@@ -121,6 +122,7 @@ std::string find_gnuplot() {
 }
 
 void render_plot(const History& history, const PlotRequest& request) {
+  if (!comm::root()) return;   // a distributed run's pictures are rank 0's to draw
   std::string ext = fs::path(request.file).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (ext != ".png" && ext != ".svg")

@@ -1,4 +1,5 @@
 #include "io/save.hpp"
+#include "support/comm.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -278,6 +279,7 @@ std::string invalid_model(const Model& m) {
 }  // namespace
 
 void save_model(const Model& model, const std::string& path) {
+  if (!comm::root()) return;   // a distributed run's files are rank 0's to write
   Writer w;
   transfer(w, const_cast<Model&>(model), kVersion);
   std::string header(kMagic, sizeof kMagic);
@@ -314,12 +316,18 @@ void save_model(const Model& model, const std::string& path) {
 }
 
 Model load_model(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw std::runtime_error(fmt::format("'{}' is a directory, not a save file", path));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(fmt::format("cannot open the save file '{}'", path));
-  std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Rank 0 reads the file, every rank restarts from its bytes (an error travels as "E" + message).
+  std::string data;
+  if (comm::root()) {
+    std::error_code ec;
+    std::ifstream in(path, std::ios::binary);
+    if (std::filesystem::is_directory(path, ec)) data = fmt::format("E'{}' is a directory, not a save file", path);
+    else if (!in) data = fmt::format("Ecannot open the save file '{}'", path);
+    else data = "D" + std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  comm::broadcast(data);
+  if (data.empty() || data[0] == 'E') throw std::runtime_error(data.empty() ? "cannot read the save file" : data.substr(1));
+  data.erase(0, 1);
   const std::size_t header_size = sizeof kMagic + sizeof kVersion + 2 * sizeof(std::uint64_t);
   if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0)
     throw std::runtime_error(fmt::format("'{}' is not a trubal save file", path));

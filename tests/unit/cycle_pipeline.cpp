@@ -76,7 +76,7 @@ TEST_CASE("pipeline: the model and physics rooms include neither the cycle nor a
   const std::map<std::string, std::set<std::string>> allowed = {
       {"model", {"model"}},
       {"physics", {"model", "physics"}},
-      {"io", {"model", "physics", "io"}},
+      {"io", {"model", "physics", "io", "support"}},
       {"backends", {"model", "backends", "support"}},
       {"support", {"support"}},
       {"cycle", {"model", "physics", "cycle", "support", "backends"}},

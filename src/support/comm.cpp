@@ -1,0 +1,170 @@
+#include "support/comm.hpp"
+
+#include <cstdlib>
+#include <cstring>
+
+#ifdef TRUBAL_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace trubal::comm {
+namespace {
+
+int g_rank = 0, g_size = 1;
+bool g_started = false;
+
+#ifdef TRUBAL_HAVE_MPI
+// Launched by mpirun (or srun, hydra): the launcher's environment says so. A plain `trubal` does not
+// start MPI (a singleton MPI start costs time and may print warnings on a machine without network).
+bool launched_by_mpirun() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+
+template <class T> MPI_Datatype type_of();
+template <> MPI_Datatype type_of<double>() { return MPI_DOUBLE; }
+template <> MPI_Datatype type_of<std::uint8_t>() { return MPI_UINT8_T; }
+template <> MPI_Datatype type_of<std::uint32_t>() { return MPI_UINT32_T; }
+
+template <class T> void gather_parts(const std::vector<T>& mine, std::vector<T>& all) {
+  if (!g_started || g_size == 1) { all = mine; return; }
+  int count = static_cast<int>(mine.size());
+  std::vector<int> counts(g_size), starts(g_size);
+  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  long total = 0;
+  for (int r = 0; r < g_size; ++r) {
+    starts[r] = static_cast<int>(total);
+    total += counts[r];
+  }
+  all.resize(static_cast<std::size_t>(total));
+  MPI_Allgatherv(mine.data(), count, type_of<T>(), all.data(), counts.data(), starts.data(), type_of<T>(),
+                 MPI_COMM_WORLD);
+}
+#endif
+
+}  // namespace
+
+bool built_with_mpi() {
+#ifdef TRUBAL_HAVE_MPI
+  return true;
+#else
+  return false;
+#endif
+}
+
+void init(int& argc, char**& argv) {
+#ifdef TRUBAL_HAVE_MPI
+  if (!launched_by_mpirun()) return;
+  MPI_Init(&argc, &argv);
+  MPI_Comm_rank(MPI_COMM_WORLD, &g_rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &g_size);
+  g_started = true;
+#else
+  (void)argc;
+  (void)argv;
+#endif
+}
+
+void finalize() {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started) MPI_Finalize();
+  g_started = false;
+#endif
+}
+
+int rank() { return g_rank; }
+int size() { return g_size; }
+
+void broadcast(std::string& text) {
+#ifdef TRUBAL_HAVE_MPI
+  if (!g_started || g_size == 1) return;
+  std::int64_t n = static_cast<std::int64_t>(text.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  text.resize(static_cast<std::size_t>(n));
+  if (n > 0) MPI_Bcast(text.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
+#else
+  (void)text;
+#endif
+}
+
+void broadcast(std::int64_t& value) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) MPI_Bcast(&value, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+#else
+  (void)value;
+#endif
+}
+
+void broadcast(double* data, std::size_t count) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) MPI_Bcast(data, static_cast<int>(count), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+#else
+  (void)data;
+  (void)count;
+#endif
+}
+
+int first_failure(bool failed, std::string& message) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    int mine = failed ? g_rank : g_size, first = g_size;
+    MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    if (first == g_size) return -1;
+    std::int64_t n = static_cast<std::int64_t>(message.size());
+    MPI_Bcast(&n, 1, MPI_INT64_T, first, MPI_COMM_WORLD);
+    message.resize(static_cast<std::size_t>(n));
+    if (n > 0) MPI_Bcast(message.data(), static_cast<int>(n), MPI_CHAR, first, MPI_COMM_WORLD);
+    return first;
+  }
+#endif
+  return failed ? 0 : -1;
+}
+
+void allgather(const std::vector<double>& mine, std::vector<double>& all) {
+#ifdef TRUBAL_HAVE_MPI
+  gather_parts(mine, all);
+#else
+  all = mine;
+#endif
+}
+void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) {
+#ifdef TRUBAL_HAVE_MPI
+  gather_parts(mine, all);
+#else
+  all = mine;
+#endif
+}
+void allgather(const std::vector<std::uint32_t>& mine, std::vector<std::uint32_t>& all) {
+#ifdef TRUBAL_HAVE_MPI
+  gather_parts(mine, all);
+#else
+  all = mine;
+#endif
+}
+
+double max(double value) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    double out = value;
+    MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    return out;
+  }
+#endif
+  return value;
+}
+
+std::vector<double> gather_all(double value) {
+  std::vector<double> all;
+  allgather(std::vector<double>{value}, all);
+  return all;
+}
+
+void abort(int status) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) MPI_Abort(MPI_COMM_WORLD, status);
+#endif
+  std::exit(status);
+}
+
+}  // namespace trubal::comm

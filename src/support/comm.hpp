@@ -1,0 +1,49 @@
+// The ranks of a distributed run (`mpirun -np P trubal deck.dat`), and the few collective
+// operations trubal needs. Built without MPI, or started without mpirun, there is one rank and
+// every operation is a no-op, so the rest of the program never asks which.
+//
+// The rule every rank follows: all ranks execute every command; rank 0 alone reads the deck, the
+// shell's lines and CALLed files (and hands their text to the others), prints, and writes files.
+// After each command the ranks agree whether it failed (first_failure), so they stay in step.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace trubal::comm {
+
+// Starts MPI when the process was launched by mpirun (Open MPI's or another PMI launcher's
+// environment), else nothing. Call once, first thing in main.
+void init(int& argc, char**& argv);
+void finalize();
+// Built with MPI at all (for PRINT info and tests).
+bool built_with_mpi();
+
+int rank();
+int size();
+inline bool root() { return rank() == 0; }
+
+// Rank 0's value to every rank.
+void broadcast(std::string& text);
+void broadcast(std::int64_t& value);
+void broadcast(double* data, std::size_t count);
+
+// The lowest rank on which `failed` is true, or -1 where it is true on none; that rank's
+// `message` is handed to every rank.
+int first_failure(bool failed, std::string& message);
+
+// Every rank's part in rank order, concatenated into `all` (part sizes may differ): a vector of
+// doubles, bytes, ints.
+void allgather(const std::vector<double>& mine, std::vector<double>& all);
+void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all);
+void allgather(const std::vector<std::uint32_t>& mine, std::vector<std::uint32_t>& all);
+// The largest of every rank's value (exact in any order).
+double max(double value);
+// Every rank's value, by rank.
+std::vector<double> gather_all(double value);
+
+// Stops every rank with this exit status (an error that leaves the ranks out of step).
+[[noreturn]] void abort(int status);
+
+}  // namespace trubal::comm
