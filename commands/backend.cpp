@@ -28,7 +28,7 @@ static void run_backend(Context& ctx, Args& args) {
 }
 
 const Command backend_command = {
-    "BACKEND", {}, "BACKEND serial|allpairs|threaded [threads n] [maxmem bytes]", "choose how contacts are found",
+    "BACKEND", {}, "BACKEND serial|allpairs|threaded|mpi [threads n] [maxmem bytes]", "choose how contacts are found",
     "Chooses how the pairs of balls that may touch are found, and on how many threads the step runs (the "
     "contact forces, each ball's sums and the motion are one pipeline for every backend); switching keeps "
     "balls, contacts and their shear history, and every backend gives the same numbers, bitwise, for any "
@@ -38,7 +38,13 @@ const Command backend_command = {
     "should be near in number (GEN numbers them so); whether sharing pays is timed in the first steps, and "
     "where it does not, one thread does the work and PRINT info says so. allpairs: TPM's arrangement, every pair of balls tested every cycle "
     "(N(N-1)/2 pair slots of one byte; it cannot miss a contact); it refuses to take more than `maxmem` bytes "
-    "(default 4 GiB or half the physical memory, the smaller).",
-    {"serial", "allpairs", "threaded", "threads", "maxmem"}, run_backend};
+    "(default 4 GiB or half the physical memory, the smaller). mpi: under `mpirun -np P trubal deck.dat` "
+    "(the default backend there) the step is shared among the P ranks: each rank takes a contiguous range of "
+    "ball numbers (whole blocks of 256, balanced by pair count) and computes its contacts, wall contacts and "
+    "motion, and the ranks exchange the results after every step; every rank holds the whole model and "
+    "finds every pair (replicated data: memory per rank is that of one run). The answer is the serial one "
+    "bit for bit for any P (tests/unit/cycle_cuts.cpp runs every cut scene on 2 and 3 ranks). On one rank "
+    "it is the serial backend. Under mpirun, the other backends compute the whole step on every rank.",
+    {"serial", "allpairs", "threaded", "mpi", "threads", "maxmem"}, run_backend};
 
 }  // namespace trubal

@@ -1,5 +1,7 @@
 #include "session.hpp"
 
+#include "support/comm.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -15,7 +17,9 @@
 
 namespace trubal {
 
-Session::Session() : pipeline_(make_pipeline("serial", 1)), history_(std::make_unique<History>()) {}
+// Under mpirun the ranks share the step (BACKEND mpi); otherwise one thread, as TRUBAL.
+Session::Session()
+    : pipeline_(make_pipeline(comm::size() > 1 ? "mpi" : "serial", 1)), history_(std::make_unique<History>()) {}
 Session::~Session() = default;
 
 Model& Session::edit() {

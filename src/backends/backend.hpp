@@ -30,6 +30,8 @@ class Backend {
   // false: the backend is asked every step for the pairs touching now (skin 0), as TPM 2.0's static
   // pair slots were tested every step.
   virtual bool keeps_list() const { return true; }
+  // Whether the step is shared among the ranks of a distributed run (BACKEND mpi), not threads.
+  virtual bool distributed() const { return false; }
   // Extra lines for PRINT info ("name: value").
   virtual std::vector<std::pair<std::string, std::string>> info() const { return {}; }
   // Candidate pairs tested so far, for tests and PRINT info (0 where the backend does not count).

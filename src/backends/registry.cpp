@@ -4,6 +4,7 @@
 
 #include "backends/allpairs/allpairs_backend.hpp"
 #include "backends/backend.hpp"
+#include "backends/mpi/mpi_backend.hpp"
 #include "backends/serial/serial_backend.hpp"
 #include "backends/threaded/threaded_backend.hpp"
 
@@ -21,6 +22,7 @@ const Entry kBackends[] = {
     {"serial", 1, false, [](const BackendOptions&) { return make_serial_backend(); }},
     {"allpairs", 0, true, [](const BackendOptions& o) { return make_allpairs_backend(o.max_memory); }},
     {"threaded", 0, false, [](const BackendOptions&) { return make_threaded_backend(); }},
+    {"mpi", 1, false, [](const BackendOptions&) { return make_mpi_backend(); }},
 };
 
 const Entry& entry(std::string_view name) {

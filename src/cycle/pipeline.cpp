@@ -5,6 +5,7 @@
 
 #include "cycle/pair_list.hpp"
 #include "cycle/wall_list.hpp"
+#include "support/comm.hpp"
 #include "model/wall_shape.hpp"
 #include "model/periodic_cell.hpp"
 #include "support/format_number.hpp"
@@ -23,7 +24,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads)
-    : backend_(std::move(backend)), pool_(threads > 0 ? threads : default_threads(backend_->name())) {}
+    : backend_(std::move(backend)), pool_(threads > 0 ? threads : default_threads(backend_->name())) {
+  step_.set_distributed(backend_->distributed() && comm::size() > 1);
+}
 
 void Pipeline::invalidate() {
   ref_.invalidate();

@@ -12,7 +12,11 @@
 #include <cstdlib>
 #include <map>
 
+#include <optional>
+#include <tuple>
+
 #include "interp_support.hpp"
+#include "support/comm.hpp"
 
 using namespace trubal;
 using namespace trubal::test;
@@ -232,6 +236,52 @@ void check_scene(const Scene& scene) {
   }
 }
 
+// The same scene under `mpirun -np ranks trubal` with BACKEND mpi, `cycling` after the setup; empty
+// results where this build or machine has no MPI (the caller skips).
+std::optional<Result> run_mpi(const Scene& scene, int ranks, const std::string& cycling) {
+  if (!comm::built_with_mpi() || shell("command -v mpirun >/dev/null 2>&1") != 0) return std::nullopt;
+  TempDir dir;
+  const std::string deck = "backend mpi\n" + std::string(scene.setup) + scene.during + cycling +
+                           "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\nprint info\n";
+  dir.write("deck.dat", deck);
+  const std::string command = "cd " + quote(dir.str()) +
+                              " && OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                              "mpirun -np " + std::to_string(ranks) + " " + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1";
+  const int status = shell(command);
+  INFO(deck);
+  INFO(slurp(dir.path() / "out.txt"));
+  REQUIRE(status == 0);
+  // Really on that many ranks, and rank 0 alone printed (one copy of each line).
+  const std::string out = slurp(dir.path() / "out.txt");
+  CHECK_THAT(out, Catch::Contains("ranks: " + std::to_string(ranks) + "\n"));
+  CHECK(out.find("trubal> print info") == out.rfind("trubal> print info"));
+  return Result{slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
+                slurp(dir.path() / "walls.csv")};
+}
+
+// Every scene on 2 and 3 ranks, unbroken and cut (a switch from serial to mpi, SAVE and RESTART),
+// byte for byte the serial run.
+void check_scene_mpi(const Scene& scene) {
+  const std::string unbroken = "cycle " + std::to_string(scene.cycles) + "\n";
+  const Result serial = run(scene, "serial", unbroken);
+  const int half = scene.cycles / 2;
+  const std::string halves = "cycle " + std::to_string(half) + "\nsave s.sav\nrestart s.sav\n" + scene.during +
+                             "cycle " + std::to_string(scene.cycles - half) + "\n";
+  for (const auto& [ranks, cycling, keeps_history] :
+       {std::tuple{2, unbroken, true}, std::tuple{3, unbroken, true}, std::tuple{2, halves, false}}) {
+    INFO(scene.name << " on " << ranks << " ranks: " << cycling);
+    const auto other = run_mpi(scene, ranks, cycling);
+    if (!other) {
+      WARN("not built with MPI, or no mpirun: the distributed backend is not checked (Debian: libopenmpi-dev openmpi-bin)");
+      return;
+    }
+    CHECK(other->balls == serial.balls);
+    CHECK(other->contacts == serial.contacts);
+    CHECK(other->walls == serial.walls);
+    if (keeps_history) CHECK(other->history == serial.history);
+  }
+}
+
 }  // namespace
 
 TEST_CASE("cycle cuts: servo, strain and shear strain in a periodic cell", "[cuts][backends]") {
@@ -252,4 +302,8 @@ TEST_CASE("cycle cuts: walls of every kind, moving and servo-driven", "[cuts][ba
 
 TEST_CASE("cycle cuts: a shear box, periodic in x and y between walls across z", "[cuts][backends][walls]") {
   check_scene(kShearBox);
+}
+
+TEST_CASE("cycle cuts: BACKEND mpi on 2 and 3 ranks gives the serial bits, every scene", "[cuts][mpi]") {
+  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox}) check_scene_mpi(*scene);
 }
