@@ -94,9 +94,11 @@ const Command hist_command = {
     "test is F1 / (S sigma2) with S the section through the perimeter balls' centres, where the membrane "
     "acts (README). "
     "platen is the z reaction force of the balls in the range (all balls without one). With `file` the rows "
-    "are written as CSV (header cycle,time,... then one row per record, flushed as they come). `HIST reset` "
+    "are written as CSV (header cycle,time,... then one row per record, flushed as they come), and memory keeps "
+    "only the last 10,000 to 20,000 (PRINT history shows those, PLOT reads the file back), so a long `every 1` "
+    "run does not fill the memory; without `file` every row stays in memory. `HIST reset` "
     "forgets all histories.",
-    {"stress", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "every", "file", "area",
+    {"stress", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall", "every", "file", "area",
      "pressure", "reset", "range"},
     run_hist};
 

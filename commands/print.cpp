@@ -139,8 +139,11 @@ static void print_history(Context& ctx) {
   const auto& tables = ctx.session.history().tables();
   if (tables.empty()) ctx.out << "no histories (HIST records them)\n";
   for (const auto& t : tables) {
-    ctx.out << fmt::format("history every {} cycles{}: {} rows\n", t->every, t->file.empty() ? "" : " -> " + t->file,
-                           t->rows.size());
+    ctx.out << fmt::format("history every {} cycles{}: {} rows{}\n", t->every, t->file.empty() ? "" : " -> " + t->file,
+                           t->recorded,
+                           t->recorded > t->rows.size()
+                               ? fmt::format(" (the last {} below; every row is in the file)", t->rows.size())
+                               : std::string());
     for (const auto& c : t->columns) ctx.out << fmt::format("{:>14}", c);
     ctx.out << '\n';
     for (const auto& row : t->rows) {

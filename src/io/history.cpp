@@ -146,6 +146,11 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
                                            model.cycle));
   }
   t.rows.push_back(std::move(row));
+  ++t.recorded;
+  // A file holds every row: keep a window of the last ones (dropped a window at a time, so that a
+  // row is moved once per kWindow records).
+  if (!t.file.empty() && t.rows.size() >= 2 * HistoryTable::kWindow)
+    t.rows.erase(t.rows.begin(), t.rows.begin() + static_cast<std::ptrdiff_t>(t.rows.size() - HistoryTable::kWindow));
 }
 
 void History::sample(const Model& model, double volume) {
@@ -206,6 +211,7 @@ std::unique_ptr<HistoryTable> read_history_csv(const std::string& path) {
     table->rows.push_back(std::move(row));
   }
   if (table->columns.empty()) throw std::runtime_error(fmt::format("'{}' is empty: no header row", path));
+  table->recorded = table->rows.size();
   return table;
 }
 

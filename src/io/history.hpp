@@ -26,8 +26,14 @@ struct HistoryTable {
   double platen_gap0 = 0;
   double area = 0, pressure = 0;           // A and sigma2 of `ratio`
   bool membrane_area = false;               // A is the membrane's, read at each record (it follows the sample)
+  // The rows: all of them for a table in memory only; for one written to a file (which has every
+  // row) the last kWindow at least, so that a long `every 1` run does not fill the memory.
   std::vector<std::vector<double>> rows;
+  std::size_t recorded = 0;                // rows recorded since HIST (in the file, for a file table)
+  static constexpr std::size_t kWindow = 10000;
   std::unique_ptr<std::ofstream> out;
+  // The rows PLOT and PRINT history read: the window, or every row read back from the file when
+  // the window no longer holds them all.
 };
 
 class History {

@@ -166,6 +166,13 @@ void render_plot(const History& history, const PlotRequest& request) {
   if (gnuplot.empty())
     throw std::runtime_error("PLOT needs gnuplot, which is not on PATH (Debian: apt-get install gnuplot-nox)");
 
+  // A table whose window has let rows go is drawn from its file, which holds them all.
+  std::vector<std::unique_ptr<HistoryTable>> reread;
+  for (auto& s : series)
+    if (!s.table->file.empty() && s.table->recorded > s.table->rows.size()) {
+      reread.push_back(read_history_csv(s.table->file));
+      s.table = reread.back().get();
+    }
   TempFolder temp;
   std::string plots;
   for (std::size_t s = 0; s < series.size(); ++s) {

@@ -122,3 +122,24 @@ TEST_CASE("io_plot: PLOT ... from draws the histories of other runs from their C
   CHECK_FALSE(h.deck("plot contacts vs time from one.csv file c.png\n", "p.dat"));
   CHECK_THAT(h.err.str(), Catch::Contains("unknown history column 'contacts'"));
 }
+
+TEST_CASE("plot: a history written to a file keeps a window in memory, and PLOT and the file have every row", "[io][hard]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  // 25,000 rows at every 1: more than two windows of 10,000.
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1e5 dens 1000\nball 0 0 0 0.1\ninit xvel 1e-3\n"
+                 "hist time every 1 file h.csv\ncycle 25000\n"));
+  const auto& table = *h.session.history().tables().at(0);
+  CHECK(table.recorded == 25000);
+  CHECK(table.rows.size() < 2 * HistoryTable::kWindow);
+  CHECK(table.rows.size() >= HistoryTable::kWindow);
+  CHECK(table.rows.back()[0] == 25000);                        // the window is the last rows
+  CHECK(lines_of(slurp(dir.path() / "h.csv")).size() == 25001);   // the header and every row
+  REQUIRE(h.deck("print history\n"));
+  CHECK_THAT(h.out.str(), Catch::Contains("25000 rows (the last"));
+  if (shell("command -v gnuplot >/dev/null 2>&1") == 0) {
+    REQUIRE(h.deck("plot time vs cycle file t.png\n"));
+    CHECK(fs::file_size(dir.path() / "t.png") > 0);
+  }
+}
