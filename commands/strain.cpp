@@ -23,6 +23,13 @@ static void run_strain(Context& ctx, Args& args) {
   const Model& now = ctx.session.model();
   std::array<double, 6> rates = now.space.strain_rate;
   std::array<bool, 3> given{false, false, false};
+  if (args.accept("reset")) {   // the accumulated strain starts again at 0 (a new stage); the rates stay
+    args.done();
+    Model& m = periodic_model(ctx, args, "STRAIN");
+    m.space.strain = {0, 0, 0, 0, 0, 0};
+    ctx.out << "accumulated strain set to 0 (the rates are unchanged)\n";
+    return;
+  }
   if (args.accept("off")) {
     args.done();
     rates = {0, 0, 0, 0, 0, 0};
@@ -72,7 +79,7 @@ static void run_strain(Context& ctx, Args& args) {
 
 const Command strain_command = {
     "STRAIN", {},
-    "STRAIN e11 e22 e33 [e12 e13 e23]  |  STRAIN xx r [yy r] [zz r] [xy r] [xz r] [yz r]  |  STRAIN off",
+    "STRAIN e11 e22 e33 [e12 e13 e23]  |  STRAIN xx r [yy r] [zz r] [xy r] [xz r] [yz r]  |  STRAIN off  |  STRAIN reset",
     "strain rates of the periodic space",
     "Sets the strain rates of the periodic cell, per unit time, compression positive: `STRAIN 0 0 1e-4` "
     "shortens the z edge by 1e-4 of its length per unit time. The cell deforms about its centre; ball "
@@ -87,7 +94,9 @@ const Command strain_command = {
     "shear rates 0 when left out); the keyword form sets only the components named (the servo keeps the "
     "other axes); a STRAIN axis is taken from the servo. `STRAIN off` stops the straining (and the servo). "
     "The accumulated strain (sum of rate dt, compression positive, tensor shear components) is in PRINT "
-    "strain and HIST strain (e11 ... e23); the cell's tilts are in PRINT info.",
-    {"xx", "yy", "zz", "xy", "xz", "yz", "off"}, run_strain};
+    "strain and HIST strain (e11 ... e23); the cell's tilts are in PRINT info. `STRAIN reset` sets the "
+    "accumulated strain to 0 and leaves the rates and the cell as they are, so that a new stage (shear after "
+    "the isotropic compression) is measured from its own start.",
+    {"xx", "yy", "zz", "xy", "xz", "yz", "off", "reset"}, run_strain};
 
 }  // namespace trubal

@@ -3,6 +3,7 @@
 #include "support/comm.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -297,6 +298,13 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
 
 void Session::dump_vtk(const std::string& base, std::int64_t every) {
   require_started();
+  // `dump vtk out/tri`: the folder is made if it is not there (rank 0 writes the files).
+  const std::filesystem::path folder = std::filesystem::path(base).parent_path();
+  if (comm::root() && !folder.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) throw std::runtime_error(fmt::format("cannot make the folder '{}' for the dumps: {}", folder.string(), ec.message()));
+  }
   // The same files again continue their collection; other files start a new one.
   if (!dumps_ || dumps_->base() != VtkSeries(base).base()) dumps_ = std::make_unique<VtkSeries>(base, every);
   else dumps_->set_every(every);

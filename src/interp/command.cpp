@@ -1,5 +1,7 @@
 #include "interp/command.hpp"
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "interp/interpreter.hpp"
@@ -38,8 +40,18 @@ std::int64_t Args::count(std::string_view what, std::int64_t min, std::int64_t m
     const std::size_t sign = !w.empty() && (w[0] == '-' || w[0] == '+');
     if (w.size() > sign && w.find_first_not_of("0123456789", sign) == std::string::npos)
       fail(fmt::format("{} is out of range: {}", what, printable(w)));   // digits only, beyond int64
-    if (parse_real(w)) fail(fmt::format("{} must be a whole number, got the real '{}'", what, printable(w)));
-    fail(fmt::format("expected a whole number for {}, got '{}'", what, printable(w)));
+    // A real with a whole value is a count (`cycle 1e6`); 2^63 and beyond, or a fraction, is not.
+    if (const auto r = parse_real(w)) {
+      if (std::isfinite(*r) && *r == std::floor(*r) && std::abs(*r) < 9.2e18) {
+        v = static_cast<std::int64_t>(*r);
+      } else if (std::isfinite(*r) && *r == std::floor(*r)) {
+        fail(fmt::format("{} is out of range: {}", what, printable(w)));
+      } else {
+        fail(fmt::format("{} must be a whole number, got the real '{}'", what, printable(w)));
+      }
+    } else {
+      fail(fmt::format("expected a whole number for {}, got '{}'", what, printable(w)));
+    }
   }
   if (*v < min || *v > max) {
     if (max == INT64_MAX) fail(fmt::format("{} must be at least {}, got {}", what, min, *v));

@@ -121,6 +121,33 @@ std::string find_gnuplot() {
   return "";
 }
 
+std::string column_label(const std::string& c) {
+  static const std::pair<const char*, const char*> known[] = {
+      {"cycle", "cycle"}, {"time", "time"},
+      {"s11", "stress s11 (compression +)"}, {"s22", "stress s22 (compression +)"}, {"s33", "stress s33 (compression +)"},
+      {"s12", "stress s12"}, {"s13", "stress s13"}, {"s23", "stress s23"},
+      {"e11", "strain e11 (compression +)"}, {"e22", "strain e22 (compression +)"}, {"e33", "axial strain e33 (compression +)"},
+      {"e12", "shear strain e12"}, {"e13", "shear strain e13"}, {"e23", "shear strain e23"},
+      {"evol", "volumetric strain (compression +)"}, {"ratio", "stress ratio"}, {"sratio", "stress ratio sigma1/sigma3"},
+      {"axial", "axial strain"}, {"platen", "platen force"}, {"ke", "kinetic energy"},
+      {"strain_energy", "strain energy"}, {"friction_work", "friction work"}, {"damping_work", "damping work"},
+      {"boundary_work", "boundary work"}, {"unbal", "unbalanced-force ratio"}, {"contacts", "contacts"},
+      {"sliding", "sliding fraction"}, {"coordination", "coordination number"}};
+  for (const auto& [name, label] : known)
+    if (c == name) return label;
+  // wN_fx ...: wall N's
+  if (c.size() > 2 && c[0] == 'w' && std::isdigit(static_cast<unsigned char>(c[1]))) {
+    const auto cut = c.find('_');
+    if (cut != std::string::npos) {
+      const std::string id = c.substr(1, cut - 1), what = c.substr(cut + 1);
+      if (what == "stress") return "wall " + id + " stress (compression +)";
+      if (what == "pos") return "wall " + id + " position";
+      return "wall " + id + " force " + what.substr(1);
+    }
+  }
+  return c;
+}
+
 void render_plot(const History& history, const PlotRequest& request) {
   if (!comm::root()) return;   // a distributed run's pictures are rank 0's to draw
   std::string ext = fs::path(request.file).extension().string();
@@ -204,8 +231,14 @@ void render_plot(const History& history, const PlotRequest& request) {
                           request.height);
   script += fmt::format("set output {}\n", quoted(partial));
   if (!request.title.empty()) script += fmt::format("set title {}\n", quoted(request.title));
-  script += fmt::format("set xlabel {}\nset ylabel {}\nset grid\nset key top left\n", quoted(request.x),
-                        quoted(request.y.size() == 1 ? request.y[0] : join(request.y)));
+  // Axis labels name the quantity unless given; the legend sits below the plot, clear of the data.
+  std::string ylabel = request.ylabel;
+  if (ylabel.empty()) {
+    for (const auto& y : request.y) ylabel += (ylabel.empty() ? "" : ", ") + column_label(y);
+  }
+  script += fmt::format("set xlabel {}\nset ylabel {}\nset grid\nset key below\n",
+                        trubal::quoted(request.xlabel.empty() ? column_label(request.x) : request.xlabel),
+                        trubal::quoted(ylabel));
   for (const auto& line : request.lines)
     if (!line.label.empty())
       script += fmt::format("set label {} at graph 0.99, first {} right offset 0,0.7\n", quoted(line.label),

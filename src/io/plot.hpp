@@ -20,8 +20,12 @@ struct PlotRequest {
   };
   std::vector<Reference> lines;     // horizontal reference lines
   std::string title;
+  std::string xlabel, ylabel;       // "": named after the quantity (column_label)
   int width = 800, height = 600;    // pixels (SVG: its nominal size)
 };
+
+// What a history column is, for an axis label ("axial strain e33" for e33, "stress ratio" for ratio).
+std::string column_label(const std::string& column);
 
 // Every column some table records, in the order first recorded (for messages and completion).
 std::vector<std::string> known_columns(const History& history);

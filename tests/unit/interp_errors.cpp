@@ -65,6 +65,16 @@ TEST_CASE("interp errors: a real where a count is needed", "[interp][errors]") {
   CHECK(negative.starts_with("deck.dat:1: error: n (number of cycles) must be at least 0, got -3"));
 }
 
+TEST_CASE("interp errors: a real with a whole value is a count (cycle 1e3, gen 2e1)", "[interp][errors]") {
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1e5 dens 1000\ngen 2e1 0.05 0.08 seed 1.0e0\ncycle 1e3\n"));
+  CHECK(h.session.model().balls.size() == 20);
+  CHECK(h.session.model().cycle == 1000);
+  // A whole value beyond a 64-bit count, or a fraction in exponent form, is still refused.
+  CHECK(deck_error("cycle 1e30\n").starts_with("deck.dat:1: error: n (number of cycles) is out of range: 1e30"));
+  CHECK(deck_error("cycle 2.5e0\n").starts_with("deck.dat:1: error: n (number of cycles) must be a whole number, got the real '2.5e0'"));
+}
+
 TEST_CASE("interp errors: a number beyond the doubles is an input error, not infinity", "[interp][errors]") {
   // strtod gives infinity for these; the run would then fail later with a NaN.
   auto step = deck_error("start box 0 1 0 1 0 1\ntstep 1e999\n");

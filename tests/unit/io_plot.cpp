@@ -2,6 +2,7 @@
 // name what is wrong.
 #include <cstdlib>
 
+#include "io/plot.hpp"
 #include "io_support.hpp"
 
 using namespace trubal;
@@ -142,4 +143,23 @@ TEST_CASE("plot: a history written to a file keeps a window in memory, and PLOT 
     REQUIRE(h.deck("plot time vs cycle file t.png\n"));
     CHECK(fs::file_size(dir.path() / "t.png") > 0);
   }
+}
+
+TEST_CASE("plot: axis labels name the quantity, or what xlabel and ylabel say", "[io]") {
+  CHECK(column_label("e33") == "axial strain e33 (compression +)");
+  CHECK(column_label("evol") == "volumetric strain (compression +)");
+  CHECK(column_label("w2_stress") == "wall 2 stress (compression +)");
+  CHECK(column_label("w12_fz") == "wall 12 force z");
+  CHECK(column_label("made_up") == "made_up");
+  if (shell("command -v gnuplot >/dev/null 2>&1") != 0) {
+    WARN("gnuplot missing: the picture itself is not drawn (Debian: gnuplot-nox)");
+    return;
+  }
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1e5 dens 1000\nball 0 0 0 0.1\ninit xvel 1e-3\n"
+                 "hist energy every 10\ncycle 100\n"
+                 "plot ke vs time file k.png xlabel \"t (s)\" ylabel \"E (J)\" title \"kinetic\"\n"));
+  CHECK(fs::file_size(dir.path() / "k.png") > 0);
 }

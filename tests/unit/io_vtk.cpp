@@ -165,9 +165,11 @@ TEST_CASE("io_vtk: DUMP errors say what is wrong", "[io][vtk]") {
   Harness h;
   CHECK_FALSE(h.deck("dump vtk x\n"));
   CHECK_THAT(h.first_error_line(), Catch::Contains("no model yet"));
-  Harness g;
-  CHECK_FALSE(g.deck(std::string(kPressedRow) + "dump vtk no/such/dir/x\n"));
-  CHECK_THAT(g.first_error_line(), Catch::Contains("cannot write 'no/such/dir/x_000000.vtp'"));
+  Harness g;   // a folder where the file goes: the system's reason ("dump vtk out/x" makes out/ itself)
+  fs::create_directory(dir.path() / "x_000000.vtp");
+  CHECK_FALSE(g.deck(std::string(kPressedRow) + "dump vtk x\n"));
+  CHECK_THAT(g.first_error_line(), Catch::Contains("'x_000000.vtp'"));
+  CHECK_THAT(g.first_error_line(), Catch::Contains("directory"));
   Harness k;
   CHECK_FALSE(k.deck(std::string(kPressedRow) + "dump vtk x every 0\n"));
   CHECK_THAT(k.first_error_line(), Catch::Contains("every"));

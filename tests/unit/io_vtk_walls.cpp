@@ -249,3 +249,16 @@ TEST_CASE("vtk walls: a walls file that cannot be written is an error naming it"
   CHECK(fs::is_directory(dir.path() / "snap_walls_000000.vtp"));
   for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().string().find(".tmp") == std::string::npos);
 }
+
+TEST_CASE("vtk: DUMP makes the folder its files go in", "[io][vtk]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  REQUIRE(h.deck(std::string(kPressedRow) + "dump vtk out/deep/tri\n"));
+  CHECK(fs::exists(dir.path() / "out/deep/tri_000000.vtp"));
+  CHECK(fs::exists(dir.path() / "out/deep/tri.pvd"));
+  // A folder that cannot be made (a file is in the way) is an error with the system's reason.
+  dir.write("blocked", "x");
+  CHECK_FALSE(h.deck("dump vtk blocked/tri\n"));
+  CHECK_THAT(h.first_error_line(), Catch::Contains("cannot make the folder 'blocked'"));
+}

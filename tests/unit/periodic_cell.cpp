@@ -235,3 +235,13 @@ TEST_CASE("periodic: SERVO holds its targets through simple shear (the integral 
   // contracts as it shears: positive, compression positive).
   CHECK(std::abs(h.session.model().space.servo_integral[2]) > 0.1);
 }
+
+TEST_CASE("periodic: STRAIN reset starts the accumulated strain again, the rates stay", "[periodic]") {
+  trubal::test::Harness h;
+  REQUIRE(h.deck("start 1 1 1\nprop kn 1e5 dens 1000\nball 0.5 0.5 0.5 0.1\nstrain 0 0 0.01\ntstep 0.01\ncycle 100\n"));
+  const auto& s = h.session.model().space;
+  CHECK(s.strain[2] == Approx(0.01).epsilon(1e-9));
+  REQUIRE(h.deck("strain reset\ncycle 50\n"));
+  CHECK(s.strain[2] == Approx(0.005).epsilon(1e-9));
+  CHECK(s.strain_rate[2] == 0.01);
+}
