@@ -3,6 +3,7 @@
 #include "support/comm.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <cmath>
 #include <random>
@@ -24,6 +25,7 @@ Session::Session()
 Session::~Session() = default;
 
 Model& Session::edit() {
+  ++changes_;
   pipeline_->invalidate();
   model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
   return model_;
@@ -42,6 +44,7 @@ void Session::start(const Space& space) {
   fresh.space = space;
   fresh.started = true;
   model_ = std::move(fresh);
+  ++changes_;
   history_->clear();
   dumps_.reset();
   pipeline_->invalidate();
@@ -79,11 +82,37 @@ std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, dou
       if (p[a] < s.lo[a] || p[a] > s.hi[a])
         throw std::runtime_error(fmt::format("ball centre {} = {} is outside the START box [{}, {}]", "xyz"[a], p[a],
                                              s.lo[a], s.hi[a]));
+  // Two balls at one centre have no normal between them and would be thrown apart: refused.
+  auto key = [](double a, double b, double c) {   // -0 and 0 are the same place
+    return std::array<double, 3>{a == 0 ? 0.0 : a, b == 0 ? 0.0 : b, c == 0 ? 0.0 : c};
+  };
+  if (centres_changes_ != changes_) {
+    centres_.clear();
+    const Balls& b = model_.balls;
+    for (std::size_t k = 0; k < b.size(); ++k) centres_.emplace(key(b.x[k], b.y[k], b.z[k]), b.id[k]);
+  }
+  if (const auto it = centres_.find(key(x, y, z)); it != centres_.end())
+    throw std::runtime_error(fmt::format("ball {} is already at ({}, {}, {}): two balls at one centre would fly apart; "
+                                         "give this one another centre", it->second, x, y, z));
   try {
-    return trubal::add_ball(edit(), id, type, x, y, z, rad);
+    const std::size_t at = trubal::add_ball(edit(), id, type, x, y, z, rad);
+    centres_.emplace(key(x, y, z), model_.balls.id[at]);
+    centres_changes_ = changes_;
+    return at;
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }
+}
+
+std::size_t Session::CentreHash::operator()(const std::array<double, 3>& c) const {
+  std::size_t h = 1469598103934665603ull;
+  for (double v : c) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    h = (h ^ bits) * 1099511628211ull;
+    h ^= h >> 29;
+  }
+  return h;
 }
 
 namespace {
@@ -267,6 +296,7 @@ double Session::stress_volume() const {
 }
 
 CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  ++changes_;   // the balls move
   require_started();
   check_ready(model_);
   update_mass(model_);
@@ -345,6 +375,7 @@ void Session::save(const std::string& path) const { save_model(model_, path); }
 void Session::restart(const std::string& path) {
   Model loaded = load_model(path);
   model_ = std::move(loaded);
+  ++changes_;
   history_->clear();
   dumps_.reset();
   pipeline_->invalidate();

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "cycle/pipeline.hpp"
@@ -103,6 +104,13 @@ class Session {
   std::unique_ptr<History> history_;
   std::unique_ptr<VtkSeries> dumps_;
   RunTotals totals_;
+  // BALL's check that no two balls share a centre: exact centre -> ball id, built afresh after any
+  // other change of the balls (changes_ counts them: edit, cycle, start, restart).
+  struct CentreHash {
+    std::size_t operator()(const std::array<double, 3>& c) const;
+  };
+  std::unordered_map<std::array<double, 3>, std::int64_t, CentreHash> centres_;
+  std::uint64_t changes_ = 0, centres_changes_ = ~std::uint64_t{0};
 };
 
 }  // namespace trubal

@@ -353,3 +353,15 @@ TEST_CASE("interp errors: BACKEND threads the system cannot start is an error, n
   CHECK(out.find("threads.dat:1: error: could not start thread") != std::string::npos);
   CHECK(out.find("ask for fewer threads") != std::string::npos);
 }
+
+TEST_CASE("interp errors: BALL refuses a centre another ball has, and says which", "[interp][errors]") {
+  const auto e = deck_error("start box -1 1 -1 1 -1 1\nball 0.1 0.2 0.3 0.1 id 7\nball 0.5 0 0 0.1\nball 0.1 0.2 0.3 0.05\n");
+  CHECK(e.starts_with("deck.dat:4: error: ball 7 is already at (0.1, 0.2, 0.3)"));
+  // After the balls move, the check is against where they are now.
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1e5 dens 1000\nball 0 0 0 0.1 id 1\ninit xvel 1\ntstep 0.01\n"
+                 "cycle 10\nball 0 0 0 0.1 id 2\n"));
+  CHECK(h.session.model().balls.size() == 2);
+  CHECK_FALSE(h.deck("ball 0 0 0 0.1 id 3\n"));
+  CHECK_THAT(h.first_error_line(), Catch::Contains("ball 2 is already at"));
+}
