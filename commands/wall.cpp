@@ -12,11 +12,9 @@ namespace trubal {
 static const std::vector<std::string_view> kWallOptions = {"type", "velocity", "spin", "about", "rrate", "inside",
                                                            "outside"};
 
-static bool is_number(const std::string& w) {
-  char* end = nullptr;
-  std::strtod(w.c_str(), &end);
-  return !w.empty() && end && *end == '\0';
-}
+// A vertex coordinate: any number form the language reads (1.5d9 too); one beyond a double is read
+// as a number, so that its error says it is out of range.
+static bool is_number(const std::string& w) { return parse_real(w).has_value() || real_out_of_range(w); }
 
 // The options that may follow a wall's shape or its id: type, motion, the side of a cylinder.
 static void read_options(Args& args, Wall& w, bool& about_given) {

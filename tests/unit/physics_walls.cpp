@@ -206,6 +206,7 @@ TEST_CASE("walls: bad WALL and SERVO wall input is an error that says what is wr
       {"wall id 4 velocity 1 0 0\n", "there is no wall 4"},
       {"wall plane 0 0 0 0 0 1 rrate 1\n", "for cylinders"},
       {"wall plane 0 0 0 0 0 1 velocity 1e999 0 0\n", "out of range"},
+      {"wall polygon 0 0 0 1e999 0 0 1 1 0\n", "vertex x is out of range"},
       {"wall plane 0 0 0 0 0 1\nservo wall 1 stress 100\n", "give `area a`"},
       {"servo wall 2 stress 100\n", "there is no wall 2"},
       {"wall plane 0 0 0 0 0 1\nhist wall 7\n", "there is no wall 7"},
