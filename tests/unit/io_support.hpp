@@ -58,4 +58,40 @@ inline Fields read_with_vtk(const TempDir& dir, const std::string& script_name, 
   return fields;
 }
 
+// Reads a .vtp with vtkXMLPolyDataReader and prints "name value..." lines: the counts (points,
+// cells, verts, lines, polys), each point (p<k>), the point and cell data arrays (pd:<name>,
+// cd:<name>, led by their component count), and each line and polygon cell's point ids
+// (line<n>, poly<n>).
+inline const char* kReadVtp = R"PY(
+import sys, vtk
+r = vtk.vtkXMLPolyDataReader()
+r.SetFileName(sys.argv[1])
+r.Update()
+if r.GetErrorCode() != 0:
+    sys.exit("vtk reader error %d" % r.GetErrorCode())
+d = r.GetOutput()
+print("points", d.GetNumberOfPoints())
+print("cells", d.GetNumberOfCells())
+print("verts", d.GetNumberOfVerts())
+print("lines", d.GetNumberOfLines())
+print("polys", d.GetNumberOfPolys())
+for k in range(d.GetNumberOfPoints()):
+    print("p%d" % k, *("%.17g" % v for v in d.GetPoint(k)))
+for data, tag in ((d.GetPointData(), "pd"), (d.GetCellData(), "cd")):
+    for a in range(data.GetNumberOfArrays()):
+        arr = data.GetArray(a)
+        vals = [arr.GetComponent(t, c) for t in range(arr.GetNumberOfTuples()) for c in range(arr.GetNumberOfComponents())]
+        print(tag + ":" + arr.GetName(), arr.GetNumberOfComponents(), *("%.17g" % v for v in vals))
+ids = vtk.vtkIdList()
+for cells, tag in ((d.GetLines(), "line"), (d.GetPolys(), "poly")):
+    cells.InitTraversal()
+    n = 0
+    while cells.GetNextCell(ids):
+        print("%s%d" % (tag, n), *(ids.GetId(k) for k in range(ids.GetNumberOfIds())))
+        n += 1
+)PY";
+
+// A .vtp file's fields as kReadVtp prints them.
+inline Fields read_vtp(const TempDir& dir, const std::string& file) { return read_with_vtk(dir, "read_vtp.py", kReadVtp, file); }
+
 }  // namespace trubal::test

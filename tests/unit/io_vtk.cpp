@@ -12,39 +12,8 @@ using namespace trubal::test;
 
 namespace {
 
-// Reads a .vtp with vtkXMLPolyDataReader and prints "name value..." lines: counts, the point
-// data and cell data arrays (all components), and each line cell's two point ids.
-const char* kReadVtp = R"PY(
-import sys, vtk
-r = vtk.vtkXMLPolyDataReader()
-r.SetFileName(sys.argv[1])
-r.Update()
-if r.GetErrorCode() != 0:
-    sys.exit("vtk reader error %d" % r.GetErrorCode())
-d = r.GetOutput()
-print("points", d.GetNumberOfPoints())
-print("verts", d.GetNumberOfVerts())
-print("lines", d.GetNumberOfLines())
-for k in range(d.GetNumberOfPoints()):
-    print("p%d" % k, *("%.17g" % v for v in d.GetPoint(k)))
-for data, tag in ((d.GetPointData(), "pd"), (d.GetCellData(), "cd")):
-    for a in range(data.GetNumberOfArrays()):
-        arr = data.GetArray(a)
-        vals = [arr.GetComponent(t, c) for t in range(arr.GetNumberOfTuples()) for c in range(arr.GetNumberOfComponents())]
-        print(tag + ":" + arr.GetName(), arr.GetNumberOfComponents(), *("%.17g" % v for v in vals))
-lines = d.GetLines()
-ids = vtk.vtkIdList()
-lines.InitTraversal()
-n = 0
-while lines.GetNextCell(ids):
-    print("line%d" % n, *(ids.GetId(k) for k in range(ids.GetNumberOfIds())))
-    n += 1
-)PY";
 
 
-Fields read_vtp(const TempDir& dir, const std::string& file) {
-  return read_with_vtk(dir, "read_vtp.py", kReadVtp, file);
-}
 
 // An array's values (the component count that leads the line dropped).
 std::vector<double> array_of(const Fields& f, const std::string& name) {

@@ -13,41 +13,9 @@ using namespace trubal::test;
 
 namespace {
 
-// Reads a .vtp with vtkXMLPolyDataReader and prints "name value..." lines: the counts, each point,
-// each polygon cell's point ids, and the cell data arrays (all components, led by their count).
-const char* kReadWalls = R"PY(
-import sys, vtk
-r = vtk.vtkXMLPolyDataReader()
-r.SetFileName(sys.argv[1])
-r.Update()
-if r.GetErrorCode() != 0:
-    sys.exit("vtk reader error %d" % r.GetErrorCode())
-d = r.GetOutput()
-print("points", d.GetNumberOfPoints())
-print("cells", d.GetNumberOfCells())
-print("polys", d.GetNumberOfPolys())
-print("verts", d.GetNumberOfVerts())
-print("lines", d.GetNumberOfLines())
-for k in range(d.GetNumberOfPoints()):
-    print("p%d" % k, *("%.17g" % v for v in d.GetPoint(k)))
-polys = d.GetPolys()
-ids = vtk.vtkIdList()
-polys.InitTraversal()
-n = 0
-while polys.GetNextCell(ids):
-    print("poly%d" % n, *(ids.GetId(k) for k in range(ids.GetNumberOfIds())))
-    n += 1
-data = d.GetCellData()
-for a in range(data.GetNumberOfArrays()):
-    arr = data.GetArray(a)
-    vals = [arr.GetComponent(t, c) for t in range(arr.GetNumberOfTuples()) for c in range(arr.GetNumberOfComponents())]
-    print("cd:" + arr.GetName(), arr.GetNumberOfComponents(), *("%.17g" % v for v in vals))
-)PY";
 
 
-Fields read_walls_vtp(const TempDir& dir, const std::string& file) {
-  return read_with_vtk(dir, "read_walls.py", kReadWalls, file);
-}
+Fields read_walls_vtp(const TempDir& dir, const std::string& file) { return read_vtp(dir, file); }
 
 // An array's values (the component count that leads the line dropped).
 std::vector<double> cell_array(const Fields& f, const std::string& name) {
