@@ -94,4 +94,23 @@ for cells, tag in ((d.GetLines(), "line"), (d.GetPolys(), "poly")):
 // A .vtp file's fields as kReadVtp prints them.
 inline Fields read_vtp(const TempDir& dir, const std::string& file) { return read_with_vtk(dir, "read_vtp.py", kReadVtp, file); }
 
+// Every data set a .pvd collection names, read with VTK: "part file points polys" lines, in the
+// collection's order (the test fails if a file does not read).
+inline std::string read_pvd(const TempDir& dir, const std::string& pvd) {
+  const std::string py = python_with_vtk();
+  if (py.empty()) FAIL("these tests read the VTK files with VTK itself: install python3-vtk9");
+  const std::string script = dir.write("read_pvd.py",
+      "import sys, os, vtk, xml.etree.ElementTree as ET\n"
+      "root = ET.parse(sys.argv[1]).getroot()\n"
+      "for d in root.iter('DataSet'):\n"
+      "    r = vtk.vtkXMLPolyDataReader(); r.SetFileName(os.path.join(os.path.dirname(sys.argv[1]), d.get('file'))); r.Update()\n"
+      "    assert r.GetErrorCode() == 0, d.get('file')\n"
+      "    print(d.get('part'), d.get('file'), r.GetOutput().GetNumberOfPoints(), r.GetOutput().GetNumberOfPolys())\n");
+  const std::string out = (dir.path() / "read_pvd.txt").string();
+  const int status = shell(py + " " + quote(script) + " " + quote(pvd) + " >" + quote(out) + " 2>&1");
+  INFO(slurp(out));
+  REQUIRE(status == 0);
+  return slurp(out);
+}
+
 }  // namespace trubal::test
