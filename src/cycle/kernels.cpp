@@ -18,13 +18,14 @@ namespace {
 // The ball data the contact loops read, and the one gather of a pair's inputs into a batch lane.
 struct PairInputs {
   const double *x, *y, *z, *rad, *mass, *vx, *vy, *vz, *wx, *wy, *wz;
+  const std::uint8_t* fixed;
   const std::int8_t *img_x, *img_y, *img_z;
   bool periodic;
   CellFrame cell;   // periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image
   PairInputs(const Model& model)
       : x(model.balls.x.data()), y(model.balls.y.data()), z(model.balls.z.data()), rad(model.balls.rad.data()),
         mass(model.balls.mass.data()), vx(model.balls.vx.data()), vy(model.balls.vy.data()), vz(model.balls.vz.data()),
-        wx(model.balls.wx.data()), wy(model.balls.wy.data()), wz(model.balls.wz.data()),
+        wx(model.balls.wx.data()), wy(model.balls.wy.data()), wz(model.balls.wz.data()), fixed(model.balls.fixed.data()),
         img_x(model.contacts.image_x.data()), img_y(model.contacts.image_y.data()), img_z(model.contacts.image_z.data()),
         periodic(model.space.periodic), cell(cell_frame(model.space)) {}
 
@@ -50,7 +51,7 @@ struct PairInputs {
       B.sy[q] = rad[i] * wy[i] + rad[j] * wy[j];
       B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
     }
-    if constexpr (F.dashpot) B.mstar[q] = mass[i] * mass[j] / (mass[i] + mass[j]);
+    if constexpr (F.dashpot) B.mstar[q] = pair_mstar(mass[i], mass[j], velocity_held(fixed[i]), velocity_held(fixed[j]));
   }
 };
 

@@ -27,7 +27,7 @@ struct ContactInput {
   double ri, rj;
   double vx, vy, vz;              // v_j - v_i
   double sx, sy, sz;              // R_i w_i + R_j w_j (kRotation only)
-  double mstar;                   // m_i m_j / (m_i + m_j) (restitution only)
+  double mstar;                   // pair_mstar (restitution only)
   double fsx, fsy, fsz;           // shear force on j from the last step (history)
 };
 

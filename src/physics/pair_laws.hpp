@@ -41,6 +41,14 @@ inline void alone_sums(const PairLaws& laws, std::size_t ball, double mass, doub
   if (sum_cn) *sum_cn = 2 * laws.alone_xi[t] * std::sqrt(kn * 0.5 * mass);
 }
 
+// m* of a pair for its dashpot. A ball whose velocity is held in every component (FIX vel) is a
+// partner of infinite mass, as a wall is: m* is then the other ball's mass (both held: the plain
+// m_i m_j / (m_i + m_j)), so that PROP rest e holds against a fixed ball too.
+inline bool velocity_held(std::uint8_t fixed) { return (fixed & kVel) == kVel; }
+inline double pair_mstar(double mi, double mj, bool held_i, bool held_j) {
+  return held_j && !held_i ? mi : (held_i && !held_j ? mj : mi * mj / (mi + mj));
+}
+
 // The damping ratio that gives restitution e in a head-on impact (linear law with the no-pull
 // clamp: exact; Hertz: the usual -ln e / sqrt(pi^2 + ln^2 e)).
 double restitution_xi(double e, bool hertz);

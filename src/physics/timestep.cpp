@@ -68,7 +68,7 @@ double critical_timestep(const Model& model) {
       in.dz = image_delta(b.z[j], b.z[i], oz);
     }
     in.ri = b.rad[i]; in.rj = b.rad[j];
-    if (law.rest_xi > 0) in.mstar = b.mass[i] * b.mass[j] / (b.mass[i] + b.mass[j]);
+    if (law.rest_xi > 0) in.mstar = pair_mstar(b.mass[i], b.mass[j], velocity_held(b.fixed[i]), velocity_held(b.fixed[j]));
     const ContactResult r = features.hertz ? contact_force<ContactFeatures{.hertz = true, .dashpot = true}>(law, in, 0, 0)
                                            : contact_force<ContactFeatures{.dashpot = true}>(law, in, 0, 0);
     if (r.state == 0) continue;

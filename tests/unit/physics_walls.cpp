@@ -238,3 +238,18 @@ TEST_CASE("walls: a platen's area is its cylinder's cross-section, the cylinder'
                        "wall id 2 plane 0 0 0.3 0 0 -1\nservo wall 1 stress 10 in 2\n"));
   CHECK_THAT(bad.first_error_line(), Catch::Contains("names a cylinder"));
 }
+
+TEST_CASE("walls: a ball held still by FIX is a partner of infinite mass, as a wall is", "[walls]") {
+  // PROP rest 0.5 against a ball fixed in every velocity component rebounds at 0.5 (it was 0.601
+  // while m* took the fixed ball's mass), and at the same speed as off a plane.
+  double rebound[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    Harness h;
+    const std::string target = k == 0 ? "ball 0 0 0 0.1 id 2\nfix vel spin range id 2\n" : "wall plane 0 0 0.1 0 0 1\n";
+    REQUIRE(h.deck("start box -1 1 -1 1 -1 2\nprop kn 1e6 ks 1e6 dens 1000 rest 0.5\nball 0 0 0.25 0.1 id 1\n" + target +
+                   "init zvel -1 range id 1\nfrac 0.02\ncycle 20000\n"));
+    rebound[k] = h.session.model().balls.vz[0];
+  }
+  CHECK(rebound[0] == Approx(0.5).epsilon(0.005));
+  CHECK(rebound[0] == Approx(rebound[1]).epsilon(1e-6));
+}
