@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "model/edit.hpp"
 #include "model/wall_shape.hpp"
 
 namespace trubal {
@@ -71,6 +72,7 @@ static void run_wall(Context& ctx, Args& args) {
       args.done();
       Model& m = ctx.session.edit();
       m.walls.erase(m.walls.begin() + (found - now.walls.begin()));
+      reindex_wall_contacts(m);
       ctx.out << fmt::format("wall {} deleted\n", id);
       return;
     }
@@ -114,6 +116,7 @@ static void run_wall(Context& ctx, Args& args) {
   w.id = id;
   const auto at = std::lower_bound(m.walls.begin(), m.walls.end(), id, [](const Wall& a, std::int64_t v) { return a.id < v; });
   m.walls.insert(at, w);
+  reindex_wall_contacts(m);   // the walls after it moved up one place
   if (m.materials.find(w.type) == m.materials.end())
     ctx.warn(fmt::format("type {0} has no properties yet (PROP type {0} kn ... ks ... fric ...)", w.type));
   ctx.out << fmt::format("wall {}: {} of type {}", id, wall_kind_name(w.kind), w.type);

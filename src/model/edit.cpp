@@ -42,6 +42,27 @@ std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y
   return pos;
 }
 
+void reindex_wall_contacts(Model& model) {
+  WallContacts& w = model.wall_contacts;
+  std::vector<bool> keep(w.size(), false);
+  std::vector<std::uint32_t> index(w.size(), 0);
+  for (std::size_t p = 0; p < w.size(); ++p) {
+    const auto it = std::lower_bound(model.walls.begin(), model.walls.end(), w.wall_id[p],
+                                     [](const Wall& wall, std::int64_t id) { return wall.id < id; });
+    keep[p] = it != model.walls.end() && it->id == w.wall_id[p];
+    if (keep[p]) index[p] = static_cast<std::uint32_t>(it - model.walls.begin());
+  }
+  w.wall = index;
+  w.for_each_array([&](auto& v) {
+    if (v.size() != keep.size()) { v.clear(); return; }
+    std::size_t k = 0;
+    for (std::size_t p = 0; p < v.size(); ++p)
+      if (keep[p]) v[k++] = v[p];
+    v.resize(k);
+  });
+  w.list_version = 0;   // a list nobody has indexed
+}
+
 std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   Balls& b = model.balls;
   std::vector<std::int64_t> new_index(b.size(), -1);

@@ -253,3 +253,21 @@ TEST_CASE("walls: a ball held still by FIX is a partner of infinite mass, as a w
   CHECK(rebound[0] == Approx(0.5).epsilon(0.005));
   CHECK(rebound[0] == Approx(rebound[1]).epsilon(1e-6));
 }
+
+TEST_CASE("walls: adding or deleting a wall keeps the wall contacts consistent, so SAVE and RESTART work", "[walls]") {
+  // A wall of a lower id inserted before one with contacts (its index moves up), then that wall
+  // deleted: each state saves and restarts, and the contact's history is the wall's, not another's.
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 2\nprop kn 1e6 ks 1e6 dens 1000 fric 0.5\nball 0 0 0.0999 0.1\n"
+                 "init xvel 0.01\nwall id 5 plane 0 0 0 0 0 1\ngrav 0 0 -10\ncycle 10\n"
+                 "wall id 1 plane 0 0 1.5 0 0 -1\nsave a.sav\nrestart a.sav\n"));
+  const WallContacts& c = h.session.model().wall_contacts;
+  REQUIRE(c.size() == 1);
+  CHECK(c.wall_id[0] == 5);
+  CHECK(h.session.model().walls[c.wall[0]].id == 5);
+  CHECK(c.fsx[0] != 0);   // the sliding ball's shear history came through
+  REQUIRE(h.deck("cycle 5\nwall id 1 delete\nsave b.sav\nrestart b.sav\nwall id 5 delete\nsave c.sav\nrestart c.sav\n"));
+  CHECK(h.session.model().wall_contacts.size() == 0);
+}
