@@ -1,7 +1,6 @@
 #include "support/comm.hpp"
 
 #include <cstdlib>
-#include <cstring>
 
 #ifdef TRUBAL_HAVE_MPI
 #include <mpi.h>
@@ -11,7 +10,7 @@ namespace trubal::comm {
 namespace {
 
 int g_rank = 0, g_size = 1;
-bool g_started = false;
+[[maybe_unused]] bool g_started = false;   // MPI_Init was called (only in a build with MPI)
 
 #ifdef TRUBAL_HAVE_MPI
 // Launched by mpirun (or srun, hydra): the launcher's environment says so. A plain `trubal` does not
@@ -25,23 +24,27 @@ bool launched_by_mpirun() {
 template <class T> MPI_Datatype type_of();
 template <> MPI_Datatype type_of<double>() { return MPI_DOUBLE; }
 template <> MPI_Datatype type_of<std::uint8_t>() { return MPI_UINT8_T; }
-template <> MPI_Datatype type_of<std::uint32_t>() { return MPI_UINT32_T; }
+#endif
 
 template <class T> void gather_parts(const std::vector<T>& mine, std::vector<T>& all) {
-  if (!g_started || g_size == 1) { all = mine; return; }
-  int count = static_cast<int>(mine.size());
-  std::vector<int> counts(g_size), starts(g_size);
-  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  long total = 0;
-  for (int r = 0; r < g_size; ++r) {
-    starts[r] = static_cast<int>(total);
-    total += counts[r];
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    int count = static_cast<int>(mine.size());
+    std::vector<int> counts(g_size), starts(g_size);
+    MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    long total = 0;
+    for (int r = 0; r < g_size; ++r) {
+      starts[r] = static_cast<int>(total);
+      total += counts[r];
+    }
+    all.resize(static_cast<std::size_t>(total));
+    MPI_Allgatherv(mine.data(), count, type_of<T>(), all.data(), counts.data(), starts.data(), type_of<T>(),
+                   MPI_COMM_WORLD);
+    return;
   }
-  all.resize(static_cast<std::size_t>(total));
-  MPI_Allgatherv(mine.data(), count, type_of<T>(), all.data(), counts.data(), starts.data(), type_of<T>(),
-                 MPI_COMM_WORLD);
-}
 #endif
+  all = mine;
+}
 
 }  // namespace
 
@@ -96,16 +99,7 @@ void broadcast(std::int64_t& value) {
 #endif
 }
 
-void broadcast(double* data, std::size_t count) {
-#ifdef TRUBAL_HAVE_MPI
-  if (g_started && g_size > 1) MPI_Bcast(data, static_cast<int>(count), MPI_DOUBLE, 0, MPI_COMM_WORLD);
-#else
-  (void)data;
-  (void)count;
-#endif
-}
-
-int first_failure(bool failed, std::string& message) {
+int first_failure(bool failed, [[maybe_unused]] std::string& message) {
 #ifdef TRUBAL_HAVE_MPI
   if (g_started && g_size > 1) {
     int mine = failed ? g_rank : g_size, first = g_size;
@@ -121,50 +115,7 @@ int first_failure(bool failed, std::string& message) {
   return failed ? 0 : -1;
 }
 
-void allgather(const std::vector<double>& mine, std::vector<double>& all) {
-#ifdef TRUBAL_HAVE_MPI
-  gather_parts(mine, all);
-#else
-  all = mine;
-#endif
-}
-void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) {
-#ifdef TRUBAL_HAVE_MPI
-  gather_parts(mine, all);
-#else
-  all = mine;
-#endif
-}
-void allgather(const std::vector<std::uint32_t>& mine, std::vector<std::uint32_t>& all) {
-#ifdef TRUBAL_HAVE_MPI
-  gather_parts(mine, all);
-#else
-  all = mine;
-#endif
-}
-
-double max(double value) {
-#ifdef TRUBAL_HAVE_MPI
-  if (g_started && g_size > 1) {
-    double out = value;
-    MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-    return out;
-  }
-#endif
-  return value;
-}
-
-std::vector<double> gather_all(double value) {
-  std::vector<double> all;
-  allgather(std::vector<double>{value}, all);
-  return all;
-}
-
-void abort(int status) {
-#ifdef TRUBAL_HAVE_MPI
-  if (g_started && g_size > 1) MPI_Abort(MPI_COMM_WORLD, status);
-#endif
-  std::exit(status);
-}
+void allgather(const std::vector<double>& mine, std::vector<double>& all) { gather_parts(mine, all); }
+void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) { gather_parts(mine, all); }
 
 }  // namespace trubal::comm

@@ -27,23 +27,13 @@ inline bool root() { return rank() == 0; }
 // Rank 0's value to every rank.
 void broadcast(std::string& text);
 void broadcast(std::int64_t& value);
-void broadcast(double* data, std::size_t count);
 
 // The lowest rank on which `failed` is true, or -1 where it is true on none; that rank's
 // `message` is handed to every rank.
 int first_failure(bool failed, std::string& message);
 
-// Every rank's part in rank order, concatenated into `all` (part sizes may differ): a vector of
-// doubles, bytes, ints.
+// Every rank's part in rank order, concatenated into `all` (part sizes may differ).
 void allgather(const std::vector<double>& mine, std::vector<double>& all);
 void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all);
-void allgather(const std::vector<std::uint32_t>& mine, std::vector<std::uint32_t>& all);
-// The largest of every rank's value (exact in any order).
-double max(double value);
-// Every rank's value, by rank.
-std::vector<double> gather_all(double value);
-
-// Stops every rank with this exit status (an error that leaves the ranks out of step).
-[[noreturn]] void abort(int status);
 
 }  // namespace trubal::comm
