@@ -90,8 +90,12 @@ int run(int argc, char** argv) {
     interp.run_file(interactive_deck);   // errors are reported; the shell opens anyway
     if (!interp.stopped()) trubal::run_shell(interp);
   } else if (stdin_deck) {
-    std::istringstream in(trubal::Interpreter::read_stream_on_root(std::cin));   // rank 0 reads it
-    status = interp.run_deck(in, "<stdin>") ? 0 : 1;
+    if (trubal::comm::size() == 1) {   // read as it comes: a pipe may feed commands one by one
+      status = interp.run_deck(std::cin, "<stdin>") ? 0 : 1;
+    } else {   // rank 0 reads it all, and hands it to the others
+      std::istringstream in(trubal::Interpreter::read_stream_on_root(std::cin));
+      status = interp.run_deck(in, "<stdin>") ? 0 : 1;
+    }
   } else if (!deck.empty()) {
     status = interp.run_file(deck) ? 0 : 1;
   } else {
