@@ -5,6 +5,7 @@
 
 #include "commands/common.hpp"
 #include "physics/measure.hpp"
+#include "physics/walls.hpp"
 
 namespace trubal {
 
@@ -30,8 +31,7 @@ static void run_hist(Context& ctx, Args& args) {
     std::string item(names[args.expect(names, "history item")]);
     if (item == "wall") {
       const std::int64_t id = args.count("wall id", 1);
-      const auto& walls = ctx.session.model().walls;
-      if (std::none_of(walls.begin(), walls.end(), [&](const Wall& w) { return w.id == id; }))
+      if (!find_wall(ctx.session.model(), id))
         args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
       item = fmt::format("wall {}", id);
     }

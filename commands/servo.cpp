@@ -18,10 +18,10 @@ static void servo_wall(Context& ctx, Args& args) {
   ctx.session.require_started();
   const std::int64_t id = args.count("wall id", 1);
   const Model& now = ctx.session.model();
-  const auto it = std::find_if(now.walls.begin(), now.walls.end(), [&](const Wall& w) { return w.id == id; });
-  if (it == now.walls.end()) args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
-  const std::size_t k = static_cast<std::size_t>(it - now.walls.begin());
-  Wall w = *it;
+  const Wall* found = find_wall(now, id);
+  if (!found) args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
+  const std::size_t k = static_cast<std::size_t>(found - now.walls.data());
+  Wall w = *found;
   if (args.accept("off")) {
     args.done();
     Model& m = ctx.session.edit();

@@ -70,6 +70,13 @@ void ParallelStep::split(const ContactTable& c, const StepScratch& scratch, std:
   cross_lists(c, balls, parts);
 }
 
+void ParallelStep::split_if_stale(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts) {
+  const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;
+  if (c.list_version != split_version_ || parts != split_parts_ || first_block_.size() != static_cast<std::size_t>(parts) + 1 ||
+      first_block_.back() != blocks)
+    split(c, scratch, balls, parts);
+}
+
 void ParallelStep::add_wall_loads(Model& model, std::size_t blocks) {
   // Each wall's load, added block by block in ascending order.
   const std::size_t wall_count = model.walls.size();
@@ -137,9 +144,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   auto block_pair = [&](std::size_t k) { return static_cast<std::size_t>(scratch.run_begin[block_ball(k)]); };
 
   const int parts = static_cast<int>(std::min<std::size_t>(pool.size(), std::max<std::size_t>(blocks, 1)));
-  if (c.list_version != split_version_ || parts != split_parts_ || first_block_.size() != static_cast<std::size_t>(parts) + 1 ||
-      first_block_.back() != blocks)
-    split(c, scratch, balls, parts);
+  split_if_stale(c, scratch, balls, parts);
   const bool parallel = parts > 1 && share_now(balls, parts);
   blocks_.assign(blocks, StepSums{});
   const std::size_t wall_count = model.walls.size();
@@ -202,7 +207,6 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
 namespace {
 
 // StepSums and WallLoad as doubles, for the exchange (a ball index below 2^53 is exact).
-constexpr std::size_t kSumDoubles = 19, kLoadDoubles = 10;
 void pack(const StepSums& s, std::vector<double>& out) {
   for (double v : {s.friction_work, s.damping_work, s.boundary_work, s.strain, s.image_power}) out.push_back(v);
   for (double v : s.force_moment) out.push_back(v);
@@ -247,9 +251,7 @@ void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const Ste
   auto block_wall = [&](std::size_t k) { return static_cast<std::size_t>(scratch.wall_run_begin[block_ball(k)]); };
   const int ranks = comm::size(), me = comm::rank();
   const int parts = static_cast<int>(std::min<std::size_t>(ranks, std::max<std::size_t>(blocks, 1)));
-  if (c.list_version != split_version_ || parts != split_parts_ || first_block_.size() != static_cast<std::size_t>(parts) + 1 ||
-      first_block_.back() != blocks)
-    split(c, scratch, balls, parts);
+  split_if_stale(c, scratch, balls, parts);
   // Rank r's blocks (a rank beyond the parts has none).
   auto blocks_of = [&](int r) {
     return r < parts ? std::pair<std::size_t, std::size_t>{first_block_[r], first_block_[r + 1]}

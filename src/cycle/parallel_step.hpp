@@ -64,6 +64,8 @@ class ParallelStep {
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
   // pairs it computes again (kept while the pair list stays the same).
   void split(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts);
+  // The split, made again where the list, the ball count or the number of parts changed.
+  void split_if_stale(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts);
   void cross_lists(const ContactTable& c, std::size_t balls, int parts);
 
   std::vector<StepSums> blocks_;

@@ -48,8 +48,7 @@ HistoryTable& History::add(std::vector<std::string> items, std::int64_t every, c
   t->every = every;
   t->file = file;
   t->platen_range = std::move(platen_range);
-  if (!file.empty()) {
-    if (!comm::root()) { tables_.push_back(std::move(t)); return *tables_.back(); }   // rank 0 writes it
+  if (!file.empty() && comm::root()) {   // a distributed run's files are rank 0's to write
     t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
     if (!*t->out) throw std::runtime_error(fmt::format("cannot write the history file '{}'", file));
     errno = 0;
@@ -119,9 +118,8 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
                        e.boundary_work})
         row.push_back(v);
     } else if (item.rfind("wall ", 0) == 0) {
-      const std::int64_t id = std::stoll(item.substr(5));
-      const auto it = std::find_if(model.walls.begin(), model.walls.end(), [&](const Wall& w) { return w.id == id; });
-      if (it == model.walls.end()) {   // deleted since: the row says so rather than stopping
+      const Wall* it = find_wall(model, std::stoll(item.substr(5)));
+      if (!it) {   // deleted since: the row says so rather than stopping
         for (int k = 0; k < 5; ++k) row.push_back(std::numeric_limits<double>::quiet_NaN());
       } else {
         row.push_back(it->force[0]); row.push_back(it->force[1]); row.push_back(it->force[2]);
