@@ -1,5 +1,6 @@
 #include "physics/timestep.hpp"
 
+#include <initializer_list>
 #include <limits>
 
 #include "model/periodic_cell.hpp"
@@ -54,6 +55,17 @@ double critical_timestep(const Model& model) {
   // Per-ball sums over the touching pairs, added in list order: ascending partner, as the gather.
   struct Sums { double kmax = 0, ks = 0, cn = 0; };
   std::vector<Sums> sums(n);
+  // A contact's stiffness and dashpot, added to the sums of its balls where it touches.
+  auto add = [&](const PairLaw& law, const ContactInput& in, std::initializer_list<std::size_t> balls) {
+    const ContactResult r = features.hertz ? contact_force<ContactFeatures{.hertz = true, .dashpot = true}>(law, in, 0, 0)
+                                           : contact_force<ContactFeatures{.dashpot = true}>(law, in, 0, 0);
+    if (r.state == 0) return;
+    for (std::size_t ball : balls) {
+      sums[ball].kmax += std::max(r.kn, r.ks);
+      sums[ball].ks += r.ks;
+      sums[ball].cn += r.cn;
+    }
+  };
   for (std::size_t p = 0; p < c.size(); ++p) {
     const std::size_t i = c.i[p], j = c.j[p];
     if (i >= n || j >= n) continue;   // a stale list: count what is still valid
@@ -69,14 +81,7 @@ double critical_timestep(const Model& model) {
     }
     in.ri = b.rad[i]; in.rj = b.rad[j];
     if (law.rest_xi > 0) in.mstar = pair_mstar(b.mass[i], b.mass[j], velocity_held(b.fixed[i]), velocity_held(b.fixed[j]));
-    const ContactResult r = features.hertz ? contact_force<ContactFeatures{.hertz = true, .dashpot = true}>(law, in, 0, 0)
-                                           : contact_force<ContactFeatures{.dashpot = true}>(law, in, 0, 0);
-    if (r.state == 0) continue;
-    for (std::size_t ball : {i, j}) {
-      sums[ball].kmax += std::max(r.kn, r.ks);
-      sums[ball].ks += r.ks;
-      sums[ball].cn += r.cn;
-    }
+    add(law, in, {i, j});
   }
   // Wall contacts, after the ball's pairs (the kernels' order).
   const WallContacts& wc = model.wall_contacts;
@@ -88,13 +93,7 @@ double critical_timestep(const Model& model) {
     in.dx = lane.dx; in.dy = lane.dy; in.dz = lane.dz;
     in.ri = in.rj = lane.r;
     in.mstar = b.mass[i];
-    const PairLaw& law = laws.wall_law(i, w);
-    const ContactResult r = features.hertz ? contact_force<ContactFeatures{.hertz = true, .dashpot = true}>(law, in, 0, 0)
-                                           : contact_force<ContactFeatures{.dashpot = true}>(law, in, 0, 0);
-    if (r.state == 0) continue;
-    sums[i].kmax += std::max(r.kn, r.ks);
-    sums[i].ks += r.ks;
-    sums[i].cn += r.cn;
+    add(laws.wall_law(i, w), in, {i});
   }
   const bool rotation = features.rotation;
   // Held balls set no step of their own; where every ball is held (the balls may still move at their
