@@ -19,6 +19,14 @@ bool is_hertz(const Model& model, std::size_t ball) {
   return it != model.materials.end() && it->second.hertz();
 }
 
+// Adds the spring energy of a touching contact to `sum`: normal (tangent stiffness kn at overlap u),
+// then shear.
+void add_contact_strain(double& sum, bool hertz, double kn, double u, double fsx, double fsy, double fsz, double ks) {
+  sum += hertz ? normal_spring_energy<HertzNormal>(HertzNormal::spring_force(kn, u), u)
+               : normal_spring_energy<LinearNormal>(LinearNormal::spring_force(kn, u), u);
+  sum += shear_spring_energy(fsx * fsx + fsy * fsy + fsz * fsz, ks);
+}
+
 // Symmetric part of sum a (x) b, in Sym6 order.
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz) {
   s[0] += ax * bx; s[1] += ay * by; s[2] += az * bz;
@@ -71,20 +79,15 @@ EnergyReport energy(const Model& model) {
   const ContactTable& c = model.contacts;
   for (std::size_t p = 0; p < c.size(); ++p) {
     if (!touching(c, p)) continue;
-    const double u = c.overlap[p];
-    const double kn = c.kn_eff[p];
-    e.strain += is_hertz(model, c.i[p]) ? normal_spring_energy<HertzNormal>(HertzNormal::spring_force(kn, u), u)
-                                        : normal_spring_energy<LinearNormal>(LinearNormal::spring_force(kn, u), u);
-    e.strain += shear_spring_energy(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p], c.ks_eff[p]);
+    add_contact_strain(e.strain, is_hertz(model, c.i[p]), c.kn_eff[p], c.overlap[p], c.fsx[p], c.fsy[p], c.fsz[p],
+                       c.ks_eff[p]);
   }
   const WallContacts& w = model.wall_contacts;
   if (w.kn_eff.size() == w.size() && w.overlap.size() == w.size())
     for (std::size_t p = 0; p < w.size(); ++p) {
       if (w.state[p] == 0 || w.ball[p] >= b.size()) continue;
-      const double u = w.overlap[p], kn = w.kn_eff[p];
-      e.strain += is_hertz(model, w.ball[p]) ? normal_spring_energy<HertzNormal>(HertzNormal::spring_force(kn, u), u)
-                                             : normal_spring_energy<LinearNormal>(LinearNormal::spring_force(kn, u), u);
-      e.strain += shear_spring_energy(w.fsx[p] * w.fsx[p] + w.fsy[p] * w.fsy[p] + w.fsz[p] * w.fsz[p], w.ks_eff[p]);
+      add_contact_strain(e.strain, is_hertz(model, w.ball[p]), w.kn_eff[p], w.overlap[p], w.fsx[p], w.fsy[p],
+                         w.fsz[p], w.ks_eff[p]);
     }
   e.friction_work = model.energy.friction_work;
   e.damping_work = model.energy.damping_work;
