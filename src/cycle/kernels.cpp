@@ -59,8 +59,7 @@ struct PairInputs {
 // (normal, overlap, forces, stiffness, dashpot coefficient, work, state). Without it a step writes
 // only the new shear history and the sums per ball (StepScratch::ball_force, ball_cn).
 template <ContactFeatures F, bool kOneLaw>
-void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end,
-                   StepSums& sums) {
+void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end, std::size_t own_end) {
   constexpr ContactFeatures kLaw = F.law();
   constexpr bool kFull = F.details;
   ContactTable& c = model.contacts;
@@ -73,9 +72,11 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const bool periodic = in.periodic;
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws.table[0];
+  // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
+  // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
-  std::array<double, 6> force_moment{};
-  std::array<double, 3> stiffness_moment{};
+  std::array<double, 9> moments{};   // force_moment (6), then stiffness_moment (3)
+  BallParts* __restrict parts = scratch.ball_parts.data();
   ContactBatch B;
   // The running sum of the ball whose pairs the list is on.
   constexpr std::size_t kNone = ~std::size_t{0};
@@ -86,6 +87,12 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
     if (acc_ball == kNone) return;
     ball_sum[acc_ball] = acc;
     if constexpr (kLaw.dashpot) cn_sum[acc_ball] = acc_cn;
+    parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0};
+    work_friction = work_damping = strain = image_power = 0;
+    if (k.moments) [[unlikely]] {
+      scratch.ball_moments[acc_ball] = moments;
+      moments = {};
+    }
   };
   for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
     const std::size_t count = std::min(kBatch, end - p0);
@@ -123,13 +130,13 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
       if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
       if (k.moments) {   // force on j times the branch vector i -> j (zero where apart)
         const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q], lx = B.dx[q], ly = B.dy[q], lz = B.dz[q];
-        force_moment[0] += fx * lx; force_moment[1] += fy * ly; force_moment[2] += fz * lz;
-        force_moment[3] += 0.5 * (fx * ly + fy * lx);
-        force_moment[4] += 0.5 * (fx * lz + fz * lx);
-        force_moment[5] += 0.5 * (fy * lz + fz * ly);
-        stiffness_moment[0] += B.kn[q] * lx * lx;
-        stiffness_moment[1] += B.kn[q] * ly * ly;
-        stiffness_moment[2] += B.kn[q] * lz * lz;
+        moments[0] += fx * lx; moments[1] += fy * ly; moments[2] += fz * lz;
+        moments[3] += 0.5 * (fx * ly + fy * lx);
+        moments[4] += 0.5 * (fx * lz + fz * lx);
+        moments[5] += 0.5 * (fy * lz + fz * ly);
+        moments[6] += B.kn[q] * lx * lx;
+        moments[7] += B.kn[q] * ly * ly;
+        moments[8] += B.kn[q] * lz * lz;
       }
       work_friction += B.work_friction[q];
       work_damping += B.work_damping[q];
@@ -147,19 +154,13 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
     }
   }
   flush();
-  sums.friction_work += work_friction;
-  sums.damping_work += work_damping;
-  sums.strain += strain;
-  sums.image_power += image_power;
-  for (int a = 0; a < 6; ++a) sums.force_moment[a] += force_moment[a];
-  for (int a = 0; a < 3; ++a) sums.stiffness_moment[a] += stiffness_moment[a];
 }
 
 template <ContactFeatures F>
 void contact_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
-                  std::size_t own_end, StepSums& sums) {
-  if (k.laws.type_count == 1) contact_range<F, true>(model, scratch, k, begin, end, own_end, sums);
-  else contact_range<F, false>(model, scratch, k, begin, end, own_end, sums);
+                  std::size_t own_end) {
+  if (k.laws.type_count == 1) contact_range<F, true>(model, scratch, k, begin, end, own_end);
+  else contact_range<F, false>(model, scratch, k, begin, end, own_end);
 }
 
 // Pairs (i, j) with i below ball_begin and j in [ball_begin, ball_end), given in list order (so
@@ -172,6 +173,8 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   ContactTable& c = model.contacts;
   std::fill(scratch.ball_force.begin() + ball_begin, scratch.ball_force.begin() + ball_end, PairForce{});
   std::fill(scratch.ball_cn.begin() + ball_begin, scratch.ball_cn.begin() + ball_end, 0.0);
+  std::fill(scratch.ball_parts.begin() + ball_begin, scratch.ball_parts.begin() + ball_end, BallParts{});
+  if (k.moments) std::fill(scratch.ball_moments.begin() + ball_begin, scratch.ball_moments.begin() + ball_end, std::array<double, 9>{});
   if (pair_count == 0) return;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
@@ -207,7 +210,7 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
 // wall's load; the wall's work on the balls is boundary work.
 template <ContactFeatures F>
 void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
-               StepSums& sums, WallLoad* loads) {
+               WallLoad* loads) {
   constexpr ContactFeatures kLaw = F.law();
   if (begin >= end) return;
   WallContacts& c = model.wall_contacts;
@@ -216,7 +219,6 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
   ContactBatch B;
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
   Vec3 point[kBatch], surface[kBatch];
-  double work_friction = 0, work_damping = 0, strain = 0, boundary = 0;
   for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
     const std::size_t count = std::min(kBatch, end - p0);
     for (std::size_t q = 0; q < count; ++q) {
@@ -248,16 +250,18 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q];
       const double ax = point[q][0] - w.spin_point[0], ay = point[q][1] - w.spin_point[1], az = point[q][2] - w.spin_point[2];
       const double power = -(fx * surface[q][0] + fy * surface[q][1] + fz * surface[q][2]);   // the wall's on the ball
-      load.fx += fx; load.fy += fy; load.fz += fz;
-      load.mx += ay * fz - az * fy; load.my += az * fx - ax * fz; load.mz += ax * fy - ay * fx;
-      load.normal_force += B.fn[q];
-      load.stiffness += B.kn[q];
-      load.work += power * k.dt;
+      // Each contact goes to the exact sums on its own (the same additions wherever it is computed).
+      load.fx.add(fx); load.fy.add(fy); load.fz.add(fz);
+      load.mx.add(ay * fz - az * fy); load.my.add(az * fx - ax * fz); load.mz.add(ax * fy - ay * fx);
+      load.normal_force.add(B.fn[q]);
+      load.stiffness.add(B.kn[q]);
+      load.work.add(power * k.dt);
       load.contacts += B.state[q] != 0;
-      boundary += power * k.dt;
-      work_friction += B.work_friction[q];
-      work_damping += B.work_damping[q];
-      strain += B.strain[q];
+      BallParts& part = scratch.ball_parts[i];
+      part.boundary += power * k.dt;
+      part.friction += B.work_friction[q];
+      part.damping += B.work_damping[q];
+      part.strain += B.strain[q];
     }
     if constexpr (F.details) {
       for (std::size_t q = 0; q < count; ++q) {
@@ -269,10 +273,12 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       }
     }
   }
-  sums.friction_work += work_friction;
-  sums.damping_work += work_damping;
-  sums.strain += strain;
-  sums.boundary_work += boundary;
+}
+
+// A ball's run's moments to the servo's exact sums (out of line: only servo steps need them).
+[[gnu::noinline]] void add_moments(StepSums& sums, const std::array<double, 9>& m) {
+  for (int a = 0; a < 6; ++a) sums.force_moment[a].add(m[a]);
+  for (int a = 0; a < 3; ++a) sums.stiffness_moment[a].add(m[6 + a]);
 }
 
 template <MotionFeatures M>
@@ -318,7 +324,21 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     v = v_new;
   };
 
+  ExactSum::Stream kinetic_sum(sums.kinetic), boundary_sum(sums.boundary_work), potential_sum(sums.potential),
+      damping_sum(sums.damping_work), friction_sum(sums.friction_work), strain_sum(sums.strain),
+      image_sum(sums.image_power);
+  const bool periodic = model.space.periodic;
   for (std::size_t ball = begin; ball < end; ++ball) {
+    // This ball's parts of the global sums: its contacts' (StepScratch::ball_parts), then its
+    // components in a fixed order; then the exact sums.
+    const BallParts& part = scratch.ball_parts[ball];
+    boundary_work = part.boundary;
+    damping_work = part.damping;
+    kinetic = potential = 0;
+    friction_sum.add(part.friction);
+    strain_sum.add(part.strain);
+    if (periodic) image_sum.add(part.image);
+    if (k.moments) [[unlikely]] add_moments(sums, scratch.ball_moments[ball]);
     double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
     {   // the sums the contact loops made (StepScratch::ball_force)
@@ -357,7 +377,7 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
       const double spin2 = wx * wx + wy * wy + wz * wz;
       speed2 += r * r * spin2;
     }
-    if (!(speed2 <= fastest2)) { fastest2 = speed2; fastest = ball; }
+    if (speed2 > fastest2 || (std::isnan(speed2) && !std::isnan(fastest2))) { fastest2 = speed2; fastest = ball; }
     if constexpr (kEstimate != StepEstimate::None) {
       // A ball held in every component sets no step of its own.
       const bool held = ball_held(fixed, kRot);
@@ -373,15 +393,15 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
         }
       }
     }
+    kinetic_sum.add(kinetic);
+    boundary_sum.add(boundary_work);
+    if constexpr (kLoads) potential_sum.add(potential);
+    damping_sum.add(damping_work);
   }
   if constexpr (kEstimate == StepEstimate::Undamped)
     if (omega2_max > 0) step_min = 2 / std::sqrt(omega2_max);
-  sums.boundary_work += boundary_work;
-  sums.damping_work += damping_work;
-  sums.kinetic += kinetic;
-  sums.potential += potential;
-  sums.critical_dt = std::min(sums.critical_dt, step_min);
-  if (!(fastest2 <= sums.fastest_speed2)) { sums.fastest_speed2 = fastest2; sums.fastest_ball = fastest; }
+  sums.take_step(step_min);
+  if (begin < end) sums.take_fastest(fastest2, fastest);
 }
 
 template <std::size_t... I>

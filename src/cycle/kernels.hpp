@@ -2,12 +2,13 @@
 // The pipeline calls them through ParallelStep (cycle/parallel_step.hpp): `cross` and
 // `contacts` over pair blocks (the pairs of kContactBalls consecutive balls i), adding each pair to
 // its balls' sums in partner order, then `motion` over blocks of kReduceBlock balls (law of
-// motion). Each call returns its block's sums; they are added in ascending block order, so every
-// backend and thread count rounds the totals alike.
+// motion). Each call adds to the sums it is given (exact sums, StepSums), so every backend, thread
+// count and rank count rounds the totals alike.
 #pragma once
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -19,60 +20,112 @@
 #include "physics/contact_law.hpp"
 #include "physics/pair_laws.hpp"
 #include "physics/scene.hpp"
+#include "support/exact_sum.hpp"
 
 namespace trubal {
 
 inline constexpr std::size_t kReduceBlock = 256;   // balls per block of the motion loop
 
-// Reductions of one step. Sums are added block by block in ascending order; min/max are exact.
+// Reductions of one step. The sums are exact (support/exact_sum.hpp): each ball adds its part
+// (the pairs of its run, its motion, its wall contacts, each summed in their fixed order), and the
+// total does not depend on how the balls are shared among threads or ranks; min and max are exact,
+// and the fastest ball is the lowest index among equals.
 struct StepSums {
-  double friction_work = 0, damping_work = 0, boundary_work = 0;
-  double strain = 0;                        // spring energy at the start of the step
-  double image_power = 0;                   // periodic: sum of -F_j . (velocity of j's image offset)
+  ExactSum friction_work, damping_work, boundary_work;
+  ExactSum strain;                          // spring energy at the start of the step
+  ExactSum image_power;                     // periodic: sum of -F_j . (velocity of j's image offset)
   // StepKernels::moments only: sum of F (x) l (symmetric part, xx yy zz xy xz yz) and of k_n l_a^2,
   // l the branch vector i -> j (image included), over the touching pairs: the servo's stress and
   // stiffness (physics/cell.hpp).
-  std::array<double, 6> force_moment{};
-  std::array<double, 3> stiffness_moment{};
-  double kinetic = 0, potential = 0;        // at t: m v(t-dt/2).v(t+dt/2)/2 and -m g.x(t), for the guard
-  double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate
+  std::array<ExactSum, 6> force_moment{};
+  std::array<ExactSum, 3> stiffness_moment{};
+  ExactSum kinetic, potential;              // at t: m v(t-dt/2).v(t+dt/2)/2 and -m g.x(t), for the guard
+  double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate (NaN wins)
   double fastest_speed2 = -1;               // |v|^2 + |R w|^2 of the fastest ball (NaN wins)
   std::size_t fastest_ball = 0;
 
-  void add(const StepSums& o) {
-    friction_work += o.friction_work; damping_work += o.damping_work;
-    boundary_work += o.boundary_work; strain += o.strain; image_power += o.image_power;
-    for (int a = 0; a < 6; ++a) force_moment[a] += o.force_moment[a];
-    for (int a = 0; a < 3; ++a) stiffness_moment[a] += o.stiffness_moment[a];
-    kinetic += o.kinetic; potential += o.potential;
-    critical_dt = std::min(critical_dt, o.critical_dt);
-    if (!(o.fastest_speed2 <= fastest_speed2)) { fastest_speed2 = o.fastest_speed2; fastest_ball = o.fastest_ball; }
+  // Every exact sum, in one fixed order (for merging and for the exchange between ranks).
+  template <class F>
+  void each_sum(F&& f) {
+    for (ExactSum* s : {&friction_work, &damping_work, &boundary_work, &strain, &image_power}) f(*s);
+    for (ExactSum& s : force_moment) f(s);
+    for (ExactSum& s : stiffness_moment) f(s);
+    f(kinetic); f(potential);
+  }
+  void take_step(double dt) {
+    if (std::isnan(dt) || dt < critical_dt) critical_dt = std::isnan(critical_dt) ? critical_dt : dt;
+  }
+  void take_fastest(double speed2, std::size_t ball) {
+    const bool nan_new = std::isnan(speed2), nan_old = std::isnan(fastest_speed2);
+    const bool better = nan_new != nan_old ? nan_new
+                        : nan_new           ? ball < fastest_ball
+                                            : speed2 > fastest_speed2 || (speed2 == fastest_speed2 && ball < fastest_ball);
+    if (better) { fastest_speed2 = speed2; fastest_ball = ball; }
+  }
+  void add(StepSums& o) {
+    std::array<ExactSum*, 16> mine{};
+    int n = 0;
+    each_sum([&](ExactSum& s) { mine[n++] = &s; });
+    n = 0;
+    o.each_sum([&](ExactSum& s) { mine[n++]->add(s); });
+    take_step(o.critical_dt);
+    take_fastest(o.fastest_speed2, o.fastest_ball);
+  }
+};
+
+// StepSums rounded: what the cycle reads.
+struct StepTotals {
+  double friction_work = 0, damping_work = 0, boundary_work = 0, strain = 0, image_power = 0;
+  std::array<double, 6> force_moment{};
+  std::array<double, 3> stiffness_moment{};
+  double kinetic = 0, potential = 0;
+  double critical_dt = std::numeric_limits<double>::infinity();
+  double fastest_speed2 = -1;
+  std::size_t fastest_ball = 0;
+  explicit StepTotals(const StepSums& s)
+      : friction_work(s.friction_work.value()), damping_work(s.damping_work.value()),
+        boundary_work(s.boundary_work.value()), strain(s.strain.value()), image_power(s.image_power.value()),
+        kinetic(s.kinetic.value()), potential(s.potential.value()), critical_dt(s.critical_dt),
+        fastest_speed2(s.fastest_speed2), fastest_ball(s.fastest_ball) {
+    for (int a = 0; a < 6; ++a) force_moment[a] = s.force_moment[a].value();
+    for (int a = 0; a < 3; ++a) stiffness_moment[a] = s.stiffness_moment[a].value();
   }
 };
 
 struct StepKernels;
 // Pairs [begin, end) of the list (whole runs of i), adding each to its balls' sums in
 // StepScratch::ball_force: ball i always, ball j if below own_end (a later thread owns the rest).
+// The pairs' parts of the global sums go to StepScratch::ball_parts (each ball's run).
 using ContactLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t begin, std::size_t end,
-                             std::size_t own_end, StepSums&);
+                             std::size_t own_end);
 // Zeroes the sums of balls [ball_begin, ball_end) and adds the pairs they have with lower balls
 // outside the range (cross pairs: `pairs`, `count` of them, in list order), before any ContactLoop.
 using CrossLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end,
                            const std::uint32_t* pairs, std::size_t count);
-// What the wall contacts of one pair block add to each wall (ParallelStep adds the blocks in order).
+// What the wall contacts add to each wall (exact sums: each thread or rank keeps its own, and they
+// merge to the same bits in any order).
 struct WallLoad {
-  double fx = 0, fy = 0, fz = 0;      // force on the wall
-  double mx = 0, my = 0, mz = 0;      // its moment about the wall's spin point
-  double normal_force = 0, stiffness = 0, work = 0;
+  ExactSum fx, fy, fz;                // force on the wall
+  ExactSum mx, my, mz;                // its moment about the wall's spin point
+  ExactSum normal_force, stiffness, work;
   std::int64_t contacts = 0;
-  void add(const WallLoad& o) {
-    fx += o.fx; fy += o.fy; fz += o.fz; mx += o.mx; my += o.my; mz += o.mz;
-    normal_force += o.normal_force; stiffness += o.stiffness; work += o.work; contacts += o.contacts;
+  template <class F>
+  void each_sum(F&& f) {
+    for (ExactSum* s : {&fx, &fy, &fz, &mx, &my, &mz, &normal_force, &stiffness, &work}) f(*s);
+  }
+  void add(WallLoad& o) {
+    std::array<ExactSum*, 9> mine{};
+    int n = 0;
+    each_sum([&](ExactSum& s) { mine[n++] = &s; });
+    n = 0;
+    o.each_sum([&](ExactSum& s) { mine[n++]->add(s); });
+    contacts += o.contacts;
   }
 };
 // Wall contacts [begin, end) of Model::wall_contacts (whole runs of balls, after all of their ball
-// pairs): added to their balls' sums in wall order, to `loads` (one per wall) and to `sums`.
-using WallLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t begin, std::size_t end, StepSums&,
+// pairs): added to their balls' sums in wall order, to `loads` (one per wall) and to the balls'
+// parts of the global sums (StepScratch::ball_parts).
+using WallLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t begin, std::size_t end,
                           WallLoad* loads);
 using MotionLoop = void (*)(Model&, const StepScratch&, const StepKernels&, std::size_t begin, std::size_t end,
                             StepSums&);

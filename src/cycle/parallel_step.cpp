@@ -77,21 +77,19 @@ void ParallelStep::split_if_stale(const ContactTable& c, const StepScratch& scra
     split(c, scratch, balls, parts);
 }
 
-void ParallelStep::add_wall_loads(Model& model, std::size_t blocks) {
-  // Each wall's load, added block by block in ascending order.
+void ParallelStep::add_wall_loads(Model& model, int parts) {
+  // Each wall's load: every thread's (or rank's) exact sums merged.
   const std::size_t wall_count = model.walls.size();
-  std::vector<WallLoad>& total = wall_total_;
-  total.assign(wall_count, WallLoad{});
-  for (std::size_t k = 0; k < blocks; ++k)
-    for (std::size_t w = 0; w < wall_count; ++w) total[w].add(wall_loads_[k * wall_count + w]);
   for (std::size_t w = 0; w < wall_count; ++w) {
+    WallLoad total;
+    for (int t = 0; t < parts; ++t) total.add(wall_loads_[t * wall_count + w]);
     Wall& wall = model.walls[w];
-    wall.force = {total[w].fx, total[w].fy, total[w].fz};
-    wall.moment = {total[w].mx, total[w].my, total[w].mz};
-    wall.normal_force = total[w].normal_force;
-    wall.stiffness = total[w].stiffness;
-    wall.contacts = total[w].contacts;
-    wall.work += total[w].work;
+    wall.force = {total.fx.value(), total.fy.value(), total.fz.value()};
+    wall.moment = {total.mx.value(), total.my.value(), total.mz.value()};
+    wall.normal_force = total.normal_force.value();
+    wall.stiffness = total.stiffness.value();
+    wall.contacts = total.contacts;
+    wall.work += total.work.value();
   }
 }
 
@@ -146,15 +144,16 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   const int parts = static_cast<int>(std::min<std::size_t>(pool.size(), std::max<std::size_t>(blocks, 1)));
   split_if_stale(c, scratch, balls, parts);
   const bool parallel = parts > 1 && share_now(balls, parts);
-  blocks_.assign(blocks, StepSums{});
+  const int threads = parallel ? static_cast<int>(pool.size()) : 1;
+  thread_sums_.assign(threads, StepSums{});
   const std::size_t wall_count = model.walls.size();
   auto block_wall = [&](std::size_t k) { return static_cast<std::size_t>(scratch.wall_run_begin[block_ball(k)]); };
-  if (wall_count) wall_loads_.assign(blocks * wall_count, WallLoad{});
+  if (wall_count) wall_loads_.assign(threads * wall_count, WallLoad{});
   // After all of a thread's blocks (every sum of its balls is then complete): its balls' wall contacts.
-  auto walls = [&](std::size_t first, std::size_t last) {
+  auto walls = [&](std::size_t first, std::size_t last, int t) {
     if (!wall_count) return;
     for (std::size_t k = first; k < last; ++k)
-      kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), blocks_[k], &wall_loads_[k * wall_count]);
+      kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), &wall_loads_[t * wall_count]);
   };
   // The history is read from fsx.. and written to fsx_next..: a thread's cross pairs may belong to
   // a thread that is already writing, so the two passes need no barrier between them.
@@ -163,17 +162,16 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
       if (t >= parts) return;
       const std::size_t own_end = block_ball(first_block_[t + 1]);
       kernels.cross(model, scratch, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
-      for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)
-        kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
-      walls(first_block_[t], first_block_[t + 1]);
+      for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)   // block by block: the same batches
+        kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end);
+      walls(first_block_[t], first_block_[t + 1], t);
     });
   } else {   // every block on this thread: no cross pairs
     kernels.cross(model, scratch, kernels, 0, balls, nullptr, 0);
-    for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), balls, blocks_[k]);
-    walls(0, blocks);
+    for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), balls);
+    walls(0, blocks, 0);
   }
-  for (const StepSums& block : blocks_) sums.add(block);
-  if (wall_count) add_wall_loads(model, blocks);
+  if (wall_count) add_wall_loads(model, threads);
   if (kernels.features.friction) {
     ContactTable& table = model.contacts;
     table.fsx.swap(scratch.fsx_next);
@@ -184,20 +182,18 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
 
   // The balls in equal shares (the contact split may be uneven, to even out cross pairs).
   const std::size_t motion_blocks = (balls + kReduceBlock - 1) / kReduceBlock;
-  blocks_.assign(motion_blocks, StepSums{});
   const int motion_parts = parallel ? static_cast<int>(std::min<std::size_t>(pool.size(), motion_blocks)) : 1;
   moved_.assign(motion_parts, 0.0);
   pool.run([&](int t) {
     if (t >= motion_parts) return;
     const std::size_t first = split_point(motion_blocks, motion_parts, t), last = split_point(motion_blocks, motion_parts, t + 1);
-    for (std::size_t k = first; k < last; ++k)
-      kernels.motion(model, scratch, kernels, k * kReduceBlock, std::min(balls, (k + 1) * kReduceBlock), blocks_[k]);
-    if (moved)
-      moved_[t] = moved->max_displacement2(model.balls, std::min(balls, first * kReduceBlock), std::min(balls, last * kReduceBlock));
+    const std::size_t ball0 = std::min(balls, first * kReduceBlock), ball1 = std::min(balls, last * kReduceBlock);
+    kernels.motion(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
+    if (moved) moved_[t] = moved->max_displacement2(model.balls, ball0, ball1);
   }, motion_parts > 1);
   moved2_ = 0;
   for (double m : moved_) moved2_ = std::max(moved2_, m);
-  for (const StepSums& block : blocks_) sums.add(block);
+  for (StepSums& part : thread_sums_) sums.add(part);
   const auto t2 = Clock::now();
   if (trial_step_ > 0) trial_time(parallel, std::chrono::duration<double>(t2 - t0).count());
   times.forces += std::chrono::duration<double>(t1 - t0).count();
@@ -206,31 +202,37 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
 
 namespace {
 
-// StepSums and WallLoad as doubles, for the exchange (a ball index below 2^53 is exact).
-void pack(const StepSums& s, std::vector<double>& out) {
-  for (double v : {s.friction_work, s.damping_work, s.boundary_work, s.strain, s.image_power}) out.push_back(v);
-  for (double v : s.force_moment) out.push_back(v);
-  for (double v : s.stiffness_moment) out.push_back(v);
-  for (double v : {s.kinetic, s.potential, s.critical_dt, s.fastest_speed2, static_cast<double>(s.fastest_ball)})
-    out.push_back(v);
+// StepSums and WallLoad as doubles, for the exchange: the exact sums as their normalised limbs (each
+// below 2^32 in magnitude, so exact as a double) and flags, then the min/max (a ball index below
+// 2^53 is exact).
+void pack(ExactSum& e, std::vector<double>& out) {
+  for (std::int64_t l : e.normalised_limbs()) out.push_back(static_cast<double>(l));
+  out.push_back(e.special());
+}
+void pack(StepSums& s, std::vector<double>& out) {
+  s.each_sum([&](ExactSum& e) { pack(e, out); });
+  for (double v : {s.critical_dt, s.fastest_speed2, static_cast<double>(s.fastest_ball)}) out.push_back(v);
+}
+void pack(WallLoad& w, std::vector<double>& out) {
+  w.each_sum([&](ExactSum& e) { pack(e, out); });
+  out.push_back(static_cast<double>(w.contacts));
+}
+void unpack(ExactSum& e, const double*& in) {
+  std::array<std::int64_t, ExactSum::kLimbs> limbs;
+  for (auto& l : limbs) l = static_cast<std::int64_t>(*in++);
+  e.load(limbs.data(), static_cast<std::uint8_t>(*in++));
 }
 StepSums unpack_sums(const double*& in) {
   StepSums s;
-  s.friction_work = *in++; s.damping_work = *in++; s.boundary_work = *in++; s.strain = *in++; s.image_power = *in++;
-  for (double& v : s.force_moment) v = *in++;
-  for (double& v : s.stiffness_moment) v = *in++;
-  s.kinetic = *in++; s.potential = *in++; s.critical_dt = *in++; s.fastest_speed2 = *in++;
+  s.each_sum([&](ExactSum& e) { unpack(e, in); });
+  s.critical_dt = *in++; s.fastest_speed2 = *in++;
   s.fastest_ball = static_cast<std::size_t>(*in++);
   return s;
 }
-void pack(const WallLoad& w, std::vector<double>& out) {
-  for (double v : {w.fx, w.fy, w.fz, w.mx, w.my, w.mz, w.normal_force, w.stiffness, w.work, static_cast<double>(w.contacts)})
-    out.push_back(v);
-}
 WallLoad unpack_load(const double*& in) {
   WallLoad w;
-  w.fx = *in++; w.fy = *in++; w.fz = *in++; w.mx = *in++; w.my = *in++; w.mz = *in++;
-  w.normal_force = *in++; w.stiffness = *in++; w.work = *in++; w.contacts = static_cast<std::int64_t>(*in++);
+  w.each_sum([&](ExactSum& e) { unpack(e, in); });
+  w.contacts = static_cast<std::int64_t>(*in++);
   return w;
 }
 
@@ -259,9 +261,10 @@ void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const Ste
   };
   const auto [first, last] = blocks_of(me);
   const std::size_t wall_count = model.walls.size();
-  blocks_.assign(blocks, StepSums{});
-  motion_blocks_.assign(blocks, StepSums{});
-  wall_loads_.assign(blocks * wall_count, WallLoad{});
+  thread_sums_.assign(ranks, StepSums{});
+  wall_loads_.assign(ranks * wall_count, WallLoad{});
+  StepSums& my_sums = thread_sums_[me];
+  WallLoad* my_loads = wall_count ? &wall_loads_[me * wall_count] : nullptr;
   const bool contact_details = kernels.contacts == kernels.contacts_full;
   const bool motion_details = kernels.motion == kernels.motion_full;
   const bool walls_details = kernels.walls == kernels.walls_full;
@@ -271,10 +274,10 @@ void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const Ste
     const std::size_t own_end = block_ball(last);
     kernels.cross(model, scratch, kernels, block_ball(first), own_end, cross_[me].data(), cross_[me].size());
     for (std::size_t k = first; k < last; ++k)
-      kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end, blocks_[k]);
+      kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end);
     if (wall_count)
       for (std::size_t k = first; k < last; ++k)
-        kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), blocks_[k], &wall_loads_[k * wall_count]);
+        kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), my_loads);
   }
   if (kernels.features.friction) {
     c.fsx.swap(scratch.fsx_next);
@@ -283,7 +286,7 @@ void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const Ste
   }
   const auto t1 = Clock::now();
   for (std::size_t k = first; k < last; ++k)
-    kernels.motion(model, scratch, kernels, block_ball(k), block_ball(k + 1), motion_blocks_[k]);
+    kernels.motion(model, scratch, kernels, block_ball(k), block_ball(k + 1), my_sums);
   const double my_moved2 = moved && first < last ? moved->max_displacement2(b, block_ball(first), block_ball(last)) : 0.0;
 
   // The exchange: each rank's ranges of the per-ball, per-pair and per-wall-contact arrays, its
@@ -320,11 +323,8 @@ void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const Ste
   for (auto* v : ball_arrays) put(*v, mine.ball0, mine.ball1);
   for (auto* v : pair_arrays) put(*v, mine.pair0, mine.pair1);
   for (auto* v : wall_arrays) put(*v, mine.wall0, mine.wall1);
-  for (std::size_t k = mine.k0; k < mine.k1; ++k) {
-    pack(blocks_[k], send_);
-    pack(motion_blocks_[k], send_);
-    for (std::size_t w = 0; w < wall_count; ++w) pack(wall_loads_[k * wall_count + w], send_);
-  }
+  pack(my_sums, send_);
+  for (std::size_t w = 0; w < wall_count; ++w) pack(my_loads[w], send_);
   send_.push_back(my_moved2);
   if (contact_details) send_bytes_.insert(send_bytes_.end(), c.state.begin() + mine.pair0, c.state.begin() + mine.pair1);
   if (wall_count && walls_details)
@@ -343,11 +343,8 @@ void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const Ste
     for (auto* v : ball_arrays) take(*v, s.ball0, s.ball1);
     for (auto* v : pair_arrays) take(*v, s.pair0, s.pair1);
     for (auto* v : wall_arrays) take(*v, s.wall0, s.wall1);
-    for (std::size_t k = s.k0; k < s.k1; ++k) {
-      blocks_[k] = unpack_sums(in);
-      motion_blocks_[k] = unpack_sums(in);
-      for (std::size_t w = 0; w < wall_count; ++w) wall_loads_[k * wall_count + w] = unpack_load(in);
-    }
+    thread_sums_[r] = unpack_sums(in);
+    for (std::size_t w = 0; w < wall_count; ++w) wall_loads_[r * wall_count + w] = unpack_load(in);
     moved2_ = std::max(moved2_, *in++);
     if (contact_details) {
       if (r != me) std::copy(in_bytes, in_bytes + (s.pair1 - s.pair0), c.state.begin() + s.pair0);
@@ -358,10 +355,9 @@ void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const Ste
       in_bytes += s.wall1 - s.wall0;
     }
   }
-  // The sums in the order of the shared-memory step: contact blocks, the walls, motion blocks.
-  for (const StepSums& block : blocks_) sums.add(block);
-  if (wall_count) add_wall_loads(model, blocks);
-  for (const StepSums& block : motion_blocks_) sums.add(block);
+  // Every rank's sums, merged exactly (the order does not matter).
+  if (wall_count) add_wall_loads(model, ranks);
+  for (StepSums& part : thread_sums_) sums.add(part);
   const auto t2 = Clock::now();
   times.forces += std::chrono::duration<double>(t1 - t0).count();
   times.motion += std::chrono::duration<double>(t2 - t1).count();

@@ -4,7 +4,8 @@
 // lower balls of earlier ranges (cross pairs, computed again from the same inputs), then runs its
 // pair blocks in list order, adding each pair to ball i and to ball j where it owns j. Every
 // ball's sum is thus the same additions in the same order (lower partners ascending, then higher
-// ones) for every thread count; block sums (energies) are added in ascending block order. So the
+// ones) for every thread count; the global sums (energies) are exact sums, merged from the threads'
+// parts (kernels.hpp, StepSums). So the
 // answer is the serial one, bit for bit. The new shear history goes to a second buffer, swapped in
 // after the pass, so that cross pairs read the old one without a barrier. The motion pass then
 // gives each thread an equal share of the balls.
@@ -54,11 +55,10 @@ class ParallelStep {
 
  private:
   // The walls' loads of this step from the per-block loads (Model::walls' force, moment, ...).
-  void add_wall_loads(Model& model, std::size_t blocks);
+  void add_wall_loads(Model& model, int parts);
   void run_distributed(Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
                        PhaseTimes& times, const VerletReference* moved);
   bool distributed_ = false;
-  std::vector<StepSums> motion_blocks_;
   std::vector<double> send_, received_;
   std::vector<std::uint8_t> send_bytes_, received_bytes_;
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
@@ -68,9 +68,8 @@ class ParallelStep {
   void split_if_stale(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts);
   void cross_lists(const ContactTable& c, std::size_t balls, int parts);
 
-  std::vector<StepSums> blocks_;
-  std::vector<WallLoad> wall_loads_;       // per block, per wall
-  std::vector<WallLoad> wall_total_;
+  std::vector<StepSums> thread_sums_;      // per thread (or rank)
+  std::vector<WallLoad> wall_loads_;       // per thread (or rank), per wall
   std::vector<std::size_t> first_block_;   // per thread, then the block count
   std::vector<std::vector<std::uint32_t>> cross_;   // per thread: its cross pairs, in list order
   std::uint64_t split_version_ = 0;

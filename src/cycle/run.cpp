@@ -127,7 +127,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
     kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
     kernels.walls = details ? kernels.walls_full : kernels.walls_lean;
-    StepSums sums;
+    StepSums step_sums;
     const auto step_start = Clock::now();
     // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
     // (the same steps however the run is cut).
@@ -135,7 +135,8 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
     cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr);
     if (!model.walls.empty()) walls_before_step(model, dt);
-    pipeline.step(model, kernels, sums);
+    pipeline.step(model, kernels, step_sums);
+    const StepTotals sums(step_sums);
     model.space.servo_measured_valid = kernels.moments;
     if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};
     cell_after_step(model, dt, sums.image_power);    // periodic space: the cell's work, its new edges, the strain

@@ -12,6 +12,8 @@ void StepScratch::index(const ContactTable& table, std::size_t balls) {
   for (std::size_t b = balls; b-- > 0;) run_begin[b] = std::min(run_begin[b], run_begin[b + 1]);
   ball_force.assign(balls, PairForce{});
   ball_cn.assign(balls, 0.0);
+  ball_parts.assign(balls, BallParts{});
+  ball_moments.assign(balls, {});
   fsx_next.assign(n, 0.0);
   fsy_next.assign(n, 0.0);
   fsz_next.assign(n, 0.0);

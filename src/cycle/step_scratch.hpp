@@ -2,6 +2,8 @@
 // the pair list the contact loops walk, the per-ball contact sums, the next shear history.
 #pragma once
 
+#include <array>
+
 #include <cstdint>
 #include <vector>
 
@@ -16,6 +18,13 @@ struct alignas(64) PairForce {
   double kmax, ks;                                      // max(k_n, k_s) and k_s now
 };
 
+// One ball's parts of the step's global sums from its contacts: its run of pairs (those with
+// higher partners, in list order), then its wall contacts in order. The motion loop adds its own
+// and hands them to the exact sums (StepSums), ball by ball.
+struct BallParts {
+  double friction = 0, damping = 0, strain = 0, image = 0, boundary = 0;
+};
+
 struct StepScratch {
   std::vector<std::uint32_t> run_begin;   // first pair with i >= b, for b = 0 .. balls
   std::uint64_t list_version = 0;         // the ContactTable::list_version this index is of
@@ -23,6 +32,9 @@ struct StepScratch {
   // ascending, then higher ones) whichever thread adds them, so they are the same to the bit.
   std::vector<PairForce> ball_force;
   std::vector<double> ball_cn;            // the dashpot coefficients' sum (time step with dashpots)
+  std::vector<BallParts> ball_parts;
+  // StepKernels::moments only: each ball's run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
+  std::vector<std::array<double, 9>> ball_moments;
   // The shear history a step writes (read from the table's, which other threads may still read
   // for their cross pairs), swapped in after the contact pass.
   std::vector<double> fsx_next, fsy_next, fsz_next;

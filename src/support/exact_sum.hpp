@@ -1,0 +1,216 @@
+// An exact sum of doubles: the result is the exact total, rounded once, so it does not depend on
+// the order of the additions, on how they are split among threads or ranks, or on how partial sums
+// are merged. The step's global sums (energies, the servo's stress, wall loads) use it, so every
+// backend, thread count and rank count gives the same bits.
+//
+// The method is a long fixed-point accumulator (Kulisch's idea; Demmel and Nguyen's reproducible
+// summation has the same aim with less memory): a double is m 2^(e - 1074) with an integer m of 53
+// bits and 0 <= e < 2046, so every double is a whole number of units of 2^-1074. The accumulator
+// keeps that whole number in 32-bit digits, each stored in a signed 64-bit limb so that carries can
+// wait: one addition adds at most 2^32 to three limbs, and the limbs are normalised (carries
+// propagated, every limb but the top one in [0, 2^32)) before they could overflow. A normalised
+// accumulator is a unique representation of its value, so merging limbs (even over MPI, as integers)
+// is exact and the final rounding sees the same number however it was reached.
+//
+// NaN and the infinities are kept aside: any NaN, or +inf with -inf, gives NaN; otherwise an
+// infinity gives itself.
+#pragma once
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+
+namespace trubal {
+
+class ExactSum {
+ public:
+  static constexpr int kLimbs = 67;   // 2046 + 53 bits of range, and room for carries
+
+  [[gnu::always_inline]] void add(double x) {
+    const std::uint64_t bits = std::bit_cast<std::uint64_t>(x);
+    const auto field = static_cast<std::uint32_t>((bits >> 52) & 0x7ff);
+    if (field == 0x7ff) [[unlikely]] {   // NaN or an infinity
+      if ((bits << 12) != 0) special_ |= kNaN;
+      else special_ |= (bits >> 63) != 0 ? kMinusInf : kPlusInf;
+      return;
+    }
+    // m 2^(position - 1074); a zero adds zeros. No branch on the sign: the signs of a step's
+    // terms (moments, works) are as good as random.
+    const std::uint64_t normal = field != 0;
+    const std::uint64_t m = (bits & ((std::uint64_t{1} << 52) - 1)) | (normal << 52);
+    const std::uint32_t position = field - static_cast<std::uint32_t>(normal);
+    const std::uint32_t k = position >> 5, shift = position & 31;
+    const std::uint64_t low = m << shift, high = (m >> 1) >> (63 - shift);   // the 84 bits of m 2^shift
+    const std::int64_t negative = -static_cast<std::int64_t>(bits >> 63);   // 0 or all ones
+    auto signed_digit = [negative](std::uint64_t d) { return (static_cast<std::int64_t>(d) ^ negative) - negative; };
+    limb_[k] += signed_digit(low & 0xffffffffu);
+    limb_[k + 1] += signed_digit(low >> 32);
+    limb_[k + 2] += signed_digit(high);
+    if (++pending_ >= kMaxPending) [[unlikely]] normalise();
+  }
+
+  // Adds v 2^e exactly (|v| < 2^63; e >= -1074 and small enough that v 2^e is finite).
+  void add_integer(std::int64_t v, int e) {
+    const auto high = static_cast<double>(v >> 32) * 0x1p32;       // exact: at most 31 bits, times 2^32
+    const auto low = static_cast<double>(v & 0xffffffff);           // exact: 32 bits
+    add(std::ldexp(high, e));
+    add(std::ldexp(low, e));
+  }
+
+  class Stream;
+
+  // Adds another sum (exactly).
+  void add(const ExactSum& o) {
+    ExactSum other = o;
+    other.normalise();
+    normalise();
+    for (int k = 0; k < kLimbs; ++k) limb_[k] += other.limb_[k];
+    special_ |= other.special_;
+    pending_ = 1;
+  }
+
+  // The sum, rounded to the nearest double (ties to even; a total beyond the double range is an
+  // infinity).
+  double value() const {
+    if (special_ != 0) {
+      if ((special_ & kNaN) || (special_ & kPlusInf && special_ & kMinusInf)) return std::nan("");
+      return special_ & kPlusInf ? INFINITY : -INFINITY;
+    }
+    ExactSum s = *this;
+    s.normalise();
+    bool negative = s.limb_[kLimbs - 1] < 0;
+    if (negative) {   // the magnitude, normalised again
+      for (auto& l : s.limb_) l = -l;
+      s.normalise();
+    }
+    int top = kLimbs - 1;
+    while (top >= 0 && s.limb_[top] == 0) --top;
+    if (top < 0) return 0.0;
+    // The top three digits hold at least 65 significant bits; the rest only decide ties.
+    unsigned __int128 m = 0;
+    for (int k = top; k > top - 3; --k) m = (m << 32) | static_cast<std::uint64_t>(k >= 0 ? s.limb_[k] : 0);
+    bool sticky = false;
+    for (int k = top - 3; k >= 0; --k) sticky |= s.limb_[k] != 0;
+    int exponent = 32 * (top - 2) - 1074;   // the unit of m
+    const int bits = 128 - count_leading_zeros(m);
+    if (bits > 53) {
+      const int drop = bits - 53;
+      const unsigned __int128 rest = m & ((static_cast<unsigned __int128>(1) << drop) - 1);
+      const unsigned __int128 half = static_cast<unsigned __int128>(1) << (drop - 1);
+      m >>= drop;
+      exponent += drop;
+      if (rest > half || (rest == half && (sticky || (m & 1)))) m += 1;
+    }
+    const double magnitude = std::ldexp(static_cast<double>(static_cast<std::uint64_t>(m)), exponent);
+    return negative ? -magnitude : magnitude;
+  }
+
+  // The limbs, normalised, for an exchange between ranks (sum them as integers, then load).
+  const std::array<std::int64_t, kLimbs>& normalised_limbs() {
+    normalise();
+    return limb_;
+  }
+  std::uint8_t special() const { return special_; }
+  void load(const std::int64_t* limbs, std::uint8_t special) {
+    for (int k = 0; k < kLimbs; ++k) limb_[k] = limbs[k];
+    special_ = special;
+    pending_ = kMaxPending - 1;   // normalised at the next addition
+  }
+
+ private:
+  static constexpr std::uint8_t kNaN = 1, kPlusInf = 2, kMinusInf = 4;
+  static constexpr std::uint32_t kMaxPending = 1u << 29;   // additions (or merges) between normalisations
+
+  static int count_leading_zeros(unsigned __int128 v) {
+    const auto high = static_cast<std::uint64_t>(v >> 64), low = static_cast<std::uint64_t>(v);
+    return high != 0 ? std::countl_zero(high) : 64 + std::countl_zero(low);
+  }
+  void normalise() {
+    for (int k = 0; k < kLimbs - 1; ++k) {
+      const std::int64_t carry = limb_[k] >> 32;   // floor division by 2^32
+      limb_[k] -= carry * (std::int64_t{1} << 32);
+      limb_[k + 1] += carry;
+    }
+    pending_ = 0;
+  }
+
+  std::array<std::int64_t, kLimbs> limb_{};
+  std::uint32_t pending_ = 0;
+  std::uint8_t special_ = 0;
+};
+
+// A fast front for a loop's stream of additions to one ExactSum, meant to live in the loop's
+// registers. Most of a stream's terms lie within a few decades of each other: a term whose
+// exponent falls in the window of 40 binades below 2^top is an integer multiple of the window's
+// grid 2^(top - 92), so it goes exactly into two integer digits (46 bits each) with a few register
+// operations; any other term goes to the ExactSum itself. The window follows the largest term so
+// far. The digits go to the ExactSum (exactly) every 2^16 terms and at the end (flush, or the destructor),
+// so the total is the ExactSum's, exact, whatever the window.
+class ExactSum::Stream {
+ public:
+  explicit Stream(ExactSum& to) : to_(&to) {}
+  Stream(const Stream&) = delete;
+  Stream& operator=(const Stream&) = delete;
+  ~Stream() { flush(); }
+
+  [[gnu::always_inline]] void add(double x) {
+    const auto field = static_cast<std::uint32_t>((std::bit_cast<std::uint64_t>(x) >> 52) & 0x7ff);
+    if (field - s_.low < kWidth) [[likely]] {
+      const double y = x * s_.scale;                          // a whole number, |y| < 2^92
+      const auto high = static_cast<std::int64_t>(y * 0x1p-46);   // truncated: |high| < 2^46
+      const double rest = y - static_cast<double>(high) * 0x1p46;   // exact: a whole number below 2^46
+      s_.high += high;
+      s_.low_digit += static_cast<std::int64_t>(rest);
+      if (++s_.count == kFlushEvery) [[unlikely]] s_ = flushed(to_, s_);
+    } else if (x != 0) {   // (a zero adds nothing; a NaN goes to the ExactSum)
+      s_ = outside(to_, s_, x, field);
+    }
+  }
+  void flush() { s_ = flushed(to_, s_); }
+
+ private:
+  static constexpr std::uint32_t kWidth = 40;            // binades in the window
+  static constexpr std::uint32_t kFlushEvery = 1u << 16;   // digits stay below 2^62
+  // The stream's state, passed by value to the slow paths so that the loop keeps it in registers.
+  struct State {
+    std::int64_t high = 0, low_digit = 0;
+    std::uint32_t count = 0;
+    std::uint32_t low = 0xffffffffu - kWidth;   // exponent field of the window's bottom; none yet: every term is outside
+    int grid = 0;                               // 2^grid: the unit of the low digit
+    double scale = 1;                           // 2^-grid
+  };
+  [[gnu::noinline]] static State flushed(ExactSum* to, State s) {
+    if (s.count == 0) return s;
+    to->add_integer(s.high, s.grid + 46);
+    to->add_integer(s.low_digit, s.grid);
+    s.high = s.low_digit = 0;
+    s.count = 0;
+    return s;
+  }
+  [[gnu::noinline]] static State outside(ExactSum* to, State s, double x, std::uint32_t field) {
+    // A normal term of moderate size above the window (or the first) moves the window up to it,
+    // with room for terms up to 2^6 times larger; terms below it go to the ExactSum.
+    const bool none = s.low > 2047;
+    if (field >= 92 && field <= 1800 && (none || field >= s.low + kWidth)) {
+      s = flushed(to, s);
+      const std::uint32_t top = field + 6;            // exponent field bound (exclusive)
+      s.low = top - kWidth;
+      s.grid = static_cast<int>(top) - 1115;
+      s.scale = std::ldexp(1.0, -s.grid);
+      const double y = x * s.scale;
+      const auto high = static_cast<std::int64_t>(y * 0x1p-46);
+      s.high += high;
+      s.low_digit += static_cast<std::int64_t>(y - static_cast<double>(high) * 0x1p46);
+      s.count += 1;
+      return s;
+    }
+    to->add(x);
+    return s;
+  }
+
+  ExactSum* to_;
+  State s_;
+};
+
+}  // namespace trubal

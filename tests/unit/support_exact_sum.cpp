@@ -1,0 +1,129 @@
+// The exact accumulator of the step's global sums (support/exact_sum.hpp): exact, rounded once,
+// and the same bits in any order or split, which is what lets threads and ranks share the sums.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "support/exact_sum.hpp"
+
+using namespace trubal;
+
+namespace {
+double sum_of(const std::vector<double>& v) {
+  ExactSum s;
+  for (double x : v) s.add(x);
+  return s.value();
+}
+}  // namespace
+
+TEST_CASE("exact sum: cancellation and rounding are exact", "[support][exact]") {
+  // 1e16 + 1 - 1e16: a double running sum loses the 1 (1e16 + 1 rounds to 1e16).
+  CHECK(sum_of({1e16, 1.0, -1e16}) == 1.0);
+  // Ten copies of double(0.1) sum exactly to 1 + 5.55e-17, whose nearest double is 1; the running
+  // double sum gives 0.9999999999999999.
+  CHECK(sum_of(std::vector<double>(10, 0.1)) == 1.0);
+  // 1 + 2^-53 is halfway between 1 and the next double: ties go to the even one (1). Anything
+  // beyond the half, however small, goes up.
+  CHECK(sum_of({1.0, std::ldexp(1.0, -53)}) == 1.0);
+  CHECK(sum_of({1.0, std::ldexp(1.0, -53), std::ldexp(1.0, -200)}) == std::nextafter(1.0, 2.0));
+  CHECK(sum_of({1.0 + std::ldexp(1.0, -52), std::ldexp(1.0, -53)}) == 1.0 + std::ldexp(1.0, -51));
+  // The ends of the range: the largest doubles cancel without overflow, subnormals add exactly.
+  const double big = std::numeric_limits<double>::max(), tiny = std::numeric_limits<double>::denorm_min();
+  CHECK(sum_of({big, big, -big, -big, 3.0}) == 3.0);
+  CHECK(sum_of({big, big}) == INFINITY);
+  CHECK(sum_of({tiny, tiny, tiny}) == 3 * tiny);
+  CHECK(sum_of({-2.5, 1.0}) == -1.5);
+  CHECK(sum_of({}) == 0.0);
+  CHECK(sum_of({5.0, -5.0}) == 0.0);
+  // NaN and infinities are kept aside.
+  CHECK(std::isnan(sum_of({1.0, NAN})));
+  CHECK(std::isnan(sum_of({INFINITY, -INFINITY})));
+  CHECK(sum_of({INFINITY, 1e300, 1e300}) == INFINITY);
+  CHECK(sum_of({-INFINITY, 2.0}) == -INFINITY);
+}
+
+TEST_CASE("exact sum: any order and any split give the same bits", "[support][exact]") {
+  // Values of both signs over 40 decades, as energies and moments of a step are: the running
+  // double sum depends on the order, the exact sum does not.
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> mantissa(-1, 1);
+  std::uniform_int_distribution<int> exponent(-60, 70);
+  std::vector<double> v(20000);
+  for (double& x : v) x = std::ldexp(mantissa(rng), exponent(rng));
+  const double reference = sum_of(v);
+  bool naive_differs = false;
+  double naive0 = 0;
+  for (double x : v) naive0 += x;
+  for (int trial = 0; trial < 5; ++trial) {
+    std::shuffle(v.begin(), v.end(), rng);
+    double naive = 0;
+    for (double x : v) naive += x;
+    naive_differs |= naive != naive0;
+    CHECK(std::bit_cast<std::uint64_t>(sum_of(v)) == std::bit_cast<std::uint64_t>(reference));
+    // Split into parts of uneven sizes, each summed on its own, merged in reverse: as threads and
+    // ranks merge their parts.
+    std::vector<ExactSum> parts(7);
+    for (std::size_t k = 0; k < v.size(); ++k) parts[(k * k) % 7].add(v[k]);
+    ExactSum merged;
+    for (int p = 6; p >= 0; --p) merged.add(parts[p]);
+    CHECK(std::bit_cast<std::uint64_t>(merged.value()) == std::bit_cast<std::uint64_t>(reference));
+    // Through the limbs, as over MPI: summed as integers, then loaded.
+    std::array<std::int64_t, ExactSum::kLimbs> total{};
+    for (ExactSum& part : parts) {
+      const auto& limbs = part.normalised_limbs();
+      for (int k = 0; k < ExactSum::kLimbs; ++k) total[k] += limbs[k];
+    }
+    ExactSum loaded;
+    loaded.load(total.data(), 0);
+    CHECK(std::bit_cast<std::uint64_t>(loaded.value()) == std::bit_cast<std::uint64_t>(reference));
+  }
+  CHECK(naive_differs);   // the test would be empty if the order never mattered to doubles
+}
+
+TEST_CASE("exact sum: many additions between normalisations stay exact", "[support][exact]") {
+  // 3 million additions of the largest 32-bit digit pattern (every limb's increment at its
+  // largest) and as many subtractions: the carries must be propagated in time.
+  ExactSum s;
+  const double x = std::ldexp(static_cast<double>((std::uint64_t{1} << 53) - 1), 11);
+  for (int k = 0; k < 3000000; ++k) s.add(x);
+  ExactSum copy = s;
+  CHECK(copy.value() == 3000000.0 * x);   // the exact total rounded once: the correctly rounded product
+  for (int k = 0; k < 3000000; ++k) s.add(-x);
+  s.add(0.25);
+  CHECK(s.value() == 0.25);
+}
+
+TEST_CASE("exact sum: the fast stream gives the exact sum's bits, inside its window and out", "[support][exact]") {
+  // Terms over 300 decades (most far outside any window of 40 binades), zeros, subnormals, and
+  // more than 2^16 of them (the digits' flush): the stream must equal the plain exact sum.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> mantissa(-1, 1);
+  std::uniform_int_distribution<int> near(-20, 8), far(-1000, 1000), pick(0, 9);
+  for (int trial = 0; trial < 4; ++trial) {
+    std::vector<double> v(70000);
+    for (double& x : v) {
+      const int kind = pick(rng);
+      x = kind == 0 ? 0.0 : kind == 1 ? std::ldexp(mantissa(rng), far(rng)) : kind == 2 ? 1e-310 * mantissa(rng)
+                                                                           : std::ldexp(mantissa(rng), near(rng));
+    }
+    if (trial == 1) v[0] = 1e-320;   // a first term too small to set a window
+    if (trial == 2) v[0] = 1e200;    // a first term far above the rest
+    ExactSum plain, streamed;
+    {
+      ExactSum::Stream stream(streamed);
+      for (double x : v) { plain.add(x); stream.add(x); }
+    }
+    CHECK(std::bit_cast<std::uint64_t>(streamed.value()) == std::bit_cast<std::uint64_t>(plain.value()));
+  }
+  ExactSum with_nan;
+  {
+    ExactSum::Stream stream(with_nan);
+    stream.add(1.0);
+    stream.add(NAN);
+  }
+  CHECK(std::isnan(with_nan.value()));
+}
