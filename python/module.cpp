@@ -41,9 +41,10 @@ PYBIND11_MODULE(trubal, m) {
           py::arg("n"), py::arg("every") = 0, py::arg("callback") = py::none(),
           "Runs n cycles, the same bits as CYCLE n. With every=k the run goes in pieces of k cycles (the last "
           "may be shorter; every cut gives the uncut run's bits) and callback(session) is called after each "
-          "piece: it may read arrays, give commands (loads, SERVO, WALL ...) and stop the run by returning a false value "
-          "other than None (False, 0, a numpy False) or by calling session.stop(). Returns the cycles done. An unstable run or a ball leaving a `stop` box "
-          "raises trubal.Error; Ctrl-C raises KeyboardInterrupt at the end of a step; the model is kept.")
+          "piece: it may read arrays, give commands (loads, SERVO, WALL ...) and stop the run by returning a "
+          "false value other than None (False, 0, a numpy False) or by calling session.stop(). Returns the "
+          "cycles done. An unstable run or a ball leaving a `stop` box raises trubal.Error; Ctrl-C raises "
+          "KeyboardInterrupt at the end of a step; the model is kept.")
       .def("stop", &PySession::stop,
            "Asks a running cycle() to stop after the current piece (call it from the callback).");
   trubal::python::bind_arrays(session);

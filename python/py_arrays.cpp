@@ -67,7 +67,8 @@ InArray checked(const py::object& value, const Model& m, int width, const char* 
   InArray a = InArray::ensure(value);
   if (!a) throw py::type_error(fmt::format("{}: a numpy array (or nested lists) of numbers is needed", what));
   const auto n = static_cast<py::ssize_t>(m.balls.size());
-  const bool ok = width == 1 ? a.ndim() == 1 && a.shape(0) == n : a.ndim() == 2 && a.shape(0) == n && a.shape(1) == width;
+  const bool ok =
+      width == 1 ? a.ndim() == 1 && a.shape(0) == n : a.ndim() == 2 && a.shape(0) == n && a.shape(1) == width;
   if (!ok) {
     std::string shape;
     for (py::ssize_t d = 0; d < a.ndim(); ++d) shape += fmt::format("{}{}", d ? ", " : "", a.shape(d));
@@ -123,7 +124,8 @@ void set_radii(PySession& s, const py::object& value) {
   const InArray in = checked(value, m, 1, "radii");
   auto v = in.unchecked<1>();
   for (std::size_t k = 0; k < m.balls.size(); ++k)
-    if (!(v(k) > 0)) raise_error("", 0, fmt::format("radii: ball {} is given radius {}: radii must be positive", m.balls.id[k], v(k)));
+    if (!(v(k) > 0))
+      raise_error("", 0, fmt::format("radii: ball {} is given radius {}: radii must be positive", m.balls.id[k], v(k)));
   Balls& balls = s.session().edit().balls;   // masses follow at the next step (update_mass)
   for (std::size_t k = 0; k < balls.size(); ++k) balls.rad[k] = v(k);
 }

@@ -27,7 +27,13 @@ CHILD = textwrap.dedent("""
         assert np.all(np.isfinite(s.positions))
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
         assert s.cycle(5) == 5 and s.step == stopped + 5   # the model goes on from where it stopped
-        print("interrupted", stopped)
+        print("interrupted", stopped, flush=True)
+    try:
+        s.command("cycle 1000000000")   # the language's CYCLE: the same
+        print("not interrupted")
+    except KeyboardInterrupt:
+        assert stopped + 5 < s.step < stopped + 10**9, s.step
+        print("interrupted again", flush=True)
 """)
 
 
@@ -39,11 +45,14 @@ class Interrupt(unittest.TestCase):
             self.assertEqual(child.stdout.readline().strip(), "ready")
             time.sleep(0.5)   # well inside the 10**9 cycles (hours)
             child.send_signal(signal.SIGINT)
+            self.assertTrue(child.stdout.readline().startswith("interrupted "))
+            time.sleep(0.5)
+            child.send_signal(signal.SIGINT)
             out, err = child.communicate(timeout=60)
         finally:
             child.kill()
         self.assertEqual(child.returncode, 0, err)
-        self.assertTrue(out.startswith("interrupted "), out + err)
+        self.assertEqual(out, "interrupted again\n", err)
 
 
 if __name__ == "__main__":
