@@ -151,5 +151,22 @@ class SetArrays(unittest.TestCase):
         self.assertGreater(e["damping_work"], 0)
 
 
+    def test_ball_resting_on_a_wall(self):
+        # Closed form: at rest on a plane, the contact carries the weight m g and is pressed in by
+        # m g / kn. Local damping stops the bounce; after 20000 steps (some 1900 periods of the
+        # contact; at 2000 the force is already within 1e-13) 1e-9 is all rounding leaves room for.
+        s = trubal.Session(quiet=True)
+        s.command("start box -1 1 -1 1 -0.5 1\nprop kn 1e5 ks 1e5 fric 0.5 dens 1000\n"
+                  "wall id 1 plane 0 0 0 0 0 1\nball 0 0 0.105 0.1\ngrav 0 0 -9.81\ndamp local 0.7")
+        s.cycle(20000)
+        weight = 1000 * 4 / 3 * np.pi * 0.1**3 * 9.81
+        wall, = s.walls()
+        self.assertEqual((wall["id"], wall["kind"], wall["contacts"]), (1, "plane", 1))
+        self.assertAlmostEqual(wall["normal_force"] / weight, 1, delta=1e-9)
+        self.assertAlmostEqual(wall["force"][2] / weight, -1, delta=1e-9)   # on the wall: pushed down
+        self.assertAlmostEqual(s.positions[0, 2], 0.1 - weight / 1e5, delta=1e-9 * 0.1)
+        self.assertEqual(len(s.contacts()["i"]), 0)   # ball pairs only: there are none
+
+
 if __name__ == "__main__":
     unittest.main()
