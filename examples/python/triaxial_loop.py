@@ -105,7 +105,9 @@ def plot_matplotlib():
 
 
 def plot_gnuplot():
-    script = ["set terminal pngcairo size 770,770", "set output 'triaxial_loop.png'", "set datafile separator ','",
+    script = ["if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) { set terminal pngcairo size 770,770 } "
+              "else { set terminal png size 770,770 }",
+              "set output 'triaxial_loop.png'", "set datafile separator ','",
               "set multiplot layout 2,1", "set grid", "set ylabel 'deviator stress q (kPa)'", "set key top left"]
     series = lambda col, scale: ", ".join(
         f"'triaxial_loop.csv' using ($1=={p!r} ? 100*$2 : 1/0):(${col}*{scale}) with lines title '{p / 1e3:.0f} kPa'"
