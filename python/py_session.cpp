@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "commands/common.hpp"
 #include "interp/signals.hpp"
 
 namespace trubal::python {
@@ -155,13 +156,14 @@ std::int64_t PySession::cycle(py::object self, std::int64_t n, std::int64_t ever
     done += r.done;
     // A Ctrl-C between pieces reached Python's own handler: raised here, not after the last piece.
     if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    if (r.destroyed > 0)
-      output_.out() << fmt::format("{} ball{} left the box and {} destroyed ({} since START)\n", r.destroyed,
-                                   r.destroyed == 1 ? "" : "s", r.destroyed == 1 ? "was" : "were",
-                                   session_.model().space.destroyed);
     flush();
     InterruptGuard::raise_if_interrupted();
-    if (r.unstable || r.left_box) raise_error("", 0, r.message);
+    // As CYCLE reports it: balls destroyed, and an unstable run or a ball out of a box as an error.
+    engine_call([&] {
+      Context ctx{session_, interp_, output_.out()};
+      report_cycle_result(ctx, r, piece);
+    });
+    flush();
     if (r.done < piece) break;   // nothing else stops a piece early; kept as a guard
     if (!callback.is_none()) {
       // None (no return statement) goes on; any false value stops (False, 0, a numpy False).

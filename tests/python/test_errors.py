@@ -53,6 +53,18 @@ class Errors(unittest.TestCase):
         self.assertEqual((caught.exception.file, caught.exception.line), (inner, 3))
         self.assertIn("frobnicate", caught.exception.message)
 
+    def test_a_ball_leaving_the_box_raises_with_the_model_kept(self):
+        s = trubal.Session(quiet=True)
+        s.command("start box -1 1 -1 1 -1 1\nprop kn 1e5 dens 1000\nball 0 0 0.9 0.05\ninit zvel 50")
+        with self.assertRaisesRegex(trubal.Error, "ball 1 left the box through z = 1 at cycle 1") as caught:
+            s.cycle(1000, every=10, callback=lambda s: self.fail("no callback after an error"))
+        self.assertIsNone(caught.exception.file)
+        self.assertEqual((s.step, s.num_balls), (1, 1))
+        # with `destroy` the ball goes, the run goes on
+        s.command("start box -1 1 -1 1 -1 1 destroy\nprop kn 1e5 dens 1000\nball 0 0 0.9 0.05\ninit zvel 50")
+        self.assertEqual(s.cycle(100), 100)
+        self.assertEqual(s.num_balls, 0)
+
     def test_missing_deck(self):
         with self.assertRaisesRegex(trubal.Error, "cannot open the deck 'no/such.dat'") as caught:
             trubal.Session(quiet=True).run_deck("no/such.dat")
