@@ -70,6 +70,9 @@ static std::string safe(const std::string& message) { return printable(message, 
 
 void Interpreter::report(const std::string& raw_message) {
   const std::string message = safe(raw_message);
+  last_error_ = {frames_.empty() ? std::string() : frames_.back().name, frames_.empty() ? 0 : frames_.back().line,
+                 message};
+  if (!report_errors) return;
   auto& err = output_.err();
   output_.out().flush();
   if (frames_.empty()) {
@@ -125,8 +128,10 @@ void Interpreter::execute(const std::string& line) {
   if (!log_failure.empty()) output_.err() << "warning: " << log_failure << '\n';
 }
 
-bool Interpreter::run_frames(std::istream& in, const std::string& name, const std::string& canonical) {
+bool Interpreter::run_frames(std::istream& in, const std::string& name, const std::string& canonical,
+                             int first_line) {
   frames_.push_back({name, canonical, 0});
+  const int offset = first_line - 1;
   LineReader reader(in);
   try {
     while (!stop_) {
@@ -134,11 +139,11 @@ bool Interpreter::run_frames(std::istream& in, const std::string& name, const st
       try {
         line = reader.next();
       } catch (const InputError&) {
-        frames_.back().line = reader.line();
+        frames_.back().line = reader.line() + offset;
         throw;
       }
       if (!line) break;
-      frames_.back().line = reader.line();
+      frames_.back().line = reader.line() + offset;
       execute(*line);
     }
   } catch (const ReportedError&) {
@@ -156,6 +161,16 @@ bool Interpreter::run_frames(std::istream& in, const std::string& name, const st
 bool Interpreter::run_deck(std::istream& in, const std::string& name) {
   try {
     return run_frames(in, name, name);
+  } catch (const ReportedError&) {
+    return false;
+  }
+}
+
+bool Interpreter::run_text(const std::string& text, const std::string& name, const std::string& canonical,
+                           int first_line) {
+  std::istringstream in(text);
+  try {
+    return run_frames(in, name, canonical, first_line);
   } catch (const ReportedError&) {
     return false;
   }
@@ -181,7 +196,8 @@ bool Interpreter::run_file(const std::string& path) {
     return f;
   });
   if (!file.ok) {
-    output_.err() << "error: " << file.error << '\n';
+    last_error_ = {std::string(), 0, file.error};
+    if (report_errors) output_.err() << "error: " << file.error << '\n';
     return false;
   }
   std::istringstream in(file.text);

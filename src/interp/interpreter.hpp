@@ -23,6 +23,10 @@ class Interpreter {
   // Runs a whole deck from a stream named `name` (a file name, or "<stdin>"). Returns false at the
   // first error, which is reported as NAME:LINE: error: ... on the error stream.
   bool run_deck(std::istream& in, const std::string& name);
+  // Lines given by a host program (the Python module's Session.command): as a deck named `name`
+  // whose first line is line `first_line` there (the caller's script and line), and whose
+  // canonical path, for CALL's lookup beside the calling file, is `canonical`.
+  bool run_text(const std::string& text, const std::string& name, const std::string& canonical, int first_line);
   bool run_file(const std::string& path);
   // One line typed at the prompt: errors are reported, the session goes on. Returns false on error.
   bool run_interactive_line(const std::string& line, int line_no);
@@ -39,10 +43,23 @@ class Interpreter {
   std::optional<std::string> variable(const std::string& name) const;
   const std::map<std::string, std::string>& variables() const { return variables_; }
 
+  // The last error reported: the innermost file and line (file empty for one outside any file)
+  // and the message, for a host that raises it as its own exception.
+  struct Error {
+    std::string file;
+    int line = 0;
+    std::string message;
+  };
+  const Error& last_error() const { return last_error_; }
+  // False: an error is only kept in last_error(), not written (a host raises it; warnings are written).
+  bool report_errors = true;
+
   bool echo = true;                // echo commands in batch mode (SET echo on/off)
   bool interactive = false;        // lines come from the shell
   void request_stop() { stop_ = true; }
   bool stopped() const { return stop_; }
+  // After STOP ended a deck: a host that goes on giving lines lets them run again.
+  void resume() { stop_ = false; }
   Output& output() { return output_; }
   Session& session() { return session_; }
 
@@ -54,13 +71,14 @@ class Interpreter {
   };
   // Executes one logical line (comments and continuations already handled).
   void execute(const std::string& line);
-  bool run_frames(std::istream& in, const std::string& name, const std::string& canonical);
+  bool run_frames(std::istream& in, const std::string& name, const std::string& canonical, int first_line = 1);
   void report(const std::string& message);
 
   Session& session_;
   Output& output_;
   std::vector<Frame> frames_;
   std::map<std::string, std::string> variables_;
+  Error last_error_;
   bool stop_ = false;
 };
 

@@ -365,3 +365,30 @@ TEST_CASE("interp errors: BALL refuses a centre another ball has, and says which
   CHECK_FALSE(h.deck("ball 0 0 0 0.1 id 3\n"));
   CHECK_THAT(h.first_error_line(), Catch::Contains("ball 2 is already at"));
 }
+
+// For a host program (the Python module): lines run as part of its own file from its line, the
+// error kept rather than written, and STOP ending one text, not the next.
+TEST_CASE("interp errors: text from a host names its file and line, and the error is kept", "[interp][errors]") {
+  Harness h;
+  h.interp.report_errors = false;
+  CHECK_FALSE(h.interp.run_text("start box 0 1 0 1 0 1\nball 0.5 0.5 0.5 0.1\nprop foo 1\nball 0.2 0.2 0.2 0.1",
+                                "script.py", "", 40));
+  const auto& e = h.interp.last_error();
+  CHECK(e.file == "script.py");
+  CHECK(e.line == 42);   // the third line of a text that starts at line 40
+  CHECK(e.message.find("unknown property 'foo'") == 0);
+  CHECK(h.err.str().empty());                    // kept, not written
+  CHECK(h.session.model().balls.size() == 1);   // the lines before it ran, the one after did not
+
+  h.interp.report_errors = true;   // the shell's way: written as well
+  CHECK_FALSE(h.interp.run_text("frobnicate", "script.py", "", 7));
+  CHECK(h.interp.last_error().line == 7);
+  CHECK(h.first_error_line().rfind("script.py:7: error: ", 0) == 0);
+
+  CHECK(h.interp.run_text("stop\nball 0.2 0.2 0.2 0.1", "script.py", "", 9));
+  CHECK(h.interp.stopped());
+  CHECK(h.session.model().balls.size() == 1);
+  h.interp.resume();
+  CHECK(h.interp.run_text("ball 0.2 0.2 0.2 0.1", "script.py", "", 10));
+  CHECK(h.session.model().balls.size() == 2);
+}

@@ -1,0 +1,294 @@
+// The model as numpy arrays. The rule (doc/python.md): every read returns a new array that owns
+// its numbers, a snapshot that later cycles do not change, marked read-only so that writing into
+// it is an error instead of a change silently lost; a write assigns a whole array, which is checked
+// and copied in through Session::edit(), as INIT and BALL change balls (the pair lists are rebuilt
+// and the time step estimated afresh at the next step).
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "io/history.hpp"
+#include "physics/measure.hpp"
+#include "physics/walls.hpp"
+#include "py_session.hpp"
+
+namespace trubal::python {
+
+namespace {
+
+using Column = std::vector<double>;
+
+template <class T> py::array_t<T> read_only(py::array_t<T> a) {
+  a.attr("flags").attr("writeable") = false;
+  return a;
+}
+
+// An (n, 3) array from three columns, rows picked by `rows` (all rows where it is null).
+py::array_t<double> columns3(const Column& a, const Column& b, const Column& c,
+                             const std::vector<std::size_t>* rows = nullptr) {
+  const std::size_t n = rows ? rows->size() : a.size();
+  py::array_t<double> out({static_cast<py::ssize_t>(n), py::ssize_t{3}});
+  auto o = out.mutable_unchecked<2>();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t r = rows ? (*rows)[k] : k;
+    o(k, 0) = a[r];
+    o(k, 1) = b[r];
+    o(k, 2) = c[r];
+  }
+  return read_only(out);
+}
+
+template <class T, class From> py::array_t<T> column(const std::vector<From>& v,
+                                                     const std::vector<std::size_t>* rows = nullptr) {
+  const std::size_t n = rows ? rows->size() : v.size();
+  py::array_t<T> out(static_cast<py::ssize_t>(n));
+  auto o = out.template mutable_unchecked<1>();
+  for (std::size_t k = 0; k < n; ++k) o(k) = static_cast<T>(v[rows ? (*rows)[k] : k]);
+  return read_only(out);
+}
+
+py::array_t<double> sym_matrix(const std::array<double, 6>& s) {   // xx yy zz xy xz yz
+  py::array_t<double> out({py::ssize_t{3}, py::ssize_t{3}});
+  auto o = out.mutable_unchecked<2>();
+  const int at[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) o(a, b) = s[at[a][b]];
+  return read_only(out);
+}
+
+using InArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// A new (n, 3) or (n,) array for the balls, its numbers finite: the shape names what was wrong.
+InArray checked(const py::object& value, const Model& m, int width, const char* what) {
+  InArray a = InArray::ensure(value);
+  if (!a) throw py::type_error(fmt::format("{}: a numpy array (or nested lists) of numbers is needed", what));
+  const auto n = static_cast<py::ssize_t>(m.balls.size());
+  const bool ok =
+      width == 1 ? a.ndim() == 1 && a.shape(0) == n : a.ndim() == 2 && a.shape(0) == n && a.shape(1) == width;
+  if (!ok) {
+    std::string shape;
+    for (py::ssize_t d = 0; d < a.ndim(); ++d) shape += fmt::format("{}{}", d ? ", " : "", a.shape(d));
+    throw py::value_error(fmt::format("{}: shape ({}) given, ({}{}) needed: one row per ball, ordered by id", what,
+                                      shape, n, width == 1 ? "," : fmt::format(", {}", width)));
+  }
+  const double* p = a.data();
+  for (py::ssize_t k = 0; k < a.size(); ++k)
+    if (!std::isfinite(p[k]))
+      throw py::value_error(fmt::format("{}: row {} holds {} (ball {}): only finite numbers", what, k / width, p[k],
+                                        m.balls.id[static_cast<std::size_t>(k / width)]));
+  return a;
+}
+
+void set_columns3(PySession& s, const InArray& in, Column Balls::*a, Column Balls::*b, Column Balls::*c) {
+  auto v = in.unchecked<2>();
+  Balls& balls = s.session().edit().balls;
+  for (std::size_t k = 0; k < balls.size(); ++k) {
+    (balls.*a)[k] = v(k, 0);
+    (balls.*b)[k] = v(k, 1);
+    (balls.*c)[k] = v(k, 2);
+  }
+}
+
+// As BALL checks a centre: inside the START box on its bounded axes, and no two balls at one
+// centre (they would have no normal between them and fly apart).
+void set_positions(PySession& s, const py::object& value) {
+  const Model& m = s.session().model();
+  const InArray in = checked(value, m, 3, "positions");
+  auto v = in.unchecked<2>();
+  const Space& space = m.space;
+  struct Hash {
+    std::size_t operator()(const std::array<double, 3>& c) const {
+      return std::hash<double>()(c[0]) ^ (std::hash<double>()(c[1]) * 31) ^ (std::hash<double>()(c[2]) * 1000003);
+    }
+  };
+  std::unordered_set<std::array<double, 3>, Hash> centres;
+  for (std::size_t k = 0; k < m.balls.size(); ++k) {
+    for (int a = 0; a < 3; ++a)
+      if (!space.wraps(a) && (v(k, a) < space.lo[a] || v(k, a) > space.hi[a]))
+        raise_error("", 0, fmt::format("positions: ball {}'s centre {} = {} is outside the START box [{}, {}]",
+                                       m.balls.id[k], "xyz"[a], v(k, a), space.lo[a], space.hi[a]));
+    auto zero = [](double x) { return x == 0 ? 0.0 : x; };   // -0 and 0 are the same place
+    if (!centres.insert({zero(v(k, 0)), zero(v(k, 1)), zero(v(k, 2))}).second)
+      raise_error("", 0, fmt::format("positions: ball {} is given the centre of another ball ({}, {}, {}): two balls "
+                                     "at one centre would fly apart", m.balls.id[k], v(k, 0), v(k, 1), v(k, 2)));
+  }
+  set_columns3(s, in, &Balls::x, &Balls::y, &Balls::z);
+}
+
+void set_radii(PySession& s, const py::object& value) {
+  const Model& m = s.session().model();
+  const InArray in = checked(value, m, 1, "radii");
+  auto v = in.unchecked<1>();
+  for (std::size_t k = 0; k < m.balls.size(); ++k)
+    if (!(v(k) > 0))
+      raise_error("", 0, fmt::format("radii: ball {} is given radius {}: radii must be positive", m.balls.id[k], v(k)));
+  Balls& balls = s.session().edit().balls;   // masses follow at the next step (update_mass)
+  for (std::size_t k = 0; k < balls.size(); ++k) balls.rad[k] = v(k);
+}
+
+// The pairs touching at the last force pass, as PRINT contacts lists them.
+py::dict contacts(PySession& s) {
+  const Model& m = s.session().model();
+  const ContactTable& c = m.contacts;
+  std::vector<std::size_t> rows;
+  for (std::size_t p = 0; p < c.size() && p < c.state.size(); ++p)
+    if (c.state[p] != 0) rows.push_back(p);
+  std::vector<std::int64_t> i(rows.size()), j(rows.size());
+  std::vector<bool> sliding(rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    i[k] = m.balls.id[c.i[rows[k]]];
+    j[k] = m.balls.id[c.j[rows[k]]];
+    sliding[k] = c.state[rows[k]] == 2;
+  }
+  py::dict d;
+  d["i"] = column<std::int64_t>(i);
+  d["j"] = column<std::int64_t>(j);
+  d["normal"] = columns3(c.nx, c.ny, c.nz, &rows);
+  d["overlap"] = column<double>(c.overlap, &rows);
+  d["normal_force"] = column<double>(c.fn, &rows);
+  d["shear_force"] = columns3(c.fsx, c.fsy, c.fsz, &rows);
+  d["force"] = columns3(c.fx, c.fy, c.fz, &rows);
+  d["sliding"] = column<bool>(sliding);
+  d["cycle"] = c.results_cycle;
+  return d;
+}
+
+py::dict energy(PySession& s) {
+  const EnergyReport e = trubal::energy(s.session().model());
+  py::dict d;
+  d["kinetic_translation"] = e.kinetic_translation;
+  d["kinetic_rotation"] = e.kinetic_rotation;
+  d["strain"] = e.strain;
+  d["potential"] = e.potential;
+  d["friction_work"] = e.friction_work;
+  d["damping_work"] = e.damping_work;
+  d["boundary_work"] = e.boundary_work;
+  d["balance"] = e.total();
+  return d;
+}
+
+// Each HIST table as {column: array}: every row recorded (read back from its file when the rows
+// kept in memory are only the latest window).
+py::list histories(PySession& s) {
+  py::list out;
+  for (const auto& t : s.session().history().tables()) {
+    const HistoryTable* table = t.get();
+    std::unique_ptr<HistoryTable> from_file;
+    if (!table->file.empty() && table->recorded > table->rows.size()) {
+      s.flush();
+      from_file = engine_call([&] { return read_history_csv(table->file); });
+      table = from_file.get();
+    }
+    py::dict d;
+    for (std::size_t col = 0; col < table->columns.size(); ++col) {
+      std::vector<double> v(table->rows.size());
+      for (std::size_t r = 0; r < v.size(); ++r) v[r] = col < table->rows[r].size() ? table->rows[r][col] : NAN;
+      d[py::str(table->columns[col])] = column<double>(v);
+    }
+    out.append(d);
+  }
+  return out;
+}
+
+py::list walls(PySession& s) {
+  const Model& m = s.session().model();
+  py::list out;
+  auto vec = [](const std::array<double, 3>& v) { return read_only(py::array_t<double>(3, v.data())); };
+  for (const Wall& w : m.walls) {
+    py::dict d;
+    d["id"] = w.id;
+    d["kind"] = w.kind == WallKind::Plane ? "plane" : w.kind == WallKind::Polygon ? "polygon" : "cylinder";
+    d["position"] = wall_position(w);
+    d["force"] = vec(w.force);
+    d["moment"] = vec(w.moment);
+    d["normal_force"] = w.normal_force;
+    d["stress"] = wall_servo_area(m, w) > 0 ? wall_stress(m, w) : std::numeric_limits<double>::quiet_NaN();
+    d["contacts"] = w.contacts;
+    d["work"] = w.work;
+    d["velocity"] = vec(w.velocity);
+    if (w.kind == WallKind::Cylinder) d["radius"] = w.radius;
+    out.append(d);
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_arrays(py::class_<PySession>& cls) {
+  const auto& B = [](PySession& s) -> const Balls& { return s.session().model().balls; };
+  cls.def_property_readonly("num_balls", [B](PySession& s) { return B(s).size(); }, "How many balls there are.")
+      .def_property_readonly("ids", [B](PySession& s) { return column<std::int64_t>(B(s).id); },
+                             "Ball ids, ascending: the order of every ball array.")
+      .def_property_readonly("types", [B](PySession& s) { return column<std::int32_t>(B(s).type); },
+                             "Each ball's type (PROP type).")
+      .def_property_readonly(
+          "fixed",
+          [B](PySession& s) {
+            const Balls& b = B(s);
+            py::array_t<bool> out({static_cast<py::ssize_t>(b.size()), py::ssize_t{6}});
+            auto o = out.mutable_unchecked<2>();
+            for (std::size_t k = 0; k < b.size(); ++k)
+              for (int d = 0; d < 6; ++d) o(k, d) = (b.fixed[k] >> d) & 1;
+            return read_only(out);
+          },
+          "(n, 6) bools: which of xvel yvel zvel xspin yspin zspin FIX holds.")
+      .def_property(
+          "positions", [B](PySession& s) { return columns3(B(s).x, B(s).y, B(s).z); }, set_positions,
+          "(n, 3) ball centres. Setting one moves the balls (checked as BALL checks a centre).")
+      .def_property(
+          "velocities", [B](PySession& s) { return columns3(B(s).vx, B(s).vy, B(s).vz); },
+          [](PySession& s, const py::object& v) {
+            set_columns3(s, checked(v, s.session().model(), 3, "velocities"), &Balls::vx, &Balls::vy, &Balls::vz);
+          },
+          "(n, 3) velocities (at t - dt/2 after a cycle, as INIT sets them; a fixed component keeps what is set).")
+      .def_property(
+          "spins", [B](PySession& s) { return columns3(B(s).wx, B(s).wy, B(s).wz); },
+          [](PySession& s, const py::object& v) {
+            set_columns3(s, checked(v, s.session().model(), 3, "spins"), &Balls::wx, &Balls::wy, &Balls::wz);
+          },
+          "(n, 3) angular velocities (rad/s, at t - dt/2).")
+      .def_property(
+          "radii", [B](PySession& s) { return column<double>(B(s).rad); }, set_radii,
+          "(n,) radii; setting them changes the masses from the next step.")
+      .def_property_readonly("forces", [B](PySession& s) { return columns3(B(s).fx, B(s).fy, B(s).fz); },
+                             "(n, 3) unbalanced forces of the last step (a fixed ball's: its reaction).")
+      .def_property_readonly("moments", [B](PySession& s) { return columns3(B(s).mx, B(s).my, B(s).mz); },
+                             "(n, 3) unbalanced moments of the last step.")
+      .def("contacts", contacts,
+           "The ball pairs touching at the last force pass (PRINT contacts): a dict of arrays, one row per "
+           "contact sorted by (i, j): i, j (ball ids, i < j), normal (n, 3; unit, from i to j), overlap, "
+           "normal_force, shear_force (n, 3; on j), force (n, 3; total on j, on i minus it), sliding (bools); and "
+           "cycle, the cycle whose force pass these are (-1: none yet).")
+      .def("stress",
+           [](PySession& s) {
+             return engine_call([&] {
+               s.session().require_started();
+               return sym_matrix(average_stress(s.session().model(), s.session().stress_volume()));
+             });
+           },
+           "The average stress tensor (3, 3) over SET volume, the periodic cell or the START box, compression "
+           "positive (PRINT stress).")
+      .def("strain", [](PySession& s) { return sym_matrix(s.session().model().space.strain); },
+           "The periodic space's accumulated strain (3, 3), compression positive (PRINT strain): the sum of "
+           "rate times step, a logarithmic strain (an edge is about its START length times exp(-strain)).")
+      .def("energy", energy,
+           "The energy terms (PRINT energy) as a dict: kinetic_translation, kinetic_rotation, strain, potential, "
+           "friction_work, damping_work, boundary_work, balance.")
+      .def("history", histories,
+           "The HIST tables, in the order given: a list with one dict per table, column name -> array "
+           "(cycle, time, then the items' columns, as PRINT history names them).")
+      .def("walls", walls,
+           "The walls (PRINT walls), one dict each: id, kind, position (HIST wall's pos), force, moment, "
+           "normal_force, stress (nan without an area), contacts, work, velocity (and radius for a cylinder).")
+      .def_property_readonly("step", [](PySession& s) { return s.session().model().cycle; },
+                             "Cycles done since START (the cycle number).")
+      .def_property_readonly("time", [](PySession& s) { return s.session().model().time; }, "Model time.")
+      .def_property_readonly("timestep", [](PySession& s) { return s.session().model().dt; },
+                             "The step of the last cycle (0 before the first).");
+}
+
+}  // namespace trubal::python
