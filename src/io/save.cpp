@@ -42,8 +42,13 @@ std::uint64_t fnv1a(const std::string& data) {
   return h;
 }
 
+static_assert(sizeof(Damping) == sizeof(DampKind) + sizeof(std::uint32_t) + 5 * sizeof(double), "Damping has hidden padding");
+static_assert(sizeof(Material) == 8 * sizeof(double) + 8, "Material has hidden padding");
+
 class Writer {
  public:
+  // A struct written whole must have no padding (its bytes would be whatever the stack held, and a
+  // save's bytes must not depend on the run): Damping and Material name theirs.
   template <class T> void pod(const T& v) {
     static_assert(std::is_trivially_copyable_v<T>);
     buf.append(reinterpret_cast<const char*>(&v), sizeof v);

@@ -28,6 +28,7 @@ struct Material {
   double poisson = 0;
   double restitution = 0;         // used when has_restitution (contact dashpot)
   bool has_restitution = false;
+  std::uint8_t unused[7] = {};    // the padding SAVE writes with the struct, made explicit so its bytes are 0
   bool hertz() const { return shear_modulus > 0; }
 };
 
@@ -211,6 +212,7 @@ enum class DampKind { None, Rayleigh, Local };
 
 struct Damping {
   DampKind kind = DampKind::None;
+  std::uint32_t unused = 0;        // the padding SAVE writes with the struct, made explicit so its bytes are 0
   double alpha = 0, beta = 0;      // Rayleigh: mass and stiffness coefficients
   double lambda = 0, freq = 0;     // as given (DAMP lambda f), for PRINT damp; 0 when given as coefficients
   double local = 0;                // local damping coefficient

@@ -1,0 +1,124 @@
+// Distributed runs (issue 17) beyond the cut matrix of cycle_cuts.cpp: four ranks, a save on three
+// ranks restarted on two, a fast gas crossing the periodic faces for 10,000 steps, and bad input on
+// several ranks (one message, exit 1, no rank left hanging). Skipped with a warning where this build
+// or machine has no MPI.
+#include <catch2/catch.hpp>
+
+#include <string>
+
+#include "interp_support.hpp"
+#include "support/comm.hpp"
+
+using namespace trubal;
+using namespace trubal::test;
+
+namespace {
+
+bool have_mpi() {
+  if (comm::built_with_mpi() && shell("command -v mpirun >/dev/null 2>&1") == 0) return true;
+  WARN("not built with MPI, or no mpirun: distributed runs are not checked (Debian: libopenmpi-dev openmpi-bin)");
+  return false;
+}
+
+// Runs deck.dat in `dir` on `ranks` ranks (0: a plain trubal, no mpirun), with a time limit so that
+// a hang fails the test instead of stalling it; returns the exit status, output in out.txt.
+int run_deck(const TempDir& dir, int ranks) {
+  const std::string launcher =
+      ranks == 0 ? std::string("timeout 120 ")
+                 : "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                   "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np " + std::to_string(ranks) + " ";
+  return shell("cd " + quote(dir.str()) + " && " + launcher + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1");
+}
+
+// A loose periodic gas squeezed by the servo, then sheared: the setup of the periodic checks.
+const char* kServoDeck = R"(start 0.01 0.01 0.01
+prop kn 1e5 ks 1e5 fric 26.57 dens 2650
+gen 300 0.0004 0.0006 seed 7
+damp local 0.7
+servo 1e5 1e5 1e5
+cycle 3000
+servo xx 1e5 yy 1e5
+strain zz 2 xy 1
+)";
+
+const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts.csv\n";
+
+}  // namespace
+
+TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the serial bits", "[mpi]") {
+  if (!have_mpi()) return;
+  TempDir serial;
+  serial.write("deck.dat", std::string(kServoDeck) + "cycle 400\n" + kOutputs);
+  REQUIRE(run_deck(serial, 0) == 0);
+  const std::string balls = slurp(serial.path() / "balls.csv"), contacts = slurp(serial.path() / "contacts.csv");
+  REQUIRE(lines_of(contacts).size() > 100);   // contacts to carry history across the cut
+
+  TempDir four;
+  four.write("deck.dat", "backend mpi\n" + std::string(kServoDeck) + "cycle 400\n" + kOutputs + "print info\n");
+  REQUIRE(run_deck(four, 4) == 0);
+  INFO(slurp(four.path() / "out.txt"));
+  CHECK_THAT(slurp(four.path() / "out.txt"), Catch::Contains("ranks: 4\n"));
+  CHECK(slurp(four.path() / "balls.csv") == balls);
+  CHECK(slurp(four.path() / "contacts.csv") == contacts);
+
+  // The save's bytes do not depend on the rank count, and a 2-rank run resumes a 3-rank save.
+  TempDir cut;
+  cut.write("deck.dat", "backend mpi\n" + std::string(kServoDeck) + "cycle 150\nsave s.sav\n");
+  REQUIRE(run_deck(cut, 3) == 0);
+  TempDir cut_serial;
+  cut_serial.write("deck.dat", std::string(kServoDeck) + "cycle 150\nsave s.sav\n");
+  REQUIRE(run_deck(cut_serial, 0) == 0);
+  CHECK(slurp(cut.path() / "s.sav") == slurp(cut_serial.path() / "s.sav"));
+  cut.write("deck.dat", "restart s.sav\nbackend mpi\ncycle 250\n" + std::string(kOutputs));
+  REQUIRE(run_deck(cut, 2) == 0);
+  INFO(slurp(cut.path() / "out.txt"));
+  CHECK(slurp(cut.path() / "balls.csv") == balls);
+  CHECK(slurp(cut.path() / "contacts.csv") == contacts);
+}
+
+TEST_CASE("distributed: a fast gas crossing the periodic faces for 10,000 steps keeps the serial bits", "[mpi]") {
+  // Balls at 3 to 7 m/s, about ten of their radii per thousand steps, in a cell a few diameters wide: every
+  // ball crosses the faces (and, in a decomposition, the ranks' boundaries) many times, and the
+  // collisions carry shear history (friction) from one crossing to the next.
+  if (!have_mpi()) return;
+  const std::string deck = R"(start 0.006 0.006 0.006
+prop kn 1e5 ks 1e5 fric 30 dens 2650 rest 0.8
+gen 250 0.0003 0.0005 seed 11
+init xvel 4 yvel -3 zvel 2 range x 0 0.003
+init xvel -2 yvel 5 zvel -4 range x 0.003 0.006
+cycle 10000
+)" + std::string(kOutputs);
+  TempDir serial, two;
+  serial.write("deck.dat", deck);
+  REQUIRE(run_deck(serial, 0) == 0);
+  two.write("deck.dat", "backend mpi\n" + deck);
+  REQUIRE(run_deck(two, 2) == 0);
+  INFO(slurp(two.path() / "out.txt"));
+  const std::string contacts = slurp(serial.path() / "contacts.csv");
+  CHECK(lines_of(contacts).size() > 2);   // collisions under way at the end (a header and at least two)
+  CHECK(slurp(two.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+  CHECK(slurp(two.path() / "contacts.csv") == contacts);
+}
+
+TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message and exit 1", "[mpi]") {
+  if (!have_mpi()) return;
+  SECTION("a deck error") {
+    TempDir dir;
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nprop kn banana\ncycle 10\n");
+    CHECK(run_deck(dir, 3) == 1);
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    const auto at = out.find("deck.dat:3:");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:3:", at + 1) == std::string::npos);   // rank 0 alone reports it
+  }
+  SECTION("a failure on rank 0 alone (its file write) stops the others too") {
+    TempDir dir;
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nsave no/such/folder/s.sav\ncycle 10\n");
+    CHECK(run_deck(dir, 3) == 1);   // not 124: no rank waits for the others
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(out.find("deck.dat:3:") != std::string::npos);
+    CHECK(out.find("deck.dat:3:") == out.rfind("deck.dat:3:"));
+  }
+}
