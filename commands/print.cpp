@@ -198,7 +198,7 @@ static void print_walls(Context& ctx, const std::string& file) {
 // The grading of the balls the last GEN made (those still there) next to the one it asked for.
 static void print_psd(Context& ctx, const std::string& file) {
   const auto& sizes = ctx.session.last_sizes();
-  if (!sizes) throw std::runtime_error("PRINT psd: no GEN since START (it compares the last GEN's balls with its sizes)");
+  if (!sizes) throw std::runtime_error("PRINT psd: no GEN since START or RESTART (it compares the last GEN's balls with its sizes)");
   const Model& m = ctx.session.model();
   std::vector<double> radii;
   for (std::int64_t id : ctx.session.last_generated()) {
