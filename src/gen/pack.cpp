@@ -209,44 +209,52 @@ class Relaxation {
     for (std::size_t k = 0; k < total; ++k) sorted[k] = at[order[k]];
     pairs_.clear();
     fixed_pairs_.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto& e = at[nf + i];
-      const double ri = e[3];
-      long c[3];
-      for (int a = 0; a < 3; ++a) c[a] = cell_index(a, e[a]);
-      for (long oz = -1; oz <= 1; ++oz) {
-        long cz = c[2] + oz, kz = 0;
-        if (s.wraps(2)) { kz = cz < 0 ? -1 : cz >= nc[2] ? 1 : 0; cz -= kz * nc[2]; }
-        else if (cz < 0 || cz >= nc[2]) continue;
-        for (long oy = -1; oy <= 1; ++oy) {
-          long cy = c[1] + oy, ky = 0;
-          if (s.wraps(1)) { ky = cy < 0 ? -1 : cy >= nc[1] ? 1 : 0; cy -= ky * nc[1]; }
-          else if (cy < 0 || cy >= nc[1]) continue;
-          for (long ox = -1; ox <= 1; ++ox) {
-            long cx = c[0] + ox, kx = 0;
-            if (s.wraps(0)) { kx = cx < 0 ? -1 : cx >= nc[0] ? 1 : 0; cx -= kx * nc[0]; }
-            else if (cx < 0 || cx >= nc[0]) continue;
-            // The image of this cell next to i: its balls shifted by k periods.
-            const double hx = static_cast<double>(kx) * L[0], hy = static_cast<double>(ky) * L[1],
-                         hz = static_cast<double>(kz) * L[2];
-            const std::size_t slot = static_cast<std::size_t>((cz * nc[1] + cy) * nc[0] + cx);
-            for (std::uint32_t k = start[slot]; k < start[slot + 1]; ++k) {
-              const auto& o = sorted[k];
-              const double dx = o[0] + hx - e[0], dy = o[1] + hy - e[1], dz = o[2] + hz - e[2];
-              const double reach = ri + o[3] + skin_;
-              if (dx * dx + dy * dy + dz * dz >= reach * reach) continue;
-              const std::uint32_t q = order[k];
-              const bool fixed = q < nf;
-              if (!fixed && q - nf <= i) continue;
-              // The sweep measures from the ball's own (raw) position: less the periods to the image.
-              Pair p{static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(fixed ? q : q - nf), o[4] - hx, o[5] - hy,
-                     o[6] - hz};
-              (fixed ? fixed_pairs_ : pairs_).push_back(p);
+    // Each pair once: a cell's balls with the later balls of their own cell and with the 13 cells
+    // after it (a half shell), the images across periodic faces included.
+    auto record = [&](std::uint32_t qa, std::uint32_t qb, const std::array<double, 7>& ea,
+                      const std::array<double, 7>& eb, double hx, double hy, double hz) {
+      const bool fa = qa < nf, fb = qb < nf;
+      if (fa && fb) return;
+      // The sweep measures from each ball's own (raw) position: offsets less the periods to the image.
+      if (!fa) {
+        pairs_or_fixed(fb).push_back({qa - static_cast<std::uint32_t>(nf), fb ? qb : qb - static_cast<std::uint32_t>(nf),
+                                      eb[4] - hx - ea[4], eb[5] - hy - ea[5], eb[6] - hz - ea[6]});
+      } else {
+        fixed_pairs_.push_back({qb - static_cast<std::uint32_t>(nf), qa, ea[4] + hx - eb[4], ea[5] + hy - eb[5],
+                                ea[6] + hz - eb[6]});
+      }
+    };
+    for (long z = 0; z < nc[2]; ++z)
+      for (long y = 0; y < nc[1]; ++y)
+        for (long x = 0; x < nc[0]; ++x) {
+          const std::size_t here = static_cast<std::size_t>((z * nc[1] + y) * nc[0] + x);
+          for (std::uint32_t ka = start[here]; ka < start[here + 1]; ++ka) {
+            const auto& ea = sorted[ka];
+            for (int o = 0; o < 14; ++o) {   // o = 0: the own cell; then the half shell
+              const long oz = o == 0 ? 0 : (o - 1) < 9 ? 1 : 0;
+              const long oy = o == 0 ? 0 : (o - 1) < 9 ? (o - 1) / 3 - 1 : (o - 1) < 12 ? 1 : 0;
+              const long ox = o == 0 ? 0 : (o - 1) < 9 ? (o - 1) % 3 - 1 : (o - 1) < 12 ? (o - 10) - 1 : 1;
+              long cz = z + oz, cy = y + oy, cx = x + ox, kz = 0, ky = 0, kx = 0;
+              if (s.wraps(2)) { kz = cz >= nc[2] ? 1 : 0; cz -= kz * nc[2]; }
+              else if (cz >= nc[2]) continue;
+              if (s.wraps(1)) { ky = cy < 0 ? -1 : cy >= nc[1] ? 1 : 0; cy -= ky * nc[1]; }
+              else if (cy < 0 || cy >= nc[1]) continue;
+              if (s.wraps(0)) { kx = cx < 0 ? -1 : cx >= nc[0] ? 1 : 0; cx -= kx * nc[0]; }
+              else if (cx < 0 || cx >= nc[0]) continue;
+              const double hx = static_cast<double>(kx) * L[0], hy = static_cast<double>(ky) * L[1],
+                           hz = static_cast<double>(kz) * L[2];
+              const std::size_t slot = static_cast<std::size_t>((cz * nc[1] + cy) * nc[0] + cx);
+              for (std::uint32_t kb = o == 0 ? ka + 1 : start[slot]; kb < start[slot + 1]; ++kb) {
+                if (o != 0 && kb == ka) continue;   // a ball and its own image: never within reach
+                const auto& eb = sorted[kb];
+                const double dx = eb[0] + hx - ea[0], dy = eb[1] + hy - ea[1], dz = eb[2] + hz - ea[2];
+                const double reach = ea[3] + eb[3] + skin_;
+                if (dx * dx + dy * dy + dz * dz >= reach * reach) continue;
+                record(order[ka], order[kb], ea, eb, hx, hy, hz);
+              }
             }
           }
         }
-      }
-    }
     at_build_.resize(n);
     for (std::size_t i = 0; i < n; ++i) at_build_[i] = {balls_[i][0], balls_[i][1], balls_[i][2]};
   }
@@ -307,6 +315,7 @@ class Relaxation {
     return worst;
   }
 
+  std::vector<Pair>& pairs_or_fixed(bool fixed) { return fixed ? fixed_pairs_ : pairs_; }
   const Model& model_;
   const Region& g_;
   std::vector<std::array<double, 4>>& balls_;
