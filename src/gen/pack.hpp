@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "gen/relaxation.hpp"
 #include "gen/size_distribution.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
@@ -34,9 +35,8 @@ struct PackResult {
   std::int64_t sweeps = 0;
 };
 
-// Relaxation limits: a stage's overlaps must fall to this fraction of the smaller radius within
-// kStageSweeps sweeps; all stages together may take kTotalSweeps.
-constexpr double kOverlapTolerance = 0.01;
+// Radius expansion's limits: a stage must relax (gen/relaxation.hpp) within kStageSweeps sweeps;
+// all stages together may take kTotalSweeps.
 constexpr int kStageSweeps = 150;
 constexpr std::int64_t kTotalSweeps = 2000;
 
