@@ -159,8 +159,8 @@ double SizeTable::radius(double u) const {
 
 double SizeTable::passing(double diameter) const {
   const double r = diameter / 2;
-  if (r <= r_.front()) return r < r_.front() ? 0 : 100 * mass_.front();
-  if (r >= r_.back()) return 100;
+  if (r >= r_.back()) return 100;   // first: balls of one size pass a sieve of their diameter
+  if (r <= r_.front()) return 0;
   auto it = std::upper_bound(r_.begin(), r_.end(), r);
   const std::size_t k = static_cast<std::size_t>(it - r_.begin());
   return 100 * (mass_[k - 1] + (mass_[k] - mass_[k - 1]) * (r - r_[k - 1]) / (r_[k] - r_[k - 1]));

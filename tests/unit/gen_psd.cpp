@@ -194,3 +194,12 @@ TEST_CASE("gen psd: a porosity beyond reach stops with the porosity reached, the
   CHECK_THAT(e, Catch::Contains(fmt::format("the balls are kept at {:.4f}", reached)));
   CHECK(largest_overlap(h.session.model()) <= 0.0101);
 }
+
+TEST_CASE("gen psd: balls of one size pass a sieve of their diameter, as asked", "[gen]") {
+  Harness h;
+  REQUIRE(h.deck("start 0.01 0.01 0.01\ngen porosity 0.6 0.0005 0.0005\nprint psd\n"));
+  // One size: the asked curve and the sample's are both 100% at d = 2 r (a step); a table that put
+  // the step just after the sieve would show a difference of 100.
+  CHECK(largest_grading_difference(h.session) == Approx(0).margin(1e-9));
+  CHECK_THAT(h.out.str(), Catch::Contains("largest difference: 0.000 percent passing"));
+}
