@@ -7,6 +7,10 @@
 //   trubal_bench [--backend name] [--threads t] [--steps k] [N ...]   N rounded to 4 n^3 (default 1680 13500 108000)
 //   trubal_bench --compare [--steps k] [--phases] [N ...]   every backend on 1 and 2 threads, speedup and efficiency
 //                                                 against the best one-thread time (default 403 1680 13500 108000)
+//   trubal_bench --gen [N ...]     GEN's time: N balls of radius 0.4-0.6 in a periodic cell at a solid fraction of
+//                                  0.21 (the loose gas of examples/periodic_triaxial.dat) (default 200000 1000000)
+//   trubal_bench --gen-porosity [N ...]   GEN porosity 0.4 of a graded sand (a sieve curve) in a periodic cell
+//                                  sized for about N balls (default 20000 200000)
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -17,6 +21,7 @@
 #include <vector>
 
 #include "cycle/pipeline.hpp"
+#include "session.hpp"
 #include "model/edit.hpp"
 #include "cycle/run.hpp"
 #include "physics/scene.hpp"
@@ -158,22 +163,67 @@ int compare(const std::vector<int>& sizes, int steps) {
   return 0;
 }
 
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+int gen_speed(std::vector<int> sizes, bool porosity) {
+  if (sizes.empty()) sizes = porosity ? std::vector<int>{20000, 200000} : std::vector<int>{200000, 1000000};
+  std::printf("%10s %12s %10s %10s   %s\n", "N asked", "placed", "s", "porosity", "what");
+  for (int n : sizes) {
+    // Mean ball volume 4/3 pi E[r^3] for r uniform in [0.4, 0.6]: pi (0.6^4 - 0.4^4) / (3 * 0.2).
+    const double mean_volume = M_PI * (std::pow(0.6, 4) - std::pow(0.4, 4)) / 0.6;
+    const double edge = std::cbrt(n * mean_volume / 0.21);
+    if (!porosity) {
+      Session s;
+      s.start_periodic({edge, edge, edge}, {0, 0, 0});
+      const auto t0 = std::chrono::steady_clock::now();
+      const std::size_t placed = s.generate(static_cast<std::size_t>(n), 0.4, 0.6, 1, 7, {});
+      std::printf("%10d %12zu %10.2f %10.4f   GEN n 0.4 0.6 in a periodic cell, solid fraction 0.21\n", n, placed,
+                  seconds_since(t0), 1 - placed * mean_volume / (edge * edge * edge));
+      std::fflush(stdout);
+    }
+    if (porosity) {
+      // A graded sand, d 0.5 to 1.5 (uniform in log d between the points), to porosity 0.4.
+      Session s;
+      Session::GenSpec spec;
+      spec.sizes.kind = SizeDistribution::Kind::Sieve;
+      spec.sizes.diameter = {0.5, 0.8, 1.0, 1.5};
+      spec.sizes.passing = {0, 20, 50, 100};
+      spec.porosity = 0.4;
+      spec.seed = 7;
+      const double mean = 0.35;   // about the sand's mean ball volume (d^3 pi / 6 at d ~ 0.87)
+      const double side = std::cbrt(n * mean / 0.6);
+      s.start_periodic({side, side, side}, {0, 0, 0});
+      const auto t0 = std::chrono::steady_clock::now();
+      const PackResult made = s.generate(spec);
+      std::printf("%10d %12zu %10.2f %10.4f   GEN porosity 0.4 psd sieve 0.5 0 0.8 20 1 50 1.5 100 (%d stages, %lld "
+                  "sweeps)\n", n, made.balls.size(), seconds_since(t0), made.porosity, made.stages,
+                  static_cast<long long>(made.sweeps));
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string backend = "serial";
   int steps = 0, threads = 1;
-  bool comparing = false;
+  bool comparing = false, gen = false, gen_porosity = false;
   std::vector<int> sizes;
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
     if (arg == "--compare") comparing = true;
+    else if (arg == "--gen") gen = true;
+    else if (arg == "--gen-porosity") gen_porosity = true;
     else if (arg == "--threads" && k + 1 < argc) threads = std::atoi(argv[++k]);
     else if (arg == "--backend" && k + 1 < argc) backend = argv[++k];
     else if (arg == "--steps" && k + 1 < argc) steps = std::atoi(argv[++k]);
     else if (arg == "--phases") g_phases = true;
     else sizes.push_back(std::atoi(arg.c_str()));
   }
+  if (gen || gen_porosity) return gen_speed(sizes, gen_porosity);
   if (comparing) {
     if (sizes.empty()) sizes = {403, 1680, 13500, 108000};
     return compare(sizes, steps);

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -16,7 +17,7 @@ namespace trubal {
 
 static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
                                                      "energy", "fabric", "coordination", "prop", "damp",
-                                                     "history", "walls"};
+                                                     "history", "walls", "psd"};
 
 static void print_info(Context& ctx) {
   const Session& s = ctx.session;
@@ -194,12 +195,43 @@ static void print_walls(Context& ctx, const std::string& file) {
   }
 }
 
+// The grading of the balls the last GEN made (those still there) next to the one it asked for.
+static void print_psd(Context& ctx, const std::string& file) {
+  const auto& sizes = ctx.session.last_sizes();
+  if (!sizes) throw std::runtime_error("PRINT psd: no GEN since START or RESTART (it compares the last GEN's balls with its sizes)");
+  const Model& m = ctx.session.model();
+  std::vector<double> radii;
+  for (std::int64_t id : ctx.session.last_generated()) {
+    auto it = std::lower_bound(m.balls.id.begin(), m.balls.id.end(), id);
+    if (it != m.balls.id.end() && *it == id) radii.push_back(m.balls.rad[static_cast<std::size_t>(it - m.balls.id.begin())]);
+  }
+  if (radii.empty()) throw std::runtime_error("PRINT psd: the balls of the last GEN are gone");
+  const auto rows = compare_grading(*sizes, radii);
+  double worst = 0, at = 0;
+  for (const auto& r : rows)
+    if (std::abs(r.sample - r.asked) > worst) { worst = std::abs(r.sample - r.asked); at = r.diameter; }
+  if (!file.empty()) {
+    std::ostringstream csv;
+    csv << "diameter,passing_asked,passing_sample\n";
+    for (const auto& r : rows) csv << csv_real(r.diameter) << ',' << csv_real(r.asked) << ',' << csv_real(r.sample) << '\n';
+    write_file_atomically(file, csv.str());
+    ctx.out << fmt::format("grading at {} diameters written to {}\n", rows.size(), file);
+  } else {
+    ctx.out << fmt::format("grading of the last GEN's {} balls ({}), percent passing by mass:\n", radii.size(),
+                           sizes->describe());
+    ctx.out << fmt::format("{:>14} {:>10} {:>10} {:>10}\n", "diameter", "asked", "sample", "difference");
+    for (const auto& r : rows)
+      ctx.out << fmt::format("{:>14.6g} {:>10.3f} {:>10.3f} {:>10.3f}\n", r.diameter, r.asked, r.sample, r.sample - r.asked);
+  }
+  ctx.out << fmt::format("largest difference: {:.3f} percent passing, at diameter {:.6g}\n", worst, at);
+}
+
 static void run_print(Context& ctx, Args& args) {
   auto item = args.expect(kItems, "PRINT item");
   std::string file;
   if (args.accept("file")) file = args.word("file name");
-  if (!file.empty() && item != 1 && item != 2 && item != 11)
-    args.fail("`file` goes with PRINT balls, contacts and walls");
+  if (!file.empty() && item != 1 && item != 2 && item != 11 && item != 12)
+    args.fail("`file` goes with PRINT balls, contacts, walls and psd");
   const Model& m = ctx.session.model();
   switch (item) {
     case 0: args.done(); print_info(ctx); return;
@@ -269,11 +301,12 @@ static void run_print(Context& ctx, Args& args) {
     }
     case 10: args.done(); print_history(ctx); return;
     case 11: args.done(); print_walls(ctx, file); return;
+    case 12: args.done(); print_psd(ctx, file); return;
   }
 }
 
 const Command print_command = {
-    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls [file f] [range ...]",
+    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
@@ -290,9 +323,11 @@ const Command print_command = {
     "id,kind,type,x,y,z,nx,ny,nz,radius,vx,vy,vz,wx,wy,wz,rrate,fx,fy,fz,mx,my,mz,stress,contacts,work (x y z "
     "its centre). The coordination number counts ball pairs only; stress and the unbalanced-force ratio "
     "include the wall contacts (a wall contact's branch vector runs from the ball's centre to the contact "
-    "point).",
+    "point). psd: the grading of the balls the last GEN made (those still there), percent passing by mass "
+    "(solid volume) at the sieve diameters of a sieve curve or at 21 diameters evenly spaced in log d, next to "
+    "the grading asked for, and the largest difference; with `file f.csv`: diameter,passing_asked,passing_sample.",
     {"info", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp", "history",
-     "walls", "file", "volume", "range"},
+     "walls", "psd", "file", "volume", "range"},
     run_print};
 
 }  // namespace trubal

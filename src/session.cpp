@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "interp/signals.hpp"
+#include "gen/placement_grid.hpp"
 #include "io/save.hpp"
 #include "model/edit.hpp"
 #include "physics/measure.hpp"
@@ -44,6 +45,8 @@ void Session::start(const Space& space) {
   fresh.space = space;
   fresh.started = true;
   model_ = std::move(fresh);
+  last_sizes_.reset();
+  last_generated_.clear();
   ++changes_;
   history_->clear();
   dumps_.reset();
@@ -115,60 +118,6 @@ std::size_t Session::CentreHash::operator()(const std::array<double, 3>& c) cons
   return h;
 }
 
-namespace {
-
-// Overlap checks for GEN: balls hashed into cubes of edge >= the largest diameter. In periodic
-// space a candidate is also checked at its images across the faces it is near.
-class PlacementGrid {
- public:
-  PlacementGrid(const Space& space, double cell) : space_(space), cell_(cell) {}
-  void insert(double x, double y, double z, double r) {
-    pts_.push_back({x, y, z, r});
-    cells_[key(cell_of(x), cell_of(y), cell_of(z))].push_back(pts_.size() - 1);
-  }
-  bool overlaps(double x, double y, double z, double r) const {
-    if (!space_.periodic) return overlaps_here(x, y, z, r);
-    auto L = space_.length();
-    const auto& t = space_.tilt;   // a sheared cell: images along its edge vectors, two deep
-    const int reach = t[0] == 0 && t[1] == 0 && t[2] == 0 ? 1 : 2;
-    int most[3];                   // a bounded axis of a mixed space has no images
-    for (int a = 0; a < 3; ++a) most[a] = space_.wraps(a) ? reach : 0;
-    for (int i = -most[0]; i <= most[0]; ++i)
-      for (int j = -most[1]; j <= most[1]; ++j)
-        for (int k = -most[2]; k <= most[2]; ++k)
-          if (overlaps_here(x + i * L[0] + j * t[0] + k * t[1], y + j * L[1] + k * t[2], z + k * L[2], r)) return true;
-    return false;
-  }
-
- private:
-  bool overlaps_here(double x, double y, double z, double r) const {
-    long cx = cell_of(x), cy = cell_of(y), cz = cell_of(z);
-    for (long i = -1; i <= 1; ++i)
-      for (long j = -1; j <= 1; ++j)
-        for (long k = -1; k <= 1; ++k) {
-          auto it = cells_.find(key(cx + i, cy + j, cz + k));
-          if (it == cells_.end()) continue;
-          for (auto q : it->second) {
-            double dx = pts_[q][0] - x, dy = pts_[q][1] - y, dz = pts_[q][2] - z, reach = pts_[q][3] + r;
-            if (dx * dx + dy * dy + dz * dz < reach * reach) return true;
-          }
-        }
-    return false;
-  }
-  // Clamped: in a box far larger than the balls the quotient passes what a long holds (the keys wrap
-  // anyway; a clamped cell only costs distance tests).
-  long cell_of(double v) const { return static_cast<long>(std::clamp(std::floor(v / cell_), -1e18, 1e18)); }
-  static std::uint64_t key(long x, long y, long z) {
-    return (static_cast<std::uint64_t>(x & 0x1FFFFF) << 42) | (static_cast<std::uint64_t>(y & 0x1FFFFF) << 21) |
-           static_cast<std::uint64_t>(z & 0x1FFFFF);
-  }
-  const Space& space_;
-  double cell_;
-  std::vector<std::array<double, 4>> pts_;
-  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
-};
-
-}  // namespace
 
 std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range) {
   require_started();
@@ -176,8 +125,8 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   const Space& s = model_.space;
   double rmax = rhi;
   for (double r : model_.balls.rad) rmax = std::max(rmax, r);
-  PlacementGrid grid(s, 2 * rmax);
   const Balls& b = model_.balls;
+  PlacementGrid grid(s, rmax, b.size() + n);
   for (std::size_t k = 0; k < b.size(); ++k) grid.insert(b.x[k], b.y[k], b.z[k], b.rad[k]);
   // More balls than the densest packing of the smallest could hold is no run at all: say so at once.
   {
@@ -235,8 +184,74 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   }
   std::stable_sort(sorted.begin(), sorted.end(), [](const Placed& p, const Placed& q) { return p.key < q.key; });
   Model& m = edit();
-  for (const auto& [key, q] : sorted) trubal::add_ball(m, 0, type, q[0], q[1], q[2], q[3]);
+  last_sizes_ = SizeDistribution{SizeDistribution::Kind::Uniform, rlo, rhi, rlo, rhi, {}, {}};
+  last_generated_.clear();
+  for (const auto& [key, q] : sorted)
+    last_generated_.push_back(m.balls.id[trubal::add_ball(m, 0, type, q[0], q[1], q[2], q[3])]);
   return placed;
+}
+
+PackResult Session::generate(const GenSpec& spec) {
+  require_started();
+  SizeDistribution sizes = spec.sizes;
+  check(sizes);
+  gen_interrupted = false;
+  PackRequest request{sizes, spec.count, spec.porosity, spec.seed, spec.range,
+                      spec.types.empty() ? 1 : spec.types.front().first};
+  PackResult made = pack(model_, request);
+  gen_interrupted = made.interrupted;
+  // Types by mass fraction: largest ball first, each to the type furthest below its share of the
+  // mass given so far (so every type gets the same grading). Mass at each type's density where PROP
+  // has given every one of them one, else by solid volume.
+  std::vector<int> type_of(made.balls.size(), spec.types.front().first);
+  if (spec.types.size() > 1) {
+    std::vector<double> density(spec.types.size(), 1.0);
+    bool all = true;
+    for (std::size_t t = 0; t < spec.types.size(); ++t) {
+      auto it = model_.materials.find(spec.types[t].first);
+      if (it == model_.materials.end() || !(it->second.density > 0)) all = false;
+      else density[t] = it->second.density;
+    }
+    if (!all) std::fill(density.begin(), density.end(), 1.0);
+    std::vector<double> given(spec.types.size(), 0);
+    double total = 0;
+    for (std::size_t k = 0; k < made.balls.size(); ++k) {
+      const double r = made.balls[k][3], v = r * r * r;
+      std::size_t best = 0;
+      double most = -INFINITY;
+      for (std::size_t t = 0; t < spec.types.size(); ++t) {
+        const double mass = density[t] * v;
+        const double short_of = spec.types[t].second * (total + mass) - given[t];
+        if (short_of > most) { most = short_of; best = t; }
+      }
+      given[best] += density[best] * v;
+      total += density[best] * v;
+      type_of[k] = spec.types[best].first;
+    }
+  }
+  // Numbered in space order, as GEN n rlo rhi numbers them.
+  const Space& s = model_.space;
+  double rmax = 0;
+  for (double r : model_.balls.rad) rmax = std::max(rmax, r);
+  for (const auto& b : made.balls) rmax = std::max(rmax, b[3]);
+  const double cell = 2 * rmax;
+  struct Placed { std::array<std::int64_t, 3> key; std::size_t k; };
+  std::vector<Placed> sorted;
+  sorted.reserve(made.balls.size());
+  for (std::size_t k = 0; k < made.balls.size(); ++k) {
+    const auto& q = made.balls[k];
+    auto cell_of = [&](int a) { return static_cast<std::int64_t>(std::floor((q[a] - s.lo[a]) / cell)); };
+    sorted.push_back({{cell_of(2), cell_of(1), cell_of(0)}, k});
+  }
+  std::stable_sort(sorted.begin(), sorted.end(), [](const Placed& p, const Placed& q) { return p.key < q.key; });
+  Model& m = edit();
+  last_sizes_ = sizes;
+  last_generated_.clear();
+  for (const auto& [key, k] : sorted) {
+    const auto& q = made.balls[k];
+    last_generated_.push_back(m.balls.id[trubal::add_ball(m, 0, type_of[k], q[0], q[1], q[2], q[3])]);
+  }
+  return made;
 }
 
 std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
@@ -375,6 +390,8 @@ void Session::save(const std::string& path) const { save_model(model_, path); }
 void Session::restart(const std::string& path) {
   Model loaded = load_model(path);
   model_ = std::move(loaded);
+  last_sizes_.reset();
+  last_generated_.clear();
   ++changes_;
   history_->clear();
   dumps_.reset();

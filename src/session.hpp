@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "cycle/pipeline.hpp"
+#include "gen/pack.hpp"
+#include "gen/size_distribution.hpp"
 #include "cycle/run.hpp"
 #include "io/history.hpp"
 #include "io/vtk.hpp"
@@ -53,6 +55,20 @@ class Session {
   std::size_t add_ball(std::int64_t id, int type, double x, double y, double z, double rad);
   // GEN: returns how many were placed (fewer than n when there is no room).
   std::size_t generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range);
+  // GEN with a size distribution: n balls (count > 0) or a target porosity; the balls' types
+  // shared by mass fraction (type, fraction; fractions summing to 1), largest ball first.
+  struct GenSpec {
+    SizeDistribution sizes;
+    std::size_t count = 0;
+    double porosity = -1;
+    std::vector<std::pair<int, double>> types{{1, 1.0}};
+    std::uint64_t seed = 0;
+    Range range;
+  };
+  PackResult generate(const GenSpec& spec);
+  // The sizes the last GEN asked for, and the ids of the balls it made (PRINT psd).
+  const std::optional<SizeDistribution>& last_sizes() const { return last_sizes_; }
+  const std::vector<std::int64_t>& last_generated() const { return last_generated_; }
   // LATTICE: which layers to build (layer 0 is even: the nx x ny one).
   enum class Layers { All, Even, Odd };
   std::size_t lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
@@ -104,6 +120,8 @@ class Session {
   std::unique_ptr<History> history_;
   std::unique_ptr<VtkSeries> dumps_;
   RunTotals totals_;
+  std::optional<SizeDistribution> last_sizes_;
+  std::vector<std::int64_t> last_generated_;
   // BALL's check that no two balls share a centre: exact centre -> ball id, built afresh after any
   // other change of the balls (changes_ counts them: edit, cycle, start, restart).
   struct CentreHash {
