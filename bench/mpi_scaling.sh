@@ -1,0 +1,90 @@
+#!/bin/bash
+# Distributed runs against serial and threaded on the dense FCC benchmark scene (issue 17): for each
+# N, trubal serial, threaded on P threads and BACKEND mpi on P ranks, interleaved REPS times; prints
+# the median cycling time, ball-steps/s, the speedup Sp = T*/Tp and efficiency Ep = Sp/p as the seed
+# paper's Table 2 defines them (T*: serial), and the largest peak resident memory of a rank (PRINT
+# INFO's "peak memory"). With
+# LAMMPS installed, LAMMPS on P ranks too (the ratio the issue's target names).
+#
+#   bench/mpi_scaling.sh build/trubal [N ...]      N: 1680, 13500 (default) or 108000
+#   env: STEPS (default 600), REPS (3), RANKS ("1 2"; more oversubscribe a small machine)
+#
+# The scene comes from ../shared/peers/gen_scenes.py (the peers' positions, so the numbers compare
+# with compare.sh). Writes only under a temporary folder.
+set -eu
+TRUBAL=$(realpath "$1"); shift
+SIZES=${*:-13500}; STEPS=${STEPS:-600}; REPS=${REPS:-3}; RANKS=${RANKS:-1 2}
+HERE=$(cd "$(dirname "$0")" && pwd)
+PEERS=$HERE/../../shared/peers
+[ -f "$PEERS/gen_scenes.py" ] || { echo "no $PEERS/gen_scenes.py (the peers' scenes)" >&2; exit 2; }
+command -v mpirun >/dev/null || { echo "no mpirun (Debian: openmpi-bin)" >&2; exit 2; }
+W=$(mktemp -d /tmp/trubal-mpi-XXXXXX)
+trap 'rm -rf "$W"' EXIT
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+SCENES_OUT=$W python3 "$PEERS/gen_scenes.py" fcc >/dev/null
+echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; $STEPS steps, median of $REPS"
+for N in $SIZES; do
+  [ -f "$W/fcc_$N.xyz" ] || { echo "no scene with N=$N (1680, 13500, 108000)" >&2; exit 2; }
+  python3 - "$W" "$N" "$STEPS" "$RANKS" <<'PY'
+import sys
+w, n, steps, ranks = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split()
+lines = open(f"{w}/fcc_{n}.xyz").read().split("\n")
+count, lx, ly, lz = lines[0].split()
+body = [f"START {lx} {ly} {lz}", "PROP KN 1.5E9 KS 1.5E9 MU 0.12278 DENS 2000"]
+body += [f"BALL {l} 20 ID {i}" for i, l in enumerate(lines[1:int(count) + 1], 1)]
+body += ["TSTEP 0.02", "CYCLE 2"]   # the first pair search and the lists, outside the timing
+backends = {"serial": "BACKEND serial"}
+for p in ranks:
+    if p != "1":
+        backends[f"threaded_{p}"] = f"BACKEND threaded threads {p}"
+    backends[f"mpi_{p}"] = "BACKEND mpi"
+for name, backend in backends.items():
+    open(f"{w}/{name}.dat", "w").write("\n".join(body + [backend, f"CYCLE {steps}", "PRINT INFO"]) + "\n")
+PY
+  : >"$W/times"
+  # One run: its cycling time (trubal's "N cycles in T s" of the timed CYCLE) and each rank's peak RSS.
+  one() {
+    local name=$1; shift
+    (cd "$W" && "$@" >"$W/$name.out" 2>&1) || { cat "$W/$name.out" >&2; exit 1; }
+    local secs rss
+    secs=$(grep -o "($STEPS cycles in [0-9.e+-]* s" "$W/$name.out" | tail -1 | awk '{print $4}')
+    rss=$(sed -n 's/^peak memory: \([0-9 ]*\) MiB.*/\1/p' "$W/$name.out" | tail -1)
+    echo "$name $secs $rss" >>"$W/times"
+  }
+  for r in $(seq "$REPS"); do
+    one serial "$TRUBAL" serial.dat
+    for p in $RANKS; do
+      [ "$p" != 1 ] && one "threaded_$p" "$TRUBAL" "threaded_$p.dat"
+      one "mpi_$p" mpirun -np "$p" "$TRUBAL" "mpi_$p.dat"
+      if command -v lmp >/dev/null; then
+        s=$(date +%s.%N)
+        mpirun -np "$p" lmp -in "$PEERS/lammps_fcc.in" -var data "$W/fcc_$N.data" -var nsteps "$STEPS" >"$W/lmp.out" 2>&1 &&
+          echo "lammps_$p $(echo "$(date +%s.%N) - $s" | bc)" >>"$W/times"
+      fi
+    done
+  done
+  python3 - "$W" "$N" "$STEPS" <<'PY'
+import statistics, sys
+w, n, steps = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+runs = {}
+for line in open(f"{w}/times"):
+    parts = line.split()
+    if len(parts) < 2 or not parts[1]: continue
+    runs.setdefault(parts[0], []).append((float(parts[1]), [int(x) for x in parts[2:]]))
+med = {k: statistics.median(t for t, _ in v) for k, v in runs.items()}
+rss = {k: max((max(r) if r else 0) for _, r in v) for k, v in runs.items()}
+base = med["serial"]
+print(f"dense FCC, N = {n}: cycling time (lammps: whole process)")
+print(f"  {'run':12s} {'seconds':>8s} {'M ball-steps/s':>15s} {'Sp':>6s} {'Ep':>6s} {'peak RSS/rank':>14s}")
+for k in sorted(med, key=lambda k: (k.split('_')[-1], k)):
+    p = int(k.split("_")[1]) if "_" in k else 1
+    sp = base / med[k]
+    mem = f"{rss[k]} MiB" if rss[k] else "-"
+    print(f"  {k:12s} {med[k]:8.3f} {n * steps / med[k] / 1e6:15.2f} {sp:6.2f} {sp / p:6.2f} {mem:>14s}")
+for k in med:
+    if k.startswith("mpi_") and k != "mpi_1":
+        p = k.split("_")[1]
+        if f"threaded_{p}" in med: print(f"  mpi on {p} ranks / threaded on {p}: {med[f'threaded_{p}'] / med[k]:.2f}x")
+        if f"lammps_{p}" in med: print(f"  mpi on {p} ranks / LAMMPS on {p} (whole process): {med[f'lammps_{p}'] / med[k]:.2f}x")
+PY
+done
