@@ -107,7 +107,8 @@ const Command hist_command = {
     "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: stress strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, measure sphere x y z r [id n]",
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33 e12 e13 e23), "
-    "volumetric (evol = e11 + e22 + e33, compression positive), "
+    "volumetric (evol = 1 - V/V0, the cell's loss of volume over its volume V0 at START or the last STRAIN reset, "
+    "compression positive: a strain, about e11 + e22 + e33 while they are small), "
     "porosity (porosity void_ratio: of the whole space, the balls' volume over SET volume, the periodic cell or the "
     "START box), measure sphere x y z r [id n] (a measurement sphere, PFC's: m<n>_s11 ... m<n>_s23 its stress, "
     "m<n>_porosity, m<n>_void_ratio, m<n>_coordination, m<n>_sliding, m<n>_f11 ... m<n>_f23 its fabric; PRINT "

@@ -281,6 +281,8 @@ static void run_print(Context& ctx, Args& args) {
       const auto& e = m.space.strain;
       ctx.out << fmt::format("strain: xx {:.6g}  yy {:.6g}  zz {:.6g}  xy {:.6g}  xz {:.6g}  yz {:.6g}\n", e[0], e[1],
                              e[2], e[3], e[4], e[5]);
+      if (m.space.periodic)
+        ctx.out << fmt::format("volumetric strain: {:.6g} (1 - V/V0, compression positive)\n", volumetric_strain(m));
       return;
     }
     case 5: {
@@ -391,7 +393,8 @@ const Command print_command = {
     "those contacts; the porosity from the parts of balls inside it. measure range sphere x y z r: all of them. "
     "porosity without a range: the whole space's (the balls' volume over SET volume, the periodic cell or the "
     "START box) and its void ratio. strain: the periodic space's accumulated strain (xx yy zz xy xz yz, tensor "
-    "components). energy: the energy terms and "
+    "components) and its volumetric strain 1 - V/V0 (V0 the cell's volume at START or the last STRAIN reset). "
+    "energy: the energy terms and "
     "their balance. fabric: the fabric tensor. coordination: coordination number, sliding fraction and "
     "unbalanced-force ratio. prop, damp: the settings. history: the recorded histories. walls: each wall's "
     "shape, motion, and the loads of the last step (force and moment on it, the moment about its spin point; "

@@ -48,6 +48,7 @@ void Session::require_started() const {
 void Session::start(const Space& space) {
   Model fresh;
   fresh.space = space;
+  fresh.space.reference_volume = space.volume();
   fresh.started = true;
   model_ = std::move(fresh);
   last_sizes_.reset();

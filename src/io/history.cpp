@@ -242,8 +242,8 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       for (double s : get_stress()) row.push_back(s);
     } else if (item == "strain") {
       for (int a = 0; a < 6; ++a) row.push_back(model.space.strain[a]);
-    } else if (item == "volumetric") {   // e11 + e22 + e33, compression positive
-      row.push_back(model.space.strain[0] + model.space.strain[1] + model.space.strain[2]);
+    } else if (item == "volumetric") {   // 1 - V / V0 since START or STRAIN reset, compression positive
+      row.push_back(volumetric_strain(model));
     } else if (item == "ratio" && !t.platen_ids.empty()) {
       // Rowe's R = sigma1 / sigma2 = F1 / (A sigma2).
       const double load = (t.membrane_area ? model.membrane.area : t.area) * t.pressure;

@@ -31,7 +31,8 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // that a restarted servo takes the steps an unbroken run takes; older files start it from the
 // contact table; the cycle the contacts' results are of; a following membrane. 5: walls, their
 // motion, servo and last loads, and the ball-wall contacts with their history; the periodic
-// axes (mixed periodicity; older files are all periodic or all bounded). 6: the histories (HIST):
+// axes (mixed periodicity; older files are all periodic or all bounded). 6: the cell's volume where
+// the accumulated strain was 0 (the volumetric strain's reference), and the histories (HIST):
 // each table's items, period, file, platen range and balls, and the rows it holds in memory, so
 // that RESTART resumes them; older files restart with none.
 constexpr std::uint32_t kVersion = 6;
@@ -193,6 +194,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     m.wall_contacts.for_each_array([&](auto& v) { io.vec(v); });
     io.pod(m.space.periodic_axis);
   }
+  if (version >= 6) io.pod(m.space.reference_volume);
 }
 
 // The histories: what each HIST asked for and the rows it holds (a file's window; every row of a
@@ -345,14 +347,17 @@ std::string invalid_model(const Model& m) {
 
 }  // namespace
 
-void save_model(const Model& model, const std::string& path, const History* history) {
+void save_model(const Model& model, const std::string& path, const History* history, std::uint32_t version) {
   if (!comm::root()) return;   // a distributed run's files are rank 0's to write
+  if (version == 0) version = kVersion;
+  if (version < kOldestVersion || version > kVersion)
+    throw std::invalid_argument(fmt::format("save format {} is not one this trubal writes", version));
   Writer w;
-  transfer(w, const_cast<Model&>(model), kVersion);
+  transfer(w, const_cast<Model&>(model), version);
   History none;
-  transfer_histories(w, const_cast<History&>(history ? *history : none));
+  if (version >= 6) transfer_histories(w, const_cast<History&>(history ? *history : none));
   std::string header(kMagic, sizeof kMagic);
-  header.append(reinterpret_cast<const char*>(&kVersion), sizeof kVersion);
+  header.append(reinterpret_cast<const char*>(&version), sizeof version);
   std::uint64_t size = w.buf.size(), sum = fnv1a(w.buf);
   header.append(reinterpret_cast<const char*>(&size), sizeof size);
   header.append(reinterpret_cast<const char*>(&sum), sizeof sum);

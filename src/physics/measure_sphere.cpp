@@ -135,4 +135,12 @@ Porosity space_porosity(const Model& model, double volume) {
   return p;
 }
 
+double volumetric_strain(const Model& model) {
+  const Space& s = model.space;
+  if (s.reference_volume > 0) return 1 - s.volume() / s.reference_volume;
+  // A save older than format 6: the ratio from the accumulated (natural) strains, each the sum of
+  // rate dt, so V / V0 = exp(-(e11 + e22 + e33)) to the steps' second order.
+  return 1 - std::exp(-(s.strain[0] + s.strain[1] + s.strain[2]));
+}
+
 }  // namespace trubal

@@ -1,5 +1,5 @@
-// Measurements in a region, after PFC's measurement spheres, and the porosity of the whole space
-// (man page, CONVENTIONS "Measurement spheres").
+// Measurements in a region, after PFC's measurement spheres, and the porosity and volumetric strain
+// of the whole space (man page, CONVENTIONS).
 #pragma once
 
 #include <array>
@@ -42,5 +42,9 @@ struct Porosity {
 };
 // The whole space: the balls' volumes over `volume` (the periodic cell, the START box or SET volume).
 Porosity space_porosity(const Model& model, double volume);
+
+// The periodic cell's volumetric strain since START or STRAIN reset, compression positive:
+// 1 - V / V0 (a strain, 0.02 for a 2% loss of volume, however large the accumulated strains).
+double volumetric_strain(const Model& model);
 
 }  // namespace trubal
