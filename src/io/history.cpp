@@ -279,10 +279,15 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       row.push_back(p.porosity);
       row.push_back(p.void_ratio);
     } else if (item.rfind("measure ", 0) == 0) {
-      const SphereMeasurement m = measure_sphere(model, measure_item_sphere(item));
-      for (double v : m.stress) row.push_back(v);
-      for (double v : {m.porosity, m.void_ratio, m.coordination, m.sliding}) row.push_back(v);
-      for (double v : m.fabric) row.push_back(v);
+      try {
+        const SphereMeasurement m = measure_sphere(model, measure_item_sphere(item));
+        for (double v : m.stress) row.push_back(v);
+        for (double v : {m.porosity, m.void_ratio, m.coordination, m.sliding}) row.push_back(v);
+        for (double v : m.fabric) row.push_back(v);
+      } catch (const std::runtime_error&) {
+        // A cell that has shrunk until it cannot hold the sphere: the row says so rather than stopping.
+        for (int k = 0; k < 16; ++k) row.push_back(std::numeric_limits<double>::quiet_NaN());
+      }
     } else if (item.rfind("wall ", 0) == 0) {
       const Wall* it = find_wall(model, std::stoll(item.substr(5)));
       if (!it) {   // deleted since: the row says so rather than stopping

@@ -190,3 +190,19 @@ TEST_CASE("measure: PRINT energy before the first cycle has gravity's potential;
   const double ke = std::stod(lines_of(slurp(dir.path() / "e.csv"))[1].substr(lines[1].find(',', lines[1].find(',') + 1) + 1));
   CHECK(mass * 10 * 5 - potential == Approx(ke).epsilon(0.2));
 }
+
+TEST_CASE("measure sphere: a cell shrunk until it cannot hold the sphere gives NaN rows, not an error",
+          "[physics][measure]") {
+  TempDir dir;
+  WorkingDir cd(dir.path());
+  Harness h;
+  // Radius 4.4 plus the ball's 0.1 needs a width of 9: the cell (10, shrinking by 1e-3 a step) is
+  // 9.05 wide at cycle 100 and 8.6 at 150.
+  REQUIRE(h.deck("start 10 10 10\nprop kn 1e5 dens 1000\nball 5 5 5 0.1\ntstep 1e-3\nstrain 1 1 1\n"
+                 "hist measure sphere 5 5 5 4.4 every 50 file m.csv\ncycle 200\n"));
+  const auto lines = lines_of(slurp(dir.path() / "m.csv"));
+  REQUIRE(lines.size() == 5);
+  CHECK_THAT(lines[2], !Catch::Contains("nan"));
+  CHECK_THAT(lines[3], Catch::Contains("nan"));
+  CHECK_THAT(lines[4], Catch::Contains("nan"));
+}
