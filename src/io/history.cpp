@@ -2,6 +2,7 @@
 #include "support/comm.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <cerrno>
 #include <cstdlib>
@@ -217,6 +218,29 @@ std::vector<std::string> History::resume_files(std::int64_t cycle) {
     if (!note.empty()) notes.push_back(std::move(note));
   }
   return notes;
+}
+
+bool History::valid_table(const HistoryTable& t) {
+  std::vector<std::string> columns = {"cycle", "time"};
+  const auto& names = item_names();
+  for (const auto& item : t.items) {
+    std::istringstream in(item);
+    std::string word;
+    in >> word;
+    if (std::find(names.begin(), names.end(), word) == names.end()) return false;
+    if (word == "wall" || word == "measure") {
+      std::int64_t id = 0;
+      if (!(in >> id) || id < 1) return false;
+      if (word == "measure") {
+        const MeasureSphere s = measure_item_sphere(item);
+        if (!(s.radius > 0) || !std::isfinite(s.radius)) return false;
+      }
+    } else if (item != word) {
+      return false;
+    }
+    for (auto& c : columns_of(item)) columns.push_back(c);
+  }
+  return columns == t.columns;
 }
 
 std::vector<std::size_t> History::platen_balls(const Model& model, const HistoryTable& t) {

@@ -64,6 +64,10 @@ class History {
   // or holds other columns is started afresh with the rows the save kept. Returns what it did, one
   // note per table that needed one.
   std::vector<std::string> resume_files(std::int64_t cycle);
+  // Whether a table's items are ones HIST makes (a wall's id, a measurement sphere's numbers) and
+  // its columns theirs: what a save file's tables must pass (a checksum cannot vouch for a file
+  // written by hand).
+  static bool valid_table(const HistoryTable& table);
   // The balls of a platen id list, as ascending indices (ids that left the model are skipped).
   static std::vector<std::size_t> platen_balls(const Model& model, const HistoryTable& table);
   // Records a row in every table whose period divides the model's cycle count.

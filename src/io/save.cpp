@@ -253,7 +253,7 @@ template <class IO> void transfer_histories(IO& io, History& history) {
         if (row.size() != t->columns.size()) io.corrupt();
     }
     if constexpr (reading)
-      if (t->every < 1 || t->columns.size() < 2) io.corrupt();
+      if (t->every < 1 || !History::valid_table(*t)) io.corrupt();
   }
 }
 

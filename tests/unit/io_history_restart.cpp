@@ -157,3 +157,24 @@ TEST_CASE("io history: a save of format 5 (before histories) restarts with none"
   CHECK(old.session.model().cycle == 10);
   CHECK(old.session.model().balls.x == h.session.model().balls.x);
 }
+
+TEST_CASE("io history: a save whose history names no quantity HIST knows is refused as damaged", "[io][history][restart]") {
+  TempDir dir;
+  WorkingDir cd(dir.path());
+  Harness h;
+  REQUIRE(h.deck(kScene + "hist unbal every 5\ncycle 10\nsave s.sav\n"));
+  std::string data = slurp(dir.path() / "s.sav");
+  const std::size_t header = 8 + 4 + 8 + 8;
+  // The item's text, made another word of the same length, with a checksum that matches: the file
+  // is whole, but not one HIST could have written.
+  const auto at = data.find("unbal", header);
+  REQUIRE(at != std::string::npos);
+  data.replace(at, 5, "xxxxx");
+  std::uint64_t sum = 1469598103934665603ull;   // FNV-1a, as save.cpp
+  for (std::size_t k = header; k < data.size(); ++k) sum = (sum ^ static_cast<unsigned char>(data[k])) * 1099511628211ull;
+  std::memcpy(data.data() + 20, &sum, sizeof sum);
+  dir.write("bad.sav", data);
+  Harness other;
+  CHECK_FALSE(other.deck("restart bad.sav\n"));
+  CHECK_THAT(other.first_error_line(), Catch::StartsWith("deck.dat:1: error:") && Catch::Contains("is damaged"));
+}
