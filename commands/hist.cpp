@@ -5,6 +5,7 @@
 
 #include "commands/common.hpp"
 #include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
 #include "physics/walls.hpp"
 
 namespace trubal {
@@ -22,22 +23,43 @@ static void run_hist(Context& ctx, Args& args) {
   std::string file;
   double area = 0, pressure = 0;
   bool membrane_area = false;
+  HistoryFileMode mode = HistoryFileMode::Default;
   const auto& names = History::item_names();
   while (!args.empty() && !match_keyword(args.peek(), {"range"})) {
     if (args.accept("every")) { every = args.count("every", 1); continue; }
     if (args.accept("file")) { file = args.word("file name"); continue; }
     if (args.accept("area")) { area = args.real("area"); continue; }
     if (args.accept("pressure")) { pressure = args.real("pressure"); continue; }
+    if (args.accept("new")) { mode = HistoryFileMode::New; continue; }
+    if (args.accept("append")) { mode = HistoryFileMode::Append; continue; }
     std::string item(names[args.expect(names, "history item")]);
     if (item == "wall") {
       const std::int64_t id = args.count("wall id", 1);
       if (!find_wall(ctx.session.model(), id))
         args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
       item = fmt::format("wall {}", id);
+    } else if (item == "measure") {
+      if (!args.accept("sphere")) args.fail("`measure` takes its sphere: `measure sphere x y z r [id n]`");
+      MeasureSphere sphere;
+      for (double& c : sphere.centre) c = args.real("sphere centre");
+      sphere.radius = args.real("sphere radius");
+      if (!(sphere.radius > 0)) args.fail("a measurement sphere needs a positive radius");
+      // Its columns are m<id>_...: the id given, else one more than the measurement spheres so far.
+      std::int64_t id = 0;
+      if (args.accept("id")) id = args.count("measurement sphere id", 1);
+      else {
+        id = 1;
+        for (const auto& t : ctx.session.history().tables())
+          for (const auto& it : t->items) id += it.rfind("measure ", 0) == 0;
+        for (const auto& it : items) id += it.rfind("measure ", 0) == 0;
+      }
+      measure_sphere(ctx.session.model(), sphere);   // a sphere the cell cannot hold is refused now
+      item = measure_item(id, sphere);
     }
     items.push_back(std::move(item));
   }
   if (items.empty()) args.fail("name at least one quantity to record");
+  if (mode != HistoryFileMode::Default && file.empty()) args.fail("`new` and `append` go with `file f.csv`");
   Range range = read_range(args);
   auto has = [&](const char* item) { return std::find(items.begin(), items.end(), item) != items.end(); };
   const bool rowe = has("ratio") || has("axial");
@@ -60,7 +82,14 @@ static void run_hist(Context& ctx, Args& args) {
       args.fail("`ratio` with a range needs the area and the confining pressure: give MEMBRANE first, or "
                 "`area a pressure p`");
   }
-  auto& t = ctx.session.history().add(items, every, file, range);
+  auto added = ctx.session.history().add(items, every, file, range, mode, model.cycle);
+  if (added.continued) {
+    ctx.out << fmt::format("recording {} every {} cycles to {} (going on: {} rows so far)\n",
+                           fmt::join(added.table.columns, ","), every, file, added.table.recorded);
+    return;
+  }
+  if (!added.note.empty()) ctx.warn(added.note);
+  auto& t = added.table;
   t.platen_ids = std::move(ids);
   t.platen_gap0 = gap0;
   t.area = area;
@@ -75,12 +104,18 @@ static void run_hist(Context& ctx, Args& args) {
 
 const Command hist_command = {
     "HIST", {},
-    "HIST what... [every n] [file f.csv] [area a] [pressure p] [range ...]  |  HIST reset",
+    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: stress strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, measure sphere x y z r [id n]",
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33 e12 e13 e23), "
-    "volumetric (evol = e11 + e22 + e33, compression positive), "
+    "volumetric (evol = 1 - V/V0, the cell's loss of volume over its volume V0 at START or the last STRAIN reset, "
+    "compression positive: a strain, about e11 + e22 + e33 while they are small), "
+    "porosity (porosity void_ratio: of the whole space, the balls' volume over SET volume, the periodic cell or the "
+    "START box), measure sphere x y z r [id n] (a measurement sphere, PFC's: m<n>_s11 ... m<n>_s23 its stress, "
+    "m<n>_porosity, m<n>_void_ratio, m<n>_coordination, m<n>_sliding, m<n>_f11 ... m<n>_f23 its fabric; PRINT "
+    "measure and the man page say how each is taken; n counts the spheres from 1 unless given; NaN where a "
+    "periodic cell has shrunk until it cannot hold the sphere), "
     "ratio, sratio, axial, platen, wall n (w<n>_fx w<n>_fy w<n>_fz: the force on wall n; w<n>_stress; w<n>_pos: a "
-    "cylinder's radius, else the plane's offset point.normal), energy (ke strain_energy friction_work damping_work boundary_work), unbal (mean "
+    "cylinder's radius, else the plane's offset point.normal), energy (ke strain_energy friction_work damping_work boundary_work potential; potential is gravity's, as PRINT energy shows it), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
     "range holding the top and bottom platens (the balls above and below the middle of its height): ratio "
@@ -96,10 +131,15 @@ const Command hist_command = {
     "platen is the z reaction force of the balls in the range (all balls without one). With `file` the rows "
     "are written as CSV (header cycle,time,... then one row per record, flushed as they come), and memory keeps "
     "only the last 10,000 to 20,000 (PRINT history shows those, PLOT reads the file back), so a long `every 1` "
-    "run does not fill the memory; without `file` every row stays in memory. `HIST reset` "
-    "forgets all histories.",
-    {"stress", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall", "every", "file", "area",
-     "pressure", "reset", "range"},
+    "run does not fill the memory; without `file` every row stays in memory. A file that is there already is "
+    "started afresh (`new`, the default; without the word HIST says how many rows of an earlier run it "
+    "replaced), or with `append` kept up to the present cycle (later rows, of a later part of the run that "
+    "wrote it, are dropped) and added to; its columns must be this HIST's. A second HIST on the file of a live "
+    "history is refused, unless it asks for the same quantities every the same period: then that history goes "
+    "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
+    "histories. `HIST reset` forgets all histories.",
+    {"stress", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall",
+     "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},
     run_hist};
 
 }  // namespace trubal

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -14,12 +15,35 @@
 #include "io/atomic_file.hpp"
 #include "io/csv.hpp"
 #include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
 
 namespace trubal {
 
 static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
                                                      "energy", "fabric", "coordination", "prop", "damp",
-                                                     "history", "walls", "psd"};
+                                                     "history", "walls", "psd", "porosity", "measure"};
+
+// The region of PRINT stress, fabric, coordination, porosity and measure: a measurement sphere,
+// given as the range element `sphere x y z r` (nothing else, since the measurement needs a volume).
+static std::optional<MeasureSphere> measurement_sphere(Args& args, const Range& range) {
+  if (range.empty()) return std::nullopt;
+  if (range.size() != 1 || range[0].kind != RangeElement::Kind::Sphere || range[0].negate)
+    args.fail("a measurement region is one sphere: `range sphere x y z r` (PFC's measurement sphere)");
+  MeasureSphere s;
+  s.centre = {range[0].v[0], range[0].v[1], range[0].v[2]};
+  s.radius = range[0].v[3];
+  return s;
+}
+
+static void print_sphere_header(Context& ctx, const MeasureSphere& s, const SphereMeasurement& m) {
+  ctx.out << fmt::format("measurement sphere at ({:.6g}, {:.6g}, {:.6g}), radius {:.6g}: {} balls, {} contacts\n",
+                         s.centre[0], s.centre[1], s.centre[2], s.radius, m.balls, m.contacts);
+}
+
+static void print_porosity(Context& ctx, double porosity, double void_ratio, double solid, double volume) {
+  ctx.out << fmt::format("porosity: {:.6g}\nvoid ratio: {:.6g}\nsolid volume: {:.6g} of {:.6g}\n", porosity, void_ratio,
+                         solid, volume);
+}
 
 static void print_info(Context& ctx) {
   const Session& s = ctx.session;
@@ -251,8 +275,15 @@ static void run_print(Context& ctx, Args& args) {
     case 3: {
       double volume = 0;
       if (args.accept("volume")) volume = args.real("volume");
-      args.done();
+      const auto sphere = measurement_sphere(args, read_range(args));
       ctx.session.require_started();
+      if (sphere) {
+        if (volume > 0) args.fail("`volume` goes with the whole space's stress, not a measurement sphere's");
+        const SphereMeasurement sm = measure_sphere(m, *sphere);
+        print_sphere_header(ctx, *sphere, sm);
+        print_sym(ctx, "stress", sm.stress);
+        return;
+      }
       print_sym(ctx, "stress", average_stress(m, volume > 0 ? volume : ctx.session.stress_volume()));
       return;
     }
@@ -261,11 +292,13 @@ static void run_print(Context& ctx, Args& args) {
       const auto& e = m.space.strain;
       ctx.out << fmt::format("strain: xx {:.6g}  yy {:.6g}  zz {:.6g}  xy {:.6g}  xz {:.6g}  yz {:.6g}\n", e[0], e[1],
                              e[2], e[3], e[4], e[5]);
+      if (m.space.periodic)
+        ctx.out << fmt::format("volumetric strain: {:.6g} (1 - V/V0, compression positive)\n", volumetric_strain(m));
       return;
     }
     case 5: {
       args.done();
-      EnergyReport e = energy(m);
+      EnergyReport e = energy(ctx.session.model_with_masses());   // before the first CYCLE too
       ctx.out << fmt::format(
           "kinetic (translation): {:.8g}\nkinetic (rotation): {:.8g}\nstrain: {:.8g}\npotential (gravity): "
           "{:.8g}\nfriction work: {:.8g}\ndamping work: {:.8g}\nboundary work: {:.8g}\nbalance (should stay "
@@ -274,9 +307,24 @@ static void run_print(Context& ctx, Args& args) {
           e.boundary_work, e.total());
       return;
     }
-    case 6: args.done(); print_sym(ctx, "fabric", fabric_tensor(m)); return;
+    case 6: {
+      if (const auto sphere = measurement_sphere(args, read_range(args))) {
+        const SphereMeasurement sm = measure_sphere(m, *sphere);
+        print_sphere_header(ctx, *sphere, sm);
+        print_sym(ctx, "fabric", sm.fabric);
+        return;
+      }
+      print_sym(ctx, "fabric", fabric_tensor(m));
+      return;
+    }
     case 7: {
-      args.done();
+      if (const auto sphere = measurement_sphere(args, read_range(args))) {
+        const SphereMeasurement sm = measure_sphere(m, *sphere);
+        print_sphere_header(ctx, *sphere, sm);
+        ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n", sm.coordination,
+                               sm.sliding, sm.contacts);
+        return;
+      }
       ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n",
                              coordination_number(m), sliding_fraction(m), contact_count(m));
       auto u = unbalanced_force(m);
@@ -313,11 +361,36 @@ static void run_print(Context& ctx, Args& args) {
     case 10: args.done(); print_history(ctx); return;
     case 11: args.done(); print_walls(ctx, file); return;
     case 12: args.done(); print_psd(ctx, file); return;
+    case 13: {
+      const auto sphere = measurement_sphere(args, read_range(args));
+      ctx.session.require_started();
+      if (sphere) {
+        const SphereMeasurement sm = measure_sphere(m, *sphere);
+        print_sphere_header(ctx, *sphere, sm);
+        print_porosity(ctx, sm.porosity, sm.void_ratio, sm.solid, sm.volume);
+        return;
+      }
+      const Porosity p = space_porosity(m, ctx.session.stress_volume());
+      print_porosity(ctx, p.porosity, p.void_ratio, p.solid, p.volume);
+      return;
+    }
+    case 14: {
+      const auto sphere = measurement_sphere(args, read_range(args));
+      if (!sphere) args.fail("PRINT measure needs its sphere: `range sphere x y z r`");
+      ctx.session.require_started();
+      const SphereMeasurement sm = measure_sphere(m, *sphere);
+      print_sphere_header(ctx, *sphere, sm);
+      print_sym(ctx, "stress", sm.stress);
+      print_porosity(ctx, sm.porosity, sm.void_ratio, sm.solid, sm.volume);
+      ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\n", sm.coordination, sm.sliding);
+      print_sym(ctx, "fabric", sm.fabric);
+      return;
+    }
   }
 }
 
 const Command print_command = {
-    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd [file f] [range ...]",
+    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
@@ -325,8 +398,14 @@ const Command print_command = {
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
     "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
-    "compression positive. strain: the periodic space's accumulated strain (xx yy zz xy xz yz, tensor "
-    "components). energy: the energy terms and "
+    "compression positive. stress, fabric, coordination and porosity with `range sphere x y z r`: those of a "
+    "measurement sphere (PFC's; man page, CONVENTIONS): the stress from the contacts of the balls whose centres "
+    "are inside, scaled by the sphere's solid fraction; the fabric, coordination number and sliding fraction of "
+    "those contacts; the porosity from the parts of balls inside it. measure range sphere x y z r: all of them. "
+    "porosity without a range: the whole space's (the balls' volume over SET volume, the periodic cell or the "
+    "START box) and its void ratio. strain: the periodic space's accumulated strain (xx yy zz xy xz yz, tensor "
+    "components) and its volumetric strain 1 - V/V0 (V0 the cell's volume at START or the last STRAIN reset). "
+    "energy: the energy terms and "
     "their balance. fabric: the fabric tensor. coordination: coordination number, sliding fraction and "
     "unbalanced-force ratio. prop, damp: the settings. history: the recorded histories. walls: each wall's "
     "shape, motion, and the loads of the last step (force and moment on it, the moment about its spin point; "
@@ -338,7 +417,7 @@ const Command print_command = {
     "(solid volume) at the sieve diameters of a sieve curve or at 21 diameters evenly spaced in log d, next to "
     "the grading asked for, and the largest difference; with `file f.csv`: diameter,passing_asked,passing_sample.",
     {"info", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp", "history",
-     "walls", "psd", "file", "volume", "range"},
+     "walls", "psd", "porosity", "measure", "file", "volume", "range"},
     run_print};
 
 }  // namespace trubal

@@ -16,21 +16,31 @@ const Command save_command = {
     "SAVE", {}, "SAVE file", "write the whole state",
     "Writes the whole state (balls, contacts with their shear history, materials, settings, groups, energy) "
     "to a versioned binary file with a checksum. The file is written to a temporary name and renamed, so "
-    "an existing save is never left half-written. Histories and the backend choice are not saved.",
+    "an existing save is never left half-written. The histories (HIST) are saved with their settings and the rows "
+    "they hold in memory; the backend choice is not saved.",
     {}, run_save};
 
 static void run_restart(Context& ctx, Args& args) {
   std::string file = args.word("file name");
   args.done();
-  ctx.session.restart(file);
+  const auto notes = ctx.session.restart(file);
   const auto& m = ctx.session.model();
   ctx.out << fmt::format("restarted from {}: {} balls, cycle {}\n", file, m.balls.size(), m.cycle);
+  const auto& tables = ctx.session.history().tables();
+  if (!tables.empty())
+    ctx.out << fmt::format("  {} histories resumed (PRINT history lists them)\n", tables.size());
+  for (const auto& note : notes) ctx.warn(note);
 }
 
 const Command restart_command = {
     "RESTART", {"RESTORE"}, "RESTART file", "read a saved state",
     "Reads a file written by SAVE; cycling then continues exactly (bitwise) as the saved run would have. A "
-    "truncated, corrupted or foreign file is refused with an error and the current model is kept.",
+    "truncated, corrupted or foreign file is refused with an error and the current model is kept. The saved "
+    "histories resume: each HIST file is appended to, after its rows past the saved cycle (of a later part of "
+    "the run that wrote it) are dropped; a file that is missing or holds other columns is started afresh with "
+    "the rows the save kept, and RESTART says so. A HIST given again with the same quantities, period and file "
+    "(a deck that repeats its HIST after RESTART) goes on with the resumed history. A save of format 5 or older "
+    "restarts with no histories.",
     {}, run_restart};
 
 }  // namespace trubal

@@ -27,6 +27,7 @@ static void run_strain(Context& ctx, Args& args) {
     args.done();
     Model& m = periodic_model(ctx, args, "STRAIN");
     m.space.strain = {0, 0, 0, 0, 0, 0};
+    m.space.reference_volume = m.space.volume();   // and the volumetric strain with it
     ctx.out << "accumulated strain set to 0 (the rates are unchanged)\n";
     return;
   }

@@ -32,6 +32,11 @@ Model& Session::edit() {
   return model_;
 }
 
+const Model& Session::model_with_masses() {
+  update_mass(model_);
+  return model_;
+}
+
 void Session::set_backend(const std::string& name, int threads, std::uint64_t max_memory) {
   pipeline_ = make_pipeline(name, threads, max_memory);
 }
@@ -43,6 +48,7 @@ void Session::require_started() const {
 void Session::start(const Space& space) {
   Model fresh;
   fresh.space = space;
+  fresh.space.reference_volume = space.volume();
   fresh.started = true;
   model_ = std::move(fresh);
   last_sizes_.reset();
@@ -385,17 +391,19 @@ Session::SolveResult Session::solve(double ratio, std::int64_t limit,
   return out;
 }
 
-void Session::save(const std::string& path) const { save_model(model_, path); }
+void Session::save(const std::string& path) const { save_model(model_, path, history_.get()); }
 
-void Session::restart(const std::string& path) {
-  Model loaded = load_model(path);
+std::vector<std::string> Session::restart(const std::string& path) {
+  auto histories = std::make_unique<History>();
+  Model loaded = load_model(path, histories.get());
   model_ = std::move(loaded);
   last_sizes_.reset();
   last_generated_.clear();
   ++changes_;
-  history_->clear();
+  history_ = std::move(histories);
   dumps_.reset();
   pipeline_->invalidate();
+  return history_->resume_files(model_.cycle);
 }
 
 }  // namespace trubal

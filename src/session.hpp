@@ -29,6 +29,10 @@ class Session {
   ~Session();
 
   const Model& model() const { return model_; }
+  // The model with each ball's mass and inertia from its type's density as they are now (CYCLE
+  // sets them at its start): for measurements taken before the first CYCLE or after a PROP,
+  // such as gravity's potential energy. Changes nothing else.
+  const Model& model_with_masses();
   // For commands that change the balls: the backend's lists are invalidated.
   Model& edit();
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
@@ -103,9 +107,10 @@ class Session {
   };
   const RunTotals& totals() const { return totals_; }
 
-  // SAVE / RESTART (io/save.hpp does the file format).
+  // SAVE / RESTART (io/save.hpp does the file format). SAVE keeps the histories; RESTART resumes
+  // them, appending to their files, and returns what it had to do to those files (notes).
   void save(const std::string& path) const;
-  void restart(const std::string& path);
+  std::vector<std::string> restart(const std::string& path);
 
   std::uint64_t seed = 12345;          // SET seed: default seed of GEN
   bool gen_interrupted = false;        // the last GEN was stopped by Ctrl-C

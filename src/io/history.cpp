@@ -2,23 +2,31 @@
 #include "support/comm.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "io/atomic_file.hpp"
 
 #include "io/csv.hpp"
 #include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
 #include "physics/walls.hpp"
 
 namespace trubal {
 
 const std::vector<std::string_view>& History::item_names() {
   static const std::vector<std::string_view> names = {"stress", "strain", "volumetric", "ratio", "sratio", "axial",
-                                                      "platen", "energy", "unbal", "contacts", "time", "wall"};
+                                                      "platen", "energy", "unbal", "contacts", "time", "wall",
+                                                      "porosity", "measure"};
   return names;
 }
 
@@ -26,7 +34,8 @@ static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "stress") return {"s11", "s22", "s33", "s12", "s13", "s23"};
   if (item == "strain") return {"e11", "e22", "e33", "e12", "e13", "e23"};
   if (item == "volumetric") return {"evol"};
-  if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work"};
+  if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work", "potential"};
+  if (item == "porosity") return {"porosity", "void_ratio"};
   if (item == "contacts") return {"contacts", "sliding", "coordination"};
   if (item == "time") return {};   // cycle and time lead every row
   if (item.rfind("wall ", 0) == 0) {   // "wall <id>": its force, stress and place
@@ -35,11 +44,131 @@ static std::vector<std::string> columns_of(const std::string& item) {
     for (const char* what : {"fx", "fy", "fz", "stress", "pos"}) out.push_back(fmt::format("w{}_{}", id, what));
     return out;
   }
+  if (item.rfind("measure ", 0) == 0) {   // "measure <id> x y z r": a measurement sphere
+    const std::string id = item.substr(8, item.find(' ', 8) - 8);
+    std::vector<std::string> out;
+    for (const char* what : {"s11", "s22", "s33", "s12", "s13", "s23", "porosity", "void_ratio", "coordination",
+                             "sliding", "f11", "f22", "f33", "f12", "f13", "f23"})
+      out.push_back(fmt::format("m{}_{}", id, what));
+    return out;
+  }
   return {item};
 }
 
-HistoryTable& History::add(std::vector<std::string> items, std::int64_t every, const std::string& file,
-                           Range platen_range) {
+namespace {
+
+// Writes the header row to a freshly truncated stream; throws naming the file and the reason.
+void write_header(std::ofstream& out, const HistoryTable& t) {
+  errno = 0;
+  for (std::size_t k = 0; k < t.columns.size(); ++k) out << (k ? "," : "") << t.columns[k];
+  out << '\n' << std::flush;
+  if (!out)
+    throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", t.file,
+                                         errno ? std::strerror(errno) : "write failed"));
+}
+
+std::string csv_row(const std::vector<double>& row) {
+  std::string line;
+  for (std::size_t k = 0; k < row.size(); ++k) {
+    if (k) line += ',';
+    line += csv_real(row[k]);
+  }
+  line += '\n';
+  return line;
+}
+
+// The data rows of an existing history file, or nullopt when there is no such file (or it is
+// empty). Throws for a file that is there but not a history (read_history_csv's message).
+std::unique_ptr<HistoryTable> existing(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec) || std::filesystem::file_size(path, ec) == 0) return nullptr;
+  return read_history_csv(path);
+}
+
+std::string cycles_of(const std::vector<std::vector<double>>& rows) {
+  if (rows.empty()) return "";
+  return fmt::format(" (cycles {} to {})", csv_real(rows.front()[0]), csv_real(rows.back()[0]));
+}
+
+}  // namespace
+
+std::string History::append_to_file(HistoryTable& t, std::int64_t cycle, bool resumed) {
+  std::unique_ptr<HistoryTable> old;
+  std::string why_afresh;
+  try {
+    old = existing(t.file);
+    if (!old) why_afresh = "it was not there";
+  } catch (const std::runtime_error& e) {
+    if (!resumed) throw std::runtime_error(fmt::format("cannot append to '{}': {}", t.file, e.what()));
+    why_afresh = e.what();
+  }
+  if (old && old->columns != t.columns) {
+    if (!resumed)
+      throw std::runtime_error(fmt::format("cannot append to '{}': its columns are {}, not this history's {} (give "
+                                           "`new` to replace it, or another file)",
+                                           t.file, fmt::join(old->columns, ","), fmt::join(t.columns, ",")));
+    why_afresh = fmt::format("its columns were {}", fmt::join(old->columns, ","));
+    old.reset();
+  }
+  if (!old) {
+    std::string note;
+    // Started afresh: the header, then (after RESTART) the rows the save kept in memory.
+    t.out = std::make_unique<std::ofstream>(t.file, std::ios::trunc);
+    if (!*t.out) throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", t.file, std::strerror(errno)));
+    write_header(*t.out, t);
+    for (const auto& row : t.rows) *t.out << csv_row(row);
+    *t.out << std::flush;
+    if (resumed)
+      note = fmt::format("{}: started afresh ({}) with the {} rows the save kept{}", t.file, why_afresh, t.rows.size(),
+                         t.recorded > t.rows.size() ? fmt::format("; the {} before them are lost", t.recorded - t.rows.size())
+                                                    : std::string());
+    t.recorded = t.rows.size();
+    return note;
+  }
+  // Keep the rows up to the present cycle; later ones are of a part of the run that is not this one.
+  auto& rows = old->rows;
+  const auto later = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return r[0] > static_cast<double>(cycle); });
+  const std::size_t dropped = static_cast<std::size_t>(rows.end() - later);
+  std::vector<std::vector<double>> dropped_rows(later, rows.end());
+  rows.erase(later, rows.end());
+  std::string dropped_note;
+  if (dropped > 0) {
+    std::string text;
+    text += fmt::format("{}\n", fmt::join(t.columns, ","));
+    for (const auto& row : rows) text += csv_row(row);
+    write_file_atomically(t.file, text);
+    dropped_note = fmt::format("dropped its {} rows after cycle {}{}, of a later part of the run that wrote it",
+                               dropped, cycle, cycles_of(dropped_rows));
+  }
+  std::string note;
+  if (!resumed)
+    note = fmt::format("{}: appending to its {} rows{}{}", t.file, rows.size(), cycles_of(rows),
+                       dropped_note.empty() ? "" : "; " + dropped_note);
+  else if (!dropped_note.empty())
+    note = fmt::format("{}: {}", t.file, dropped_note);
+  t.recorded = rows.size();
+  const std::size_t keep = std::min(rows.size(), HistoryTable::kWindow);
+  t.rows.assign(rows.end() - static_cast<std::ptrdiff_t>(keep), rows.end());
+  t.out = std::make_unique<std::ofstream>(t.file, std::ios::app);
+  if (!*t.out) throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", t.file, std::strerror(errno)));
+  return note;
+}
+
+std::string measure_item(std::int64_t id, const MeasureSphere& s) {
+  return fmt::format("measure {} {} {} {} {}", id, csv_real(s.centre[0]), csv_real(s.centre[1]), csv_real(s.centre[2]),
+                     csv_real(s.radius));
+}
+
+MeasureSphere measure_item_sphere(const std::string& item) {
+  std::istringstream in(item.substr(8));
+  std::int64_t id = 0;
+  MeasureSphere s;
+  in >> id >> s.centre[0] >> s.centre[1] >> s.centre[2] >> s.radius;
+  return s;
+}
+
+HistoryAdded History::add(std::vector<std::string> items, std::int64_t every, const std::string& file,
+                          Range platen_range, HistoryFileMode mode, std::int64_t cycle) {
   auto t = std::make_unique<HistoryTable>();
   t->columns = {"cycle", "time"};
   for (const auto& item : items)
@@ -48,18 +177,70 @@ HistoryTable& History::add(std::vector<std::string> items, std::int64_t every, c
   t->every = every;
   t->file = file;
   t->platen_range = std::move(platen_range);
+  if (!file.empty())
+    for (auto& live : tables_) {
+      if (live->file != file) continue;
+      // The same history again (a deck that repeats its HIST after RESTART resumed it): it goes on.
+      if (live->columns == t->columns && live->every == every && mode != HistoryFileMode::New)
+        return {*live, true, fmt::format("{}: the history already recording to it goes on", file)};
+      throw std::runtime_error(fmt::format("'{}' is the file of a history already recording ({} every {}): give "
+                                           "another file, or HIST reset first",
+                                           file, fmt::join(live->columns, ","), live->every));
+    }
+  std::string note;
   if (!file.empty() && comm::root()) {   // a distributed run's files are rank 0's to write
-    t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
-    if (!*t->out) throw std::runtime_error(fmt::format("cannot write the history file '{}'", file));
-    errno = 0;
-    for (std::size_t k = 0; k < t->columns.size(); ++k) *t->out << (k ? "," : "") << t->columns[k];
-    *t->out << '\n' << std::flush;
-    if (!*t->out)
-      throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", file,
-                                           errno ? std::strerror(errno) : "write failed"));
+    if (mode == HistoryFileMode::Append) {
+      note = append_to_file(*t, cycle, false);
+    } else {
+      if (mode == HistoryFileMode::Default) {
+        std::unique_ptr<HistoryTable> old;
+        try { old = existing(file); } catch (const std::runtime_error&) {}
+        if (old && !old->rows.empty())
+          note = fmt::format("{}: replaced its {} rows{} of an earlier run (HIST ... append keeps them; `new` replaces them without this note)", file,
+                             old->rows.size(), cycles_of(old->rows));
+      }
+      t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
+      if (!*t->out)
+        throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", file, std::strerror(errno)));
+      write_header(*t->out, *t);
+    }
   }
   tables_.push_back(std::move(t));
-  return *tables_.back();
+  return {*tables_.back(), false, note};
+}
+
+std::vector<std::string> History::resume_files(std::int64_t cycle) {
+  std::vector<std::string> notes;
+  if (!comm::root()) return notes;
+  for (auto& t : tables_) {
+    if (t->file.empty()) continue;
+    std::string note = append_to_file(*t, cycle, true);
+    if (!note.empty()) notes.push_back(std::move(note));
+  }
+  return notes;
+}
+
+bool History::valid_table(const HistoryTable& t) {
+  std::vector<std::string> columns = {"cycle", "time"};
+  const auto& names = item_names();
+  for (const auto& item : t.items) {
+    std::istringstream in(item);
+    std::string word;
+    in >> word;
+    if (std::find(names.begin(), names.end(), word) == names.end()) return false;
+    if (word == "wall" || word == "measure") {
+      std::int64_t id = 0;
+      if (!(in >> id) || id < 1) return false;
+      if (word == "measure") {
+        const MeasureSphere s = measure_item_sphere(item);
+        if (!(s.radius > 0) || !std::isfinite(s.radius)) return false;
+      }
+    } else if (item != word) {
+      return false;
+    }
+    for (auto& c : columns_of(item)) columns.push_back(c);
+  }
+  return columns == t.columns;
 }
 
 std::vector<std::size_t> History::platen_balls(const Model& model, const HistoryTable& t) {
@@ -85,8 +266,8 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       for (double s : get_stress()) row.push_back(s);
     } else if (item == "strain") {
       for (int a = 0; a < 6; ++a) row.push_back(model.space.strain[a]);
-    } else if (item == "volumetric") {   // e11 + e22 + e33, compression positive
-      row.push_back(model.space.strain[0] + model.space.strain[1] + model.space.strain[2]);
+    } else if (item == "volumetric") {   // 1 - V / V0 since START or STRAIN reset, compression positive
+      row.push_back(volumetric_strain(model));
     } else if (item == "ratio" && !t.platen_ids.empty()) {
       // Rowe's R = sigma1 / sigma2 = F1 / (A sigma2).
       const double load = (t.membrane_area ? model.membrane.area : t.area) * t.pressure;
@@ -115,8 +296,22 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
     } else if (item == "energy") {
       EnergyReport e = energy(model);
       for (double v : {e.kinetic_translation + e.kinetic_rotation, e.strain, e.friction_work, e.damping_work,
-                       e.boundary_work})
+                       e.boundary_work, e.potential})
         row.push_back(v);
+    } else if (item == "porosity") {
+      const Porosity p = space_porosity(model, volume);
+      row.push_back(p.porosity);
+      row.push_back(p.void_ratio);
+    } else if (item.rfind("measure ", 0) == 0) {
+      try {
+        const SphereMeasurement m = measure_sphere(model, measure_item_sphere(item));
+        for (double v : m.stress) row.push_back(v);
+        for (double v : {m.porosity, m.void_ratio, m.coordination, m.sliding}) row.push_back(v);
+        for (double v : m.fabric) row.push_back(v);
+      } catch (const std::runtime_error&) {
+        // A cell that has shrunk until it cannot hold the sphere: the row says so rather than stopping.
+        for (int k = 0; k < 16; ++k) row.push_back(std::numeric_limits<double>::quiet_NaN());
+      }
     } else if (item.rfind("wall ", 0) == 0) {
       const Wall* it = find_wall(model, std::stoll(item.substr(5)));
       if (!it) {   // deleted since: the row says so rather than stopping

@@ -10,6 +10,7 @@
 
 #include "model/model.hpp"
 #include "model/range.hpp"
+#include "physics/measure_sphere.hpp"
 
 namespace trubal {
 
@@ -36,13 +37,37 @@ struct HistoryTable {
   // the window no longer holds them all.
 };
 
+// What HIST ... file does with a file that is there: `new` starts it afresh, `append` keeps its rows
+// up to the present cycle and adds to them; the default is `new`, saying how many rows it replaces.
+enum class HistoryFileMode { Default, New, Append };
+
+// What History::add did: a new table, or (`continued`) the live table that already writes that
+// file with the same columns and period (a HIST repeated after RESTART resumed it). `note`: what it
+// did to a file that was there (replaced rows, kept rows, dropped later rows), or "".
+struct HistoryAdded {
+  HistoryTable& table;
+  bool continued = false;
+  std::string note;
+};
+
 class History {
  public:
   // The item names HIST accepts, for parsing and completion.
   static const std::vector<std::string_view>& item_names();
-  // Adds a table; opens (truncates) its file and writes the header. Throws std::runtime_error if the
-  // file cannot be written.
-  HistoryTable& add(std::vector<std::string> items, std::int64_t every, const std::string& file, Range platen_range);
+  // Adds a table; opens its file as `mode` says (at the model's `cycle`) and writes the header.
+  // Throws std::runtime_error if the file cannot be written, if `append` finds other columns in it,
+  // or if another live table writes the same file with other columns.
+  HistoryAdded add(std::vector<std::string> items, std::int64_t every, const std::string& file, Range platen_range,
+                   HistoryFileMode mode = HistoryFileMode::Default, std::int64_t cycle = 0);
+  // After RESTART: reopens the file of every table taken from the save, for appending. A file's
+  // rows after `cycle` (a later part of the run that wrote it) are dropped; a file that is missing
+  // or holds other columns is started afresh with the rows the save kept. Returns what it did, one
+  // note per table that needed one.
+  std::vector<std::string> resume_files(std::int64_t cycle);
+  // Whether a table's items are ones HIST makes (a wall's id, a measurement sphere's numbers) and
+  // its columns theirs: what a save file's tables must pass (a checksum cannot vouch for a file
+  // written by hand).
+  static bool valid_table(const HistoryTable& table);
   // The balls of a platen id list, as ascending indices (ids that left the model are skipped).
   static std::vector<std::size_t> platen_balls(const Model& model, const HistoryTable& table);
   // Records a row in every table whose period divides the model's cycle count.
@@ -64,8 +89,15 @@ class History {
 
  private:
   void record(HistoryTable& table, const Model& model, double volume);
+  // Opens t.file for appending after keeping its rows up to `cycle`; "" or a note.
+  static std::string append_to_file(HistoryTable& t, std::int64_t cycle, bool resumed);
   std::vector<std::unique_ptr<HistoryTable>> tables_;
 };
+
+// The item string of a measurement sphere (`measure <id> x y z r`, reals in round-trip form, so
+// that a saved history measures the same sphere), and the sphere back from it.
+std::string measure_item(std::int64_t id, const MeasureSphere& sphere);
+MeasureSphere measure_item_sphere(const std::string& item);
 
 // Reads a CSV file written by HIST ... file (a header row, then rows of numbers) as a table whose
 // `file` is the path. Throws std::runtime_error naming the file and line of anything malformed.

@@ -31,8 +31,11 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // that a restarted servo takes the steps an unbroken run takes; older files start it from the
 // contact table; the cycle the contacts' results are of; a following membrane. 5: walls, their
 // motion, servo and last loads, and the ball-wall contacts with their history; the periodic
-// axes (mixed periodicity; older files are all periodic or all bounded).
-constexpr std::uint32_t kVersion = 5;
+// axes (mixed periodicity; older files are all periodic or all bounded). 6: the cell's volume where
+// the accumulated strain was 0 (the volumetric strain's reference), and the histories (HIST):
+// each table's items, period, file, platen range and balls, and the rows it holds in memory, so
+// that RESTART resumes them; older files restart with none.
+constexpr std::uint32_t kVersion = 6;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -191,6 +194,67 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     m.wall_contacts.for_each_array([&](auto& v) { io.vec(v); });
     io.pod(m.space.periodic_axis);
   }
+  if (version >= 6) io.pod(m.space.reference_volume);
+}
+
+// The histories: what each HIST asked for and the rows it holds (a file's window; every row of a
+// table in memory only). The file itself is reopened by History::resume_files.
+template <class IO> void transfer_histories(IO& io, History& history) {
+  constexpr bool reading = std::is_same_v<IO, Reader>;
+  std::uint64_t ntables = history.tables().size();
+  io.pod(ntables);
+  if constexpr (reading) {
+    if (ntables > 100000) io.corrupt();
+    for (std::uint64_t k = 0; k < ntables; ++k) history.adopt(std::make_unique<HistoryTable>());
+  }
+  auto strings = [&](std::vector<std::string>& v) {
+    std::uint64_t n = v.size();
+    io.pod(n);
+    if constexpr (reading) {
+      if (n > 1000000) io.corrupt();
+      v.assign(n, std::string());
+    }
+    for (auto& x : v) io.str(x);
+  };
+  for (const auto& t : history.tables()) {
+    strings(t->items);
+    strings(t->columns);
+    io.pod(t->every);
+    io.str(t->file);
+    std::uint64_t nrange = t->platen_range.size();
+    io.pod(nrange);
+    if constexpr (reading) {
+      if (nrange > 1000) io.corrupt();
+      t->platen_range.assign(nrange, RangeElement{});
+    }
+    for (RangeElement& e : t->platen_range) {
+      std::int32_t kind = static_cast<std::int32_t>(e.kind);
+      io.pod(kind);
+      if constexpr (reading) {
+        if (kind < 0 || kind > static_cast<std::int32_t>(RangeElement::Kind::Octagon)) io.corrupt();
+        e.kind = static_cast<RangeElement::Kind>(kind);
+      }
+      io.pod(e.negate); io.pod(e.v); io.str(e.group);
+    }
+    io.vec(t->platen_ids);
+    io.pod(t->platen_gap0); io.pod(t->area); io.pod(t->pressure); io.pod(t->membrane_area);
+    std::uint64_t recorded = t->recorded, nrows = t->rows.size();
+    io.pod(recorded);
+    io.pod(nrows);
+    if constexpr (reading) {
+      if (nrows > recorded) io.corrupt();
+      t->recorded = recorded;
+      if (nrows > 100000000) io.corrupt();
+      t->rows.assign(nrows, {});
+    }
+    for (auto& row : t->rows) {
+      io.vec(row);
+      if constexpr (reading)
+        if (row.size() != t->columns.size()) io.corrupt();
+    }
+    if constexpr (reading)
+      if (t->every < 1 || !History::valid_table(*t)) io.corrupt();
+  }
 }
 
 // PATH.tmp-PID files of SAVEs that were killed (kill -9) mid-write: nothing else removes them. Only
@@ -283,12 +347,17 @@ std::string invalid_model(const Model& m) {
 
 }  // namespace
 
-void save_model(const Model& model, const std::string& path) {
+void save_model(const Model& model, const std::string& path, const History* history, std::uint32_t version) {
   if (!comm::root()) return;   // a distributed run's files are rank 0's to write
+  if (version == 0) version = kVersion;
+  if (version < kOldestVersion || version > kVersion)
+    throw std::invalid_argument(fmt::format("save format {} is not one this trubal writes", version));
   Writer w;
-  transfer(w, const_cast<Model&>(model), kVersion);
+  transfer(w, const_cast<Model&>(model), version);
+  History none;
+  if (version >= 6) transfer_histories(w, const_cast<History&>(history ? *history : none));
   std::string header(kMagic, sizeof kMagic);
-  header.append(reinterpret_cast<const char*>(&kVersion), sizeof kVersion);
+  header.append(reinterpret_cast<const char*>(&version), sizeof version);
   std::uint64_t size = w.buf.size(), sum = fnv1a(w.buf);
   header.append(reinterpret_cast<const char*>(&size), sizeof size);
   header.append(reinterpret_cast<const char*>(&sum), sizeof sum);
@@ -320,7 +389,7 @@ void save_model(const Model& model, const std::string& path) {
   }
 }
 
-Model load_model(const std::string& path) {
+Model load_model(const std::string& path, History* history) {
   // Rank 0 reads the file, every rank restarts from its bytes (an error travels as "E" + message).
   std::string data;
   if (comm::root()) {
@@ -354,6 +423,8 @@ Model load_model(const std::string& path) {
   Model m;
   Reader r(body, path);
   transfer(r, m, version);
+  History histories;
+  if (version >= 6) transfer_histories(r, histories);
   if (!r.at_end()) r.corrupt();
   // Cross-checks that a checksum collision or a bug could not hide.
   const std::size_t n = m.balls.id.size();
@@ -366,6 +437,7 @@ Model load_model(const std::string& path) {
   const std::string wrong = invalid_model(m);
   if (!wrong.empty())
     throw std::runtime_error(fmt::format("'{}' holds no valid model: {} (not restarted)", path, wrong));
+  if (history) *history = std::move(histories);
   return m;
 }
 

@@ -1,18 +1,26 @@
 // SAVE/RESTART: the whole model (balls, materials, contacts with their shear history, space,
-// settings, energy, groups) in a versioned binary file with a checksum, written atomically.
+// settings, energy, groups, histories) in a versioned binary file with a checksum, written atomically.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
+#include "io/history.hpp"
 #include "model/model.hpp"
 
 namespace trubal {
 
 // Writes to PATH.tmp-PID, syncs, renames over PATH. Throws std::runtime_error on failure (the old
 // file, if any, is untouched).
-void save_model(const Model& model, const std::string& path);
+// With `history`, its tables (settings and the rows in memory) are saved too. `version` 0 writes
+// the current format; an older one writes what that format held (for the tests that check that
+// older files still read).
+void save_model(const Model& model, const std::string& path, const History* history = nullptr,
+                std::uint32_t version = 0);
 // Reads a file written by save_model. Throws std::runtime_error for a missing, truncated,
-// corrupted or foreign file, or one of another version; the model is not touched then.
-Model load_model(const std::string& path);
+// corrupted or foreign file, or one of another version; the model is not touched then. With
+// `history`, it receives the saved tables (none from a file older than version 6), their files not
+// yet opened (History::resume_files).
+Model load_model(const std::string& path, History* history = nullptr);
 
 }  // namespace trubal

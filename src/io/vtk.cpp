@@ -206,6 +206,38 @@ void write_walls_vtp(const Model& model, const std::string& path) {
   write_file_atomically(path, wr.finish(points.size() / 3, 0, 0, polys));
 }
 
+void write_domain_vtp(const Model& model, const std::string& path) {
+  // The corners lo + H s, s in {0, 1}^3, H's columns the edge vectors (tilted in a sheared cell).
+  const Space& s = model.space;
+  const auto L = s.length();
+  const Vec3 edge[3] = {{L[0], 0, 0}, {s.tilt[0], L[1], 0}, {s.tilt[1], s.tilt[2], L[2]}};
+  std::vector<double> points;
+  for (int k = 0; k < 8; ++k) {
+    Vec3 p = s.lo;
+    for (int a = 0; a < 3; ++a)
+      if (k >> a & 1)
+        for (int c = 0; c < 3; ++c) p[c] += edge[a][c];
+    points.insert(points.end(), {p[0], p[1], p[2]});
+  }
+  // The 12 edges: from each corner without bit a to the corner with it.
+  std::vector<std::int64_t> connectivity;
+  std::vector<std::int32_t> axis, periodic;
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < 8; ++k)
+      if (!(k >> a & 1)) {
+        connectivity.insert(connectivity.end(), {k, k | 1 << a});
+        axis.push_back(a);
+        periodic.push_back(s.wraps(a) ? 1 : 0);
+      }
+  PolyDataWriter w;
+  w.array("Points", "Float64", "Points", points, 3);
+  w.array("Lines", "Int64", "connectivity", connectivity);
+  w.array("Lines", "Int64", "offsets", iota64(axis.size(), 2, 2));
+  w.array("CellData", "Int32", "axis", axis);
+  w.array("CellData", "Int32", "periodic", periodic);
+  write_file_atomically(path, w.finish(8, 0, axis.size()));
+}
+
 VtkSeries::VtkSeries(std::string base, std::int64_t every) : base_(std::move(base)), every_(every) {
   for (const char* ext : {".vtp", ".pvd", ".VTP", ".PVD"})
     if (base_.size() > 4 && base_.ends_with(ext)) base_.resize(base_.size() - 4);
@@ -220,11 +252,16 @@ std::string VtkSeries::contacts_path(std::int64_t cycle) const {
 
 std::string VtkSeries::walls_path(std::int64_t cycle) const { return fmt::format("{}_walls_{:06d}.vtp", base_, cycle); }
 
+std::string VtkSeries::domain_path(std::int64_t cycle) const {
+  return fmt::format("{}_domain_{:06d}.vtp", base_, cycle);
+}
+
 void VtkSeries::write(const Model& model) {
   write_balls_vtp(model, balls_path(model.cycle));
   write_contacts_vtp(model, contacts_path(model.cycle));
   const bool walls = !model.walls.empty();
   if (walls) write_walls_vtp(model, walls_path(model.cycle));
+  write_domain_vtp(model, domain_path(model.cycle));
   // A second dump at the same cycle replaces the first.
   if (!entries_.empty() && entries_.back().cycle == model.cycle) entries_.pop_back();
   entries_.push_back({model.cycle, model.time, walls});
@@ -257,6 +294,7 @@ void VtkSeries::write_pvd() const {
                        leaf(contacts_path(e.cycle)));
     if (e.walls)
       xml += fmt::format("    <DataSet timestep=\"{}\" part=\"2\" file=\"{}\"/>\n", e.time, leaf(walls_path(e.cycle)));
+    xml += fmt::format("    <DataSet timestep=\"{}\" part=\"3\" file=\"{}\"/>\n", e.time, leaf(domain_path(e.cycle)));
   }
   xml += "  </Collection>\n</VTKFile>\n";
   write_file_atomically(pvd_path(), xml);

@@ -8,8 +8,12 @@
 //                             the START box's diagonal; a polygon as one cell of its vertices; a
 //                             cylinder as kCylinderSegments quads around, one band along its length,
 //                             facing out; cell data id (the wall's), force (on the wall)
+// and, in every dump,
+//   BASE_domain_000123.vtp    the START box or periodic cell (a parallelepiped once sheared): its 8
+//                             corners and 12 edges as line cells; cell data axis (0 1 2, the edge's
+//                             direction) and periodic (1 where that axis is periodic)
 // and rewrites BASE.pvd, the collection (part 0 balls, part 1 contacts, part 2 walls where a dump
-// has them) with each dump's time, so ParaView opens the whole series at once. Arrays are binary, appended raw (little-endian, UInt64
+// has them, part 3 the domain) with each dump's time, so ParaView opens the whole series at once. Arrays are binary, appended raw (little-endian, UInt64
 // byte counts). Every file is written to a temporary name and renamed, so a reader never sees
 // half a file.
 #pragma once
@@ -30,6 +34,7 @@ inline constexpr int kCylinderSegments = 48;
 void write_balls_vtp(const Model& model, const std::string& path);
 void write_contacts_vtp(const Model& model, const std::string& path);
 void write_walls_vtp(const Model& model, const std::string& path);
+void write_domain_vtp(const Model& model, const std::string& path);
 
 class VtkSeries {
  public:
@@ -47,6 +52,7 @@ class VtkSeries {
   std::string balls_path(std::int64_t cycle) const;
   std::string contacts_path(std::int64_t cycle) const;
   std::string walls_path(std::int64_t cycle) const;   // written only when the model has walls
+  std::string domain_path(std::int64_t cycle) const;
   std::size_t dumps() const { return entries_.size(); }
 
  private:

@@ -131,6 +131,11 @@ struct Space {
   // Periodic cell control (compression positive): xx yy zz xy xz yz.
   std::array<double, 6> strain_rate{};
   std::array<double, 6> strain{};                   // accumulated
+  // The cell's volume where `strain` was last 0 (START, STRAIN reset): the volumetric strain is
+  // 1 - V / this. 0 where unknown (a save older than format 6): then exp of the accumulated
+  // strains stands in for the ratio.
+  double reference_volume = 0;
+  double volume() const { const auto L = length(); return L[0] * L[1] * L[2]; }
   std::array<bool, 3> servo_on{false, false, false};
   std::array<double, 3> servo_target{};
   double servo_gain = 0, servo_max_rate = 0;

@@ -192,7 +192,7 @@ TEST_CASE("commands: PRINT balls file and HIST file write the documented CSV", "
                  "print balls file b.csv\nprint contacts file c.csv\n"));
   auto hist = lines_of(slurp("h.csv"));
   REQUIRE(hist.size() == 11);   // header + cycles 10, 20, ..., 100
-  CHECK(hist[0] == "cycle,time,s11,s22,s33,s12,s13,s23,ke,strain_energy,friction_work,damping_work,boundary_work,"
+  CHECK(hist[0] == "cycle,time,s11,s22,s33,s12,s13,s23,ke,strain_energy,friction_work,damping_work,boundary_work,potential,"
                    "contacts,sliding,coordination");
   CHECK(hist[10].rfind("100,", 0) == 0);
   auto balls = lines_of(slurp("b.csv"));

@@ -79,7 +79,7 @@ TEST_CASE("io_plot: unknown columns, columns of different HISTs, other formats a
   CHECK_FALSE(h.deck("plot ratio vs axial file r.png\n"));
   CHECK_THAT(h.first_error_line(),
              Catch::Contains("unknown history column 'ratio' (recorded: cycle, time, ke, strain_energy, friction_work, "
-                             "damping_work, boundary_work, unbal, contacts, sliding, coordination)"));
+                             "damping_work, boundary_work, potential, unbal, contacts, sliding, coordination)"));
   Harness h2;
   REQUIRE(h2.deck(kRecorded));
   CHECK_FALSE(h2.deck("plot ke vs coordination\n"));

@@ -96,7 +96,7 @@ TEST_CASE("io_vtk: periodic dumps, DUMP off, and the .pvd collection with the ti
   CHECK_FALSE(fs::exists(dir.path() / "out/run_000020.vtp"));
   for (const auto& e : fs::directory_iterator(dir.path() / "out")) CHECK(e.path().string().find(".tmp") == std::string::npos);
 
-  // The collection: two parts per dump, times those of HIST time at the same cycles.
+  // The collection: three parts per dump, times those of HIST time at the same cycles.
   const std::string pvd = slurp(dir.path() / "out/run.pvd");
   const auto& rows = h.session.history().tables().front()->rows;   // cycles 5, 10, 15, 20
   REQUIRE(rows.size() >= 2);
@@ -108,14 +108,15 @@ TEST_CASE("io_vtk: periodic dumps, DUMP off, and the .pvd collection with the ti
                                               rows[1][1])));
   std::size_t datasets = 0;
   for (std::size_t at = 0; (at = pvd.find("<DataSet", at)) != std::string::npos; ++at) ++datasets;
-  CHECK(datasets == 6);
+  CHECK(datasets == 9);   // balls, contacts and the domain (part 3) of three dumps
 
   // The collection parses as XML and every file it names reads with VTK. Chains: none before the
   // first step computed forces (cycle 0), two lines at cycle 5, none at cycle 10 (the pressed balls,
   // undamped, have sprung apart).
   CHECK(read_pvd(dir, "out/run.pvd") ==
-        "0 run_000000.vtp 4 0\n1 run_contacts_000000.vtp 0 0\n0 run_000005.vtp 4 0\n1 run_contacts_000005.vtp 4 0\n"
-        "0 run_000010.vtp 4 0\n1 run_contacts_000010.vtp 0 0\n");
+        "0 run_000000.vtp 4 0\n1 run_contacts_000000.vtp 0 0\n3 run_domain_000000.vtp 8 0\n0 run_000005.vtp 4 0\n"
+        "1 run_contacts_000005.vtp 4 0\n3 run_domain_000005.vtp 8 0\n"
+        "0 run_000010.vtp 4 0\n1 run_contacts_000010.vtp 0 0\n3 run_domain_000010.vtp 8 0\n");
 }
 
 TEST_CASE("io_vtk: DUMP errors say what is wrong", "[io][vtk]") {

@@ -173,7 +173,7 @@ TEST_CASE("vtk walls: the collection names the walls as part 2, only in dumps wi
   std::size_t datasets = 0, walls = 0;
   for (std::size_t at = 0; (at = pvd.find("<DataSet", at)) != std::string::npos; ++at) ++datasets;
   for (std::size_t at = 0; (at = pvd.find("part=\"2\"", at)) != std::string::npos; ++at) ++walls;
-  CHECK(datasets == 4 * 2 + 3);
+  CHECK(datasets == 4 * 3 + 3);   // balls, contacts and domain of four dumps, walls of three
   CHECK(walls == 3);
 
   // Every file the collection names reads with VTK; a walls file has the three walls' 50 cells.

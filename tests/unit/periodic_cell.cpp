@@ -7,11 +7,14 @@
 #include <memory>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "model/periodic_cell.hpp"
 #include "backends_scenes.hpp"
 #include "interp_support.hpp"
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
 
 using namespace trubal;
 using namespace trubal::test;
@@ -244,4 +247,26 @@ TEST_CASE("periodic: STRAIN reset starts the accumulated strain again, the rates
   REQUIRE(h.deck("strain reset\ncycle 50\n"));
   CHECK(s.strain[2] == Approx(0.005).epsilon(1e-9));
   CHECK(s.strain_rate[2] == 0.01);
+}
+
+TEST_CASE("periodic: the volumetric strain is 1 - V/V0 from START or STRAIN reset, through SAVE and RESTART",
+          "[periodic]") {
+  trubal::test::TempDir dir;
+  trubal::test::WorkingDir cd(dir.path());
+  trubal::test::Harness h;
+  // 3000 steps at 1e-4 per step on every axis: accumulated strains of 0.3 each, 0.9 in all, where
+  // the cell has lost 1 - (1 - 1e-4)^9000 = 59.3% of its volume: a strain below 1, as a strain is.
+  REQUIRE(h.deck("start 10 10 10\nprop kn 1e5 dens 1000\nball 5 5 5 0.1\nstrain 1 1 1\ntstep 1e-4\ncycle 3000\n"
+                 "print strain\n"));
+  const auto& s = h.session.model().space;
+  CHECK(s.strain[0] + s.strain[1] + s.strain[2] == Approx(0.9).epsilon(1e-9));
+  const double evol = trubal::volumetric_strain(h.session.model());
+  CHECK(evol == Approx(1 - std::pow(1 - 1e-4, 9000)).epsilon(1e-9));
+  CHECK_THAT(h.out.str(), Catch::Contains(fmt::format("volumetric strain: {:.6g} (1 - V/V0", evol)));
+  // A new stage: measured from its own start. 100 more steps shrink the volume by 1 - (1 - 1e-4)^300.
+  REQUIRE(h.deck("strain reset\ncycle 100\nsave s.sav\n"));
+  CHECK(trubal::volumetric_strain(h.session.model()) == Approx(1 - std::pow(1 - 1e-4, 300)).epsilon(1e-9));
+  trubal::test::Harness restarted;
+  REQUIRE(restarted.deck("restart s.sav\n"));
+  CHECK(trubal::volumetric_strain(restarted.session.model()) == trubal::volumetric_strain(h.session.model()));
 }
