@@ -27,15 +27,14 @@ void add_contact_strain(double& sum, bool hertz, double kn, double u, double fsx
   sum += shear_spring_energy(fsx * fsx + fsy * fsy + fsz * fsz, ks);
 }
 
-// Symmetric part of sum a (x) b, in Sym6 order.
+}  // namespace
+
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz) {
   s[0] += ax * bx; s[1] += ay * by; s[2] += az * bz;
   s[3] += 0.5 * (ax * by + ay * bx);
   s[4] += 0.5 * (ax * bz + az * bx);
   s[5] += 0.5 * (ay * bz + az * by);
 }
-
-}  // namespace
 
 Sym6 average_stress(const Model& model, double volume) {
   Sym6 s{};

@@ -12,6 +12,8 @@ namespace trubal {
 using Sym6 = std::array<double, 6>;   // xx yy zz xy xz yz
 
 // Average stress (1/V) sum_c f_a l_b over the contacts (compression positive).
+// Adds the symmetric part of a (x) b to s, in Sym6 order.
+void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz);
 Sym6 average_stress(const Model& model, double volume);
 
 struct EnergyReport {

@@ -20,13 +20,6 @@ constexpr double kPi = std::numbers::pi;
 
 double ball_volume(double r) { return 4.0 / 3.0 * kPi * r * r * r; }
 
-void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz) {
-  s[0] += ax * bx; s[1] += ay * by; s[2] += az * bz;
-  s[3] += 0.5 * (ax * by + ay * bx);
-  s[4] += 0.5 * (ax * bz + az * bx);
-  s[5] += 0.5 * (ay * bz + az * by);
-}
-
 }  // namespace
 
 double ball_sphere_overlap(double r, double R, double d) {
