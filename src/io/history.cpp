@@ -81,7 +81,9 @@ std::string csv_row(const std::vector<double>& row) {
 // empty). Throws for a file that is there but not a history (read_history_csv's message).
 std::unique_ptr<HistoryTable> existing(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec) || std::filesystem::file_size(path, ec) == 0) return nullptr;
+  // Only a regular file can hold an earlier run's rows: a device (/dev/full, /dev/null) or a fifo
+  // is written to, never read (reading /dev/full never ends).
+  if (!std::filesystem::is_regular_file(path, ec) || std::filesystem::file_size(path, ec) == 0 || ec) return nullptr;
   return read_history_csv(path);
 }
 
@@ -365,6 +367,9 @@ std::pair<const HistoryTable*, std::size_t> History::find_column(const std::stri
 }
 
 std::unique_ptr<HistoryTable> read_history_csv(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw std::runtime_error(fmt::format("the history file '{}' is not a regular file", path));
   std::ifstream in(path);
   if (!in) throw std::runtime_error(fmt::format("cannot open the history file '{}'", path));
   auto table = std::make_unique<HistoryTable>();

@@ -94,6 +94,7 @@ TEST_CASE("io_progress: at an interactive terminal a bar is redrawn and erased b
   const std::string command = long_cycle(h, 1.2, true);
   const std::string out = h.out.str();
   const auto last = out.rfind("\r\033[K");
+  INFO(out);   // (once seen failing under ASan with -j2, passing alone: the output says why next time)
   REQUIRE(last != std::string::npos);
   CHECK(count(out, "cycles/s  ") >= 1);
   CHECK_THAT(out, Catch::Contains("] "));
