@@ -26,6 +26,17 @@ namespace trubal {
 
 inline constexpr std::size_t kReduceBlock = 256;   // balls per block of the motion loop
 
+// Adds every exact sum of `from` to the same one of `into` (StepSums, WallLoad: each_sum lists them
+// in one fixed order).
+template <class Sums>
+void merge_exact_sums(Sums& into, Sums& from) {
+  std::array<ExactSum*, 16> to{};   // (StepSums has the most: 16)
+  std::size_t n = 0;
+  into.each_sum([&](ExactSum& s) { to[n++] = &s; });
+  n = 0;
+  from.each_sum([&](ExactSum& s) { to[n++]->add(s); });
+}
+
 // Reductions of one step. The sums are exact (support/exact_sum.hpp): each ball adds its part
 // (the pairs of its run, its motion, its wall contacts, each summed in their fixed order), and the
 // total does not depend on how the balls are shared among threads or ranks; min and max are exact,
@@ -53,7 +64,8 @@ struct StepSums {
     f(kinetic); f(potential);
   }
   void take_step(double dt) {
-    if (std::isnan(dt) || dt < critical_dt) critical_dt = std::isnan(critical_dt) ? critical_dt : dt;
+    if (std::isnan(critical_dt)) return;
+    if (std::isnan(dt) || dt < critical_dt) critical_dt = dt;
   }
   void take_fastest(double speed2, std::size_t ball) {
     const bool nan_new = std::isnan(speed2), nan_old = std::isnan(fastest_speed2);
@@ -63,11 +75,7 @@ struct StepSums {
     if (better) { fastest_speed2 = speed2; fastest_ball = ball; }
   }
   void add(StepSums& o) {
-    std::array<ExactSum*, 16> mine{};
-    int n = 0;
-    each_sum([&](ExactSum& s) { mine[n++] = &s; });
-    n = 0;
-    o.each_sum([&](ExactSum& s) { mine[n++]->add(s); });
+    merge_exact_sums(*this, o);
     take_step(o.critical_dt);
     take_fastest(o.fastest_speed2, o.fastest_ball);
   }
@@ -114,11 +122,7 @@ struct WallLoad {
     for (ExactSum* s : {&fx, &fy, &fz, &mx, &my, &mz, &normal_force, &stiffness, &work}) f(*s);
   }
   void add(WallLoad& o) {
-    std::array<ExactSum*, 9> mine{};
-    int n = 0;
-    each_sum([&](ExactSum& s) { mine[n++] = &s; });
-    n = 0;
-    o.each_sum([&](ExactSum& s) { mine[n++]->add(s); });
+    merge_exact_sums(*this, o);
     contacts += o.contacts;
   }
 };

@@ -54,7 +54,8 @@ class ParallelStep {
   bool distributed() const { return distributed_; }
 
  private:
-  // The walls' loads of this step from the per-block loads (Model::walls' force, moment, ...).
+  // The walls' loads of this step from the `parts` threads' (or ranks') loads (Model::walls' force,
+  // moment, ...).
   void add_wall_loads(Model& model, int parts);
   void run_distributed(Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
                        PhaseTimes& times, const VerletReference* moved);

@@ -101,6 +101,7 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   if (!fresh_ || model_ != &model) prepare(model);
   fresh_ = false;
   const bool measure = backend_->keeps_list() && ref_.x.size() == model.balls.size();
+  if (kernels.moments) scratch_.ball_moments.resize(model.balls.size());   // the contact loops zero their balls'
   step_.run(pool_, model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
   moved_known_ = measure;
   // The walls move with the balls (their velocities are those of the step, like the balls' at t + dt/2).

@@ -33,7 +33,8 @@ struct StepScratch {
   std::vector<PairForce> ball_force;
   std::vector<double> ball_cn;            // the dashpot coefficients' sum (time step with dashpots)
   std::vector<BallParts> ball_parts;
-  // StepKernels::moments only: each ball's run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
+  // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
+  // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
   std::vector<std::array<double, 9>> ball_moments;
   // The shear history a step writes (read from the table's, which other threads may still read
   // for their cross pairs), swapped in after the contact pass.

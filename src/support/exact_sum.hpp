@@ -115,7 +115,7 @@ class ExactSum {
   void load(const std::int64_t* limbs, std::uint8_t special) {
     for (int k = 0; k < kLimbs; ++k) limb_[k] = limbs[k];
     special_ = special;
-    pending_ = kMaxPending - 1;   // normalised at the next addition
+    normalise();   // (limbs summed over ranks need their carries)
   }
 
  private:

@@ -16,6 +16,7 @@
 #include <tuple>
 
 #include "interp_support.hpp"
+#include "scene_decks.hpp"
 #include "support/comm.hpp"
 
 using namespace trubal;
@@ -30,18 +31,8 @@ struct Scene {
   int cycles;
 };
 
-// A loose periodic assembly compressed by the servo, then loaded under the mixed servo (xx, yy held)
-// with an axial strain rate and a shear rate: servo, strain, shear strain (Lees-Edwards images),
-// local damping.
-const Scene kServoShear = {"servo_shear", R"(start 0.01 0.01 0.01
-prop kn 1e5 ks 1e5 fric 26.57 dens 2650
-gen 300 0.0004 0.0006 seed 7
-damp local 0.7
-servo 1e5 1e5 1e5
-cycle 3000
-servo xx 1e5 yy 1e5
-strain zz 2 xy 1
-)", "hist stress strain contacts every 7 file h.csv\ndump vtk d every 50\n", 400};
+// The servo, strain and shear deck of scene_decks.hpp.
+const Scene kServoShear = {"servo_shear", kServoShearDeck, "hist stress strain contacts every 7 file h.csv\ndump vtk d every 50\n", 400};
 
 // Hertz-Mindlin balls with restitution dashpots and Rayleigh damping falling under gravity onto a held
 // floor, some pushed sideways and spun by applied loads; balls that bounce out of the box are destroyed.

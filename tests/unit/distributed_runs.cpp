@@ -7,6 +7,7 @@
 #include <string>
 
 #include "interp_support.hpp"
+#include "scene_decks.hpp"
 #include "support/comm.hpp"
 
 using namespace trubal;
@@ -30,16 +31,6 @@ int run_deck(const TempDir& dir, int ranks) {
   return shell("cd " + quote(dir.str()) + " && " + launcher + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1");
 }
 
-// A loose periodic gas squeezed by the servo, then sheared: the setup of the periodic checks.
-const char* kServoDeck = R"(start 0.01 0.01 0.01
-prop kn 1e5 ks 1e5 fric 26.57 dens 2650
-gen 300 0.0004 0.0006 seed 7
-damp local 0.7
-servo 1e5 1e5 1e5
-cycle 3000
-servo xx 1e5 yy 1e5
-strain zz 2 xy 1
-)";
 
 const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts.csv\n";
 
@@ -48,13 +39,13 @@ const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts
 TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the serial bits", "[mpi]") {
   if (!have_mpi()) return;
   TempDir serial;
-  serial.write("deck.dat", std::string(kServoDeck) + "cycle 400\n" + kOutputs);
+  serial.write("deck.dat", std::string(kServoShearDeck) + "cycle 400\n" + kOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
   const std::string balls = slurp(serial.path() / "balls.csv"), contacts = slurp(serial.path() / "contacts.csv");
   REQUIRE(lines_of(contacts).size() > 100);   // contacts to carry history across the cut
 
   TempDir four;
-  four.write("deck.dat", "backend mpi\n" + std::string(kServoDeck) + "cycle 400\n" + kOutputs + "print info\n");
+  four.write("deck.dat", "backend mpi\n" + std::string(kServoShearDeck) + "cycle 400\n" + kOutputs + "print info\n");
   REQUIRE(run_deck(four, 4) == 0);
   INFO(slurp(four.path() / "out.txt"));
   CHECK_THAT(slurp(four.path() / "out.txt"), Catch::Contains("ranks: 4\n"));
@@ -63,10 +54,10 @@ TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the 
 
   // The save's bytes do not depend on the rank count, and a 2-rank run resumes a 3-rank save.
   TempDir cut;
-  cut.write("deck.dat", "backend mpi\n" + std::string(kServoDeck) + "cycle 150\nsave s.sav\n");
+  cut.write("deck.dat", "backend mpi\n" + std::string(kServoShearDeck) + "cycle 150\nsave s.sav\n");
   REQUIRE(run_deck(cut, 3) == 0);
   TempDir cut_serial;
-  cut_serial.write("deck.dat", std::string(kServoDeck) + "cycle 150\nsave s.sav\n");
+  cut_serial.write("deck.dat", std::string(kServoShearDeck) + "cycle 150\nsave s.sav\n");
   REQUIRE(run_deck(cut_serial, 0) == 0);
   CHECK(slurp(cut.path() / "s.sav") == slurp(cut_serial.path() / "s.sav"));
   cut.write("deck.dat", "restart s.sav\nbackend mpi\ncycle 250\n" + std::string(kOutputs));
