@@ -328,7 +328,9 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
       damping_sum(sums.damping_work), friction_sum(sums.friction_work), strain_sum(sums.strain),
       image_sum(sums.image_power);
   const bool periodic = model.space.periodic;
+  const std::uint8_t* ghost = scratch.ghost.empty() ? nullptr : scratch.ghost.data();
   for (std::size_t ball = begin; ball < end; ++ball) {
+    if (ghost && ghost[ball]) continue;   // another rank moves it (cycle/brick_step.hpp)
     // This ball's parts of the global sums: its contacts' (StepScratch::ball_parts), then its
     // components in a fixed order; then the exact sums.
     const BallParts& part = scratch.ball_parts[ball];

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "cycle/sum_exchange.hpp"
 #include "support/comm.hpp"
 
 namespace trubal {
@@ -77,13 +78,10 @@ void ParallelStep::split_if_stale(const ContactTable& c, const StepScratch& scra
     split(c, scratch, balls, parts);
 }
 
-void ParallelStep::add_wall_loads(Model& model, int parts) {
-  // Each wall's load: every thread's (or rank's) exact sums merged.
-  const std::size_t wall_count = model.walls.size();
-  for (std::size_t w = 0; w < wall_count; ++w) {
-    WallLoad total;
-    for (int t = 0; t < parts; ++t) total.add(wall_loads_[t * wall_count + w]);
-    Wall& wall = model.walls[w];
+void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals) {
+  for (std::size_t w = 0; w < walls.size() && w < totals.size(); ++w) {
+    WallLoad& total = totals[w];
+    Wall& wall = walls[w];
     wall.force = {total.fx.value(), total.fy.value(), total.fz.value()};
     wall.moment = {total.mx.value(), total.my.value(), total.mz.value()};
     wall.normal_force = total.normal_force.value();
@@ -91,6 +89,15 @@ void ParallelStep::add_wall_loads(Model& model, int parts) {
     wall.contacts = total.contacts;
     wall.work += total.work.value();
   }
+}
+
+void ParallelStep::add_wall_loads(Model& model, int parts) {
+  // Each wall's load: every thread's (or rank's) exact sums merged.
+  const std::size_t wall_count = model.walls.size();
+  wall_totals_.assign(wall_count, WallLoad{});
+  for (std::size_t w = 0; w < wall_count; ++w)
+    for (int t = 0; t < parts; ++t) wall_totals_[w].add(wall_loads_[t * wall_count + w]);
+  if (!part_only_) set_wall_loads(model.walls, wall_totals_);
 }
 
 bool ParallelStep::share_now(std::size_t balls, int parts) {
@@ -200,43 +207,6 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   times.motion += std::chrono::duration<double>(t2 - t1).count();
 }
 
-namespace {
-
-// StepSums and WallLoad as doubles, for the exchange: the exact sums as their normalised limbs (each
-// below 2^32 in magnitude, so exact as a double) and flags, then the min/max (a ball index below
-// 2^53 is exact).
-void pack(ExactSum& e, std::vector<double>& out) {
-  for (std::int64_t l : e.normalised_limbs()) out.push_back(static_cast<double>(l));
-  out.push_back(e.special());
-}
-void pack(StepSums& s, std::vector<double>& out) {
-  s.each_sum([&](ExactSum& e) { pack(e, out); });
-  for (double v : {s.critical_dt, s.fastest_speed2, static_cast<double>(s.fastest_ball)}) out.push_back(v);
-}
-void pack(WallLoad& w, std::vector<double>& out) {
-  w.each_sum([&](ExactSum& e) { pack(e, out); });
-  out.push_back(static_cast<double>(w.contacts));
-}
-void unpack(ExactSum& e, const double*& in) {
-  std::array<std::int64_t, ExactSum::kLimbs> limbs;
-  for (auto& l : limbs) l = static_cast<std::int64_t>(*in++);
-  e.load(limbs.data(), static_cast<std::uint8_t>(*in++));
-}
-StepSums unpack_sums(const double*& in) {
-  StepSums s;
-  s.each_sum([&](ExactSum& e) { unpack(e, in); });
-  s.critical_dt = *in++; s.fastest_speed2 = *in++;
-  s.fastest_ball = static_cast<std::size_t>(*in++);
-  return s;
-}
-WallLoad unpack_load(const double*& in) {
-  WallLoad w;
-  w.each_sum([&](ExactSum& e) { unpack(e, in); });
-  w.contacts = static_cast<std::int64_t>(*in++);
-  return w;
-}
-
-}  // namespace
 
 void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
                                    PhaseTimes& times, const VerletReference* moved) {

@@ -26,6 +26,10 @@
 
 namespace trubal {
 
+// Each wall's force, moment, normal force, stiffness and contacts from its merged load (rounded
+// once); its work grows by the load's.
+void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals);
+
 class ParallelStep {
  public:
   // Contacts over model.contacts (every pair; `scratch` indexes it), then motion over the balls;
@@ -51,6 +55,10 @@ class ParallelStep {
   // mpi): rank r takes the balls thread r would, and after the step the ranks exchange what they
   // computed, so every rank holds the whole new state (replicated data).
   void set_distributed(bool on) { distributed_ = on; }
+  // A rank's part of a spatially decomposed step (cycle/brick_step.hpp): the walls' loads are left
+  // in wall_totals() for the ranks to merge, not written to the walls.
+  void set_part_only(bool on) { part_only_ = on; }
+  std::vector<WallLoad>& wall_totals() { return wall_totals_; }
   bool distributed() const { return distributed_; }
 
  private:
@@ -60,6 +68,8 @@ class ParallelStep {
   void run_distributed(Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
                        PhaseTimes& times, const VerletReference* moved);
   bool distributed_ = false;
+  bool part_only_ = false;
+  std::vector<WallLoad> wall_totals_;      // per wall: the threads' (or ranks') loads merged
   std::vector<double> send_, received_;
   std::vector<std::uint8_t> send_bytes_, received_bytes_;
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross

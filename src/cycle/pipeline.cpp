@@ -29,6 +29,7 @@ Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads)
 }
 
 void Pipeline::invalidate() {
+  bricks_.drop();
   ref_.invalidate();
   moved_known_ = false;
   fresh_ = false;
@@ -87,7 +88,21 @@ void Pipeline::rebuild(Model& model) {
   model_ = &model;
 }
 
+void Pipeline::sync(Model& model) {
+  if (bricks_.live_for(model)) bricks_.sync(model);
+}
+
+bool Pipeline::may_be_outside_box(const Model& model) const {
+  return !bricks_.live_for(model) || bricks_.outside_box();
+}
+
 void Pipeline::prepare(Model& model) {
+  // The whole model is about to be read and changed: the ranks' parts first, then dropped.
+  if (bricks_.live()) {
+    if (bricks_.live_for(model)) bricks_.sync(model);
+    bricks_.drop();
+    moved_known_ = false;
+  }
   const auto t0 = std::chrono::steady_clock::now();
   // The rare wrap itself is serial; the test for it is shared out.
   if (model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
@@ -96,7 +111,39 @@ void Pipeline::prepare(Model& model) {
   times_.detect += seconds_since(t0);
 }
 
+void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& sums) {
+  // The last step's findings (every rank's): the parts go on where the serial pipeline would only
+  // step; a wrap or a rebuild goes through the whole model.
+  const auto t0 = std::chrono::steady_clock::now();
+  bool whole = true;
+  if (bricks_.live_for(model)) {   // (every rank decides alike: each input is the same on all)
+    const bool outside = bricks_.outside_cell(model);   // a collective call, made unconditionally
+    const double limit2 = ref_.displacement_limit2(model);
+    whole = outside || !(limit2 >= 0) || !(bricks_.moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
+  }
+  times_.detect += seconds_since(t0);
+  if (whole) {
+    if (bricks_.live() || !fresh_ || model_ != &model) prepare(model);   // syncs and drops the parts first
+    const auto t1 = std::chrono::steady_clock::now();
+    bricks_.split(model, ref_);
+    times_.detect += seconds_since(t1);
+  }
+  fresh_ = false;
+  bricks_.step(pool_, model, kernels, sums, times_);
+  moved_known_ = false;
+}
+
 void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
+  if (step_.distributed()) {
+    if (BrickStep::applies(model)) {
+      brick_step(model, kernels, sums);
+      double most = 0;
+      for (Wall& w : model.walls) most = std::max(most, move_wall(w, kernels.dt));
+      wall_travel_ += most;
+      return;
+    }
+    if (bricks_.live()) prepare(model);   // the whole model, current, for the replicated step
+  }
   // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
   if (!fresh_ || model_ != &model) prepare(model);
   fresh_ = false;
@@ -116,6 +163,7 @@ PipelineCounters Pipeline::counters() const {
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   auto lines = backend_->info();
+  for (auto& line : bricks_.info()) lines.push_back(std::move(line));
   if (backend_->keeps_list()) {
     lines.emplace_back("pair list skin", format_number(ref_.skin()));
     lines.emplace_back("pair list rebuilds", std::to_string(ref_.rebuilds()));

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "backends/backend.hpp"
+#include "cycle/brick_step.hpp"
 #include "cycle/kernels.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
@@ -43,6 +44,12 @@ class Pipeline {
   void step(Model& model, const StepKernels& kernels, StepSums& sums);
   // The balls or the table were changed outside cycling: the next step searches afresh.
   void invalidate();
+  // Makes the model current where a distributed run's ranks step their parts of it (BACKEND mpi,
+  // cycle/brick_step.hpp): a collective call, made by every rank at the same step. Else nothing.
+  void sync(Model& model);
+  // Whether some ball may be outside a bounded axis of the START box after the last step (false
+  // only where a distributed run's ranks found none; the caller then need not sync to look).
+  bool may_be_outside_box(const Model& model) const;
 
   PipelineCounters counters() const;
   std::vector<std::pair<std::string, std::string>> info() const;
@@ -57,11 +64,14 @@ class Pipeline {
   void rebuild(Model& model);
   bool needs_rebuild(const Model& model);
   bool any_outside(const Model& model);
+  // A step of a distributed run by the spatial decomposition, where it applies.
+  void brick_step(Model& model, const StepKernels& kernels, StepSums& sums);
 
   std::unique_ptr<Backend> backend_;
   ThreadPool pool_;
   StepScratch scratch_;
   ParallelStep step_;
+  BrickStep bricks_;
   VerletReference ref_;
   PairCandidates pairs_;
   PhaseTimes times_;

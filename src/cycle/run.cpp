@@ -104,11 +104,14 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   timing = PhaseTimes{};
   // Copies the timings into the result whichever way the loop ends.
   auto finish = [&]() -> CycleResult& {
+    pipeline.sync(model);   // a distributed run's last step (already current where it wrote details)
     result.seconds = std::chrono::duration<double>(Clock::now() - loop_start).count();
     result.times = timing;
     return result;
   };
 
+  // An error mid-run (every rank meets it at the same step) leaves the model as the last step made it.
+  try {
   for (std::int64_t s = 1; s <= n; ++s) {
     const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
     // Before anything moves: a step that would shear or squash the periodic cell by more than half an
@@ -131,11 +134,16 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     const auto step_start = Clock::now();
     // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
     // (the same steps however the run is cut).
-    if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) follow_membrane(model);
+    if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) {
+      pipeline.sync(model);
+      follow_membrane(model);
+    }
     // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
     cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr);
     if (!model.walls.empty()) walls_before_step(model, dt);
     pipeline.step(model, kernels, step_sums);
+    // A distributed run's ranks step their parts: the model is made current where it is read.
+    if (details) pipeline.sync(model);
     const StepTotals sums(step_sums);
     model.space.servo_measured_valid = kernels.moments;
     if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};
@@ -191,7 +199,8 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       return finish();
     }
     result.done = s;
-    if (model.started && (!model.space.periodic || model.space.mixed())) {
+    if (model.started && (!model.space.periodic || model.space.mixed()) && pipeline.may_be_outside_box(model)) {
+      pipeline.sync(model);
       Escapes escaped = find_escapes(model);
       if (escaped.destroy_count > 0) {
         // What the leaving balls carry out is boundary work, so the balance stays closed.
@@ -243,6 +252,10 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       result.interrupted = s < n;
       break;
     }
+  }
+  } catch (...) {
+    pipeline.sync(model);
+    throw;
   }
   return finish();
 }

@@ -41,6 +41,9 @@ struct StepScratch {
   std::vector<double> fsx_next, fsy_next, fsz_next;
   // The wall contacts' index: the first with ball >= b, for b = 0 .. balls.
   std::vector<std::uint32_t> wall_run_begin;
+  // A rank's part of a spatially decomposed run (cycle/brick_step.hpp): 1 for a ball another rank
+  // owns (a ghost: the motion loop skips it, its owner sends its new state). Empty otherwise.
+  std::vector<std::uint8_t> ghost;
   std::uint64_t wall_list_version = 0;
 
   // Whether the index is of this table, for this many balls.

@@ -1,5 +1,6 @@
 #include "support/comm.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 
 #ifdef TRUBAL_HAVE_MPI
@@ -116,6 +117,40 @@ int first_failure(bool failed, [[maybe_unused]] std::string& message) {
 }
 
 void allgather(const std::vector<double>& mine, std::vector<double>& all) { gather_parts(mine, all); }
+
+void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    std::vector<int> send_counts(g_size), send_starts(g_size), recv_counts(g_size), recv_starts(g_size);
+    std::vector<double> out, in;
+    long s = 0, r = 0;
+    for (int k = 0; k < g_size; ++k) {
+      send_starts[k] = static_cast<int>(s);
+      send_counts[k] = static_cast<int>(send[k].size());
+      s += send_counts[k];
+      recv_starts[k] = static_cast<int>(r);
+      recv_counts[k] = static_cast<int>(recv[k].size());
+      r += recv_counts[k];
+    }
+    out.reserve(static_cast<std::size_t>(s));
+    for (const auto& part : send) out.insert(out.end(), part.begin(), part.end());
+    in.resize(static_cast<std::size_t>(r));
+    MPI_Alltoallv(out.data(), send_counts.data(), send_starts.data(), MPI_DOUBLE, in.data(), recv_counts.data(),
+                  recv_starts.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    for (int k = 0; k < g_size; ++k)
+      std::copy(in.begin() + recv_starts[k], in.begin() + recv_starts[k] + recv_counts[k], recv[k].begin());
+    return;
+  }
+#endif
+  if (!send.empty() && !recv.empty()) recv[0] = send[0];
+}
+
+void max_all([[maybe_unused]] std::vector<double>& values) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1)
+    MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+#endif
+}
 void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) { gather_parts(mine, all); }
 
 }  // namespace trubal::comm

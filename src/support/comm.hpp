@@ -36,4 +36,11 @@ int first_failure(bool failed, std::string& message);
 void allgather(const std::vector<double>& mine, std::vector<double>& all);
 void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all);
 
+// Point to point, all at once: send[r] goes to rank r, and recv[r] (already sized to what rank r
+// sends this rank) is filled from it. Every rank calls it; empty parts cost nothing but the call.
+void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv);
+
+// The largest of each rank's values, element by element, on every rank (exact in any order).
+void max_all(std::vector<double>& values);
+
 }  // namespace trubal::comm

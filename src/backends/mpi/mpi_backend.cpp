@@ -7,10 +7,11 @@
 namespace trubal {
 namespace {
 
-// Step 1 of the distributed backend (issue 17): every rank holds the whole model (replicated
-// data) and finds every pair; each rank computes the contacts and motion of its own range of
-// balls, and the ranks exchange the results after every step. The answer is the serial one, bit
-// for bit, for any rank count. Not yet: a spatial decomposition with ghosts (memory per rank).
+// The distributed backend (issue 17): every rank holds the whole model between steps that need it
+// and finds every pair (the serial search); the step itself is shared by a spatial decomposition
+// (cycle/brick_step.hpp) or, for the scenes it does not take, by ranges of balls with an exchange
+// of the whole state every step (cycle/parallel_step.hpp). The answer is the serial one, bit for
+// bit, for any rank count.
 class MpiBackend final : public Backend {
  public:
   std::string name() const override { return "mpi"; }
@@ -20,8 +21,10 @@ class MpiBackend final : public Backend {
   bool distributed() const override { return true; }
   std::vector<std::pair<std::string, std::string>> info() const override {
     auto lines = search_->info();
-    lines.emplace_back("decomposition", "contiguous ranges of balls (by id), balanced by pair count; every rank holds "
-                                        "the whole model and finds every pair (replicated data)");
+    lines.emplace_back("decomposition",
+                       "recursive bisection of the balls by count, made again at every pair-list rebuild; each rank "
+                       "steps its own balls with ghost copies of their partners (replicated instead where a periodic "
+                       "servo, a tilting cell or a following membrane changes every ball between steps)");
     return lines;
   }
 

@@ -1,0 +1,384 @@
+#include "cycle/brick_step.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <type_traits>
+
+#include "cycle/sum_exchange.hpp"
+#include "model/periodic_cell.hpp"
+#include "support/comm.hpp"
+
+namespace trubal {
+namespace {
+
+constexpr std::uint32_t kAbsent = ~std::uint32_t{0};
+constexpr std::size_t kHalo = 9;   // a ghost's state each step: position, velocity, spin
+
+// Owners by recursive coordinate bisection: the balls of a box are cut across its longest extent
+// at the count that gives each side its share of the ranks. Ties and non-finite coordinates are
+// ordered by index, so every rank computes the same owners.
+void bisect(const Balls& b, std::vector<std::uint32_t>& order, std::size_t lo, std::size_t hi, int parts, int first,
+            std::vector<int>& owner) {
+  if (parts <= 1 || hi - lo <= 1) {
+    for (std::size_t q = lo; q < hi; ++q) owner[order[q]] = first;
+    return;
+  }
+  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  double extent[3];
+  for (int a = 0; a < 3; ++a) {
+    double least = std::numeric_limits<double>::infinity(), most = -least;
+    for (std::size_t q = lo; q < hi; ++q) {
+      const double x = (*pos[a])[order[q]];
+      if (!std::isfinite(x)) continue;
+      least = std::min(least, x);
+      most = std::max(most, x);
+    }
+    extent[a] = most > least ? most - least : 0;
+  }
+  const int axis = extent[0] >= extent[1] && extent[0] >= extent[2] ? 0 : (extent[1] >= extent[2] ? 1 : 2);
+  const std::vector<double>& x = *pos[axis];
+  const int left = parts / 2;
+  const std::size_t cut = lo + (hi - lo) * static_cast<std::size_t>(left) / static_cast<std::size_t>(parts);
+  auto key = [&](std::uint32_t k) { return std::isfinite(x[k]) ? x[k] : std::numeric_limits<double>::infinity(); };
+  std::nth_element(order.begin() + lo, order.begin() + cut, order.begin() + hi, [&](std::uint32_t p, std::uint32_t q) {
+    const double kp = key(p), kq = key(q);
+    return kp < kq || (kp == kq && p < q);
+  });
+  bisect(b, order, lo, cut, left, first, owner);
+  bisect(b, order, cut, hi, parts - left, first + left, owner);
+}
+
+// `to`'s arrays are `from`'s at the picked indices (the visitor lists a struct's arrays in one order).
+template <class Visit>
+void gather(Visit&& visit, const void* from, void* to, const std::vector<std::uint32_t>& pick) {
+  std::vector<const void*> source;
+  visit(const_cast<void*>(from), [&](auto& v) { source.push_back(&v); });
+  std::size_t n = 0;
+  visit(to, [&](auto& v) {
+    using V = std::decay_t<decltype(v)>;
+    const V& s = *static_cast<const V*>(source[n++]);
+    v.resize(pick.size());
+    for (std::size_t q = 0; q < pick.size(); ++q) v[q] = s[pick[q]];
+  });
+}
+const auto visit_balls = [](void* p, auto&& f) { static_cast<Balls*>(p)->for_each_array(f); };
+const auto visit_pairs = [](void* p, auto&& f) { static_cast<ContactTable*>(p)->for_each_pair_array(f); };
+const auto visit_walls = [](void* p, auto&& f) { static_cast<WallContacts*>(p)->for_each_array(f); };
+
+// What a step changes, the arrays sync() gathers: the balls' motion and unbalanced forces, every
+// pair's and wall contact's history and results (not their structure: balls, images).
+template <class F> void each_moving_ball_array(Balls& b, F&& f) {
+  for (auto* v : {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz})
+    f(*v);
+}
+template <class F> void each_moving_pair_array(ContactTable& c, F&& f) {
+  f(c.state);
+  for (auto* v : {&c.fsx, &c.fsy, &c.fsz, &c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fx, &c.fy, &c.fz, &c.tx, &c.ty,
+                  &c.tz, &c.kn_eff, &c.ks_eff, &c.cn_eff, &c.work_friction, &c.work_damping})
+    f(*v);
+}
+template <class F> void each_moving_wall_array(WallContacts& w, F&& f) {
+  f(w.state);
+  for (auto* v : {&w.fsx, &w.fsy, &w.fsz, &w.nx, &w.ny, &w.nz, &w.overlap, &w.fn, &w.fx, &w.fy, &w.fz, &w.kn_eff,
+                  &w.ks_eff})
+    f(*v);
+}
+
+// The cycle's kernels with the part's own pair laws (per ball of the part): every field but `laws`.
+void take_kernels(const StepKernels& from, StepKernels& to) {
+  to.features = from.features;
+  to.estimate = from.estimate;
+  to.moments = from.moments;
+  to.dt = from.dt;
+  to.beta = from.beta;
+  to.alpha = from.alpha;
+  to.local = from.local;
+  to.gravity = from.gravity;
+  to.contacts = from.contacts; to.contacts_full = from.contacts_full; to.contacts_lean = from.contacts_lean;
+  to.cross = from.cross;
+  to.walls = from.walls; to.walls_full = from.walls_full; to.walls_lean = from.walls_lean;
+  to.motion = from.motion; to.motion_full = from.motion_full; to.motion_lean = from.motion_lean;
+}
+
+std::uint64_t next_part_version() {
+  // Far above the versions install_pairs and the wall list hand out, so a part's never equals one.
+  static std::uint64_t versions = std::uint64_t{1} << 62;
+  return ++versions;
+}
+
+}  // namespace
+
+bool BrickStep::applies(const Model& model) {
+  const Space& s = model.space;
+  if (model.membrane.follow_every > 0) return false;
+  if (s.periodic) {
+    if (s.servo_on[0] || s.servo_on[1] || s.servo_on[2]) return false;
+    if (s.strain_rate[3] != 0 || s.strain_rate[4] != 0 || s.strain_rate[5] != 0) return false;
+  }
+  return true;
+}
+
+bool BrickStep::live_for(const Model& full) const {
+  return live_ && model_ == &full && full.balls.size() == full_balls_ && full.contacts.list_version == list_version_ &&
+         full.wall_contacts.list_version == wall_version_;
+}
+
+void BrickStep::split(const Model& full, const VerletReference& ref) {
+  const int ranks = comm::size(), me = comm::rank();
+  const Balls& b = full.balls;
+  const std::size_t n = b.size();
+  const ContactTable& c = full.contacts;
+  const WallContacts& wc = full.wall_contacts;
+  owner_.assign(n, 0);
+  {
+    std::vector<std::uint32_t> order(n);
+    std::iota(order.begin(), order.end(), 0u);
+    bisect(b, order, 0, n, ranks, 0, owner_);
+  }
+  // The part: owned balls (1) and their partners owned elsewhere (2, ghosts); the pairs touching
+  // an owned ball; for each other rank, the owned balls that are its ghosts.
+  std::vector<std::uint8_t> in_part(n, 0);
+  for (std::size_t k = 0; k < n; ++k)
+    if (owner_[k] == me) in_part[k] = 1;
+  std::vector<std::uint32_t> pairs;
+  std::vector<std::vector<std::uint32_t>> sends(ranks);
+  rank_pairs_.assign(ranks, {});
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const std::uint32_t i = c.i[p], j = c.j[p];
+    const int oi = owner_[i], oj = owner_[j];
+    rank_pairs_[oi].push_back(static_cast<std::uint32_t>(p));
+    if (oi != me && oj != me) continue;
+    pairs.push_back(static_cast<std::uint32_t>(p));
+    if (oi == oj) continue;
+    if (oi == me) { in_part[j] = 2; sends[oj].push_back(i); }
+    else { in_part[i] = 2; sends[oi].push_back(j); }
+  }
+  global_ball_.clear();
+  std::vector<std::uint32_t> local(n, kAbsent);
+  rank_balls_.assign(ranks, {});
+  for (std::size_t k = 0; k < n; ++k) {
+    rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
+    if (!in_part[k]) continue;
+    local[k] = static_cast<std::uint32_t>(global_ball_.size());
+    global_ball_.push_back(static_cast<std::uint32_t>(k));
+  }
+  const std::size_t m = global_ball_.size();
+
+  // The part's model: its balls, pairs and wall contacts, and what the step reads of the rest.
+  part_.space = full.space;
+  part_.materials = full.materials;
+  part_.walls = full.walls;
+  part_.settings = full.settings;
+  part_.started = full.started;
+  gather(visit_balls, &full.balls, &part_.balls, global_ball_);
+  gather(visit_pairs, &full.contacts, &part_.contacts, pairs);
+  for (std::size_t q = 0; q < pairs.size(); ++q) {
+    part_.contacts.i[q] = local[part_.contacts.i[q]];
+    part_.contacts.j[q] = local[part_.contacts.j[q]];
+  }
+  part_.contacts.results_cycle = c.results_cycle;
+  part_.contacts.list_version = next_part_version();
+  std::vector<std::uint32_t> walls;
+  rank_walls_.assign(ranks, {});
+  for (std::size_t q = 0; q < wc.size(); ++q) {
+    rank_walls_[owner_[wc.ball[q]]].push_back(static_cast<std::uint32_t>(q));
+    if (owner_[wc.ball[q]] == me) walls.push_back(static_cast<std::uint32_t>(q));
+  }
+  gather(visit_walls, &full.wall_contacts, &part_.wall_contacts, walls);
+  for (std::size_t q = 0; q < walls.size(); ++q) part_.wall_contacts.ball[q] = local[part_.wall_contacts.ball[q]];
+  part_.wall_contacts.list_version = next_part_version();
+
+  // What this rank reports to sync(), as part indices, in the order of rank_balls_ etc.
+  owned_.clear();
+  for (std::uint32_t k : rank_balls_[me]) owned_.push_back(local[k]);
+  owned_pairs_.clear();
+  {
+    std::size_t q = 0;
+    for (std::uint32_t p : rank_pairs_[me]) {   // both lists ascend
+      while (pairs[q] != p) ++q;
+      owned_pairs_.push_back(static_cast<std::uint32_t>(q));
+    }
+  }
+  owned_walls_.resize(walls.size());
+  std::iota(owned_walls_.begin(), owned_walls_.end(), 0u);
+
+  // The ghost exchange: to each rank, its ghosts this rank owns; from each, the ghosts it owns.
+  send_.assign(ranks, {});
+  recv_.assign(ranks, {});
+  for (int r = 0; r < ranks; ++r) {
+    auto& s = sends[r];
+    std::sort(s.begin(), s.end());
+    s.erase(std::unique(s.begin(), s.end()), s.end());
+    for (std::uint32_t k : s) send_[r].push_back(local[k]);
+  }
+  scratch_.ghost.assign(m, 0);
+  ghosts_ = 0;
+  for (std::size_t q = 0; q < m; ++q) {
+    const std::uint32_t k = global_ball_[q];
+    if (in_part[k] != 2) continue;
+    scratch_.ghost[q] = 1;
+    recv_[owner_[k]].push_back(static_cast<std::uint32_t>(q));
+    ++ghosts_;
+  }
+  send_buf_.assign(ranks, {});
+  recv_buf_.assign(ranks, {});
+  for (int r = 0; r < ranks; ++r) {
+    send_buf_[r].resize(kHalo * send_[r].size());
+    recv_buf_[r].resize(kHalo * recv_[r].size());
+  }
+
+  // The list's reference positions, for the part's displacement test.
+  ref_.x.clear(); ref_.y.clear(); ref_.z.clear();
+  if (ref.x.size() == n)
+    for (std::uint32_t k : global_ball_) {
+      ref_.x.push_back(ref.x[k]);
+      ref_.y.push_back(ref.y[k]);
+      ref_.z.push_back(ref.z[k]);
+    }
+  scratch_.index(part_.contacts, m);
+  scratch_.index_walls(part_.wall_contacts, m);
+  kernels_.laws = make_pair_laws(part_);
+  step_.set_part_only(true);
+
+  most_balls_ = 0;
+  least_balls_ = n;
+  for (int r = 0; r < ranks; ++r) {
+    most_balls_ = std::max(most_balls_, rank_balls_[r].size());
+    least_balls_ = std::min(least_balls_, rank_balls_[r].size());
+  }
+  ++splits_;
+  flags_.assign(3, 0.0);
+  model_ = &full;
+  full_balls_ = n;
+  list_version_ = c.list_version;
+  wall_version_ = wc.list_version;
+  live_ = true;
+  current_ = true;
+}
+
+void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, StepSums& sums, PhaseTimes& times) {
+  // The space and the walls are the whole model's (the cell's strain and the walls' motion and
+  // servos act on it between steps).
+  part_.space = full.space;
+  part_.walls = full.walls;
+  take_kernels(kernels, kernels_);
+  Balls& b = part_.balls;
+  const std::size_t m = b.size();
+  if (kernels_.moments) scratch_.ball_moments.resize(m);
+  StepSums mine;
+  step_.run(pool, part_, scratch_, kernels_, mine, times, ref_.x.size() == m ? &ref_ : nullptr);
+  current_ = false;
+
+  // The ghosts' new state, from their owners.
+  const int ranks = comm::size();
+  for (int r = 0; r < ranks; ++r) {
+    double* out = send_buf_[r].data();
+    for (std::uint32_t k : send_[r]) {
+      for (double v : {b.x[k], b.y[k], b.z[k], b.vx[k], b.vy[k], b.vz[k], b.wx[k], b.wy[k], b.wz[k]}) *out++ = v;
+    }
+  }
+  comm::exchange(send_buf_, recv_buf_);
+  for (int r = 0; r < ranks; ++r) {
+    const double* in = recv_buf_[r].data();
+    for (std::uint32_t k : recv_[r]) {
+      for (double* v : {&b.x[k], &b.y[k], &b.z[k], &b.vx[k], &b.vy[k], &b.vz[k], &b.wx[k], &b.wy[k], &b.wz[k]}) *v = *in++;
+    }
+  }
+
+  // What decides whether the next step needs the whole model (the largest over the ranks, sent
+  // with the sums): the displacement since the list was made, a ball outside the box.
+  const Space& s = part_.space;
+  const double moved2 = ref_.x.size() == m ? step_.moved2() : std::numeric_limits<double>::infinity();
+  bool outside = false;
+  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  for (int a = 0; a < 3 && !outside; ++a) {
+    if (s.wraps(a)) continue;
+    for (std::size_t k = 0; k < m && !outside; ++k) {
+      const double x = (*pos[a])[k];
+      outside = x < s.lo[a] || x > s.hi[a];
+    }
+  }
+
+  // The global sums: every rank's exact sums, merged (in any order, the same bits).
+  if (mine.fastest_ball < global_ball_.size()) mine.fastest_ball = global_ball_[mine.fastest_ball];
+  const std::size_t wall_count = full.walls.size();
+  std::vector<WallLoad>& loads = step_.wall_totals();
+  if (loads.size() != wall_count) loads.assign(wall_count, WallLoad{});
+  sums_out_.clear();
+  pack(mine, sums_out_);
+  for (std::size_t w = 0; w < wall_count; ++w) pack(loads[w], sums_out_);
+  sums_out_.push_back(moved2);
+  sums_out_.push_back(outside ? 1.0 : 0.0);
+  comm::allgather(sums_out_, sums_in_);
+  flags_[1] = 0;
+  flags_[2] = 0;
+  std::vector<WallLoad> totals(wall_count);
+  const double* in = sums_in_.data();
+  for (int r = 0; r < ranks; ++r) {
+    StepSums part = unpack_sums(in);
+    sums.add(part);
+    for (std::size_t w = 0; w < wall_count; ++w) {
+      WallLoad load = unpack_load(in);
+      totals[w].add(load);
+    }
+    flags_[1] = std::max(flags_[1], *in++);
+    flags_[2] = std::max(flags_[2], *in++);
+  }
+  if (wall_count) set_wall_loads(full.walls, totals);
+}
+
+bool BrickStep::outside_cell(const Model& full) {
+  if (!full.space.periodic) return false;
+  part_.space = full.space;
+  // The part's ghosts are current, and each is some rank's own ball: the same answer as the owned
+  // balls' alone.
+  std::vector<double> any{trubal::outside_cell(part_, 0, part_.balls.size()) ? 1.0 : 0.0};
+  comm::max_all(any);
+  return any[0] != 0;
+}
+
+void BrickStep::sync(Model& full) {
+  if (!live_ || current_ || model_ != &full) return;
+  const int ranks = comm::size(), me = comm::rank();
+  Balls& b = part_.balls;
+  ContactTable& c = part_.contacts;
+  WallContacts& wc = part_.wall_contacts;
+  sync_out_.clear();
+  auto put = [&](const std::vector<std::uint32_t>& pick) {
+    return [&](auto& v) {
+      for (std::uint32_t q : pick) sync_out_.push_back(static_cast<double>(v[q]));
+    };
+  };
+  each_moving_ball_array(b, put(owned_));
+  each_moving_pair_array(c, put(owned_pairs_));
+  each_moving_wall_array(wc, put(owned_walls_));
+  comm::allgather(sync_out_, sync_in_);
+  const double* in = sync_in_.data();
+  for (int r = 0; r < ranks; ++r) {
+    auto take = [&](const std::vector<std::uint32_t>& pick) {
+      return [&](auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        for (std::uint32_t k : pick) v[k] = static_cast<T>(*in++);
+      };
+    };
+    // This rank's own values come back through the same buffer (as doubles: every value is one).
+    (void)me;
+    each_moving_ball_array(full.balls, take(rank_balls_[r]));
+    each_moving_pair_array(full.contacts, take(rank_pairs_[r]));
+    each_moving_wall_array(full.wall_contacts, take(rank_walls_[r]));
+  }
+  current_ = true;
+}
+
+std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
+  std::vector<std::pair<std::string, std::string>> lines;
+  if (splits_ == 0) return lines;
+  lines.emplace_back("balls per rank", std::to_string(least_balls_) + " to " + std::to_string(most_balls_) +
+                                           " (rank 0 also holds " + std::to_string(ghosts_) + " ghosts)");
+  lines.emplace_back("decompositions made", std::to_string(splits_));
+  return lines;
+}
+
+}  // namespace trubal

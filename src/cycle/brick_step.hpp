@@ -1,0 +1,91 @@
+// BACKEND mpi's spatial decomposition: each rank steps only the balls it owns, with ghost copies of
+// their partners, and the ranks exchange only the ghosts' new state each step (doc/distributed.md).
+//
+// How the answer stays the serial one, bit for bit, for any rank count:
+// - The owners are a recursive bisection of the balls by count (any split gives the same bits; the
+//   split only decides the speed). It is made again at every pair-list rebuild.
+// - A rank's part is a Model of its own balls and their partners in the pair list (the ghosts),
+//   numbered in the order of the whole model's indices, with the whole list's pairs that touch an
+//   owned ball, in list order. So every owned ball meets its partners in the serial order and sums
+//   its contacts in the same additions; a pair between two ranks is computed on both, from the
+//   same inputs, and both keep the same history.
+// - The motion loop moves owned balls only (StepScratch::ghost); the global sums are exact sums of
+//   each owned ball's part, merged over the ranks (kernels.hpp).
+// - Anything the step cannot do on its own part (a ball leaving the periodic cell, a stale list, a
+//   ball outside a START box, an edit between steps) goes through the whole model: sync() gathers
+//   every rank's balls, pairs and wall contacts into it, the serial rules act on it, and the parts
+//   are made afresh from it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cycle/kernels.hpp"
+#include "cycle/parallel_step.hpp"
+#include "cycle/phase_times.hpp"
+#include "cycle/step_scratch.hpp"
+#include "cycle/verlet.hpp"
+#include "model/model.hpp"
+#include "support/thread_pool.hpp"
+
+namespace trubal {
+
+class BrickStep {
+ public:
+  // Whether the decomposition applies to the model's scene as it is: not where the step changes
+  // every ball outside the pipeline (a periodic servo's velocity field, a tilting cell's image
+  // renumbering, a following membrane); those run replicated (ParallelStep::run_distributed).
+  static bool applies(const Model& model);
+
+  // The parts hold the current state of `full` (which may be older).
+  bool live_for(const Model& full) const;
+  bool live() const { return live_; }
+  // Makes this rank's part of `full` (current, its list installed; `ref` the list's reference
+  // positions). Every rank computes every rank's owners, so nothing is exchanged.
+  void split(const Model& full, const VerletReference& ref);
+  // One step on this rank's part: forces, motion of the owned balls, the ghosts' new state from
+  // their owners, the global sums (merged over the ranks into `sums`) and the walls' loads (into
+  // full.walls). The space and walls are read from `full`.
+  void step(ThreadPool& pool, Model& full, const StepKernels& kernels, StepSums& sums, PhaseTimes& times);
+  // Whether some ball is outside the periodic cell as it is now, on any rank (a collective call:
+  // the cell changes after each step, so this is asked before the next).
+  bool outside_cell(const Model& full);
+  // What the last step found, over every rank: the largest squared displacement since the list was
+  // made, some ball outside a bounded axis of the box.
+  double moved2() const { return flags_[1]; }
+  bool outside_box() const { return flags_[2] != 0; }
+  // Brings `full` up to date with every rank's part (a collective call; the parts stay live).
+  void sync(Model& full);
+  // The parts are dropped (the whole model was changed, or is to be stepped another way).
+  void drop() { live_ = false; }
+
+  std::vector<std::pair<std::string, std::string>> info() const;
+
+ private:
+  Model part_;
+  StepScratch scratch_;
+  ParallelStep step_;
+  VerletReference ref_;                     // the reference positions of the part's balls
+  StepKernels kernels_;                     // the cycle's, with the part's pair laws
+  bool live_ = false;
+  bool current_ = true;                     // `full` holds the parts' state
+  const Model* model_ = nullptr;
+  std::uint64_t list_version_ = 0, wall_version_ = 0;
+  std::size_t full_balls_ = 0;
+  std::vector<int> owner_;                  // per ball of the whole model
+  std::vector<std::uint32_t> global_ball_;  // part ball -> whole model's ball
+  std::vector<std::uint32_t> owned_, owned_pairs_, owned_walls_;   // part indices this rank reports
+  // Per rank: the whole model's balls it owns, pairs whose ball i it owns, its balls' wall contacts.
+  std::vector<std::vector<std::uint32_t>> rank_balls_, rank_pairs_, rank_walls_;
+  // Per rank: the part's balls sent to it each step (its ghosts), and the ghosts it sends.
+  std::vector<std::vector<std::uint32_t>> send_, recv_;
+  std::vector<std::vector<double>> send_buf_, recv_buf_;
+  std::vector<double> sums_out_, sums_in_, sync_out_, sync_in_;
+  std::vector<double> flags_{0, 0, 0};
+  std::size_t ghosts_ = 0, most_balls_ = 0, least_balls_ = 0, most_ghosts_ = 0;
+  std::size_t splits_ = 0;
+};
+
+}  // namespace trubal
