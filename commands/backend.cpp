@@ -39,12 +39,17 @@ const Command backend_command = {
     "where it does not, one thread does the work and PRINT info says so. allpairs: TPM's arrangement, every pair of balls tested every cycle "
     "(N(N-1)/2 pair slots of one byte; it cannot miss a contact); it refuses to take more than `maxmem` bytes "
     "(default 4 GiB or half the physical memory, the smaller). mpi: under `mpirun -np P trubal deck.dat` "
-    "(the default backend there) the step is shared among the P ranks: each rank takes a contiguous range of "
-    "ball numbers (whole blocks of 256, balanced by pair count) and computes its contacts, wall contacts and "
-    "motion, and the ranks exchange the results after every step; every rank holds the whole model and "
-    "finds every pair (replicated data: memory per rank is that of one run). The answer is the serial one "
-    "bit for bit for any P (tests/unit/cycle_cuts.cpp runs every cut scene on 2 and 3 ranks). On one rank "
-    "it is the serial backend. Under mpirun, the other backends compute the whole step on every rank.",
+    "(the default backend there) the step is shared among the P ranks by a spatial decomposition: the balls "
+    "are split by recursive coordinate bisection into P groups of equal count (made again at every pair-list "
+    "rebuild), each rank steps its own balls with ghost copies of their partners, and each step the owners "
+    "send the ghosts' new positions, velocities and spins; a ball leaving the periodic cell, a stale pair "
+    "list, a ball outside a START box or an output step goes through the whole model, which every rank "
+    "holds (memory per rank is that of one run plus its part). Where a periodic servo, a shearing (tilting) "
+    "cell or a following membrane changes every ball between steps, the ranks instead take contiguous ranges "
+    "of ball numbers and exchange the whole state after every step (replicated). PRINT info says which, and "
+    "the balls per rank. The answer is the serial one bit for bit for any P (tests/unit/cycle_cuts.cpp and "
+    "distributed_runs.cpp run the scenes on 2, 3 and 4 ranks). On one rank it is the serial backend. Under "
+    "mpirun, the other backends compute the whole step on every rank.",
     {"serial", "allpairs", "threaded", "mpi", "threads", "maxmem"}, run_backend};
 
 }  // namespace trubal

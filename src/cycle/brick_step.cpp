@@ -110,14 +110,32 @@ std::uint64_t next_part_version() {
 
 }  // namespace
 
-bool BrickStep::applies(const Model& model) {
-  const Space& s = model.space;
-  if (model.membrane.follow_every > 0) return false;
-  if (s.periodic) {
-    if (s.servo_on[0] || s.servo_on[1] || s.servo_on[2]) return false;
-    if (s.strain_rate[3] != 0 || s.strain_rate[4] != 0 || s.strain_rate[5] != 0) return false;
+bool BrickStep::applies(const Model& model) { return model.membrane.follow_every <= 0; }
+
+void BrickStep::apply_field(Model& full, const FieldChange& change) {
+  ExactSum work, gross;
+  apply_field_change(part_.balls, change, 0, part_.balls.size(), scratch_.ghost.data(), work, gross);
+  current_ = false;   // the parts' velocities are newer than full's now
+  std::vector<double> out, in;
+  pack(work, out);
+  pack(gross, out);
+  comm::allgather(out, in);
+  ExactSum all_work, all_gross;
+  const double* p = in.data();
+  for (int r = 0; r < comm::size(); ++r) {
+    ExactSum w, g;
+    unpack(w, p);
+    unpack(g, p);
+    all_work.add(w);
+    all_gross.add(g);
   }
-  return true;
+  full.energy.boundary_work += all_work.value();
+  full.space.gross_work += all_gross.value();
+}
+
+void BrickStep::reduce_tilt(const Space& before) {
+  part_.space = before;
+  reduce_cell_tilt(part_);
 }
 
 bool BrickStep::live_for(const Model& full) const {

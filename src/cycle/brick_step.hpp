@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "cycle/kernels.hpp"
+#include "physics/cell.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
 #include "cycle/step_scratch.hpp"
@@ -34,9 +35,9 @@ namespace trubal {
 
 class BrickStep {
  public:
-  // Whether the decomposition applies to the model's scene as it is: not where the step changes
-  // every ball outside the pipeline (a periodic servo's velocity field, a tilting cell's image
-  // renumbering, a following membrane); those run replicated (ParallelStep::run_distributed).
+  // Whether the decomposition applies to the model's scene as it is: not where a following
+  // membrane changes the loads of balls between steps; that runs replicated
+  // (ParallelStep::run_distributed).
   static bool applies(const Model& model);
 
   // The parts hold the current state of `full` (which may be older).
@@ -56,6 +57,13 @@ class BrickStep {
   // made, some ball outside a bounded axis of the box.
   double moved2() const { return flags_[1]; }
   bool outside_box() const { return flags_[2] != 0; }
+  // A change of the cell's velocity field (a servo's or STRAIN's new rates) on every copy of the
+  // part's balls; the work it does, summed over the owned balls and the ranks (a collective call),
+  // goes to full's energy.
+  void apply_field(Model& full, const FieldChange& change);
+  // The tilts of the cell were reduced (reduce_cell_tilt) from `before`: the part's pair images
+  // are renumbered alike.
+  void reduce_tilt(const Space& before);
   // Brings `full` up to date with every rank's part (a collective call; the parts stay live).
   void sync(Model& full);
   // The parts are dropped (the whole model was changed, or is to be stepped another way).

@@ -92,6 +92,20 @@ void Pipeline::sync(Model& model) {
   if (bricks_.live_for(model)) bricks_.sync(model);
 }
 
+void Pipeline::apply_field(Model& model, const FieldChange& change) {
+  if (!change.any) return;
+  if (bricks_.live_for(model)) return bricks_.apply_field(model, change);
+  ExactSum work, gross;
+  apply_field_change(model.balls, change, 0, model.balls.size(), nullptr, work, gross);
+  model.energy.boundary_work += work.value();
+  model.space.gross_work += gross.value();
+}
+
+void Pipeline::reduce_cell_tilt(Model& model) {
+  const Space before = model.space;
+  if (trubal::reduce_cell_tilt(model) && bricks_.live_for(model)) bricks_.reduce_tilt(before);
+}
+
 bool Pipeline::may_be_outside_box(const Model& model) const {
   return !bricks_.live_for(model) || bricks_.outside_box();
 }
@@ -136,12 +150,15 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
 void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   if (step_.distributed()) {
     if (BrickStep::applies(model)) {
+      shared_by_ = "the spatial decomposition";
       brick_step(model, kernels, sums);
       double most = 0;
       for (Wall& w : model.walls) most = std::max(most, move_wall(w, kernels.dt));
       wall_travel_ += most;
       return;
     }
+    shared_by_ = "ranges of balls, the whole state exchanged every step (a periodic servo, a tilting cell or a "
+                 "following membrane changes every ball between steps)";
     if (bricks_.live()) prepare(model);   // the whole model, current, for the replicated step
   }
   // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
@@ -163,7 +180,9 @@ PipelineCounters Pipeline::counters() const {
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   auto lines = backend_->info();
-  for (auto& line : bricks_.info()) lines.push_back(std::move(line));
+  if (!shared_by_.empty()) lines.emplace_back("last step shared by", shared_by_);
+  if (shared_by_ == "the spatial decomposition")
+    for (auto& line : bricks_.info()) lines.push_back(std::move(line));
   if (backend_->keeps_list()) {
     lines.emplace_back("pair list skin", format_number(ref_.skin()));
     lines.emplace_back("pair list rebuilds", std::to_string(ref_.rebuilds()));

@@ -47,6 +47,11 @@ class Pipeline {
   // Makes the model current where a distributed run's ranks step their parts of it (BACKEND mpi,
   // cycle/brick_step.hpp): a collective call, made by every rank at the same step. Else nothing.
   void sync(Model& model);
+  // Between steps: the velocity field change of new strain rates (cell_before_step's, deferred), on
+  // the balls wherever they are stepped; the tilts of the cell kept within half an edge
+  // (reduce_cell_tilt) on every copy of the pair list.
+  void apply_field(Model& model, const FieldChange& change);
+  void reduce_cell_tilt(Model& model);
   // Whether some ball may be outside a bounded axis of the START box after the last step (false
   // only where a distributed run's ranks found none; the caller then need not sync to look).
   bool may_be_outside_box(const Model& model) const;
@@ -72,6 +77,7 @@ class Pipeline {
   StepScratch scratch_;
   ParallelStep step_;
   BrickStep bricks_;
+  std::string shared_by_;           // how the last distributed step was shared among the ranks (PRINT info)
   VerletReference ref_;
   PairCandidates pairs_;
   PhaseTimes times_;

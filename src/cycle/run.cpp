@@ -139,7 +139,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       follow_membrane(model);
     }
     // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
-    cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr);
+    FieldChange field;   // the servo's new rates change the balls' velocities: where the pipeline holds them
+    cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr, &field);
+    pipeline.apply_field(model, field);
     if (!model.walls.empty()) walls_before_step(model, dt);
     pipeline.step(model, kernels, step_sums);
     // A distributed run's ranks step their parts: the model is made current where it is read.
@@ -147,7 +149,8 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     const StepTotals sums(step_sums);
     model.space.servo_measured_valid = kernels.moments;
     if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};
-    cell_after_step(model, dt, sums.image_power);    // periodic space: the cell's work, its new edges, the strain
+    cell_after_step(model, dt, sums.image_power, false);   // periodic space: the cell's work, its new edges, the strain
+    pipeline.reduce_cell_tilt(model);                     // and its tilts, on every copy of the pairs
     timing.step += std::chrono::duration<double>(Clock::now() - step_start).count();
     model.cycle += 1;
     if (details) model.contacts.results_cycle = model.cycle;

@@ -19,24 +19,14 @@ std::array<double, 3> cell_centre(const Space& s) {
           0.5 * (s.lo[2] + s.hi[2])};
 }
 
-void set_all_strain_rates(Model& model, const std::array<double, 6>& rates) {
-  Space& s = model.space;
-  Balls& b = model.balls;
-  std::array<double, 6> change{};
-  bool any = false;
-  for (int a = 0; a < 6; ++a) {
-    change[a] = rates[a] - s.strain_rate[a];
-    any = any || change[a] != 0;
-    s.strain_rate[a] = rates[a];
-  }
-  if (!any || !s.periodic) return;
-  update_mass(model);   // STRAIN may come before the first CYCLE: the energy needs the masses
-  const auto centre = cell_centre(s);
-  const auto g = velocity_gradient(change);   // the change of the homogeneous field v = L (x - centre)
+void apply_field_change(Balls& b, const FieldChange& change, std::size_t begin, std::size_t end,
+                        const std::uint8_t* skip, ExactSum& work, ExactSum& gross) {
+  const auto& g = change.g;
+  const auto& centre = change.centre;
   std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
   std::vector<double>* vel[3] = {&b.vx, &b.vy, &b.vz};
-  double work = 0;
-  for (std::size_t k = 0; k < b.size(); ++k)
+  for (std::size_t k = begin; k < end; ++k) {
+    double ball_work = 0, ball_gross = 0;
     for (int a = 0; a < 3; ++a) {
       if (b.fixed[k] & (a == 0 ? kXVel : a == 1 ? kYVel : kZVel)) continue;
       double dv = 0;
@@ -50,15 +40,44 @@ void set_all_strain_rates(Model& model, const std::array<double, 6>& rates) {
       double& v = (*vel[a])[k];
       const double old = v;
       v += dv;
-      work += 0.5 * b.mass[k] * (v * v - old * old);
-      s.gross_work += 0.5 * b.mass[k] * std::abs(v * v - old * old);
+      ball_work += 0.5 * b.mass[k] * (v * v - old * old);
+      ball_gross += 0.5 * b.mass[k] * std::abs(v * v - old * old);
     }
-  model.energy.boundary_work += work;
+    if (skip && skip[k]) continue;
+    work.add(ball_work);
+    gross.add(ball_gross);
+  }
 }
 
-void set_strain_rates(Model& model, const std::array<double, 3>& rates) {
+void set_all_strain_rates(Model& model, const std::array<double, 6>& rates, FieldChange* defer) {
+  Space& s = model.space;
+  Balls& b = model.balls;
+  std::array<double, 6> change{};
+  bool any = false;
+  for (int a = 0; a < 6; ++a) {
+    change[a] = rates[a] - s.strain_rate[a];
+    any = any || change[a] != 0;
+    s.strain_rate[a] = rates[a];
+  }
+  if (defer) *defer = FieldChange{};
+  if (!any || !s.periodic) return;
+  FieldChange field;
+  field.any = true;
+  field.centre = cell_centre(s);
+  const auto g = velocity_gradient(change);   // the change of the homogeneous field v = L (x - centre)
+  for (int a = 0; a < 3; ++a)
+    for (int e = 0; e < 3; ++e) field.g[a][e] = g[a][e];
+  if (defer) { *defer = field; return; }
+  update_mass(model);   // STRAIN may come before the first CYCLE: the energy needs the masses
+  ExactSum work, gross;
+  apply_field_change(b, field, 0, b.size(), nullptr, work, gross);
+  model.energy.boundary_work += work.value();
+  s.gross_work += gross.value();
+}
+
+void set_strain_rates(Model& model, const std::array<double, 3>& rates, FieldChange* defer) {
   const auto& r = model.space.strain_rate;
-  set_all_strain_rates(model, {rates[0], rates[1], rates[2], r[3], r[4], r[5]});
+  set_all_strain_rates(model, {rates[0], rates[1], rates[2], r[3], r[4], r[5]}, defer);
 }
 
 // kServoFraction / (M dt), M = (1/V) sum k_n l_a^2.
@@ -104,7 +123,7 @@ double servo_rate(double error, double gain, double closes, double& integral, do
   return std::clamp(std::clamp(r, -most, most), old - slew, old + slew);
 }
 
-void cell_before_step(Model& model, double dt, const ContactMoments* last) {
+void cell_before_step(Model& model, double dt, const ContactMoments* last, FieldChange* defer) {
   Space& s = model.space;
   if (!s.periodic || !(s.servo_on[0] || s.servo_on[1] || s.servo_on[2])) {
     s.servo_integral = {0, 0, 0};   // a servo switched on again starts afresh
@@ -130,7 +149,7 @@ void cell_before_step(Model& model, double dt, const ContactMoments* last) {
     const double closes = m > 0 && dt > 0 ? std::min(1.0, gain * m * dt) : 0.0;
     rates[a] = servo_rate(error, gain, closes, integral, most, s.strain_rate[a]);
   }
-  set_strain_rates(model, rates);
+  set_strain_rates(model, rates, defer);
 }
 
 void check_cell_step(const Space& s, double dt) {
@@ -146,7 +165,7 @@ void check_cell_step(const Space& s, double dt) {
           "STRAIN asked for more than any loading can be: lower the rate", what[k], change[k]));
 }
 
-void cell_after_step(Model& model, double dt, double image_power) {
+void cell_after_step(Model& model, double dt, double image_power, bool reduce) {
   Space& s = model.space;
   if (!s.periodic) return;
   const CellFrame f = cell_frame(s);
@@ -169,7 +188,7 @@ void cell_after_step(Model& model, double dt, double image_power) {
     s.hi[a] = middle + half;
   }
   for (int a = 0; a < 6; ++a) s.strain[a] += s.strain_rate[a] * dt;
-  reduce_cell_tilt(model);
+  if (reduce) reduce_cell_tilt(model);
 }
 
 }  // namespace trubal

@@ -9,16 +9,32 @@
 #include <cstdlib>
 
 #include "model/model.hpp"
+#include "support/exact_sum.hpp"
 
 namespace trubal {
+
+// The change of the homogeneous velocity field that a change of strain rates makes: each free
+// velocity component of a ball at x changes by sum_e g[a][e] (x_e - centre_e).
+struct FieldChange {
+  bool any = false;
+  std::array<std::array<double, 3>, 3> g{};
+  std::array<double, 3> centre{};
+};
+// Applies it to balls [begin, end) (all of them, ghosts of a rank's part included, so that every
+// copy of a ball changes alike), adding the kinetic energy each ball not marked in `skip` gains to
+// `work` and its magnitude to `gross` (one ball's part, its components in order, then the exact sums).
+void apply_field_change(Balls& balls, const FieldChange& change, std::size_t begin, std::size_t end,
+                        const std::uint8_t* skip, ExactSum& work, ExactSum& gross);
 
 // Sets the strain rates (xx yy zz xy xz yz; tensor components, compression positive) and changes
 // every free velocity component by the change of the homogeneous field v = L (x - centre), L the
 // velocity gradient (backends/periodic.hpp: simple shear for the shear rates); the kinetic energy
 // this adds is counted as boundary work.
-void set_all_strain_rates(Model& model, const std::array<double, 6>& rates);
+// With `defer`, the balls are left as they are and the change is handed back instead (the cycle's
+// pipeline applies it where the balls are: cycle/pipeline.hpp).
+void set_all_strain_rates(Model& model, const std::array<double, 6>& rates, FieldChange* defer = nullptr);
 // The normal rates (xx yy zz) only; the shear rates stay.
-void set_strain_rates(Model& model, const std::array<double, 3>& rates);
+void set_strain_rates(Model& model, const std::array<double, 3>& rates, FieldChange* defer = nullptr);
 
 // The centre of the periodic cell, about which it deforms.
 std::array<double, 3> cell_centre(const Space& space);
@@ -51,10 +67,13 @@ void check_cell_step(const Space& space, double dt);
 
 // Before a step in a periodic space: the servo's new rates, from the last force pass's stress
 // (`last`, or the contact table's per-pair results when it is null).
-void cell_before_step(Model& model, double dt, const ContactMoments* last = nullptr);
+// With `defer`, the velocity change of the new rates is handed back, not applied (set_all_strain_rates).
+void cell_before_step(Model& model, double dt, const ContactMoments* last = nullptr, FieldChange* defer = nullptr);
 // After a step: the work the cell did on the balls through image contacts (image_power: the
 // contact loop's sum of -F_j . (image velocity), StepSums::image_power), the new cell edges and
 // tilts (about the centre, tilts kept within half an edge) and the accumulated strain.
-void cell_after_step(Model& model, double dt, double image_power);
+// `reduce` false leaves the tilts to the caller (reduce_cell_tilt, which renumbers the pair images:
+// the cycle's pipeline does it where the pairs are).
+void cell_after_step(Model& model, double dt, double image_power, bool reduce = true);
 
 }  // namespace trubal
