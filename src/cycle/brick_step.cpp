@@ -110,6 +110,17 @@ std::uint64_t next_part_version() {
 
 }  // namespace
 
+void apply_field_change(Balls& balls, const FieldChange& change, std::size_t begin, std::size_t end,
+                        const std::uint8_t* skip, ExactSum& work, ExactSum& gross) {
+  for (std::size_t k = begin; k < end; ++k) {
+    double ball_work, ball_gross;
+    apply_field_change(balls, change, k, ball_work, ball_gross);
+    if (skip && skip[k]) continue;
+    work.add(ball_work);
+    gross.add(ball_gross);
+  }
+}
+
 bool BrickStep::applies(const Model& model) { return model.membrane.follow_every <= 0; }
 
 void BrickStep::apply_field(Model& full, const FieldChange& change) {
@@ -357,36 +368,53 @@ bool BrickStep::outside_cell(const Model& full) {
   return any[0] != 0;
 }
 
+namespace {
+
+// Each array's values at this rank's `mine` (part indices) to every rank, written into the whole
+// model's copy at each rank's `by_rank` (whole-model indices): one array at a time, so the buffers
+// hold one array's values, not the whole state.
+template <class T>
+void gather_array(const std::vector<T>& part, std::vector<T>& whole, const std::vector<std::uint32_t>& mine,
+                  const std::vector<std::vector<std::uint32_t>>& by_rank, std::vector<double>& out,
+                  std::vector<double>& in) {
+  out.clear();
+  for (std::uint32_t q : mine) out.push_back(static_cast<double>(part[q]));
+  comm::allgather(out, in);
+  const double* p = in.data();
+  for (const auto& ranks_own : by_rank)
+    for (std::uint32_t k : ranks_own) whole[k] = static_cast<T>(*p++);
+}
+
+// The arrays an each_moving_* lists, as pointers by element type (the same order for every object).
+struct ArrayList {
+  std::vector<std::vector<double>*> reals;
+  std::vector<std::vector<std::uint8_t>*> bytes;
+  void operator()(std::vector<double>& v) { reals.push_back(&v); }
+  void operator()(std::vector<std::uint8_t>& v) { bytes.push_back(&v); }
+};
+
+template <class Each, class S>
+void gather_set(Each&& each, S& part, S& whole, const std::vector<std::uint32_t>& mine,
+                const std::vector<std::vector<std::uint32_t>>& by_rank, std::vector<double>& out,
+                std::vector<double>& in) {
+  ArrayList from, to;
+  each(part, [&](auto& v) { from(v); });
+  each(whole, [&](auto& v) { to(v); });
+  for (std::size_t a = 0; a < from.reals.size(); ++a) gather_array(*from.reals[a], *to.reals[a], mine, by_rank, out, in);
+  for (std::size_t a = 0; a < from.bytes.size(); ++a) gather_array(*from.bytes[a], *to.bytes[a], mine, by_rank, out, in);
+}
+
+}  // namespace
+
 void BrickStep::sync(Model& full) {
   if (!live_ || current_ || model_ != &full) return;
-  const int ranks = comm::size(), me = comm::rank();
-  Balls& b = part_.balls;
-  ContactTable& c = part_.contacts;
-  WallContacts& wc = part_.wall_contacts;
-  sync_out_.clear();
-  auto put = [&](const std::vector<std::uint32_t>& pick) {
-    return [&](auto& v) {
-      for (std::uint32_t q : pick) sync_out_.push_back(static_cast<double>(v[q]));
-    };
-  };
-  each_moving_ball_array(b, put(owned_));
-  each_moving_pair_array(c, put(owned_pairs_));
-  each_moving_wall_array(wc, put(owned_walls_));
-  comm::allgather(sync_out_, sync_in_);
-  const double* in = sync_in_.data();
-  for (int r = 0; r < ranks; ++r) {
-    auto take = [&](const std::vector<std::uint32_t>& pick) {
-      return [&](auto& v) {
-        using T = typename std::decay_t<decltype(v)>::value_type;
-        for (std::uint32_t k : pick) v[k] = static_cast<T>(*in++);
-      };
-    };
-    // This rank's own values come back through the same buffer (as doubles: every value is one).
-    (void)me;
-    each_moving_ball_array(full.balls, take(rank_balls_[r]));
-    each_moving_pair_array(full.contacts, take(rank_pairs_[r]));
-    each_moving_wall_array(full.wall_contacts, take(rank_walls_[r]));
-  }
+  std::vector<double> out, in;
+  gather_set([](Balls& b, auto&& f) { each_moving_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
+             out, in);
+  gather_set([](ContactTable& c, auto&& f) { each_moving_pair_array(c, f); }, part_.contacts, full.contacts,
+             owned_pairs_, rank_pairs_, out, in);
+  gather_set([](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
+             full.wall_contacts, owned_walls_, rank_walls_, out, in);
   current_ = true;
 }
 

@@ -24,6 +24,7 @@
 
 #include "cycle/kernels.hpp"
 #include "physics/cell.hpp"
+#include "support/exact_sum.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
 #include "cycle/step_scratch.hpp"
@@ -32,6 +33,11 @@
 #include "support/thread_pool.hpp"
 
 namespace trubal {
+
+// A change of the cell's velocity field on balls [begin, end), every copy changed; the kinetic
+// energy the balls not marked in `skip` gain, summed exactly ball by ball.
+void apply_field_change(Balls& balls, const FieldChange& change, std::size_t begin, std::size_t end,
+                        const std::uint8_t* skip, ExactSum& work, ExactSum& gross);
 
 class BrickStep {
  public:
@@ -90,7 +96,7 @@ class BrickStep {
   // Per rank: the part's balls sent to it each step (its ghosts), and the ghosts it sends.
   std::vector<std::vector<std::uint32_t>> send_, recv_;
   std::vector<std::vector<double>> send_buf_, recv_buf_;
-  std::vector<double> sums_out_, sums_in_, sync_out_, sync_in_;
+  std::vector<double> sums_out_, sums_in_;
   std::vector<double> flags_{0, 0, 0};
   std::size_t ghosts_ = 0, most_balls_ = 0, least_balls_ = 0, most_ghosts_ = 0;
   std::size_t splits_ = 0;

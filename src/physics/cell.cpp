@@ -19,33 +19,27 @@ std::array<double, 3> cell_centre(const Space& s) {
           0.5 * (s.lo[2] + s.hi[2])};
 }
 
-void apply_field_change(Balls& b, const FieldChange& change, std::size_t begin, std::size_t end,
-                        const std::uint8_t* skip, ExactSum& work, ExactSum& gross) {
+void apply_field_change(Balls& b, const FieldChange& change, std::size_t k, double& work, double& gross) {
   const auto& g = change.g;
   const auto& centre = change.centre;
   std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
   std::vector<double>* vel[3] = {&b.vx, &b.vy, &b.vz};
-  for (std::size_t k = begin; k < end; ++k) {
-    double ball_work = 0, ball_gross = 0;
-    for (int a = 0; a < 3; ++a) {
-      if (b.fixed[k] & (a == 0 ? kXVel : a == 1 ? kYVel : kZVel)) continue;
-      double dv = 0;
-      bool changes = false;
-      for (int e = a; e < 3; ++e) {
-        if (g[a][e] == 0) continue;
-        dv += g[a][e] * ((*pos[e])[k] - centre[e]);
-        changes = true;
-      }
-      if (!changes) continue;
-      double& v = (*vel[a])[k];
-      const double old = v;
-      v += dv;
-      ball_work += 0.5 * b.mass[k] * (v * v - old * old);
-      ball_gross += 0.5 * b.mass[k] * std::abs(v * v - old * old);
+  work = gross = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (b.fixed[k] & (a == 0 ? kXVel : a == 1 ? kYVel : kZVel)) continue;
+    double dv = 0;
+    bool changes = false;
+    for (int e = a; e < 3; ++e) {
+      if (g[a][e] == 0) continue;
+      dv += g[a][e] * ((*pos[e])[k] - centre[e]);
+      changes = true;
     }
-    if (skip && skip[k]) continue;
-    work.add(ball_work);
-    gross.add(ball_gross);
+    if (!changes) continue;
+    double& v = (*vel[a])[k];
+    const double old = v;
+    v += dv;
+    work += 0.5 * b.mass[k] * (v * v - old * old);
+    gross += 0.5 * b.mass[k] * std::abs(v * v - old * old);
   }
 }
 
@@ -69,10 +63,14 @@ void set_all_strain_rates(Model& model, const std::array<double, 6>& rates, Fiel
     for (int e = 0; e < 3; ++e) field.g[a][e] = g[a][e];
   if (defer) { *defer = field; return; }
   update_mass(model);   // STRAIN may come before the first CYCLE: the energy needs the masses
-  ExactSum work, gross;
-  apply_field_change(b, field, 0, b.size(), nullptr, work, gross);
-  model.energy.boundary_work += work.value();
-  s.gross_work += gross.value();
+  double work = 0;
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    double ball_work, ball_gross;
+    apply_field_change(b, field, k, ball_work, ball_gross);
+    work += ball_work;
+    s.gross_work += ball_gross;
+  }
+  model.energy.boundary_work += work;
 }
 
 void set_strain_rates(Model& model, const std::array<double, 3>& rates, FieldChange* defer) {

@@ -9,7 +9,6 @@
 #include <cstdlib>
 
 #include "model/model.hpp"
-#include "support/exact_sum.hpp"
 
 namespace trubal {
 
@@ -20,11 +19,10 @@ struct FieldChange {
   std::array<std::array<double, 3>, 3> g{};
   std::array<double, 3> centre{};
 };
-// Applies it to balls [begin, end) (all of them, ghosts of a rank's part included, so that every
-// copy of a ball changes alike), adding the kinetic energy each ball not marked in `skip` gains to
-// `work` and its magnitude to `gross` (one ball's part, its components in order, then the exact sums).
-void apply_field_change(Balls& balls, const FieldChange& change, std::size_t begin, std::size_t end,
-                        const std::uint8_t* skip, ExactSum& work, ExactSum& gross);
+// Applies it to ball k, returning the kinetic energy it gains (`work`, its components in order) and
+// that energy's magnitude (`gross`). The cycle applies it to every copy of a ball and sums the
+// works of the balls it owns exactly (cycle/pipeline.hpp).
+void apply_field_change(Balls& balls, const FieldChange& change, std::size_t k, double& work, double& gross);
 
 // Sets the strain rates (xx yy zz xy xz yz; tensor components, compression positive) and changes
 // every free velocity component by the change of the homogeneous field v = L (x - centre), L the
