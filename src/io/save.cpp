@@ -197,7 +197,13 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     io.pod(m.space.periodic_axis);
   }
   if (version >= 6) io.pod(m.space.reference_volume);
-  if (version >= 7) io.pod(m.energy_at_step);
+  if (version >= 7) {   // field by field: the struct's padding is no part of the state
+    EnergyAtStep& e = m.energy_at_step;
+    io.pod(e.valid);
+    for (double* v : {&e.kinetic_translation, &e.kinetic_rotation, &e.strain, &e.potential, &e.damping_ahead,
+                      &e.boundary_ahead})
+      io.pod(*v);
+  }
 }
 
 // The histories: what each HIST asked for and the rows it holds (a file's window; every row of a
