@@ -137,6 +137,7 @@ void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked)
                            r.destroyed == 1 ? "" : "s", r.destroyed == 1 ? "was" : "were",
                            ctx.session.model().space.destroyed);
   if (r.unstable || r.left_box) throw std::runtime_error(r.message);
+  if (!r.energy_warning.empty()) ctx.warn(r.energy_warning);
   if (r.interrupted)
     ctx.out << fmt::format("interrupted after {} of {} cycles; the model is kept (cycle {})\n", r.done, asked,
                            ctx.session.model().cycle);

@@ -36,7 +36,11 @@ const Command cycle_command = {
     "CYCLE", {}, "CYCLE n", "n time steps",
     "Runs n time steps. Ctrl-C stops at the end of the current step and keeps the model (in a batch run the "
     "deck then stops). A run that goes unstable stops with a message naming the cycle, a ball and a "
-    "suggested FRAC, and leaves the last good state to print or save. A long run shows its progress "
+    "suggested FRAC, and leaves the last good state to print or save. When the energy balance (PRINT energy) "
+    "moved during the CYCLE by more than 1% of the energy that moved (the largest energy in play: kinetic, "
+    "strain, and the changes of the potential and the works), a warning says so once at the end, with the "
+    "FRAC (or TSTEP) that would hold it, from the error falling as the step squared: the step is too coarse "
+    "for what happened, mostly contacts that form and break within a few steps (impacts). A long run shows its progress "
     "(cycles/s, time left): a bar redrawn in place at the interactive prompt, a plain line every 10 s "
     "otherwise (SET progress). At the end one line gives the cycle, time, step and speed, and in batch "
     "where the time went (contact detection, forces, motion, output).",

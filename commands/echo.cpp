@@ -9,7 +9,7 @@ const Command echo_command = {"ECHO", {}, "ECHO text", "print a line of text",
 
 static void run_title(Context& ctx, Args& args) {
   std::string title = args.rest();
-  ctx.session.edit().title = title;
+  ctx.session.set_title(title);
   ctx.out << "title: " << title << '\n';
 }
 

@@ -299,6 +299,10 @@ static void run_print(Context& ctx, Args& args) {
     case 5: {
       args.done();
       EnergyReport e = energy(ctx.session.model_with_masses());   // before the first CYCLE too
+      if (e.at_step)
+        ctx.out << fmt::format("at the last force pass (cycle {}, time {:.8g}):\n", m.cycle - 1, m.time - m.dt);
+      else
+        ctx.out << "of the state as it is (no step since the balls or the settings last changed):\n";
       ctx.out << fmt::format(
           "kinetic (translation): {:.8g}\nkinetic (rotation): {:.8g}\nstrain: {:.8g}\npotential (gravity): "
           "{:.8g}\nfriction work: {:.8g}\ndamping work: {:.8g}\nboundary work: {:.8g}\nbalance (should stay "
@@ -407,12 +411,13 @@ const Command print_command = {
     "START box) and its void ratio. strain: the periodic space's accumulated strain (xx yy zz xy xz yz, tensor "
     "components) and its volumetric strain 1 - V/V0 (V0 the cell's volume at START or the last STRAIN reset). "
     "energy: the energy terms and "
-    "their balance, each taken where the state has it (central differences stagger them): kinetic from the "
-    "velocities at t - dt/2, gravity's potential at the midpoint x(t) - v dt/2, the strain energy from the "
-    "contact table, which is of the last force pass (the positions at t - dt), and the works summed over the "
-    "steps so far; so the balance also carries up to a step's worth of bookkeeping (the step's own guard "
-    "uses m v(t-dt/2).v(t+dt/2)/2 with the strain and potential at t, which central differences conserve "
-    "for a linear spring). fabric: the fabric tensor. coordination: coordination number, sliding fraction and "
+    "their balance, all at the time of the last step's force pass (the model's time less dt; the step's "
+    "own sums, man page CONVENTIONS): kinetic m v(t-dt/2).v(t+dt/2)/2 and I w(t-dt/2).w(t+dt/2)/2, the "
+    "springs' energy and gravity's potential at the positions of that pass, and the works up to it (the "
+    "step's works less their part after it); central differences keep that sum for linear springs, so the "
+    "balance moves only by the integration's error. Before the first CYCLE, and after a command that "
+    "changes the balls or the settings, the terms are of the state as it is (velocities now, positions now, "
+    "the contact table's last force pass) and the output says so. fabric: the fabric tensor. coordination: coordination number, sliding fraction and "
     "unbalanced-force ratio. prop, damp: the settings. history: the recorded histories. walls: each wall's "
     "shape, motion, and the loads of the last step (force and moment on it, the moment about its spin point; "
     "its stress, touching contacts, and the work it has done on the balls); with `file f.csv`: "

@@ -168,6 +168,7 @@ py::dict energy(PySession& s) {
   d["damping_work"] = e.damping_work;
   d["boundary_work"] = e.boundary_work;
   d["balance"] = e.total();
+  d["at_step"] = e.at_step;   // all at the last force pass (else the state as it is)
   return d;
 }
 

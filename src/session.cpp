@@ -27,6 +27,7 @@ Session::~Session() = default;
 
 Model& Session::edit() {
   ++changes_;
+  model_.energy_at_step.valid = false;   // the balls may no longer be as the last step left them
   pipeline_->invalidate();
   model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
   return model_;
@@ -367,6 +368,7 @@ Session::SolveResult Session::solve(double ratio, std::int64_t limit,
   SolveResult out;
   std::int64_t done = 0;
   const std::int64_t chunk = 100;
+  CycleResult worst;   // the chunk whose energy balance was off the most (its warning is SOLVE's, once)
   while (done < limit) {
     std::int64_t n = std::min(chunk, limit - done);
     CycleResult r = cycle(n, progress ? [&](std::int64_t d, std::int64_t) { progress(done + d, limit); }
@@ -375,10 +377,15 @@ Session::SolveResult Session::solve(double ratio, std::int64_t limit,
     const double seconds = out.run.seconds + r.seconds;
     PhaseTimes times = out.run.times;
     times.add(r.times);
+    if (r.energy_scale > 0 && !(r.balance_error * worst.energy_scale <= worst.balance_error * r.energy_scale))
+      worst = r;
     out.run = r;
     out.run.done = done;
     out.run.seconds = seconds;
     out.run.times = times;
+    out.run.balance_error = worst.balance_error;
+    out.run.energy_scale = worst.energy_scale;
+    out.run.energy_warning = worst.energy_warning;
     // A chunk is often shorter than the engine's progress period: report between chunks too.
     if (progress) progress(done, limit);
     if (r.interrupted || r.unstable) return out;

@@ -33,12 +33,15 @@ class Session {
   // sets them at its start): for measurements taken before the first CYCLE or after a PROP,
   // such as gravity's potential energy. Changes nothing else.
   const Model& model_with_masses();
-  // For commands that change the balls: the backend's lists are invalidated.
+  // For commands that change the balls: the backend's lists are invalidated, and the energy terms
+  // of the last step (Model::energy_at_step) are no longer the state's.
   Model& edit();
+  void set_title(const std::string& title) { model_.title = title; }
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
-  // estimated afresh.
+  // estimated afresh, and PRINT energy takes the state as it is until the next step.
   Settings& settings() {
     model_.critical_dt = 0;
+    model_.energy_at_step.valid = false;   // gravity's potential, say, is no longer the last step's
     return model_.settings;
   }
 

@@ -55,6 +55,13 @@ struct PairInputs {
   }
 };
 
+// The dashpots' work of a step, c V(t - dt/2)^2 dt (physics/contact/dashpot.hpp), stands for its
+// force F(t) = -c V(t - dt/2) times v(t) dt, which the law of motion's balance charges it with, half
+// of it after t with v(t + dt/2). For a dashpot of constant c the sum of the steps' works up to t
+// less a quarter of the last is that charge up to t, to second order in the step (doc/physics.md
+// "Energy"): the quarter is the dashpots' part after t.
+constexpr double kDashpotAhead = 0.25;
+
 // The pairs of [begin, end), by the law F composes; F.details: also write what measurements read
 // (normal, overlap, forces, stiffness, dashpot coefficient, work, state). Without it a step writes
 // only the new shear history and the sums per ball (StepScratch::ball_force, ball_cn).
@@ -87,7 +94,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
     if (acc_ball == kNone) return;
     ball_sum[acc_ball] = acc;
     if constexpr (kLaw.dashpot) cn_sum[acc_ball] = acc_cn;
-    parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0};
+    parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0, kDashpotAhead * work_damping, 0.0};
     work_friction = work_damping = strain = image_power = 0;
     if (k.moments) [[unlikely]] {
       scratch.ball_moments[acc_ball] = moments;
@@ -259,8 +266,10 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       load.contacts += B.state[q] != 0;
       BallParts& part = scratch.ball_parts[i];
       part.boundary += power * k.dt;
+      part.boundary_ahead += power * (0.5 * k.dt);   // the wall moves on with the balls: half after t
       part.friction += B.work_friction[q];
       part.damping += B.work_damping[q];
+      part.damping_ahead += kDashpotAhead * B.work_damping[q];
       part.strain += B.strain[q];
     }
     if constexpr (F.details) {
@@ -294,7 +303,8 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
   // Mass-proportional damping, factor form: v' = (v (1 - a dt/2) + F/m dt) / (1 + a dt/2).
   const double keep = 1 - 0.5 * k.alpha * dt, shrink = 1 / (1 + 0.5 * k.alpha * dt);
   const auto [gx, gy, gz] = k.gravity;
-  double boundary_work = 0, damping_work = 0, kinetic = 0, potential = 0;
+  const double half_dt = 0.5 * dt;
+  double boundary_work = 0, damping_work = 0, kinetic = 0, potential = 0, boundary_ahead = 0, damping_ahead = 0;
   double omega2_max = 0, step_min = std::numeric_limits<double>::infinity();
   double fastest2 = -1;
   std::size_t fastest = begin;
@@ -302,10 +312,15 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
   // One velocity component: fixed ones keep their velocity (the force is their reaction).
   // Kinetic energy at t as m v(t - dt/2) v(t + dt/2) / 2: with the spring energy and the potential at
   // t this is the quantity central differences conserve exactly for a linear spring (and free
-  // fall), so the guard sees no false imbalance from a stable step however coarse it is.
+  // fall), so the guard sees no false imbalance from a stable step however coarse it is. Its change
+  // over a step is (F(t - dt) + F(t)) / 2 . v(t - dt/2) dt, so a force F(t) other than the springs'
+  // does the work F(t) . v(t) dt, v(t) = (v(t - dt/2) + v(t + dt/2)) / 2, of which the part
+  // F(t) . v(t + dt/2) dt/2 lies after t (the aheads).
   auto advance = [&](double force, double applied, double& v, double inv_m, double m, bool fixed) {
     if (fixed) {
-      boundary_work -= (force - applied) * v * dt;
+      const double work = -(force - applied) * v * dt;
+      boundary_work += work;
+      boundary_ahead += 0.5 * work;
       kinetic += 0.5 * m * v * v;
       return;
     }
@@ -317,16 +332,27 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     const double v_old = v;
     const double v_new = kDamp == DampKind::Rayleigh ? (v_old * keep + f * inv_m * dt) * shrink : v_old + f * inv_m * dt;
     const double v_mid = 0.5 * (v_old + v_new);
-    if constexpr (kLoads) boundary_work += applied * v_mid * dt;
-    if constexpr (kDamp == DampKind::Local) damping_work += (force - f) * v_mid * dt;
-    if constexpr (kDamp == DampKind::Rayleigh) damping_work += k.alpha * m * v_mid * v_mid * dt;
+    if constexpr (kLoads) {
+      boundary_work += applied * v_mid * dt;
+      boundary_ahead += applied * v_new * half_dt;
+    }
+    if constexpr (kDamp == DampKind::Local) {
+      damping_work += (force - f) * v_mid * dt;
+      damping_ahead += (force - f) * v_new * half_dt;
+    }
+    if constexpr (kDamp == DampKind::Rayleigh) {
+      const double drag = k.alpha * m * v_mid;
+      damping_work += drag * v_mid * dt;
+      damping_ahead += drag * v_new * half_dt;
+    }
     kinetic += 0.5 * m * v_old * v_new;
     v = v_new;
   };
 
-  ExactSum::Stream kinetic_sum(sums.kinetic), boundary_sum(sums.boundary_work), potential_sum(sums.potential),
-      damping_sum(sums.damping_work), friction_sum(sums.friction_work), strain_sum(sums.strain),
-      image_sum(sums.image_power);
+  ExactSum::Stream kinetic_sum(sums.kinetic_translation), spin_sum(sums.kinetic_rotation),
+      boundary_sum(sums.boundary_work), potential_sum(sums.potential), damping_sum(sums.damping_work),
+      friction_sum(sums.friction_work), strain_sum(sums.strain), image_sum(sums.image_power),
+      boundary_ahead_sum(sums.boundary_ahead), damping_ahead_sum(sums.damping_ahead);
   const bool periodic = model.space.periodic;
   const std::uint8_t* ghost = scratch.ghost.empty() ? nullptr : scratch.ghost.data();
   for (std::size_t ball = begin; ball < end; ++ball) {
@@ -336,6 +362,8 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     const BallParts& part = scratch.ball_parts[ball];
     boundary_work = part.boundary;
     damping_work = part.damping;
+    boundary_ahead = part.boundary_ahead;
+    damping_ahead = part.damping_ahead;
     kinetic = potential = 0;
     friction_sum.add(part.friction);
     strain_sum.add(part.strain);
@@ -364,6 +392,8 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     advance(fy, kLoads ? b.ay[ball] : 0.0, b.vy[ball], inv_m, m, fixed & kYVel);
     advance(fz, kLoads ? b.az[ball] : 0.0, b.vz[ball], inv_m, m, fixed & kZVel);
     if constexpr (kWriteForces) { b.fx[ball] = fx; b.fy[ball] = fy; b.fz[ball] = fz; }
+    kinetic_sum.add(kinetic);
+    kinetic = 0;
     const double vx = b.vx[ball], vy = b.vy[ball], vz = b.vz[ball];
     b.x[ball] += vx * dt; b.y[ball] += vy * dt; b.z[ball] += vz * dt;
     double speed2 = vx * vx + vy * vy + vz * vz;
@@ -378,6 +408,7 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
       const double wx = b.wx[ball], wy = b.wy[ball], wz = b.wz[ball];
       const double spin2 = wx * wx + wy * wy + wz * wz;
       speed2 += r * r * spin2;
+      spin_sum.add(kinetic);
     }
     if (speed2 > fastest2 || (std::isnan(speed2) && !std::isnan(fastest2))) { fastest2 = speed2; fastest = ball; }
     if constexpr (kEstimate != StepEstimate::None) {
@@ -395,10 +426,11 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
         }
       }
     }
-    kinetic_sum.add(kinetic);
     boundary_sum.add(boundary_work);
     if constexpr (kLoads) potential_sum.add(potential);
     damping_sum.add(damping_work);
+    boundary_ahead_sum.add(boundary_ahead);
+    damping_ahead_sum.add(damping_ahead);
   }
   if constexpr (kEstimate == StepEstimate::Undamped)
     if (omega2_max > 0) step_min = 2 / std::sqrt(omega2_max);

@@ -30,7 +30,7 @@ inline constexpr std::size_t kReduceBlock = 256;   // balls per block of the mot
 // in one fixed order).
 template <class Sums>
 void merge_exact_sums(Sums& into, Sums& from) {
-  std::array<ExactSum*, 16> to{};   // (StepSums has the most: 16)
+  std::array<ExactSum*, 19> to{};   // (StepSums has the most: 19)
   std::size_t n = 0;
   into.each_sum([&](ExactSum& s) { to[n++] = &s; });
   n = 0;
@@ -50,7 +50,12 @@ struct StepSums {
   // stiffness (physics/cell.hpp).
   std::array<ExactSum, 6> force_moment{};
   std::array<ExactSum, 3> stiffness_moment{};
-  ExactSum kinetic, potential;              // at t: m v(t-dt/2).v(t+dt/2)/2 and -m g.x(t), for the guard
+  // The energy at t, the time of this step's force pass (doc/physics.md "Energy"): kinetic
+  // m v(t-dt/2).v(t+dt/2)/2 (and I w.w for the spins), -m g.x(t); and the parts of the step's works
+  // that lie after t (half of F(t).v(t+dt/2) dt for applied loads, damping in the law of motion,
+  // fixed velocities and walls), which the balance at t leaves out.
+  ExactSum kinetic_translation, kinetic_rotation, potential;
+  ExactSum damping_ahead, boundary_ahead;
   double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate (NaN wins)
   double fastest_speed2 = -1;               // |v|^2 + |R w|^2 of the fastest ball (NaN wins)
   std::size_t fastest_ball = 0;
@@ -61,7 +66,7 @@ struct StepSums {
     for (ExactSum* s : {&friction_work, &damping_work, &boundary_work, &strain, &image_power}) f(*s);
     for (ExactSum& s : force_moment) f(s);
     for (ExactSum& s : stiffness_moment) f(s);
-    f(kinetic); f(potential);
+    for (ExactSum* s : {&kinetic_translation, &kinetic_rotation, &potential, &damping_ahead, &boundary_ahead}) f(*s);
   }
   void take_step(double dt) {
     if (std::isnan(critical_dt)) return;
@@ -86,14 +91,16 @@ struct StepTotals {
   double friction_work = 0, damping_work = 0, boundary_work = 0, strain = 0, image_power = 0;
   std::array<double, 6> force_moment{};
   std::array<double, 3> stiffness_moment{};
-  double kinetic = 0, potential = 0;
+  double kinetic_translation = 0, kinetic_rotation = 0, potential = 0, damping_ahead = 0, boundary_ahead = 0;
   double critical_dt = std::numeric_limits<double>::infinity();
   double fastest_speed2 = -1;
   std::size_t fastest_ball = 0;
   explicit StepTotals(const StepSums& s)
       : friction_work(s.friction_work.value()), damping_work(s.damping_work.value()),
         boundary_work(s.boundary_work.value()), strain(s.strain.value()), image_power(s.image_power.value()),
-        kinetic(s.kinetic.value()), potential(s.potential.value()), critical_dt(s.critical_dt),
+        kinetic_translation(s.kinetic_translation.value()), kinetic_rotation(s.kinetic_rotation.value()),
+        potential(s.potential.value()), damping_ahead(s.damping_ahead.value()),
+        boundary_ahead(s.boundary_ahead.value()), critical_dt(s.critical_dt),
         fastest_speed2(s.fastest_speed2), fastest_ball(s.fastest_ball) {
     for (int a = 0; a < 6; ++a) force_moment[a] = s.force_moment[a].value();
     for (int a = 0; a < 3; ++a) stiffness_moment[a] = s.stiffness_moment[a].value();

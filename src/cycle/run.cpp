@@ -20,7 +20,8 @@
 namespace trubal {
 namespace {
 
-constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs about one step's memory traffic
+constexpr std::int64_t kSnapshotEvery = 500;
+constexpr int kFlippingSteps = 20;   // a copy costs about one step's memory traffic
 constexpr double kProgressSeconds = 0.2;
 
 double resting_energy_floor(const Model& model) {
@@ -67,6 +68,27 @@ Escapes find_escapes(const Model& model) {
   return e;
 }
 
+// The CYCLE's balance error against the energy that moved (CycleResult::energy_warning): above
+// kBalanceWarning of it, the step is too coarse for what happened, mostly contacts that formed and
+// broke within a few steps (impacts). The error of a collision falls as the step squared (doc/
+// physics.md "Energy"), so the FRAC that would have held it is about FRAC sqrt(kBalanceWarning /
+// error), taken at half that error for the scatter a collision's phase against the steps gives.
+std::string balance_warning(const Model& model, const CycleResult& r, double energy_floor) {
+  if (!(r.energy_scale > 0) || !(r.balance_error > kBalanceWarning * r.energy_scale) ||
+      !(r.balance_error > energy_floor))
+    return {};
+  const double error = r.balance_error / r.energy_scale;
+  const double shrink = std::sqrt(0.5 * kBalanceWarning / error);
+  const std::string advice =
+      model.settings.fixed_dt > 0
+          ? fmt::format("TSTEP {:.2g} (now {:.3g})", model.settings.fixed_dt * shrink, model.settings.fixed_dt)
+          : fmt::format("FRAC {:.2g} (now {:.3g})", model.settings.frac * shrink, model.settings.frac);
+  return fmt::format(
+      "the energy balance of this CYCLE was off by {:.3g}% of the energy that moved ({:.3g} of {:.3g}): the step is "
+      "too coarse for contacts that form and break within a few steps (impacts); {} would hold it to {:.3g}%",
+      100 * error, r.balance_error, r.energy_scale, advice, 100 * kBalanceWarning);
+}
+
 }  // namespace
 
 CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control) {
@@ -86,10 +108,17 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   pipeline.prepare(model);
   if (!(model.critical_dt > 0)) model.critical_dt = critical_timestep(model);
   // The guard: energy in must balance energy out. A step beyond the stability limit creates
-  // energy from nothing; when that is half of all the energy in play, the run stops.
+  // energy from nothing; when that is half of all the energy in play, the run stops. The balance
+  // alone cannot see an instability of the linear springs: central differences keep
+  // m v(t-dt/2).v(t+dt/2)/2 plus the springs' energy even as the velocities flip sign and grow,
+  // the kinetic term going negative, and sliding contacts can hold such a flipping motion at a
+  // bounded size. So the run also stops where the kinetic term stays negative for kFlippingSteps
+  // steps running (for a stable step it is negative only near the turning points of the fastest
+  // vibrations, a few steps of each period).
   const double friction0 = model.energy.friction_work, damping0 = model.energy.damping_work;
   const double boundary0 = model.energy.boundary_work, gross0 = model.space.gross_work;
   double balance_ref = 0, potential_ref = 0, scale_max = 0;
+  int flipping = 0;   // steps running with the kinetic term negative
   // A scene at rest has almost no energy, and rounding alone then looks like a large relative
   // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
   // an unstable step grows exponentially and passes this within a few steps.
@@ -107,6 +136,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     pipeline.sync(model);   // a distributed run's last step (already current where it wrote details)
     result.seconds = std::chrono::duration<double>(Clock::now() - loop_start).count();
     result.times = timing;
+    if (!result.unstable) result.energy_warning = balance_warning(model, result, energy_floor);
     return result;
   };
 
@@ -165,18 +195,35 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
         model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, cap, kernels.features.hertz);
     }
 
-    const double dissipated = model.energy.friction_work - friction0 + model.energy.damping_work - damping0;
-    const double boundary = model.energy.boundary_work - boundary0;
+    // The balance at t, the time of this step's force pass: every term there (the works less
+    // their parts after t; the cell moves on with the balls, so half its step's work is after t).
+    EnergyAtStep& now = model.energy_at_step;
+    now.valid = true;
+    now.kinetic_translation = sums.kinetic_translation;
+    now.kinetic_rotation = sums.kinetic_rotation;
+    now.strain = sums.strain;
+    now.potential = sums.potential;
+    now.damping_ahead = sums.damping_ahead;
+    now.boundary_ahead = sums.boundary_ahead + (model.space.periodic ? 0.5 * sums.image_power * dt : 0.0);
+    const double kinetic = now.kinetic_translation + now.kinetic_rotation;
+    const double dissipated =
+        model.energy.friction_work - friction0 + model.energy.damping_work - damping0 - now.damping_ahead;
+    const double boundary = model.energy.boundary_work - boundary0 - now.boundary_ahead;
     if (s == 1) potential_ref = sums.potential;
     const double potential = sums.potential - potential_ref;
-    const double balance = sums.kinetic + sums.strain + potential + dissipated - boundary;
+    const double balance = kinetic + sums.strain + potential + dissipated - boundary;
     if (s == 1) balance_ref = balance;
-    const double scale = sums.kinetic + sums.strain + std::abs(potential) + std::abs(dissipated) + std::abs(boundary) +
-                         (model.space.gross_work - gross0);
+    // (|kinetic|: the kinetic term is negative in a step where the velocities turn.)
+    const double scale = std::abs(kinetic) + sums.strain + std::abs(potential) + std::abs(dissipated) +
+                         std::abs(boundary) + (model.space.gross_work - gross0);
     // Against the most energy in play so far: a bouncing ball at the top of its flight has little
     // energy, while the contact it left (a few coarse steps) may have shifted the balance a little.
     scale_max = std::max(scale_max, scale);
-    if (!std::isfinite(balance) || std::abs(balance - balance_ref) > 0.5 * scale_max + energy_floor) {
+    result.balance_error = std::max(result.balance_error, std::abs(balance - balance_ref));
+    result.energy_scale = scale_max;
+    flipping = kinetic < -energy_floor ? flipping + 1 : 0;
+    if (!std::isfinite(balance) || std::abs(balance - balance_ref) > 0.5 * scale_max + energy_floor ||
+        flipping >= kFlippingSteps) {
       const std::size_t ball = sums.fastest_ball < model.balls.size() ? sums.fastest_ball : 0;
       const std::int64_t id = model.balls.size() ? model.balls.id[ball] : 0;
       const double speed = std::sqrt(sums.fastest_speed2);

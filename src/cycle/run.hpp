@@ -25,6 +25,8 @@ struct CycleControl {
   std::function<void(std::int64_t done, std::int64_t total)> progress;
 };
 
+inline constexpr double kBalanceWarning = 0.01;   // of the energy that moved: CycleResult::energy_warning
+
 struct CycleResult {
   std::int64_t done = 0;
   bool interrupted = false;
@@ -32,6 +34,13 @@ struct CycleResult {
   bool left_box = false;            // a ball left a START box across a `stop` face (message says which)
   std::size_t destroyed = 0;        // balls deleted for leaving across a `destroy` face
   std::string message;              // for an unstable run: cycle, ball, suggested FRAC
+  // The energy balance at each step's force pass (doc/physics.md "Energy"): its largest distance
+  // from the first step's, and the largest energy in play (kinetic, strain and the magnitudes of
+  // the potential's change and of the works since the first step): the energy that moved.
+  double balance_error = 0, energy_scale = 0;
+  // Set where balance_error passed kBalanceWarning of energy_scale: what to tell the user once the
+  // CYCLE is over, with the FRAC (or TSTEP) that would have held it.
+  std::string energy_warning;
   double seconds = 0;               // wall time of the loop
   PhaseTimes times;                 // where it went
 };

@@ -23,6 +23,7 @@ struct alignas(64) PairForce {
 // and hands them to the exact sums (StepSums), ball by ball.
 struct BallParts {
   double friction = 0, damping = 0, strain = 0, image = 0, boundary = 0;
+  double damping_ahead = 0, boundary_ahead = 0;   // the parts after t (StepSums)
 };
 
 struct StepScratch {

@@ -34,8 +34,10 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // axes (mixed periodicity; older files are all periodic or all bounded). 6: the cell's volume where
 // the accumulated strain was 0 (the volumetric strain's reference), and the histories (HIST):
 // each table's items, period, file, platen range and balls, and the rows it holds in memory, so
-// that RESTART resumes them; older files restart with none.
-constexpr std::uint32_t kVersion = 6;
+// that RESTART resumes them; older files restart with none. 7: the energy terms of the last step
+// at its force pass (Model::energy_at_step), so that PRINT energy after RESTART is the saved run's;
+// older files print the state as it is until the next step.
+constexpr std::uint32_t kVersion = 7;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -195,6 +197,13 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     io.pod(m.space.periodic_axis);
   }
   if (version >= 6) io.pod(m.space.reference_volume);
+  if (version >= 7) {   // field by field: the struct's padding is no part of the state
+    EnergyAtStep& e = m.energy_at_step;
+    io.pod(e.valid);
+    for (double* v : {&e.kinetic_translation, &e.kinetic_rotation, &e.strain, &e.potential, &e.damping_ahead,
+                      &e.boundary_ahead})
+      io.pod(*v);
+  }
 }
 
 // The histories: what each HIST asked for and the rows it holds (a file's window; every row of a

@@ -237,6 +237,17 @@ struct Energy {
   double boundary_work = 0;        // done by fixed velocities and applied forces (gravity: potential)
 };
 
+// The energy terms at the time t of the last step's force pass (cycle/run.cpp): the positions were
+// then x(t) (now x(t) + v dt), the velocities v(t - dt/2) and v(t + dt/2) (now the latter). kinetic
+// m v(t - dt/2).v(t + dt/2)/2, the springs' energy and gravity's potential at x(t); the ahead parts
+// are what the step's works (Energy) hold beyond t, so the works up to t are the totals less them.
+// valid: the balls are as that step left them (an edit of the balls makes it false).
+struct EnergyAtStep {
+  bool valid = false;
+  double kinetic_translation = 0, kinetic_rotation = 0, strain = 0, potential = 0;
+  double damping_ahead = 0, boundary_ahead = 0;
+};
+
 // MEMBRANE: its pressure and the cross-section area its forces are consistent with (the union of
 // the loaded layers' square cells), so that HIST ratio can form F1 / (A sigma2). 0: no membrane.
 // With `follow`, the forces are recomputed from the positions every follow_every cycles
@@ -264,6 +275,7 @@ struct Model {
   WallContacts wall_contacts;
   Settings settings;
   Energy energy;
+  EnergyAtStep energy_at_step;
   Membrane membrane;
   std::map<std::string, std::vector<std::int64_t>> groups;   // GROUP name -> ball ids
   std::int64_t cycle = 0;

@@ -65,15 +65,27 @@ double EnergyReport::total() const {
 
 EnergyReport energy(const Model& model) {
   EnergyReport e;
+  e.friction_work = model.energy.friction_work;
+  e.damping_work = model.energy.damping_work;
+  e.boundary_work = model.energy.boundary_work;
+  const EnergyAtStep& now = model.energy_at_step;
+  if (now.valid) {   // all at t, the time of the last force pass (the step's own sums)
+    e.at_step = true;
+    e.kinetic_translation = now.kinetic_translation;
+    e.kinetic_rotation = now.kinetic_rotation;
+    e.strain = now.strain;
+    e.potential = now.potential;
+    e.damping_work -= now.damping_ahead;
+    e.boundary_work -= now.boundary_ahead;
+    return e;
+  }
+  // No step since the balls last changed (or none yet): the state as it is.
   const Balls& b = model.balls;
   const auto& g = model.settings.gravity;
-  const double half_dt = 0.5 * model.dt;
   for (std::size_t i = 0; i < b.size(); ++i) {
     e.kinetic_translation += 0.5 * b.mass[i] * (b.vx[i] * b.vx[i] + b.vy[i] * b.vy[i] + b.vz[i] * b.vz[i]);
     e.kinetic_rotation += 0.5 * b.inertia[i] * (b.wx[i] * b.wx[i] + b.wy[i] * b.wy[i] + b.wz[i] * b.wz[i]);
-    // Velocities are at the half step, so the height is taken there too (free fall balances).
-    e.potential -= b.mass[i] * (g[0] * (b.x[i] - half_dt * b.vx[i]) + g[1] * (b.y[i] - half_dt * b.vy[i]) +
-                                g[2] * (b.z[i] - half_dt * b.vz[i]));
+    e.potential -= b.mass[i] * (g[0] * b.x[i] + g[1] * b.y[i] + g[2] * b.z[i]);
   }
   const ContactTable& c = model.contacts;
   for (std::size_t p = 0; p < c.size(); ++p) {
@@ -88,9 +100,6 @@ EnergyReport energy(const Model& model) {
       add_contact_strain(e.strain, is_hertz(model, w.ball[p]), w.kn_eff[p], w.overlap[p], w.fsx[p], w.fsy[p],
                          w.fsz[p], w.ks_eff[p]);
     }
-  e.friction_work = model.energy.friction_work;
-  e.damping_work = model.energy.damping_work;
-  e.boundary_work = model.energy.boundary_work;
   return e;
 }
 

@@ -16,10 +16,15 @@ using Sym6 = std::array<double, 6>;   // xx yy zz xy xz yz
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz);
 Sym6 average_stress(const Model& model, double volume);
 
+// The energy terms, all at one time: where the balls are as the last step left them, at t, the
+// time of its force pass (Model::energy_at_step: kinetic m v(t - dt/2).v(t + dt/2)/2, the springs
+// and gravity at x(t), the works up to t); otherwise (before the first step, after an edit of the
+// balls) from the state as it is, the strain from the contact table's last force pass.
 struct EnergyReport {
   double kinetic_translation = 0, kinetic_rotation = 0, strain = 0;
   double friction_work = 0, damping_work = 0, boundary_work = 0;
-  double potential = 0;            // gravity, relative to z = 0
+  double potential = 0;            // gravity, relative to x = 0
+  bool at_step = false;            // taken at the last step's t (else from the state as it is)
   double total() const;            // kinetic + strain + potential + dissipated - boundary
 };
 EnergyReport energy(const Model& model);

@@ -149,6 +149,7 @@ class SetArrays(unittest.TestCase):
         e = s.energy()
         self.assertGreater(e["strain"], 0)
         self.assertGreater(e["damping_work"], 0)
+        self.assertTrue(e["at_step"])   # taken at the last step's force pass
 
 
     def test_ball_resting_on_a_wall(self):

@@ -43,6 +43,12 @@ Model run(const Scene& scene, const std::string& backend_name, int threads, int 
 // threaded keep the same Verlet list; allpairs lists only the touching pairs).
 void same_energy(const Model& a, const Model& b) {
   CHECK(std::memcmp(&a.energy, &b.energy, sizeof(Energy)) == 0);
+  // The terms at the last force pass (PRINT energy's), field by field (the struct has padding).
+  const EnergyAtStep &x = a.energy_at_step, &y = b.energy_at_step;
+  CHECK(x.valid == y.valid);
+  for (auto f : {&EnergyAtStep::kinetic_translation, &EnergyAtStep::kinetic_rotation, &EnergyAtStep::strain,
+                 &EnergyAtStep::potential, &EnergyAtStep::damping_ahead, &EnergyAtStep::boundary_ahead})
+    CHECK(std::memcmp(&(x.*f), &(y.*f), sizeof(double)) == 0);
 }
 
 void check_scene(const Scene& scene, bool all_variants = true) {

@@ -145,7 +145,13 @@ TEST_CASE("io history: a save of format 5 (before histories) restarts with none"
   std::string data = slurp(dir.path() / "s.sav");
   std::uint32_t version = 0;
   std::memcpy(&version, data.data() + 8, sizeof version);
-  REQUIRE(version == 6);
+  REQUIRE(version == 7);
+  // Format 7 keeps the energy terms of the last force pass: PRINT energy after RESTART is the run's.
+  Harness now;
+  REQUIRE(now.deck(kScene + "restart s.sav\n"));
+  REQUIRE(now.session.model().energy_at_step.valid);
+  CHECK(energy(now.session.model()).kinetic_translation == energy(h.session.model()).kinetic_translation);
+  CHECK(energy(now.session.model()).total() == energy(h.session.model()).total());
   // The same model in format 5, which had no histories.
   save_model(h.session.model(), (dir.path() / "old.sav").string(), &h.session.history(), 5);
   data = slurp(dir.path() / "old.sav");
@@ -154,6 +160,7 @@ TEST_CASE("io history: a save of format 5 (before histories) restarts with none"
   Harness old;
   REQUIRE(old.deck(kScene + "hist stress\nrestart old.sav\n"));
   CHECK(old.session.history().tables().empty());
+  CHECK_FALSE(old.session.model().energy_at_step.valid);   // before format 7: the state as it is
   CHECK(old.session.model().cycle == 10);
   CHECK(old.session.model().balls.x == h.session.model().balls.x);
 }

@@ -28,9 +28,10 @@ struct CoulombSpring {
     const double new2 = px * px + py * py + pz * pz;
     const bool turn = old2 > 0, rescale = turn && new2 > 0;
     const double scale = rescale ? std::sqrt(old2 / (rescale ? new2 : 1.0)) : 1.0;
-    double fsx = turn ? (rescale ? px * scale : px) : hx;
-    double fsy = turn ? (rescale ? py * scale : py) : hy;
-    double fsz = turn ? (rescale ? pz * scale : pz) : hz;
+    const double hx_turned = turn ? (rescale ? px * scale : px) : hx;
+    const double hy_turned = turn ? (rescale ? py * scale : py) : hy;
+    const double hz_turned = turn ? (rescale ? pz * scale : pz) : hz;
+    double fsx = hx_turned, fsy = hy_turned, fsz = hz_turned;
     s.vsx = vx - vn * nx; s.vsy = vy - vn * ny; s.vsz = vz - vn * nz;
     const double kdt = ks * dt;
     fsx -= kdt * s.vsx; fsy -= kdt * s.vsy; fsz -= kdt * s.vsz;
@@ -39,8 +40,15 @@ struct CoulombSpring {
     const double fs = std::sqrt(fs2);
     const double cut = s.slide ? limit / (s.slide ? fs : 1.0) : 1.0;
     s.fsx = s.slide ? fsx * cut : fsx; s.fsy = s.slide ? fsy * cut : fsy; s.fsz = s.slide ? fsz * cut : fsz;
+    // The slip (trial - force) / k_s times the mean of the force before and after it (the history
+    // turned onto the plane, and the capped force): the trapezoid rule the law of motion integrates
+    // the contact forces with (cycle/kernels.cpp), so a step's spring energy, friction work and the
+    // balls' kinetic energy balance.
     const double ks_safe = ks > 0 ? ks : 1.0;
-    s.work_friction = s.slide && ks > 0 ? limit * (fs - limit) / ks_safe : 0.0;
+    const double mean_x = 0.5 * (s.fsx + hx_turned), mean_y = 0.5 * (s.fsy + hy_turned);
+    const double mean_z = 0.5 * (s.fsz + hz_turned);
+    const double slip_work = (fsx - s.fsx) * mean_x + (fsy - s.fsy) * mean_y + (fsz - s.fsz) * mean_z;
+    s.work_friction = s.slide && ks > 0 ? slip_work / ks_safe : 0.0;
     s.strain = shear_spring_energy(s.fsx * s.fsx + s.fsy * s.fsy + s.fsz * s.fsz, ks);
   }
 };
