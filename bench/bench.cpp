@@ -268,7 +268,8 @@ std::string settle_deck(const std::string& path, std::size_t& balls) {
 }
 
 // The settle scene on one backend: the whole fall and settling in `parts` equal pieces, each with
-// its contacts at the end and, with --phases, where its time went.
+// its contacts (touching ball pairs) and list (the pairs the contact loop visits) at the end and,
+// with --phases, where its time went.
 int settle(const std::string& path, const std::string& backend, int threads, int steps) {
   std::size_t n = 0;
   const std::string deck = settle_deck(path, n);
@@ -284,7 +285,7 @@ int settle(const std::string& path, const std::string& backend, int threads, int
   const int parts = 4;
   std::printf("settle scene %s: %zu balls, backend %s (%d threads), dt 0.04, %d steps in %d parts\n", path.c_str(), n,
               backend.c_str(), threads, steps, parts);
-  std::printf("%8s %8s %10s %8s %14s %s\n", "from", "steps", "contacts", "s", "ball-steps/s",
+  std::printf("%8s %8s %10s %10s %8s %14s %s\n", "from", "steps", "contacts", "list", "s", "ball-steps/s",
               g_phases ? "  us per step: detect, forces, motion, rest of step, outside step" : "");
   double total = 0;
   for (int p = 0; p < parts; ++p) {
@@ -293,8 +294,8 @@ int settle(const std::string& path, const std::string& backend, int threads, int
     const CycleResult r = session.cycle(k);
     if (r.unstable || r.left_box || r.done != k) throw std::runtime_error("--settle: the run stopped: " + r.message);
     total += r.seconds;
-    std::printf("%8lld %8d %10zu %8.3f %12.2f M", static_cast<long long>(from), k, contact_count(session.model()),
-                r.seconds, static_cast<double>(n) * k / r.seconds / 1e6);
+    std::printf("%8lld %8d %10zu %10zu %8.3f %12.2f M", static_cast<long long>(from), k, contact_count(session.model()),
+                session.model().contacts.size(), r.seconds, static_cast<double>(n) * k / r.seconds / 1e6);
     if (g_phases) {
       const PhaseTimes& t = r.times;
       const double us = 1e6 / k;
