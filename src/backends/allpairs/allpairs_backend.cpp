@@ -27,7 +27,8 @@ std::string bytes_text(std::uint64_t bytes) {
   return u == 0 ? fmt::format("{} bytes", bytes) : fmt::format("{:.3g} {} ({} bytes)", v, unit[u], bytes);
 }
 
-// Calls visit(q) for each set slot q of a row, in ascending q, skipping eight empty slots at a time.
+// Calls visit(q) for each set slot q of a row, in ascending q, skipping eight empty slots at a time
+// (the periodic rows; the free-space loop below is the same, written out).
 template <class Visit>
 inline void for_each_set(const std::uint8_t* slot, std::size_t count, Visit&& visit) {
   std::size_t k = 0;
@@ -114,9 +115,16 @@ class AllPairsBackend final : public Backend {
         if (test_row(b.x[i], b.y[i], b.z[i], b.rad[i], b.x.data() + i + 1, b.y.data() + i + 1, b.z.data() + i + 1,
                      b.rad.data() + i + 1, count, slot) == 0)
           continue;
-        for_each_set(slot, count, [&](std::size_t q) {
-          out.push(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1 + q));
-        });
+        std::size_t k = 0;
+        for (; k + 8 <= count; k += 8) {   // skip eight empty slots at a time
+          std::uint64_t word;
+          std::memcpy(&word, slot + k, 8);
+          if (word == 0) continue;
+          for (std::size_t q = k; q < k + 8; ++q)
+            if (slot[q]) out.push(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1 + q));
+        }
+        for (; k < count; ++k)
+          if (slot[k]) out.push(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1 + k));
       }
     }, slot_count_ >= kParallelSlots);
     pairs.clear();
