@@ -1,26 +1,34 @@
-// Speed of the engine on the peers' benchmark scene (shared/peers): a dense FCC block, every ball
-// touching its 12 neighbours (nearest-neighbour distance 0.99 d, jitter 0.05), R = 20,
-// kn = ks = 1.5e9, mu = 0.12278, density 2000, dt = 0.02, rotation on, no damping, no gravity.
-// Free space until periodic space exists: the outer layer of lattice cells is held fixed (a rigid
-// container), or the stored spring energy would blow the block apart.
+// Speed of the engine on the peers' benchmark scenes (shared/peers).
 //
-//   trubal_bench [--backend name] [--threads t] [--steps k] [N ...]   N rounded to 4 n^3 (default 1680 13500 108000)
-//   trubal_bench --compare [--steps k] [--phases] [N ...]   every backend on 1 and 2 threads, speedup and efficiency
-//                                                 against the best one-thread time (default 403 1680 13500 108000)
-//   trubal_bench --gen [N ...]     GEN's time: N balls of radius 0.4-0.6 in a periodic cell at a solid fraction of
-//                                  0.21 (the loose gas of examples/periodic_triaxial.dat) (default 200000 1000000)
-//   trubal_bench --gen-porosity [N ...]   GEN porosity 0.4 of a graded sand (a sieve curve) in a periodic cell
-//                                  sized for about N balls (default 20000 200000)
+// The dense scene: an FCC block, every ball touching its 12 neighbours (nearest-neighbour distance
+// 0.99 d, jitter 0.05), R = 20, kn = ks = 1.5e9, mu = 0.12278, density 2000, dt = 0.02, rotation on,
+// no damping, no gravity. In free space (the default) the outer layer of lattice cells is held fixed
+// (a rigid container), or the stored spring energy would blow the block apart; --periodic puts the
+// block in a periodic cell of the lattice's size instead, every ball free (the peers' own scene,
+// ../shared/peers/compare.sh).
+//
+// The sparse scene (--settle FILE): the peers' settle scene, FILE a settle_<N>.xyz that
+// ../shared/peers/gen_scenes.py writes (`python3 gen_scenes.py settle`): balls falling from a loose
+// gas under gravity 0.03 onto a floor wall at z = 0, x and y periodic, gran/hooke/history with a
+// normal dashpot, dt = 0.04 (the deck of tests/peers/settle_trubal.dat and bench/settle_vs_lammps.sh).
+//
+// Run trubal_bench --help for the options.
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
+#include <cerrno>
 #include <exception>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "cycle/pipeline.hpp"
+#include "interp/interpreter.hpp"
+#include "interp/output.hpp"
 #include "session.hpp"
 #include "model/edit.hpp"
 #include "cycle/run.hpp"
@@ -33,6 +41,9 @@ using namespace trubal;
 namespace {
 
 enum class Scene { Standard, NoRotation, Everything };
+
+bool g_phases = false;     // --phases: print where each run's time went
+bool g_periodic = false;   // --periodic: the FCC block in a periodic cell, every ball free
 
 Model fcc_block(int nx, int ny, int nz, Scene scene) {
   const double r = 20, d = 2 * r, a = 0.99 * d * std::sqrt(2.0);
@@ -48,7 +59,9 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
     model.settings.damping.kind = DampKind::Rayleigh;
     model.settings.damping.alpha = 0.05 * M_PI;
     model.settings.damping.beta = 1e-4;
-    model.settings.gravity = {0, 0, -9.81};
+    // Not in a periodic cell: the whole block would fall through its images, gaining potential
+    // energy at every wrap (the instability guard stops that run).
+    if (!g_periodic) model.settings.gravity = {0, 0, -9.81};
   }
   std::uint64_t seed = 12345;
   auto jitter = [&] {   // deterministic, uniform in [-0.05, 0.05]
@@ -56,6 +69,10 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
     return (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * 0.1;
   };
   const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  if (g_periodic) {   // the lattice's own cell: every ball has its 12 neighbours, across the faces too
+    model.space.periodic = true;
+    model.space.hi = {nx * a, ny * a, nz * a};
+  }
   std::int64_t id = 1;
   // Ids in lattice order, as the peers' data files number them.
   for (int k = 0; k < nz; ++k)
@@ -66,14 +83,12 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
           const double z = (k + b[2] + 0.25) * a + jitter();
           const std::size_t ball = add_ball(model, id++, 1, x, y, z, r);
           const bool shell = i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
-          if (shell) model.balls.fixed[ball] = kVel | kSpin;
+          if (shell && !g_periodic) model.balls.fixed[ball] = kVel | kSpin;
         }
   return model;
 }
 
 struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; };
-
-bool g_phases = false;   // --phases: print where each run's time went
 
 // The warm-up builds the pair list, fills the caches and covers the threaded backend's trial of
 // whether sharing a step pays (its first 128 steps): start-up costs, not throughput.
@@ -127,7 +142,8 @@ void lattice_for(int n, int& nx, int& ny, int& nz) {
 int compare(const std::vector<int>& sizes, int steps) {
   struct Variant { const char* backend; int threads; };
   const Variant variants[] = {{"serial", 1}, {"threaded", 1}, {"threaded", 2}, {"allpairs", 1}, {"allpairs", 2}};
-  std::printf("dense FCC block, dt 0.02, every backend; M = million per second, G = billion per second\n");
+  std::printf("dense FCC block, %s, dt 0.02, every backend; M = million per second, G = billion per second\n",
+              g_periodic ? "periodic cell" : "free space, outer layer held");
   std::printf("%8s %10s %9s %2s %7s %8s %14s %16s %7s %6s %9s\n", "N", "contacts", "backend", "p", "steps", "s",
               "ball-cycles/s", "pair tests/s", "Sp", "Ep", "peak MiB");
   for (int n : sizes) {
@@ -205,46 +221,206 @@ int gen_speed(std::vector<int> sizes, bool porosity) {
   return 0;
 }
 
+// The peers' settle scene from gen_scenes.py's settle_<N>.xyz (header "N Lx Ly Lz", Lz the data
+// file's z extent from zlo = -R; then one "x y z" per ball), as tests/peers/settle_trubal.dat makes
+// it: x and y periodic, the floor a wall at z = 0, the box top 10 diameters above the highest
+// centre, LAMMPS's gran/hooke/history 1.5e9 1.5e9 1.338 0 0.12278 with the dashpot matched by PROP
+// rest (tests/peers/README.md: xi = gamma_n sqrt(m_eff / kn) / 2, m_eff = m/2 between balls, m at
+// the wall, and the restitution of trubal's non-pulling dashpot at that xi).
+std::string settle_deck(const std::string& path, std::size_t& balls) {
+  std::FILE* f = std::fopen(path.c_str(), "r");
+  if (!f) throw std::runtime_error("--settle: cannot open " + path);
+  long n = 0;
+  double lx = 0, ly = 0, lz = 0;
+  if (std::fscanf(f, "%ld %lf %lf %lf", &n, &lx, &ly, &lz) != 4 || n <= 0 || !(lx > 0) || lx != ly) {
+    std::fclose(f);
+    throw std::runtime_error("--settle: " + path + " is not a settle_<N>.xyz of gen_scenes.py (header N L L Lz)");
+  }
+  const double r = 20, rho = 2000, kn = 1.5e9, gamma_n = 1.338, zlo = -r;
+  std::string lines;
+  double top = zlo;
+  char line[160];
+  for (long k = 1; k <= n; ++k) {
+    double x, y, z;
+    if (std::fscanf(f, "%lf %lf %lf", &x, &y, &z) != 3) {
+      std::fclose(f);
+      throw std::runtime_error("--settle: " + path + " ends before its " + std::to_string(n) + " balls");
+    }
+    std::snprintf(line, sizeof line, "ball %.17g %.17g %.17g 20 id %ld\n", x, y, z, k);
+    lines += line;
+    top = std::max(top, z);
+  }
+  std::fclose(f);
+  auto rest = [&](double m_eff) {   // tests/peers/settle_vs_lammps.py clamped_restitution
+    const double xi = gamma_n * std::sqrt(m_eff / kn) / 2, s = std::sqrt(1 - xi * xi);
+    return std::exp(-xi * std::atan2(2 * xi * s, 2 * xi * xi - 1) / s);
+  };
+  const double m = rho * 4.0 / 3.0 * M_PI * r * r * r;
+  char head[1024];
+  std::snprintf(head, sizeof head,
+                "start box 0 %.17g 0 %.17g %.17g %.17g x periodic y periodic\n"
+                "prop type 1 kn 1.5e9 ks 1.5e9 mu 0.12278 dens 2000 rest %.17g\n"
+                "prop type 2 kn 1.5e9 ks 1.5e9 mu 0.12278 rest %.17g\n"
+                "wall id 1 plane 0 0 0 0 0 1 type 2\n",
+                lx, ly, zlo, std::max(zlo + lz, top + 20 * r), rest(m / 2), rest(m));
+  balls = static_cast<std::size_t>(n);
+  return head + lines + "grav 0 0 -0.03\ntstep 0.04\n";
+}
+
+// The settle scene on one backend: the whole fall and settling in `parts` equal pieces, each with
+// its contacts (touching ball pairs) and list (the pairs the contact loop visits) at the end and,
+// with --phases, where its time went.
+int settle(const std::string& path, const std::string& backend, int threads, int steps) {
+  std::size_t n = 0;
+  const std::string deck = settle_deck(path, n);
+  Session session;
+  std::ostringstream quiet_out, quiet_err;
+  Output output(quiet_out, quiet_err);
+  Interpreter interp(session, output);
+  interp.echo = false;
+  if (!interp.run_text(deck, "settle", "settle", 1))
+    throw std::runtime_error("--settle: the deck failed: " + interp.last_error().message);
+  session.set_backend(backend, threads);
+  if (steps <= 0) steps = 20000;
+  const int parts = 4;
+  std::printf("settle scene %s: %zu balls, backend %s (%d threads), dt 0.04, %d steps in %d parts\n", path.c_str(), n,
+              backend.c_str(), threads, steps, parts);
+  std::printf("%8s %8s %10s %10s %8s %14s %s\n", "from", "steps", "contacts", "list", "s", "ball-steps/s",
+              g_phases ? "  us per step: detect, forces, motion, rest of step, outside step" : "");
+  double total = 0;
+  for (int p = 0; p < parts; ++p) {
+    const int k = steps / parts + (p < steps % parts ? 1 : 0);
+    const std::int64_t from = session.model().cycle;
+    const CycleResult r = session.cycle(k);
+    if (r.unstable || r.left_box || r.done != k) throw std::runtime_error("--settle: the run stopped: " + r.message);
+    total += r.seconds;
+    std::printf("%8lld %8d %10zu %10zu %8.3f %12.2f M", static_cast<long long>(from), k, contact_count(session.model()),
+                session.model().contacts.size(), r.seconds, static_cast<double>(n) * k / r.seconds / 1e6);
+    if (g_phases) {
+      const PhaseTimes& t = r.times;
+      const double us = 1e6 / k;
+      std::printf("  %.1f, %.1f, %.1f, %.1f, %.1f", t.detect * us, t.forces * us, t.motion * us,
+                  (t.step - t.detect - t.forces - t.motion) * us, (r.seconds - t.step) * us);
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  std::printf("whole run: %.3f s, %.2f M ball-steps/s, coordination %.4f (ball pairs, 2 C / N)\n", total,
+              static_cast<double>(n) * steps / total / 1e6, coordination_number(session.model()));
+  return 0;
+}
+
+const char* const kUsage =
+    "usage:\n"
+    "  trubal_bench [--backend NAME] [--threads T] [--steps K] [--periodic] [--phases] [N ...]\n"
+    "      the dense FCC block on one backend, N rounded to 4 n^3 balls (default 1680 13500 108000):\n"
+    "      the standard scene, without shear or rotation, and with damping and gravity\n"
+    "  trubal_bench --compare [--steps K] [--periodic] [--phases] [N ...]\n"
+    "      every backend on 1 and 2 threads, speedup and efficiency against the best one-thread\n"
+    "      time, peak memory per row (default 403 1680 13500 108000)\n"
+    "  trubal_bench --settle FILE [--backend NAME] [--threads T] [--steps K] [--phases]\n"
+    "      the peers' sparse settle scene, FILE a settle_<N>.xyz of ../shared/peers/gen_scenes.py\n"
+    "      (default 20000 steps, timed in 4 parts)\n"
+    "  trubal_bench --gen [N ...]          GEN's time: N balls of radius 0.4-0.6 in a periodic cell at a\n"
+    "                                      solid fraction of 0.21 (default 200000 1000000)\n"
+    "  trubal_bench --gen-porosity [N ...] GEN porosity 0.4 of a graded sand in a periodic cell sized\n"
+    "                                      for about N balls (default 20000 200000)\n"
+    "options:\n"
+    "  --backend NAME  serial (default), threaded or allpairs\n"
+    "  --threads T     the backend's threads (default 1)\n"
+    "  --steps K       steps per timed run (default: by size)\n"
+    "  --periodic      the FCC block in a periodic cell of the lattice's size, every ball free (the\n"
+    "                  peers' scene); default: free space, the outer layer of lattice cells held\n"
+    "  --phases        where each run's time went, in microseconds per step\n"
+    "  -h, --help      this text\n";
+
+// A whole positive number, or nothing.
+bool positive(const char* text, int& value) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || errno != 0 || v <= 0 || v > 1000000000) return false;
+  value = static_cast<int>(v);
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string backend = "serial";
+  std::string backend = "serial", settle_file;
   int steps = 0, threads = 1;
   bool comparing = false, gen = false, gen_porosity = false;
   std::vector<int> sizes;
+  auto bad = [](const std::string& why) {
+    std::fprintf(stderr, "trubal_bench: %s\n(trubal_bench --help for the usage)\n", why.c_str());
+    return 2;
+  };
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
-    if (arg == "--compare") comparing = true;
+    const bool has_value = k + 1 < argc;
+    if (arg == "--help" || arg == "-h") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    } else if (arg == "--compare") comparing = true;
     else if (arg == "--gen") gen = true;
     else if (arg == "--gen-porosity") gen_porosity = true;
-    else if (arg == "--threads" && k + 1 < argc) threads = std::atoi(argv[++k]);
-    else if (arg == "--backend" && k + 1 < argc) backend = argv[++k];
-    else if (arg == "--steps" && k + 1 < argc) steps = std::atoi(argv[++k]);
     else if (arg == "--phases") g_phases = true;
-    else sizes.push_back(std::atoi(arg.c_str()));
+    else if (arg == "--periodic") g_periodic = true;
+    else if (arg == "--threads" || arg == "--steps") {
+      int v = 0;
+      if (!has_value || !positive(argv[k + 1], v))
+        return bad(arg + " needs a whole number above 0" + (has_value ? std::string(", not '") + argv[k + 1] + "'" : ""));
+      (arg == "--threads" ? threads : steps) = v;
+      ++k;
+    } else if (arg == "--backend") {
+      if (!has_value) return bad("--backend needs a name: serial, threaded or allpairs");
+      backend = argv[++k];
+      if (backend != "serial" && backend != "threaded" && backend != "allpairs")
+        return bad("unknown backend '" + backend + "' (serial, threaded or allpairs)");
+    } else if (arg == "--settle") {
+      if (!has_value) return bad("--settle needs a settle_<N>.xyz file of gen_scenes.py");
+      settle_file = argv[++k];
+    } else {
+      int n = 0;
+      if (!positive(arg.c_str(), n) || n < 4)
+        return bad("unknown option or not a ball count (a whole number, at least 4): '" + arg + "'");
+      sizes.push_back(n);
+    }
   }
-  if (gen || gen_porosity) return gen_speed(sizes, gen_porosity);
-  if (comparing) {
-    if (sizes.empty()) sizes = {403, 1680, 13500, 108000};
-    return compare(sizes, steps);
+  if (comparing + gen + gen_porosity + !settle_file.empty() > 1)
+    return bad("--compare, --gen, --gen-porosity and --settle are separate benchmarks: give one");
+  try {
+    if (!settle_file.empty()) {
+      if (!sizes.empty()) return bad("--settle takes its balls from the file, not ball counts");
+      return settle(settle_file, backend, threads, steps);
+    }
+    if (gen || gen_porosity) return gen_speed(sizes, gen_porosity);
+    if (comparing) {
+      if (sizes.empty()) sizes = {403, 1680, 13500, 108000};
+      return compare(sizes, steps);
+    }
+    if (sizes.empty()) sizes = {1680, 13500, 108000};
+    std::printf("dense FCC block, %s, backend %s (%d threads), dt 0.02, M = million per second\n",
+                g_periodic ? "periodic cell" : "free space, outer layer held", backend.c_str(), threads);
+    std::printf("%8s %10s %8s %6s %14s %14s %10s %10s\n", "N", "contacts", "steps", "s", "ball-steps/s",
+                "contacts/s", "no-rot x", "all-on x");
+    for (int n : sizes) {
+      // 4 n^3 balls; 1680 is the peers' 7 x 6 x 10 block.
+      int nx, ny, nz;
+      lattice_for(n, nx, ny, nz);
+      const int k = steps > 0 ? steps : std::max(20, static_cast<int>(4e6 / (4.0 * nx * ny * nz)));
+      const Timing standard = run(fcc_block(nx, ny, nz, Scene::Standard), backend, k, threads);
+      const Timing reduced = run(fcc_block(nx, ny, nz, Scene::NoRotation), backend, k, threads);
+      const Timing full = run(fcc_block(nx, ny, nz, Scene::Everything), backend, k, threads);
+      std::printf("%8d %10zu %8d %6.2f %12.2f M %12.2f M %9.2fx %9.2fx\n", 4 * nx * ny * nz, standard.contacts, k,
+                  standard.seconds, standard.ball_steps / 1e6, standard.contact_steps / 1e6,
+                  reduced.ball_steps / standard.ball_steps, full.ball_steps / standard.ball_steps);
+    }
+    std::printf("no-rot x: a scene without shear or rotation against the standard one; all-on x: with Rayleigh\n"
+                "damping%s as well.\n", g_periodic ? " (no gravity in the periodic cell)" : " and gravity");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "trubal_bench: %s\n", e.what());
+    return 1;
   }
-  if (sizes.empty()) sizes = {1680, 13500, 108000};
-  std::printf("dense FCC block, backend %s (%d threads), dt 0.02, M = million per second\n", backend.c_str(), threads);
-  std::printf("%8s %10s %8s %6s %14s %14s %10s %10s\n", "N", "contacts", "steps", "s", "ball-steps/s",
-              "contacts/s", "no-rot x", "all-on x");
-  for (int n : sizes) {
-    // 4 n^3 balls; 1680 is the peers' 7 x 6 x 10 block.
-    int nx, ny, nz;
-    lattice_for(n, nx, ny, nz);
-    const int k = steps > 0 ? steps : std::max(20, static_cast<int>(4e6 / (4.0 * nx * ny * nz)));
-    const Timing standard = run(fcc_block(nx, ny, nz, Scene::Standard), backend, k, threads);
-    const Timing reduced = run(fcc_block(nx, ny, nz, Scene::NoRotation), backend, k, threads);
-    const Timing full = run(fcc_block(nx, ny, nz, Scene::Everything), backend, k, threads);
-    std::printf("%8d %10zu %8d %6.2f %12.2f M %12.2f M %9.2fx %9.2fx\n", 4 * nx * ny * nz, standard.contacts, k,
-                standard.seconds, standard.ball_steps / 1e6, standard.contact_steps / 1e6,
-                reduced.ball_steps / standard.ball_steps, full.ball_steps / standard.ball_steps);
-  }
-  std::printf("no-rot x: a scene without shear or rotation against the standard one; all-on x: with Rayleigh\n"
-              "damping and gravity as well.\n");
   return 0;
 }

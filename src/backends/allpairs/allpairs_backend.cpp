@@ -27,6 +27,22 @@ std::string bytes_text(std::uint64_t bytes) {
   return u == 0 ? fmt::format("{} bytes", bytes) : fmt::format("{:.3g} {} ({} bytes)", v, unit[u], bytes);
 }
 
+// Calls visit(q) for each set slot q of a row, in ascending q, skipping eight empty slots at a time
+// (the periodic rows; the free-space loop below is the same, written out).
+template <class Visit>
+inline void for_each_set(const std::uint8_t* slot, std::size_t count, Visit&& visit) {
+  std::size_t k = 0;
+  for (; k + 8 <= count; k += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, slot + k, 8);
+    if (word == 0) continue;
+    for (std::size_t q = k; q < k + 8; ++q)
+      if (slot[q]) visit(q);
+  }
+  for (; k < count; ++k)
+    if (slot[k]) visit(k);
+}
+
 // Fewer pair slots than this are tested on one thread: waking workers costs more.
 constexpr std::uint64_t kParallelSlots = 1 << 16;
 
@@ -117,16 +133,25 @@ class AllPairsBackend final : public Backend {
   }
 
   // Periodic space: every pair against j's nearest image (with every edge at least twice the largest
-  // diameter no other image can touch), with find_periodic_pairs' arithmetic at skin 0.
+  // diameter no other image can touch), with find_periodic_pairs' arithmetic at skin 0. A row is
+  // tested branch-free as in free space (test_row_periodic: nearest_image_within's arithmetic, which
+  // the compiler vectorises); each pair it finds takes its image from nearest_image_within itself.
   void find_touching_periodic(const Model& model, ThreadPool& pool, PairCandidates& pairs) {
     const Balls& b = model.balls;
     const std::size_t n = b.size();
     const CellFrame f = cell_frame(model.space);
+    const bool tilted = f.xy != 0 || f.xz != 0 || f.yz != 0;
     pool.run([&](int t) {
       PairCandidates& out = found_[t];
       out.clear();
-      for (std::size_t i = row_split_[t]; i < row_split_[t + 1]; ++i)
-        for (std::size_t j = i + 1; j < n; ++j) {
+      for (std::size_t i = row_split_[t]; i < row_split_[t + 1]; ++i) {
+        const std::size_t count = n - 1 - i;
+        std::uint8_t* slot = slots_.data() + row_start(i, n);
+        if (test_row_periodic(f, tilted, b.x[i], b.y[i], b.z[i], b.rad[i], b.x.data() + i + 1, b.y.data() + i + 1,
+                              b.z.data() + i + 1, b.rad.data() + i + 1, count, slot) == 0)
+          continue;
+        for_each_set(slot, count, [&](std::size_t q) {
+          const std::size_t j = i + 1 + q;
           std::int8_t ix, iy, iz;
           if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + 0.0, ix, iy, iz)) {
             out.i.push_back(static_cast<std::uint32_t>(i));
@@ -135,7 +160,8 @@ class AllPairsBackend final : public Backend {
             out.image_y.push_back(iy);
             out.image_z.push_back(iz);
           }
-        }
+        });
+      }
     }, slot_count_ >= kParallelSlots);
     pairs.clear();
     for (const PairCandidates& part : found_) pairs.append(part);

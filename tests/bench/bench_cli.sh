@@ -1,0 +1,55 @@
+#!/bin/sh
+# trubal_bench's command line (issue 22): --help prints the usage and exits 0 without running a
+# benchmark; bad arguments are refused with a message and exit status 2, before any run; with the
+# peers' scene generator (../shared/peers, or TRUBAL_PEERS), --settle runs a small settle scene.
+#   bench_cli.sh BENCH [PEERS_DIR]
+BENCH=$1
+PEERS=${2:-${TRUBAL_PEERS:-}}
+fail=0
+W=$(mktemp -d /tmp/trubal-bench-cli-XXXXXX)
+trap 'rm -rf "$W"' EXIT
+
+for h in --help -h; do
+  if ! "$BENCH" $h >"$W/out" 2>"$W/err"; then echo "FAIL: $h exited $?"; fail=1; fi
+  grep -q '^usage:' "$W/out" || { echo "FAIL: $h printed no usage:"; cat "$W/out" "$W/err"; fail=1; }
+  grep -q -- '--settle FILE' "$W/out" || { echo "FAIL: $h does not name --settle"; fail=1; }
+  if grep -qi 'nan\|ball-steps/s' "$W/out"; then echo "FAIL: $h ran a benchmark:"; cat "$W/out"; fail=1; fi
+done
+
+# Each refused with exit status 2 and a message naming what was wrong.
+refuse() {
+  want=$1; shift
+  "$BENCH" "$@" >"$W/out" 2>"$W/err"
+  rc=$?
+  if [ "$rc" -ne 2 ]; then echo "FAIL: trubal_bench $* exited $rc, not 2"; cat "$W/out" "$W/err"; fail=1; return; fi
+  grep -q -- "$want" "$W/err" || { echo "FAIL: trubal_bench $*: no '$want' in:"; cat "$W/err"; fail=1; }
+  [ -s "$W/out" ] && { echo "FAIL: trubal_bench $* printed results:"; cat "$W/out"; fail=1; }
+}
+refuse "unknown option" --bogus
+refuse "not a ball count" 0
+refuse "not a ball count" 12x
+refuse "not a ball count" -5
+refuse "whole number above 0" --steps
+refuse "whole number above 0" --steps 0
+refuse "whole number above 0" --threads two
+refuse "unknown backend 'mpi'" --backend mpi
+refuse "separate benchmarks" --compare --gen
+refuse "not ball counts" --settle x.xyz 1000
+"$BENCH" --settle "$W/none.xyz" >"$W/out" 2>"$W/err"
+rc=$?
+[ "$rc" -eq 1 ] && grep -q "cannot open" "$W/err" || { echo "FAIL: --settle of a missing file: exit $rc"; cat "$W/err"; fail=1; }
+
+# A small settle scene (the peers' generator, 400 balls, 300 steps), where the generator is here.
+if [ -n "$PEERS" ] && [ -f "$PEERS/gen_scenes.py" ] && command -v python3 >/dev/null; then
+  PEERS=$(cd "$PEERS" && pwd)
+  (cd "$W" && SCENES_OUT=$W python3 -c "import sys; sys.path.insert(0, sys.argv[1]); import gen_scenes; gen_scenes.settle(400, 300.0)" "$PEERS") >/dev/null || { echo "FAIL: gen_scenes.settle"; fail=1; }
+  if "$BENCH" --settle "$W/settle_400.xyz" --steps 300 --phases >"$W/out" 2>"$W/err"; then
+    grep -q 'whole run:' "$W/out" || { echo "FAIL: --settle printed no totals"; cat "$W/out"; fail=1; }
+  else
+    echo "FAIL: --settle exited $?"; cat "$W/out" "$W/err"; fail=1
+  fi
+else
+  echo "(the peers' gen_scenes.py is not here: --settle not run)"
+fi
+[ "$fail" -eq 0 ] && echo "trubal_bench command line: ok"
+exit $fail
