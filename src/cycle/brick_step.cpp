@@ -278,7 +278,8 @@ void BrickStep::split(const Model& full, const VerletReference& ref) {
     least_balls_ = std::min(least_balls_, rank_balls_[r].size());
   }
   ++splits_;
-  flags_.assign(3, 0.0);
+  moved2_ = 0;
+  outside_box_ = false;
   model_ = &full;
   full_balls_ = n;
   list_version_ = c.list_version;
@@ -341,8 +342,8 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   sums_out_.push_back(moved2);
   sums_out_.push_back(outside ? 1.0 : 0.0);
   comm::allgather(sums_out_, sums_in_);
-  flags_[1] = 0;
-  flags_[2] = 0;
+  moved2_ = 0;
+  double outside_any = 0;
   std::vector<WallLoad> totals(wall_count);
   const double* in = sums_in_.data();
   for (int r = 0; r < ranks; ++r) {
@@ -352,9 +353,10 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
       WallLoad load = unpack_load(in);
       totals[w].add(load);
     }
-    flags_[1] = std::max(flags_[1], *in++);
-    flags_[2] = std::max(flags_[2], *in++);
+    moved2_ = std::max(moved2_, *in++);
+    outside_any = std::max(outside_any, *in++);
   }
+  outside_box_ = outside_any != 0;
   if (wall_count) set_wall_loads(full.walls, totals);
 }
 

@@ -61,8 +61,8 @@ class BrickStep {
   bool outside_cell(const Model& full);
   // What the last step found, over every rank: the largest squared displacement since the list was
   // made, some ball outside a bounded axis of the box.
-  double moved2() const { return flags_[1]; }
-  bool outside_box() const { return flags_[2] != 0; }
+  double moved2() const { return moved2_; }
+  bool outside_box() const { return outside_box_; }
   // A change of the cell's velocity field (a servo's or STRAIN's new rates) on every copy of the
   // part's balls; the work it does, summed over the owned balls and the ranks (a collective call),
   // goes to full's energy.
@@ -97,7 +97,8 @@ class BrickStep {
   std::vector<std::vector<std::uint32_t>> send_, recv_;
   std::vector<std::vector<double>> send_buf_, recv_buf_;
   std::vector<double> sums_out_, sums_in_;
-  std::vector<double> flags_{0, 0, 0};
+  double moved2_ = 0;                       // over every rank, after the last step
+  bool outside_box_ = false;
   std::size_t ghosts_ = 0, most_balls_ = 0, least_balls_ = 0, most_ghosts_ = 0;
   std::size_t splits_ = 0;
 };

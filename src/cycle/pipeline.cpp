@@ -152,9 +152,7 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
     if (BrickStep::applies(model)) {
       shared_by_ = "the spatial decomposition";
       brick_step(model, kernels, sums);
-      double most = 0;
-      for (Wall& w : model.walls) most = std::max(most, move_wall(w, kernels.dt));
-      wall_travel_ += most;
+      move_walls(model, kernels.dt);
       return;
     }
     shared_by_ = "ranges of balls, the whole state exchanged every step (a periodic servo, a tilting cell or a "
@@ -169,8 +167,12 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   step_.run(pool_, model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
   moved_known_ = measure;
   // The walls move with the balls (their velocities are those of the step, like the balls' at t + dt/2).
+  move_walls(model, kernels.dt);
+}
+
+void Pipeline::move_walls(Model& model, double dt) {
   double most = 0;
-  for (Wall& w : model.walls) most = std::max(most, move_wall(w, kernels.dt));
+  for (Wall& w : model.walls) most = std::max(most, move_wall(w, dt));
   wall_travel_ += most;
 }
 

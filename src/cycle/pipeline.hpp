@@ -71,6 +71,8 @@ class Pipeline {
   bool any_outside(const Model& model);
   // A step of a distributed run by the spatial decomposition, where it applies.
   void brick_step(Model& model, const StepKernels& kernels, StepSums& sums);
+  // The walls' motion over a step, and how far any wall's surface may have gone since the search.
+  void move_walls(Model& model, double dt);
 
   std::unique_ptr<Backend> backend_;
   ThreadPool pool_;

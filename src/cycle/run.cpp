@@ -20,8 +20,8 @@
 namespace trubal {
 namespace {
 
-constexpr std::int64_t kSnapshotEvery = 500;
-constexpr int kFlippingSteps = 20;   // a copy costs about one step's memory traffic
+constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs about one step's memory traffic
+constexpr int kFlippingSteps = 20;   // steps running with a negative kinetic term that stop the run (below)
 constexpr double kProgressSeconds = 0.2;
 
 double resting_energy_floor(const Model& model) {
