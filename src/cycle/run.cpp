@@ -20,7 +20,7 @@
 namespace trubal {
 namespace {
 
-constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs about one step's memory traffic
+constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs less than one step's memory traffic
 constexpr int kFlippingSteps = 20;   // steps running with a negative kinetic term that stop the run (below)
 constexpr double kProgressSeconds = 0.2;
 
@@ -140,21 +140,16 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     return result;
   };
 
-  // An error mid-run (every rank meets it at the same step) leaves the model as the last step made it.
-  try {
-  for (std::int64_t s = 1; s <= n; ++s) {
+  // One step: the cell and the walls before it, the pipeline's step, and what follows it (the
+  // cell's strain and tilt, the clock, the works, the next critical step, the energy terms at t).
+  // details: the step writes the per-pair results (CycleControl::reads_contacts).
+  auto advance = [&](bool details) -> StepTotals {
     const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
     // Before anything moves: a step that would shear or squash the periodic cell by more than half an
     // edge is refused (no tilt reduction could follow it; the run stays at its last step).
     check_cell_step(model.space, dt);
     kernels.dt = dt;
-    // The per-pair results measurements read are written only where someone will read them: the
-    // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (a restored model prints
-    // right) and the cycles history and dumps record.
-    const bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
     const Space& space = model.space;
-    const bool details = s == n || stopping || s % kSnapshotEvery == 0 ||
-                         (control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1)));
     // A servo reads the stress and stiffness of each force pass: the contact loops sum them.
     kernels.moments = space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2]);
     kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
@@ -194,8 +189,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       if (std::isfinite(estimate))
         model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, cap, kernels.features.hertz);
     }
-
-    // The balance at t, the time of this step's force pass: every term there (the works less
+    // The energy terms at t, the time of this step's force pass: every term there (the works less
     // their parts after t; the cell moves on with the balls, so half its step's work is after t).
     EnergyAtStep& now = model.energy_at_step;
     now.valid = true;
@@ -205,6 +199,84 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     now.potential = sums.potential;
     now.damping_ahead = sums.damping_ahead;
     now.boundary_ahead = sums.boundary_ahead + (model.space.periodic ? 0.5 * sums.image_power * dt : 0.0);
+    return sums;
+  };
+
+  // START box: balls outside a bounded axis's faces after a step are destroyed (`destroy`) or stop
+  // the run (`stop`: true, with the message). replay: a step the rescue takes again (it was
+  // reported the first time).
+  auto escapes = [&](bool replay) -> bool {
+    if (!(model.started && (!model.space.periodic || model.space.mixed()) && pipeline.may_be_outside_box(model)))
+      return false;
+    pipeline.sync(model);
+    Escapes escaped = find_escapes(model);
+    if (escaped.destroy_count > 0) {
+      // What the leaving balls carry out is boundary work, so the balance stays closed.
+      const Balls& b = model.balls;
+      const auto& g = model.settings.gravity;
+      for (std::size_t k = 0; k < b.size(); ++k)
+        if (escaped.destroy[k])
+          model.energy.boundary_work -=
+              0.5 * b.mass[k] * (b.vx[k] * b.vx[k] + b.vy[k] * b.vy[k] + b.vz[k] * b.vz[k]) +
+              0.5 * b.inertia[k] * (b.wx[k] * b.wx[k] + b.wy[k] * b.wy[k] + b.wz[k] * b.wz[k]) -
+              b.mass[k] * (g[0] * b.x[k] + g[1] * b.y[k] + g[2] * b.z[k]);
+      if (escaped.stop_ball != ~std::size_t{0} && escaped.destroy[escaped.stop_ball]) escaped.stop_ball = ~std::size_t{0};
+      const double held = model.critical_dt;   // fewer balls make no contact stiffer: keep the step
+      remove_balls(model, escaped.destroy);
+      model.critical_dt = held;
+      model.space.destroyed += static_cast<std::int64_t>(escaped.destroy_count);
+      if (!replay) result.destroyed += escaped.destroy_count;
+      pipeline.invalidate();
+      kernels.laws = make_pair_laws(model);   // per-ball type indices
+      if (escaped.stop_ball != ~std::size_t{0}) escaped = find_escapes(model);
+    }
+    if (escaped.stop_ball == ~std::size_t{0}) return false;
+    const std::size_t k = escaped.stop_ball;
+    const int a = escaped.stop_axis;
+    const double x = (a == 0 ? model.balls.x : a == 1 ? model.balls.y : model.balls.z)[k];
+    result.left_box = true;
+    result.message = fmt::format(
+        "ball {} left the box through {} = {:.6g} at cycle {} (it is at {} = {:.9g}); the model is kept at that "
+        "cycle: DELETE the ball, make the box larger, or let such balls go with START box ... destroy",
+        model.balls.id[k], "xyz"[a], x < model.space.lo[a] ? model.space.lo[a] : model.space.hi[a], model.cycle,
+        "xyz"[a], x);
+    return true;
+  };
+
+  // The rescue from a failed step at bad_cycle: back to the copy. The copy of the CYCLE's start is
+  // its last good state as it is. The later copies are of the state a step before a multiple of
+  // kSnapshotEvery steps: the rescue takes that step again, writing the results, so the model is at
+  // the multiple and prints as it was then. The same bits as the first time: nothing in a step
+  // depends on when the pair list was made (the cut tests hold this), and the observers do not run
+  // again. (Where the failing step is that step, the model stays at the copy.) Returns whether the
+  // results are those of the state it is left in (false only where a step after the copy
+  // overwrote them: Snapshot::restore).
+  auto rescue = [&](std::int64_t bad_cycle) -> bool {
+    bool current = snapshot.restore(model);
+    pipeline.invalidate();
+    kernels.laws = make_pair_laws(model);   // the balls destroyed since the copy are back
+    if (model.cycle > start_cycle && model.cycle + 1 < bad_cycle) {
+      advance(true);
+      escapes(true);
+      current = true;
+    }
+    pipeline.sync(model);
+    return current;
+  };
+
+  // An error mid-run (every rank meets it at the same step) leaves the model as the last step made it.
+  try {
+  for (std::int64_t s = 1; s <= n; ++s) {
+    // The per-pair results measurements read are written only where someone will read them: the
+    // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (Snapshot::restore finds them
+    // current where the next step fails) and the cycles history and dumps record.
+    const bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
+    const bool details = s == n || stopping || (s + 1) % kSnapshotEvery == 0 ||
+                         (control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1)));
+    const StepTotals sums = advance(details);
+
+    // The balance at t, the time of this step's force pass.
+    const EnergyAtStep& now = model.energy_at_step;
     const double kinetic = now.kinetic_translation + now.kinetic_rotation;
     const double dissipated =
         model.energy.friction_work - friction0 + model.energy.damping_work - damping0 - now.damping_ahead;
@@ -228,8 +300,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       const std::int64_t id = model.balls.size() ? model.balls.id[ball] : 0;
       const double speed = std::sqrt(sums.fastest_speed2);
       const std::int64_t bad_cycle = model.cycle;
-      snapshot.restore(model);
-      pipeline.invalidate();
+      const bool results_current = rescue(bad_cycle);
       const double frac = model.settings.frac;
       std::string advice;
       if (model.settings.fixed_dt > 0)
@@ -244,53 +315,19 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       result.done = model.cycle - start_cycle;
       result.message = fmt::format(
           "unstable at cycle {}: ball {} moved at {:.3g} and energy was created; the model is back at cycle {}, "
-          "its last good state; {}",
-          bad_cycle, id, speed, model.cycle, advice);
+          "its last good state{}; {}",
+          bad_cycle, id, speed, model.cycle,
+          results_current ? "" : " (its contact forces were not kept: CYCLE computes them)", advice);
       return finish();
     }
     result.done = s;
-    if (model.started && (!model.space.periodic || model.space.mixed()) && pipeline.may_be_outside_box(model)) {
-      pipeline.sync(model);
-      Escapes escaped = find_escapes(model);
-      if (escaped.destroy_count > 0) {
-        // What the leaving balls carry out is boundary work, so the balance stays closed.
-        const Balls& b = model.balls;
-        const auto& g = model.settings.gravity;
-        for (std::size_t k = 0; k < b.size(); ++k)
-          if (escaped.destroy[k])
-            model.energy.boundary_work -=
-                0.5 * b.mass[k] * (b.vx[k] * b.vx[k] + b.vy[k] * b.vy[k] + b.vz[k] * b.vz[k]) +
-                0.5 * b.inertia[k] * (b.wx[k] * b.wx[k] + b.wy[k] * b.wy[k] + b.wz[k] * b.wz[k]) -
-                b.mass[k] * (g[0] * b.x[k] + g[1] * b.y[k] + g[2] * b.z[k]);
-        if (escaped.stop_ball != ~std::size_t{0} && escaped.destroy[escaped.stop_ball]) escaped.stop_ball = ~std::size_t{0};
-        const double held = model.critical_dt;   // fewer balls make no contact stiffer: keep the step
-        remove_balls(model, escaped.destroy);
-        model.critical_dt = held;
-        model.space.destroyed += static_cast<std::int64_t>(escaped.destroy_count);
-        result.destroyed += escaped.destroy_count;
-        pipeline.invalidate();
-        kernels.laws = make_pair_laws(model);   // per-ball type indices
-        if (escaped.stop_ball != ~std::size_t{0}) escaped = find_escapes(model);
-      }
-      if (escaped.stop_ball != ~std::size_t{0}) {
-        const std::size_t k = escaped.stop_ball;
-        const int a = escaped.stop_axis;
-        const double x = (a == 0 ? model.balls.x : a == 1 ? model.balls.y : model.balls.z)[k];
-        result.left_box = true;
-        result.message = fmt::format(
-            "ball {} left the box through {} = {:.6g} at cycle {} (it is at {} = {:.9g}); the model is kept at that "
-            "cycle: DELETE the ball, make the box larger, or let such balls go with START box ... destroy",
-            model.balls.id[k], "xyz"[a], x < model.space.lo[a] ? model.space.lo[a] : model.space.hi[a], model.cycle,
-            "xyz"[a], x);
-        return finish();
-      }
-    }
+    if (escapes(false)) return finish();
     if (control.after_step) {
       const auto output_start = Clock::now();
       control.after_step(model);
       timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
     }
-    if (s % kSnapshotEvery == 0) snapshot.take(model);
+    if ((s + 1) % kSnapshotEvery == 0) snapshot.take(model);   // the rescue steps on to cycles on kSnapshotEvery
     if (control.progress && (s & 7) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_progress).count() > kProgressSeconds) {

@@ -46,7 +46,8 @@ struct CycleResult {
 };
 
 // Runs n steps (or until interrupted or unstable) on the pipeline. On instability the model is left
-// at the last good state, which can be printed and saved.
+// at the last good state, which can be printed and saved: where the CYCLE started, or its last
+// multiple of 500 steps (taken again from the rescue copy, which is of a step before).
 //
 // What a step leaves current (the contract every reader relies on): positions at t + dt,
 // velocities and spins at t + dt/2, the shear history and the servo's moments of the force pass at
@@ -54,8 +55,8 @@ struct CycleResult {
 // overlap, forces, stiffness, work, state) and the balls' unbalanced forces and moments are those
 // of the force pass of the step that ended at cycle ContactTable::results_cycle: every CYCLE's
 // last step writes them, and so do the steps whose cycle an observer reads (reads_contacts), the
-// step a Ctrl-C ends and every 500th (the rescue copy's); other steps skip the writes and compute
-// the same numbers.
+// step a Ctrl-C ends and the one before every 500th (the rescue copy's); other steps skip the writes
+// and compute the same numbers.
 CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control);
 
 }  // namespace trubal

@@ -99,6 +99,14 @@ struct ContactTable {
   template <class F> void for_each_pair_array(F&& f) const {
     const_cast<ContactTable*>(this)->for_each_pair_array([&](auto& v) { f(static_cast<const decltype(v)&>(v)); });
   }
+  // The arrays of the last force pass's results (all of for_each_pair_array's but the pair list
+  // and the shear history).
+  template <class F> void for_each_result_array(F&& f) {
+    f(state);
+    for (auto* v : {&nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &tx, &ty, &tz, &kn_eff, &ks_eff, &cn_eff,
+                    &work_friction, &work_damping})
+      f(*v);
+  }
 };
 
 // What the servo reads of a force pass, summed by the contact loops: sum of F (x) l (symmetric part,
