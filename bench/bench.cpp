@@ -402,22 +402,29 @@ int main(int argc, char** argv) {
     if (sizes.empty()) sizes = {1680, 13500, 108000};
     std::printf("dense FCC block, %s, backend %s (%d threads), dt 0.02, M = million per second\n",
                 g_periodic ? "periodic cell" : "free space, outer layer held", backend.c_str(), threads);
-    std::printf("%8s %10s %8s %6s %14s %14s %10s %10s\n", "N", "contacts", "steps", "s", "ball-steps/s",
-                "contacts/s", "no-rot x", "all-on x");
+    std::printf("%8s %10s %8s %6s %14s %14s %10s %10s %9s %7s\n", "N", "contacts", "steps", "s", "ball-steps/s",
+                "contacts/s", "no-rot x", "all-on x", "peak MiB", "B/ball");
     for (int n : sizes) {
       // 4 n^3 balls; 1680 is the peers' 7 x 6 x 10 block.
       int nx, ny, nz;
       lattice_for(n, nx, ny, nz);
       const int k = steps > 0 ? steps : std::max(20, static_cast<int>(4e6 / (4.0 * nx * ny * nz)));
+      reset_peak_memory();
       const Timing standard = run(fcc_block(nx, ny, nz, Scene::Standard), backend, k, threads);
+      const double peak = peak_memory_mib();   // the standard run's: model, lists, scratch, rescue copy
       const Timing reduced = run(fcc_block(nx, ny, nz, Scene::NoRotation), backend, k, threads);
       const Timing full = run(fcc_block(nx, ny, nz, Scene::Everything), backend, k, threads);
-      std::printf("%8d %10zu %8d %6.2f %12.2f M %12.2f M %9.2fx %9.2fx\n", 4 * nx * ny * nz, standard.contacts, k,
+      const int balls = 4 * nx * ny * nz;
+      std::printf("%8d %10zu %8d %6.2f %12.2f M %12.2f M %9.2fx %9.2fx %9.0f %7.0f\n", balls, standard.contacts, k,
                   standard.seconds, standard.ball_steps / 1e6, standard.contact_steps / 1e6,
-                  reduced.ball_steps / standard.ball_steps, full.ball_steps / standard.ball_steps);
+                  reduced.ball_steps / standard.ball_steps, full.ball_steps / standard.ball_steps, peak,
+                  peak * 1048576.0 / balls);
+      std::fflush(stdout);
     }
     std::printf("no-rot x: a scene without shear or rotation against the standard one; all-on x: with Rayleigh\n"
-                "damping%s as well.\n", g_periodic ? " (no gravity in the periodic cell)" : " and gravity");
+                "damping%s as well. peak MiB: the process's peak resident memory in the standard run (the\n"
+                "program's own few MiB included); B/ball: that per ball.\n",
+                g_periodic ? " (no gravity in the periodic cell)" : " and gravity");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "trubal_bench: %s\n", e.what());
     return 1;

@@ -39,6 +39,16 @@ refuse "not ball counts" --settle x.xyz 1000
 rc=$?
 [ "$rc" -eq 1 ] && grep -q "cannot open" "$W/err" || { echo "FAIL: --settle of a missing file: exit $rc"; cat "$W/err"; fail=1; }
 
+# The dense block prints its peak memory (issue 22 asks the benchmark to measure it): a small block,
+# whose peak is above the program's own few MiB and below 200 MiB, and the same per ball.
+if "$BENCH" --steps 20 1680 >"$W/out" 2>"$W/err"; then
+  grep -q 'peak MiB' "$W/out" || { echo "FAIL: no peak MiB column"; cat "$W/out"; fail=1; }
+  awk '$1 == 1680 { ok = ($(NF-1) > 2 && $(NF-1) < 200 && $NF > 1000) } END { exit !ok }' "$W/out" ||
+    { echo "FAIL: the 1680-ball row's peak memory is not plausible"; cat "$W/out"; fail=1; }
+else
+  echo "FAIL: trubal_bench --steps 20 1680 exited $?"; cat "$W/out" "$W/err"; fail=1
+fi
+
 # A small settle scene (the peers' generator, 400 balls, 300 steps), where the generator is here.
 if [ -n "$PEERS" ] && [ -f "$PEERS/gen_scenes.py" ] && command -v python3 >/dev/null; then
   PEERS=$(cd "$PEERS" && pwd)
