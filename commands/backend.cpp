@@ -44,10 +44,9 @@ const Command backend_command = {
     "rebuild), each rank steps its own balls with ghost copies of their partners, and each step the owners "
     "send the ghosts' new positions, velocities and spins; a ball leaving the periodic cell, a stale pair "
     "list, a ball outside a START box or an output step goes through the whole model, which every rank "
-    "holds (memory per rank is that of one run plus its part). Where a periodic servo, a shearing (tilting) "
-    "cell or a following membrane changes every ball between steps, the ranks instead take contiguous ranges "
-    "of ball numbers and exchange the whole state after every step (replicated). PRINT info says which, and "
-    "the balls per rank. The answer is the serial one bit for bit for any P (tests/unit/cycle_cuts.cpp and "
+    "holds (memory per rank is that of one run plus its part); a periodic servo's or a shearing cell's new "
+    "rates change every copy of a ball's velocity, a following membrane's new forces every copy of its "
+    "loads. PRINT info shows the balls per rank. The answer is the serial one bit for bit for any P (tests/unit/cycle_cuts.cpp and "
     "distributed_runs.cpp run the scenes on 2, 3 and 4 ranks). On one rank it is the serial backend. Under "
     "mpirun, the other backends compute the whole step on every rank.",
     {"serial", "allpairs", "threaded", "mpi", "threads", "maxmem"}, run_backend};

@@ -121,8 +121,6 @@ void apply_field_change(Balls& balls, const FieldChange& change, std::size_t beg
   }
 }
 
-bool BrickStep::applies(const Model& model) { return model.membrane.follow_every <= 0; }
-
 void BrickStep::apply_field(Model& full, const FieldChange& change) {
   ExactSum work, gross;
   apply_field_change(part_.balls, change, 0, part_.balls.size(), scratch_.ghost.data(), work, gross);
@@ -418,6 +416,16 @@ void BrickStep::sync(Model& full) {
   gather_set([](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
              full.wall_contacts, owned_walls_, rank_walls_, out, in);
   current_ = true;
+}
+
+void BrickStep::loads_changed(const Model& full) {
+  const Balls& from = full.balls;
+  Balls& to = part_.balls;
+  for (std::size_t q = 0; q < to.size(); ++q) {
+    const std::size_t k = global_ball_[q];
+    to.ax[q] = from.ax[k]; to.ay[q] = from.ay[k]; to.az[q] = from.az[k];
+    to.amx[q] = from.amx[k]; to.amy[q] = from.amy[k]; to.amz[q] = from.amz[k];
+  }
 }
 
 std::vector<std::pair<std::string, std::string>> BrickStep::info() const {

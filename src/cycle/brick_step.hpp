@@ -41,11 +41,6 @@ void apply_field_change(Balls& balls, const FieldChange& change, std::size_t beg
 
 class BrickStep {
  public:
-  // Whether the decomposition applies to the model's scene as it is: not where a following
-  // membrane changes the loads of balls between steps; that runs replicated
-  // (ParallelStep::run_distributed).
-  static bool applies(const Model& model);
-
   // The parts hold the current state of `full` (which may be older).
   bool live_for(const Model& full) const;
   bool live() const { return live_; }
@@ -72,6 +67,9 @@ class BrickStep {
   void reduce_tilt(const Space& before);
   // Brings `full` up to date with every rank's part (a collective call; the parts stay live).
   void sync(Model& full);
+  // The applied loads of `full`'s balls changed (a following membrane's, between steps, on every
+  // rank alike): the part's copies take them.
+  void loads_changed(const Model& full);
   // The parts are dropped (the whole model was changed, or is to be stepped another way).
   void drop() { live_ = false; }
 

@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <chrono>
 
-#include "cycle/sum_exchange.hpp"
-#include "support/comm.hpp"
 
 namespace trubal {
 
@@ -139,7 +137,6 @@ void ParallelStep::cross_lists(const ContactTable& c, std::size_t balls, int par
 
 void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
                        PhaseTimes& times, const VerletReference* moved) {
-  if (distributed_) return run_distributed(model, scratch, kernels, sums, times, moved);
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   const ContactTable& c = model.contacts;
@@ -203,132 +200,6 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   for (StepSums& part : thread_sums_) sums.add(part);
   const auto t2 = Clock::now();
   if (trial_step_ > 0) trial_time(parallel, std::chrono::duration<double>(t2 - t0).count());
-  times.forces += std::chrono::duration<double>(t1 - t0).count();
-  times.motion += std::chrono::duration<double>(t2 - t1).count();
-}
-
-
-void ParallelStep::run_distributed(Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
-                                   PhaseTimes& times, const VerletReference* moved) {
-  static_assert(kReduceBlock == kContactBalls, "a rank's motion blocks are its contact blocks");
-  using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
-  ContactTable& c = model.contacts;
-  WallContacts& wc = model.wall_contacts;
-  Balls& b = model.balls;
-  const std::size_t balls = b.size();
-  const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;
-  auto block_ball = [&](std::size_t k) { return std::min(balls, k * kContactBalls); };
-  auto block_pair = [&](std::size_t k) { return static_cast<std::size_t>(scratch.run_begin[block_ball(k)]); };
-  auto block_wall = [&](std::size_t k) { return static_cast<std::size_t>(scratch.wall_run_begin[block_ball(k)]); };
-  const int ranks = comm::size(), me = comm::rank();
-  const int parts = static_cast<int>(std::min<std::size_t>(ranks, std::max<std::size_t>(blocks, 1)));
-  split_if_stale(c, scratch, balls, parts);
-  // Rank r's blocks (a rank beyond the parts has none).
-  auto blocks_of = [&](int r) {
-    return r < parts ? std::pair<std::size_t, std::size_t>{first_block_[r], first_block_[r + 1]}
-                     : std::pair<std::size_t, std::size_t>{blocks, blocks};
-  };
-  const auto [first, last] = blocks_of(me);
-  const std::size_t wall_count = model.walls.size();
-  thread_sums_.assign(ranks, StepSums{});
-  wall_loads_.assign(ranks * wall_count, WallLoad{});
-  StepSums& my_sums = thread_sums_[me];
-  WallLoad* my_loads = wall_count ? &wall_loads_[me * wall_count] : nullptr;
-  const bool contact_details = kernels.contacts == kernels.contacts_full;
-  const bool motion_details = kernels.motion == kernels.motion_full;
-  const bool walls_details = kernels.walls == kernels.walls_full;
-
-  // This rank's share: exactly what thread `me` of a pool of `parts` computes.
-  if (first < last) {
-    const std::size_t own_end = block_ball(last);
-    kernels.cross(model, scratch, kernels, block_ball(first), own_end, cross_[me].data(), cross_[me].size());
-    for (std::size_t k = first; k < last; ++k)
-      kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end);
-    if (wall_count)
-      for (std::size_t k = first; k < last; ++k)
-        kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), my_loads);
-  }
-  if (kernels.features.friction) {
-    c.fsx.swap(scratch.fsx_next);
-    c.fsy.swap(scratch.fsy_next);
-    c.fsz.swap(scratch.fsz_next);
-  }
-  const auto t1 = Clock::now();
-  for (std::size_t k = first; k < last; ++k)
-    kernels.motion(model, scratch, kernels, block_ball(k), block_ball(k + 1), my_sums);
-  const double my_moved2 = moved && first < last ? moved->max_displacement2(b, block_ball(first), block_ball(last)) : 0.0;
-
-  // The exchange: each rank's ranges of the per-ball, per-pair and per-wall-contact arrays, its
-  // blocks' sums and wall loads, in one buffer of doubles (and one of bytes); the ranges are
-  // contiguous and in rank order, so every rank reads every other's part back in place.
-  std::vector<std::vector<double>*> ball_arrays = {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz};
-  if (motion_details)
-    for (auto* v : {&b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz}) ball_arrays.push_back(v);
-  std::vector<std::vector<double>*> pair_arrays;
-  if (kernels.features.friction) pair_arrays = {&c.fsx, &c.fsy, &c.fsz};
-  if (contact_details)
-    for (auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fx, &c.fy, &c.fz, &c.tx, &c.ty, &c.tz, &c.kn_eff,
-                    &c.ks_eff, &c.cn_eff, &c.work_friction, &c.work_damping})
-      pair_arrays.push_back(v);
-  std::vector<std::vector<double>*> wall_arrays;
-  if (wall_count) {
-    wall_arrays = {&wc.fsx, &wc.fsy, &wc.fsz};
-    if (walls_details)
-      for (auto* v : {&wc.nx, &wc.ny, &wc.nz, &wc.overlap, &wc.fn, &wc.fx, &wc.fy, &wc.fz, &wc.kn_eff, &wc.ks_eff})
-        wall_arrays.push_back(v);
-  }
-  struct Span { std::size_t k0, k1, ball0, ball1, pair0, pair1, wall0, wall1; };
-  auto span_of = [&](int r) {
-    const auto [k0, k1] = blocks_of(r);
-    return Span{k0, k1, block_ball(k0), block_ball(k1), block_pair(k0), block_pair(k1),
-                wall_count ? block_wall(k0) : 0, wall_count ? block_wall(k1) : 0};
-  };
-  const Span mine = span_of(me);
-  send_.clear();
-  send_bytes_.clear();
-  auto put = [&](const std::vector<double>& v, std::size_t from, std::size_t to) {
-    send_.insert(send_.end(), v.begin() + from, v.begin() + to);
-  };
-  for (auto* v : ball_arrays) put(*v, mine.ball0, mine.ball1);
-  for (auto* v : pair_arrays) put(*v, mine.pair0, mine.pair1);
-  for (auto* v : wall_arrays) put(*v, mine.wall0, mine.wall1);
-  pack(my_sums, send_);
-  for (std::size_t w = 0; w < wall_count; ++w) pack(my_loads[w], send_);
-  send_.push_back(my_moved2);
-  if (contact_details) send_bytes_.insert(send_bytes_.end(), c.state.begin() + mine.pair0, c.state.begin() + mine.pair1);
-  if (wall_count && walls_details)
-    send_bytes_.insert(send_bytes_.end(), wc.state.begin() + mine.wall0, wc.state.begin() + mine.wall1);
-  comm::allgather(send_, received_);
-  if (contact_details || (wall_count && walls_details)) comm::allgather(send_bytes_, received_bytes_);
-  const double* in = received_.data();
-  const std::uint8_t* in_bytes = received_bytes_.data();
-  moved2_ = 0;
-  for (int r = 0; r < ranks; ++r) {
-    const Span s = span_of(r);
-    auto take = [&](std::vector<double>& v, std::size_t from, std::size_t to) {
-      if (r != me) std::copy(in, in + (to - from), v.begin() + from);
-      in += to - from;
-    };
-    for (auto* v : ball_arrays) take(*v, s.ball0, s.ball1);
-    for (auto* v : pair_arrays) take(*v, s.pair0, s.pair1);
-    for (auto* v : wall_arrays) take(*v, s.wall0, s.wall1);
-    thread_sums_[r] = unpack_sums(in);
-    for (std::size_t w = 0; w < wall_count; ++w) wall_loads_[r * wall_count + w] = unpack_load(in);
-    moved2_ = std::max(moved2_, *in++);
-    if (contact_details) {
-      if (r != me) std::copy(in_bytes, in_bytes + (s.pair1 - s.pair0), c.state.begin() + s.pair0);
-      in_bytes += s.pair1 - s.pair0;
-    }
-    if (wall_count && walls_details) {
-      if (r != me) std::copy(in_bytes, in_bytes + (s.wall1 - s.wall0), wc.state.begin() + s.wall0);
-      in_bytes += s.wall1 - s.wall0;
-    }
-  }
-  // Every rank's sums, merged exactly (the order does not matter).
-  if (wall_count) add_wall_loads(model, ranks);
-  for (StepSums& part : thread_sums_) sums.add(part);
-  const auto t2 = Clock::now();
   times.forces += std::chrono::duration<double>(t1 - t0).count();
   times.motion += std::chrono::duration<double>(t2 - t1).count();
 }

@@ -51,27 +51,17 @@ class ParallelStep {
   // the split), -1 never does; for every ParallelStep of the process.
   static inline std::atomic<int> share_rule{0};
 
-  // Shares the step among the ranks of a distributed run instead of the pool's threads (BACKEND
-  // mpi): rank r takes the balls thread r would, and after the step the ranks exchange what they
-  // computed, so every rank holds the whole new state (replicated data).
-  void set_distributed(bool on) { distributed_ = on; }
   // A rank's part of a spatially decomposed step (cycle/brick_step.hpp): the walls' loads are left
   // in wall_totals() for the ranks to merge, not written to the walls.
   void set_part_only(bool on) { part_only_ = on; }
   std::vector<WallLoad>& wall_totals() { return wall_totals_; }
-  bool distributed() const { return distributed_; }
 
  private:
   // The walls' loads of this step from the `parts` threads' (or ranks') loads (Model::walls' force,
   // moment, ...).
   void add_wall_loads(Model& model, int parts);
-  void run_distributed(Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
-                       PhaseTimes& times, const VerletReference* moved);
-  bool distributed_ = false;
   bool part_only_ = false;
-  std::vector<WallLoad> wall_totals_;      // per wall: the threads' (or ranks') loads merged
-  std::vector<double> send_, received_;
-  std::vector<std::uint8_t> send_bytes_, received_bytes_;
+  std::vector<WallLoad> wall_totals_;      // per wall: the threads' loads merged
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross
   // pairs it computes again (kept while the pair list stays the same).
   void split(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts);

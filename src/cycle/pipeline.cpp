@@ -25,7 +25,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads)
     : backend_(std::move(backend)), pool_(threads > 0 ? threads : default_threads(backend_->name())) {
-  step_.set_distributed(backend_->distributed() && comm::size() > 1);
+  distributed_ = backend_->distributed() && comm::size() > 1;
 }
 
 void Pipeline::invalidate() {
@@ -101,6 +101,10 @@ void Pipeline::apply_field(Model& model, const FieldChange& change) {
   model.space.gross_work += gross.value();
 }
 
+void Pipeline::loads_changed(Model& model) {
+  if (bricks_.live_for(model)) bricks_.loads_changed(model);
+}
+
 void Pipeline::reduce_cell_tilt(Model& model) {
   const Space before = model.space;
   if (trubal::reduce_cell_tilt(model) && bricks_.live_for(model)) bricks_.reduce_tilt(before);
@@ -148,16 +152,11 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
 }
 
 void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
-  if (step_.distributed()) {
-    if (BrickStep::applies(model)) {
-      shared_by_ = "the spatial decomposition";
-      brick_step(model, kernels, sums);
-      move_walls(model, kernels.dt);
-      return;
-    }
-    shared_by_ = "ranges of balls, the whole state exchanged every step (a periodic servo, a tilting cell or a "
-                 "following membrane changes every ball between steps)";
-    if (bricks_.live()) prepare(model);   // the whole model, current, for the replicated step
+  if (distributed_) {
+    shared_by_ = "the spatial decomposition";
+    brick_step(model, kernels, sums);
+    move_walls(model, kernels.dt);
+    return;
   }
   // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
   if (!fresh_ || model_ != &model) prepare(model);

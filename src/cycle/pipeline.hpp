@@ -51,6 +51,8 @@ class Pipeline {
   // the balls wherever they are stepped; the tilts of the cell kept within half an edge
   // (reduce_cell_tilt) on every copy of the pair list.
   void apply_field(Model& model, const FieldChange& change);
+  // The balls' applied loads changed between steps (a following membrane's): on every copy.
+  void loads_changed(Model& model);
   void reduce_cell_tilt(Model& model);
   // Whether some ball may be outside a bounded axis of the START box after the last step (false
   // only where a distributed run's ranks found none; the caller then need not sync to look).
@@ -79,6 +81,7 @@ class Pipeline {
   StepScratch scratch_;
   ParallelStep step_;
   BrickStep bricks_;
+  bool distributed_ = false;        // BACKEND mpi on several ranks: every step by the decomposition
   std::string shared_by_;           // how the last distributed step was shared among the ranks (PRINT info)
   VerletReference ref_;
   PairCandidates pairs_;

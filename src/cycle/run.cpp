@@ -162,6 +162,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) {
       pipeline.sync(model);
       follow_membrane(model);
+      pipeline.loads_changed(model);
     }
     // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
     FieldChange field;   // the servo's new rates change the balls' velocities: where the pipeline holds them

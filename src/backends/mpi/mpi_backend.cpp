@@ -9,9 +9,7 @@ namespace {
 
 // The distributed backend (issue 17): every rank holds the whole model between steps that need it
 // and finds every pair (the serial search); the step itself is shared by a spatial decomposition
-// (cycle/brick_step.hpp) or, for the scenes it does not take, by ranges of balls with an exchange
-// of the whole state every step (cycle/parallel_step.hpp). The answer is the serial one, bit for
-// bit, for any rank count.
+// (cycle/brick_step.hpp). The answer is the serial one, bit for bit, for any rank count.
 class MpiBackend final : public Backend {
  public:
   std::string name() const override { return "mpi"; }
@@ -23,8 +21,7 @@ class MpiBackend final : public Backend {
     auto lines = search_->info();
     lines.emplace_back("decomposition",
                        "recursive bisection of the balls by count, made again at every pair-list rebuild; each rank "
-                       "steps its own balls with ghost copies of their partners (replicated instead where a periodic "
-                       "servo, a tilting cell or a following membrane changes every ball between steps)");
+                       "steps its own balls with ghost copies of their partners");
     return lines;
   }
 
