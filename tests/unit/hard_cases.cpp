@@ -309,16 +309,18 @@ TEST_CASE("hard: a ball crossing a whole contact box in one step meets the same 
 // (positions, velocities, history, the results, the energy terms). A small ball is thrown at a
 // fixed one with a step eight times its contact's critical step; two large fixed balls beside them
 // touch, stable at that step, so that there are results to keep.
+const std::string kThrownBall =
+    "start box -10 10 -10 10 -10 10\n"
+    "prop kn 1e4 ks 1e4 fric 0.5 dens 1000\n"
+    "ball 0 0 0 1 id 1\nball 1.999999 0 0 1 id 2\nball 5 0 0 0.01 id 3\nball 5.1 0 0 0.01 id 4\n"
+    "fix xvel yvel zvel xspin yspin zspin range id 1 3\n"
+    "ini xvel -0.0114 range id 4 4\n"   // reaches ball 3 after about 700 cycles
+    "tstep 1e-2\n";
+
 TEST_CASE("hard: an unstable run goes back to its last multiple of 500 cycles with that cycle's results", "[hard]") {
   test::TempDir dir;
   test::WorkingDir wd(dir.path());
-  const std::string setup =
-      "start box -10 10 -10 10 -10 10\n"
-      "prop kn 1e4 ks 1e4 fric 0.5 dens 1000\n"
-      "ball 0 0 0 1 id 1\nball 1.999999 0 0 1 id 2\nball 5 0 0 0.01 id 3\nball 5.1 0 0 0.01 id 4\n"
-      "fix xvel yvel zvel xspin yspin zspin range id 1 3\n"
-      "ini xvel -0.0114 range id 4 4\n"   // reaches ball 3 after about 700 cycles
-      "tstep 1e-2\n";
+  const std::string setup = kThrownBall;
   test::Harness failed;
   REQUIRE(failed.deck(setup));
   REQUIRE_FALSE(failed.deck("cycle 2000\n"));
@@ -357,16 +359,11 @@ TEST_CASE("hard: the contact table's arrays are the pair list, the history and t
 TEST_CASE("hard: an unstable run goes back to the CYCLE's start with its results, through list rebuilds", "[hard]") {
   test::TempDir dir;
   test::WorkingDir wd(dir.path());
-  const std::string setup =
-      "start box -10 10 -10 10 -10 10\n"
-      "prop kn 1e4 ks 1e4 fric 0.5 dens 1000\n"
-      "ball 0 0 0 1 id 1\nball 1.999999 0 0 1 id 2\nball 5 0 0 0.01 id 3\nball 5.1 0 0 0.01 id 4\n"
-      "ball -5 0 0 0.01 id 5\nball -4.93 -0.15 0 0.01 id 6\n"
-      "fix xvel yvel zvel xspin yspin zspin range id 1 3\n"
-      "fix xvel yvel zvel xspin yspin zspin range id 5 5\n"
-      "ini xvel -0.0114 range id 4 4\n"   // reaches ball 3 after about 700 cycles
-      "ini yvel 0.05 range id 6 6\n"      // passes ball 5 a skin apart near cycle 300
-      "tstep 1e-2\ncycle 300\n";
+  const std::string setup = kThrownBall +
+                            "ball -5 0 0 0.01 id 5\nball -4.93 -0.15 0 0.01 id 6\n"
+                            "fix xvel yvel zvel xspin yspin zspin range id 5 5\n"
+                            "ini yvel 0.05 range id 6 6\n"   // passes ball 5 a skin apart near cycle 300
+                            "cycle 300\n";
   auto has_pair_5_6 = [](const Model& m) {
     for (std::size_t p = 0; p < m.contacts.size(); ++p)
       if (m.balls.id[m.contacts.i[p]] == 5 && m.balls.id[m.contacts.j[p]] == 6) return true;
