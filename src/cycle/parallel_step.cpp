@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 
-
 namespace trubal {
 
 namespace {
@@ -90,7 +89,7 @@ void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals) {
 }
 
 void ParallelStep::add_wall_loads(Model& model, int parts) {
-  // Each wall's load: every thread's (or rank's) exact sums merged.
+  // Each wall's load: every thread's exact sums merged.
   const std::size_t wall_count = model.walls.size();
   wall_totals_.assign(wall_count, WallLoad{});
   for (std::size_t w = 0; w < wall_count; ++w)

@@ -57,8 +57,7 @@ class ParallelStep {
   std::vector<WallLoad>& wall_totals() { return wall_totals_; }
 
  private:
-  // The walls' loads of this step from the `parts` threads' (or ranks') loads (Model::walls' force,
-  // moment, ...).
+  // The walls' loads of this step from the `parts` threads' loads (Model::walls' force, moment, ...).
   void add_wall_loads(Model& model, int parts);
   bool part_only_ = false;
   std::vector<WallLoad> wall_totals_;      // per wall: the threads' loads merged
@@ -69,8 +68,8 @@ class ParallelStep {
   void split_if_stale(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts);
   void cross_lists(const ContactTable& c, std::size_t balls, int parts);
 
-  std::vector<StepSums> thread_sums_;      // per thread (or rank)
-  std::vector<WallLoad> wall_loads_;       // per thread (or rank), per wall
+  std::vector<StepSums> thread_sums_;      // per thread
+  std::vector<WallLoad> wall_loads_;       // per thread, per wall
   std::vector<std::size_t> first_block_;   // per thread, then the block count
   std::vector<std::vector<std::uint32_t>> cross_;   // per thread: its cross pairs, in list order
   std::uint64_t split_version_ = 0;
