@@ -85,6 +85,9 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   std::array<double, 9> moments{};   // force_moment (6), then stiffness_moment (3)
   BallParts* __restrict parts = scratch.ball_parts.data();
   ContactBatch B;
+  // StepScratch::history_in_place: the new history of a batch is made here, then copied over the old.
+  const bool in_place = scratch.history_in_place;
+  alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
   // The running sum of the ball whose pairs the list is on.
   constexpr std::size_t kNone = ~std::size_t{0};
   std::size_t acc_ball = kNone;
@@ -107,8 +110,17 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
       const std::size_t p = p0 + q;
       in.gather<kLaw, kOneLaw>(B, q, k, p, pi[p], pj[p]);
     }
-    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, next_x + p0, next_y + p0,
-                                  next_z + p0);
+    if (in_place) {   // one thread walks the list: the batch's new history goes back where it was read
+      contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz);
+      if constexpr (kLaw.shear) {
+        std::copy(hx, hx + count, fsx + p0);
+        std::copy(hy, hy + count, fsy + p0);
+        std::copy(hz, hz + count, fsz + p0);
+      }
+    } else {
+      contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, next_x + p0,
+                                    next_y + p0, next_z + p0);
+    }
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q;
       const double kmax = std::max(B.kn[q], B.ks[q]);

@@ -158,8 +158,16 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     for (std::size_t k = first; k < last; ++k)
       kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), &wall_loads_[t * wall_count]);
   };
-  // The history is read from fsx.. and written to fsx_next..: a thread's cross pairs may belong to
-  // a thread that is already writing, so the two passes need no barrier between them.
+  // Shared among threads, the history is read from fsx.. and written to fsx_next..: a thread's cross
+  // pairs may belong to a thread that is already writing, so the two passes need no barrier
+  // between them. On one thread it is written in place (StepScratch::history_in_place).
+  const bool swap_history = parallel && kernels.features.friction;
+  scratch.history_in_place = !parallel;
+  if (swap_history && scratch.fsx_next.size() != c.size()) {
+    scratch.fsx_next.resize(c.size());
+    scratch.fsy_next.resize(c.size());
+    scratch.fsz_next.resize(c.size());
+  }
   if (parallel) {
     pool.run([&](int t) {
       if (t >= parts) return;
@@ -175,7 +183,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     walls(0, blocks, 0);
   }
   if (wall_count) add_wall_loads(model, threads);
-  if (kernels.features.friction) {
+  if (swap_history) {
     ContactTable& table = model.contacts;
     table.fsx.swap(scratch.fsx_next);
     table.fsy.swap(scratch.fsy_next);

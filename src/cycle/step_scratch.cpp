@@ -13,9 +13,6 @@ void StepScratch::index(const ContactTable& table, std::size_t balls) {
   ball_force.assign(balls, PairForce{});
   ball_cn.assign(balls, 0.0);
   ball_parts.assign(balls, BallParts{});
-  fsx_next.assign(n, 0.0);
-  fsy_next.assign(n, 0.0);
-  fsz_next.assign(n, 0.0);
 }
 
 void StepScratch::index_walls(const WallContacts& walls, std::size_t balls) {

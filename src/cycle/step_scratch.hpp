@@ -37,9 +37,12 @@ struct StepScratch {
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
   std::vector<std::array<double, 9>> ball_moments;
-  // The shear history a step writes (read from the table's, which other threads may still read
-  // for their cross pairs), swapped in after the contact pass.
+  // The shear history a step shared among threads writes (read from the table's, which other
+  // threads may still read for their cross pairs), swapped in after the contact pass. A step on one
+  // thread (history_in_place) writes the table's own, a batch at a time: no cross pairs read it,
+  // and these stay empty (24 bytes a pair less).
   std::vector<double> fsx_next, fsy_next, fsz_next;
+  bool history_in_place = true;
   // The wall contacts' index: the first with ball >= b, for b = 0 .. balls.
   std::vector<std::uint32_t> wall_run_begin;
   // A rank's part of a spatially decomposed run (cycle/brick_step.hpp): 1 for a ball another rank
@@ -49,7 +52,7 @@ struct StepScratch {
 
   // Whether the index is of this table, for this many balls.
   bool fits(const ContactTable& table, std::size_t balls) const {
-    return list_version != 0 && list_version == table.list_version && run_begin.size() == balls + 1 && fsx_next.size() == table.size();
+    return list_version != 0 && list_version == table.list_version && run_begin.size() == balls + 1;
   }
   bool fits_walls(const WallContacts& walls, std::size_t balls) const {
     return wall_list_version == walls.list_version && wall_run_begin.size() == balls + 1;
