@@ -135,12 +135,12 @@ void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked)
   if (r.destroyed > 0)
     ctx.out << fmt::format("{} ball{} left the box and {} destroyed ({} since START)\n", r.destroyed,
                            r.destroyed == 1 ? "" : "s", r.destroyed == 1 ? "was" : "were",
-                           ctx.session.model().space.destroyed);
+                           ctx.session.state().space.destroyed);
   if (r.unstable || r.left_box) throw std::runtime_error(r.message);
   if (!r.energy_warning.empty()) ctx.warn(r.energy_warning);
   if (r.interrupted)
     ctx.out << fmt::format("interrupted after {} of {} cycles; the model is kept (cycle {})\n", r.done, asked,
-                           ctx.session.model().cycle);
+                           ctx.session.state().cycle);
 }
 
 }  // namespace trubal

@@ -15,8 +15,8 @@ static void finish_run(Context& ctx, ProgressReporter& progress, const CycleResu
   progress.finish();
   report_cycle_result(ctx, r, asked);
   if (r.interrupted && !ctx.interp.interactive)
-    throw InputError(fmt::format("interrupted by Ctrl-C at cycle {}", ctx.session.model().cycle));
-  const auto& m = ctx.session.model();
+    throw InputError(fmt::format("interrupted by Ctrl-C at cycle {}", ctx.session.state().cycle));
+  const auto& m = ctx.session.state();   // cycle, time, counts: the deferred results are not read
   double rate = seconds > 0 ? r.done * static_cast<double>(m.balls.size()) / seconds : 0;
   std::string split = r.done > 0 && !ctx.interp.interactive ? phase_split(r.times, r.seconds) : "";
   ctx.out << fmt::format("cycle {}  time {:.6g}  timestep {:.6g}  ({} cycles in {:.3f} s, {:.3g} ball-cycles/s{}{})\n",
@@ -28,7 +28,7 @@ static void run_cycle(Context& ctx, Args& args) {
   args.done();
   auto start = std::chrono::steady_clock::now();
   ProgressReporter progress(ctx);
-  CycleResult r = ctx.session.cycle(n, progress.callback());
+  CycleResult r = ctx.session.cycle(n, progress.callback(), true);
   finish_run(ctx, progress, r, n, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 

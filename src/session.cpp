@@ -26,6 +26,7 @@ Session::Session()
 Session::~Session() = default;
 
 Model& Session::edit() {
+  make_results(model_, *pipeline_);   // of the state before the change
   ++changes_;
   model_.energy_at_step.valid = false;   // the balls may no longer be as the last step left them
   pipeline_->invalidate();
@@ -34,12 +35,15 @@ Model& Session::edit() {
 }
 
 const Model& Session::model_with_masses() {
+  make_results(model_, *pipeline_);
   update_mass(model_);
   return model_;
 }
 
 void Session::set_backend(const std::string& name, int threads, std::uint64_t max_memory) {
-  pipeline_ = make_pipeline(name, threads, max_memory);
+  auto pipeline = make_pipeline(name, threads, max_memory);
+  make_results(model_, *pipeline_);   // the old pipeline holds the copy they are made from
+  pipeline_ = std::move(pipeline);
 }
 
 void Session::require_started() const {
@@ -52,6 +56,7 @@ void Session::start(const Space& space) {
   fresh.space.reference_volume = space.volume();
   fresh.started = true;
   model_ = std::move(fresh);
+  pipeline_->clear_deferred();
   last_sizes_.reset();
   last_generated_.clear();
   ++changes_;
@@ -127,6 +132,7 @@ std::size_t Session::CentreHash::operator()(const std::array<double, 3>& c) cons
 
 
 std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range) {
+  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   if (!(rlo > 0) || rhi < rlo) throw std::runtime_error("GEN: radii must satisfy 0 < rlo <= rhi");
   const Space& s = model_.space;
@@ -199,6 +205,7 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
 }
 
 PackResult Session::generate(const GenSpec& spec) {
+  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   SizeDistribution sizes = spec.sizes;
   check(sizes);
@@ -263,6 +270,7 @@ PackResult Session::generate(const GenSpec& spec) {
 
 std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
                                  const Range& range, Layers layers) {
+  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   if (!(d > 0)) throw std::runtime_error("LATTICE: the diameter must be positive");
   const bool periodic_x = model_.space.wraps(0), periodic_y = model_.space.wraps(1);
@@ -296,6 +304,7 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
 }
 
 std::size_t Session::delete_balls(const Range& range) {
+  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   std::vector<bool> remove(model_.balls.size(), false);
   for (auto k : select(range)) remove[k] = true;
@@ -303,6 +312,7 @@ std::size_t Session::delete_balls(const Range& range) {
 }
 
 std::size_t Session::define_group(const std::string& name, const Range& range) {
+  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   std::vector<std::int64_t> ids;
   for (auto k : select(range)) ids.push_back(model_.balls.id[k]);
@@ -317,7 +327,8 @@ double Session::stress_volume() const {
   return L[0] * L[1] * L[2];
 }
 
-CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress) {
+CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress,
+                           bool defer_results) {
   ++changes_;   // the balls move
   require_started();
   check_ready(model_);
@@ -326,6 +337,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   CycleControl control;
   control.interrupt = &interrupt_requested();
   control.progress = progress;
+  control.defer_results = defer_results;
   const double vol = stress_volume();
   const bool histories = !history_->tables().empty();
   VtkSeries* dumps = dumps_ && dumps_->every() > 0 ? dumps_.get() : nullptr;
@@ -358,6 +370,7 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
     if (ec) throw std::runtime_error(fmt::format("cannot make the folder '{}' for the dumps: {}", folder.string(), ec.message()));
   }
   // The same files again continue their collection; other files start a new one.
+  make_results(model_, *pipeline_);
   if (!dumps_ || dumps_->base() != VtkSeries(base).base()) dumps_ = std::make_unique<VtkSeries>(base, every);
   else dumps_->set_every(every);
   dumps_->write(model_);
@@ -398,12 +411,13 @@ Session::SolveResult Session::solve(double ratio, std::int64_t limit,
   return out;
 }
 
-void Session::save(const std::string& path) const { save_model(model_, path, history_.get()); }
+void Session::save(const std::string& path) const { save_model(model(), path, history_.get()); }
 
 std::vector<std::string> Session::restart(const std::string& path) {
   auto histories = std::make_unique<History>();
   Model loaded = load_model(path, histories.get());
   model_ = std::move(loaded);
+  pipeline_->clear_deferred();
   last_sizes_.reset();
   last_generated_.clear();
   ++changes_;

@@ -28,7 +28,15 @@ class Session {
   Session();
   ~Session();
 
-  const Model& model() const { return model_; }
+  // The model, its contact results made first where the last CYCLE left them to be made when read
+  // (make_results, cycle/run.hpp: one step taken again).
+  const Model& model() const {
+    make_results(model_, *pipeline_);
+    return model_;
+  }
+  // The model as it is, its contact results and the balls' unbalanced forces perhaps not made
+  // (ContactTable::results_kept): for what a CYCLE's report reads (cycle, time, counts).
+  const Model& state() const { return model_; }
   // The model with each ball's mass and inertia from its type's density as they are now (CYCLE
   // sets them at its start): for measurements taken before the first CYCLE or after a PROP,
   // such as gravity's potential energy. Changes nothing else.
@@ -40,6 +48,7 @@ class Session {
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
   // estimated afresh, and PRINT energy takes the state as it is until the next step.
   Settings& settings() {
+    make_results(model_, *pipeline_);   // the step taken again reads the settings
     model_.critical_dt = 0;
     model_.energy_at_step.valid = false;   // gravity's potential, say, is no longer the last step's
     return model_.settings;
@@ -87,7 +96,9 @@ class Session {
   std::vector<std::size_t> select(const Range& range) const { return trubal::select(model_, range); }
 
   // CYCLE / SOLVE. The interrupt flag is the process's Ctrl-C flag.
-  CycleResult cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress = {});
+  // defer_results: the last step's contact results are made when next read (CycleControl).
+  CycleResult cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress = {},
+                    bool defer_results = false);
   struct SolveResult { CycleResult run; double ratio = 0; bool converged = false; };
   SolveResult solve(double ratio, std::int64_t limit,
                     const std::function<void(std::int64_t, std::int64_t)>& progress = {});
@@ -123,7 +134,8 @@ class Session {
 
  private:
   void start(const Space& space);   // a fresh model in this space; histories and dumps end
-  Model model_;
+  // mutable: model() makes deferred results (a cache of what the state determines).
+  mutable Model model_;
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<History> history_;
   std::unique_ptr<VtkSeries> dumps_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 
 #include "cycle/pair_list.hpp"
 #include "cycle/wall_list.hpp"
@@ -151,9 +152,17 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
   moved_known_ = false;
 }
 
+void Pipeline::rewind_step() {
+  moved_known_ = false;   // the displacements are measured again at the positions put back
+  fresh_ = false;
+  wall_travel_ = wall_travel_at_step_;
+}
+
 void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
+  wall_travel_at_step_ = wall_travel_;
   if (distributed_) {
     shared_by_ = "the spatial decomposition";
+    model.contacts.keep_results();   // the ranks' parts are cut from the whole table, results too
     brick_step(model, kernels, sums);
     move_walls(model, kernels.dt);
     return;
@@ -173,6 +182,13 @@ void Pipeline::move_walls(Model& model, double dt) {
   double most = 0;
   for (Wall& w : model.walls) most = std::max(most, move_wall(w, dt));
   wall_travel_ += most;
+}
+
+bool Pipeline::Deferred::same(const Deferred& o) const {
+  auto bits = [](double v) { std::uint64_t b; std::memcpy(&b, &v, sizeof b); return b; };
+  return model == o.model && cycle == o.cycle && bits(time) == bits(o.time) &&
+         bits(friction_work) == bits(o.friction_work) && bits(damping_work) == bits(o.damping_work) &&
+         bits(boundary_work) == bits(o.boundary_work) && bits(kinetic) == bits(o.kinetic);
 }
 
 PipelineCounters Pipeline::counters() const {

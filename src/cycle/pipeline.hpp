@@ -44,6 +44,9 @@ class Pipeline {
   void step(Model& model, const StepKernels& kernels, StepSums& sums);
   // The balls or the table were changed outside cycling: the next step searches afresh.
   void invalidate();
+  // The model was put back to its state before the last step (make_results): the next step decides
+  // on a search as that step did, so the list it makes (or keeps) is that step's.
+  void rewind_step();
   // Makes the model current where a distributed run's ranks step their parts of it (BACKEND mpi,
   // cycle/brick_step.hpp): a collective call, made by every rank at the same step. Else nothing.
   void sync(Model& model);
@@ -66,6 +69,29 @@ class Pipeline {
 
   // run_cycles' rescue copy of the state, kept between CYCLEs (cycle/snapshot.hpp).
   Snapshot& rescue() { return rescue_; }
+  bool distributed() const { return distributed_; }
+
+  // A CYCLE that left its last step's results to be made when read (CycleControl::defer_results):
+  // the rescue copy is then of the step before, and taking that step again makes them
+  // (make_results, cycle/run.hpp). What the step left is noted to check the step taken again.
+  struct Deferred {
+    const Model* model = nullptr;
+    std::int64_t cycle = -1;
+    double time = 0, friction_work = 0, damping_work = 0, boundary_work = 0, kinetic = 0;
+    static Deferred of(const Model& m) {
+      return {&m, m.cycle, m.time, m.energy.friction_work, m.energy.damping_work, m.energy.boundary_work,
+              m.energy_at_step.kinetic_translation + m.energy_at_step.kinetic_rotation};
+    }
+    // Bit for bit (a NaN compares unequal, so the test is on the bits).
+    bool same(const Deferred& o) const;
+  };
+  void defer_results(const Model& model) { deferred_ = Deferred::of(model); }
+  // Whether the model's results wait for the step before to be taken again, from the rescue copy.
+  bool results_deferred(const Model& model) const {
+    return deferred_.model == &model && deferred_.cycle == model.cycle && rescue_.cycle + 1 == model.cycle;
+  }
+  const Deferred& deferred() const { return deferred_; }
+  void clear_deferred() { deferred_ = {}; }
 
  private:
   void rebuild(Model& model);
@@ -91,7 +117,9 @@ class Pipeline {
   bool moved_known_ = false;        // step_.moved2() holds the displacements of the current positions
   bool fresh_ = false;              // searched at the current positions (nothing moved since)
   double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
+  double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)
   Snapshot rescue_;
+  Deferred deferred_;
 };
 
 // A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument).

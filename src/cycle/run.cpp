@@ -123,8 +123,23 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
   // an unstable step grows exponentially and passes this within a few steps.
   const double energy_floor = resting_energy_floor(model);
+  // A servo not yet run reads its first stress from the contact table (cell_before_step).
+  const Space& cell = model.space;
+  const bool servo_reads_table =
+      cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
+  if (servo_reads_table) make_results(model, pipeline);
   Snapshot& snapshot = pipeline.rescue();
-  snapshot.take(model);
+  // A CYCLE right after one that deferred its last step's results: the rescue copy, of the step
+  // before, is kept as this run's copy (the rescue takes that step again).
+  if (!pipeline.results_deferred(model)) snapshot.take(model);
+  pipeline.clear_deferred();
+  const bool defer = control.defer_results && !pipeline.distributed();
+  if (defer) {
+    // Results not of this state are of no use (the servo has read them already).
+    if (model.contacts.results_cycle != model.cycle && !servo_reads_table) model.contacts.drop_results();
+  } else {
+    model.contacts.keep_results();
+  }
   using Clock = std::chrono::steady_clock;
   const auto loop_start = Clock::now();
   auto last_progress = loop_start;
@@ -249,14 +264,15 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // kSnapshotEvery steps: the rescue takes that step again, writing the results, so the model is at
   // the multiple and prints as it was then. The same bits as the first time: nothing in a step
   // depends on when the pair list was made (the cut tests hold this), and the observers do not run
-  // again. (Where the failing step is that step, the model stays at the copy.) Returns whether the
+  // again; so is a copy kept from the CYCLE before, of its last step's step before (defer_results).
+  // (Where the failing step is that step, the model stays at the copy.) Returns whether the
   // results are those of the state it is left in (false only where a step after the copy
   // overwrote them: Snapshot::restore).
   auto rescue = [&](std::int64_t bad_cycle) -> bool {
     bool current = snapshot.restore(model);
     pipeline.invalidate();
     kernels.laws = make_pair_laws(model);   // the balls destroyed since the copy are back
-    if (model.cycle > start_cycle && model.cycle + 1 < bad_cycle) {
+    if (model.cycle != start_cycle && model.cycle + 1 < bad_cycle) {
       advance(true);
       escapes(true);
       current = true;
@@ -272,8 +288,11 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (Snapshot::restore finds them
     // current where the next step fails) and the cycles history and dumps record.
     const bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
-    const bool details = s == n || stopping || (s + 1) % kSnapshotEvery == 0 ||
-                         (control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1)));
+    const bool observed = control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1));
+    // defer: the last step's results are made when read, from a copy of the step before.
+    const bool deferred = defer && s == n && !stopping && !observed;
+    const bool details = (s == n && !deferred) || stopping || (!defer && (s + 1) % kSnapshotEvery == 0) || observed;
+    if (deferred && snapshot.cycle != model.cycle) snapshot.take(model);
     const StepTotals sums = advance(details);
 
     // The balance at t, the time of this step's force pass.
@@ -340,12 +359,32 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       result.interrupted = s < n;
       break;
     }
+    if (deferred) {
+      model.contacts.drop_results();
+      pipeline.defer_results(model);
+    }
   }
   } catch (...) {
     pipeline.sync(model);
     throw;
   }
   return finish();
+}
+
+void make_results(Model& model, Pipeline& pipeline) {
+  if (pipeline.results_deferred(model)) {
+    const Pipeline::Deferred left = pipeline.deferred();
+    pipeline.clear_deferred();
+    // The list as that step had it: the same search, or none (the SAVE that follows writes it).
+    pipeline.rescue().restore(model);
+    pipeline.rewind_step();
+    const CycleResult r = run_cycles(model, pipeline, 1, {});   // its one step writes the results
+    if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
+      throw std::logic_error(fmt::format(
+          "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));
+    return;
+  }
+  model.contacts.keep_results();
 }
 
 }  // namespace trubal

@@ -23,6 +23,11 @@ struct CycleControl {
   std::function<bool(std::int64_t cycle)> reads_contacts;
   // Called now and then for progress reports.
   std::function<void(std::int64_t done, std::int64_t total)> progress;
+  // The last step's results (and the 500th steps' before the rescue copies) are not written: the
+  // result arrays are freed, and make_results takes the last step again from the rescue copy when
+  // they are read (CYCLE's way: their memory is two fifths of the model's). A run on several
+  // ranks, one stopped early and one whose last step an observer reads write them as usual.
+  bool defer_results = false;
 };
 
 inline constexpr double kBalanceWarning = 0.01;   // of the energy that moved: CycleResult::energy_warning
@@ -54,9 +59,16 @@ struct CycleResult {
 // t, and model.cycle, time, dt, critical_dt, energy advanced. The per-contact results (normal,
 // overlap, forces, stiffness, work, state) and the balls' unbalanced forces and moments are those
 // of the force pass of the step that ended at cycle ContactTable::results_cycle: every CYCLE's
-// last step writes them, and so do the steps whose cycle an observer reads (reads_contacts), the
+// last step writes them (or defers them: CycleControl::defer_results), and so do the steps whose cycle an observer reads (reads_contacts), the
 // step a Ctrl-C ends and the one before every 500th (the rescue copy's); other steps skip the writes
 // and compute the same numbers.
 CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control);
+
+// Makes the model's contact results current where they can be: a CYCLE that deferred its last
+// step's (CycleControl::defer_results) has it taken again from the rescue copy, to the same bits
+// (throws std::logic_error where it does not come back to them); else the result arrays are made
+// of the list's length, zero where they were not kept (results_cycle -1). Every reader of the
+// results (the Session's model()) calls it first.
+void make_results(Model& model, Pipeline& pipeline);
 
 }  // namespace trubal

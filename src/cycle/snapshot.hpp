@@ -10,9 +10,12 @@
 // start they still stand in the model's table (restore).
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "cycle/pair_list.hpp"
@@ -21,7 +24,7 @@
 namespace trubal {
 
 struct Snapshot {
-  Balls balls;
+  Balls balls;   // all but the unbalanced forces and moments (results: restore)
   // The contact table's state: its pair list, the shear history.
   PairCandidates pairs;
   std::vector<double> fsx, fsy, fsz;
@@ -38,7 +41,7 @@ struct Snapshot {
   double time = 0, dt = 0, critical_dt = 0;
 
   void take(const Model& m) {
-    balls = m.balls;
+    copy_balls(balls, m.balls);
     const ContactTable& c = m.contacts;
     pairs.i = c.i; pairs.j = c.j; pairs.image_x = c.image_x; pairs.image_y = c.image_y; pairs.image_z = c.image_z;
     fsx = c.fsx; fsy = c.fsy; fsz = c.fsz;
@@ -51,25 +54,47 @@ struct Snapshot {
   }
 
   // Puts the copy back. Returns whether the table's results are those of the copy's state: true
-  // where no step since wrote results and the balls are the same. The results then still stand in
+  // where they were of its cycle when it was taken, no step since wrote results and the balls are
+  // the same. The results then still stand in
   // the model's table, and install_pairs moves them to the copy's list by the pair, as it moves
   // them at a rebuild; a pair the list has lost since comes back with zero results, which are its
   // results only if it did not touch (its state tells). Else they are zero, with results_cycle -1.
   bool restore(Model& m) const {
     ContactTable& c = m.contacts;
     const bool same_step = c.results_cycle == results_cycle && m.balls.id == balls.id;
-    install_pairs(c, pairs);
+    if (!holds_pairs(c, pairs)) install_pairs(c, pairs);   // the same list keeps its index
     c.fsx = fsx; c.fsy = fsy; c.fsz = fsz;
-    const bool current = same_step && c.state == state;
+    const bool current = same_step && results_cycle == cycle && c.state == state;
     if (!current) {
       c.for_each_result_array([&](auto& v) { v.assign(v.size(), {}); });
       c.results_cycle = -1;
     }
-    m.balls = balls; m.walls = walls; m.wall_contacts = wall_contacts; m.space = space;
+    copy_balls(m.balls, balls);
+    // The unbalanced forces are results too: the model's stand where the results do.
+    for (auto* v : unbalanced(m.balls))
+      if (!current || v->size() != m.balls.size()) v->assign(m.balls.size(), 0.0);
+    m.walls = walls; m.wall_contacts = wall_contacts; m.space = space;
     m.energy = energy; m.energy_at_step = energy_at_step;
     m.membrane = membrane; m.groups = groups;
     m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
     return current;
+  }
+
+ private:
+  static std::array<std::vector<double>*, 6> unbalanced(Balls& b) { return {&b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz}; }
+  // Every per-ball array but the unbalanced forces and moments (48 bytes a ball the copy need not hold).
+  static void copy_balls(Balls& to, const Balls& from) {
+    std::vector<const void*> source;
+    from.for_each_array([&](const auto& v) { source.push_back(&v); });
+    const auto skip = unbalanced(to);
+    std::size_t k = 0;
+    to.for_each_array([&](auto& v) {
+      using V = std::decay_t<decltype(v)>;
+      const V& s = *static_cast<const V*>(source[k++]);
+      if constexpr (std::is_same_v<V, std::vector<double>>)
+        if (std::find(skip.begin(), skip.end(), &v) != skip.end()) return;
+      v = s;
+    });
   }
 };
 

@@ -147,7 +147,30 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     }
   }
   m.balls.for_each_array([&](auto& v) { io.vec(v); });
-  m.contacts.for_each_pair_array([&](auto& v) { io.vec(v); });
+  if constexpr (std::is_same_v<IO, Reader>) {
+    m.contacts.for_each_pair_array([&](auto& v) { io.vec(v); });
+  } else {
+    // The pairs that carry something (touching, or a shear history): the others are the search's
+    // spare candidates, all zero, which depend on when the list was last made (a cut run, a rank
+    // count, results made again when read) while the state does not. The next step finds them.
+    const ContactTable& c = m.contacts;
+    // (Results not kept, ContactTable::results_kept, are written as zero.)
+    const bool results = c.results_kept();
+    std::vector<std::uint8_t> keep(c.size(), 1);
+    std::size_t count = 0;
+    for (std::size_t p = 0; p < c.size(); ++p) {
+      keep[p] = (results && c.state[p] != 0) || c.fsx[p] != 0 || c.fsy[p] != 0 || c.fsz[p] != 0;
+      count += keep[p];
+    }
+    m.contacts.for_each_pair_array([&](const auto& v) {
+      if (count == c.size() && v.size() == c.size()) return io.vec(v);
+      std::decay_t<decltype(v)> kept(count);
+      if (v.size() == c.size())
+        for (std::size_t p = 0, q = 0; p < v.size(); ++p)
+          if (keep[p]) kept[q++] = v[p];
+      io.vec(kept);
+    });
+  }
   if (version >= 4) io.pod(m.contacts.results_cycle);
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
   io.pod(m.settings.damping);

@@ -83,13 +83,28 @@ struct ContactTable {
   std::vector<double> work_friction, work_damping;      // energy dissipated this step
   std::vector<std::uint8_t> state;                      // 0 apart, 1 touching, 2 sliding
   // The cycle whose step's force pass the results above are of (cycle/run.hpp says which steps
-  // write them); -1: none yet.
+  // write them); -1: none yet. The result arrays are either all of the list's length or all empty
+  // (not kept: results_cycle is then -1); a CYCLE's last step may leave them empty, to be made again
+  // when read (make_results, cycle/run.hpp).
   std::int64_t results_cycle = -1;
   // Unique to each pair list installed (cycle/pair_list.hpp): what the pipeline's index of the
   // list is checked against. Not saved; 0: a list nobody indexed.
   std::uint64_t list_version = 0;
 
   std::size_t size() const { return i.size(); }
+  // Whether the result arrays are of the list's length (else they are empty: not kept).
+  bool results_kept() const { return state.size() == i.size() && nx.size() == i.size(); }
+  // The result arrays of the list's length, zero where they were not kept.
+  void keep_results() {
+    if (results_kept()) return;
+    for_each_result_array([&](auto& v) { v.assign(i.size(), {}); });
+    results_cycle = -1;
+  }
+  // Frees the result arrays (their memory goes back).
+  void drop_results() {
+    for_each_result_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+    results_cycle = -1;
+  }
   template <class F> void for_each_pair_array(F&& f) {
     f(i); f(j); f(image_x); f(image_y); f(image_z); f(state);
     for (auto* v : {&fsx, &fsy, &fsz, &nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &tx, &ty, &tz,

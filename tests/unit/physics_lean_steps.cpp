@@ -5,9 +5,12 @@
 #include <catch2/catch.hpp>
 
 #include <atomic>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "backends_scenes.hpp"
+#include "interp_support.hpp"
 
 using namespace trubal;
 using namespace trubal::test;
@@ -78,4 +81,81 @@ TEST_CASE("lean steps: a run stopped by Ctrl-C ends on a step that wrote its con
     REQUIRE(run_cycles(straight, *other, 42, {}).done == 42);
     CHECK(difference(picture(stopped), picture(straight)).empty());
   }
+}
+
+// CYCLE's way (CycleControl::defer_results): the last step is lean too, the result arrays are
+// freed, and make_results takes that step again from the rescue copy when they are read. What it
+// makes is what a run writing the last step gives, to the bit, on every backend, and so is the
+// state a second run goes on from.
+TEST_CASE("lean steps: a run's last results, made when read, are those of a run that wrote them", "[physics][lean]") {
+  for (const char* backend : {"serial", "threaded"}) {
+    for (Scene& scene : scenes()) {
+      INFO(scene.name << " on " << backend);
+      const int threads = std::string(backend) == "serial" ? 1 : 2;
+      CycleControl deferring;
+      deferring.defer_results = true;
+      Model deferred = scene.model;
+      auto pipeline = make_pipeline(backend, threads);
+      const int first = scene.cycles / 3;   // not a multiple of 500: the copy is taken for the last step
+      REQUIRE(run_cycles(deferred, *pipeline, first, deferring).done == first);
+      CHECK_FALSE(deferred.contacts.results_kept());
+      CHECK(deferred.contacts.nx.capacity() == 0);   // the memory went back
+      CHECK(deferred.contacts.results_cycle == -1);
+      CHECK(pipeline->results_deferred(deferred));
+
+      Model straight = scene.model;
+      auto other = make_pipeline(backend, threads);
+      REQUIRE(run_cycles(straight, *other, first, {}).done == first);
+      make_results(deferred, *pipeline);
+      CHECK(deferred.contacts.results_cycle == deferred.cycle);
+      CHECK_FALSE(pipeline->results_deferred(deferred));
+      CHECK(difference(picture(deferred), picture(straight)).empty());
+
+      // Deferred again, and the next run goes on from the deferred state (its rescue copy is the
+      // step before): the same as the straight run.
+      REQUIRE(run_cycles(deferred, *pipeline, 1, deferring).done == 1);
+      REQUIRE(run_cycles(deferred, *pipeline, scene.cycles - first - 1, deferring).done == scene.cycles - first - 1);
+      REQUIRE(run_cycles(straight, *other, scene.cycles - first, {}).done == scene.cycles - first);
+      make_results(deferred, *pipeline);
+      CHECK(difference(picture(deferred), picture(straight)).empty());
+    }
+  }
+}
+
+// The step taken again is checked against what it left (cycle, time, works, kinetic energy): a copy
+// that is not of the step before cannot pass for it.
+TEST_CASE("lean steps: results made from a copy that is not the step before are refused", "[physics][lean]") {
+  Scene scene = fcc_compression(4, 4, 4);
+  CycleControl deferring;
+  deferring.defer_results = true;
+  auto pipeline = make_pipeline("serial", 1);
+  REQUIRE(run_cycles(scene.model, *pipeline, 30, deferring).done == 30);
+  REQUIRE(pipeline->results_deferred(scene.model));
+  pipeline->rescue().balls.vx[0] += 1e-3;   // what a change of the copy behind the session's back would do
+  CHECK_THROWS_AS(make_results(scene.model, *pipeline), std::logic_error);
+}
+
+// Through the interpreter: CYCLE defers, any command that reads the model makes them, and a SAVE
+// after it holds the bytes of a run that wrote them.
+TEST_CASE("lean steps: CYCLE leaves its results to the next command that reads them", "[physics][lean][interp]") {
+  test::TempDir dir;
+  test::WorkingDir wd(dir.path());
+  const std::string deck =
+      "start box -10 10 -10 10 -10 10\nprop kn 1e5 ks 1e5 fric 0.5 dens 1000\n"
+      "lattice fcc 1.0 4 4 4 origin 0 0 0\nini xvel 0.02 yvel -0.01 range id 1 9\n";
+  test::Harness h;
+  REQUIRE(h.deck(deck + "cycle 333\n"));
+  CHECK_FALSE(h.session.state().contacts.results_kept());
+  const Model& m = h.session.model();
+  CHECK(m.contacts.results_kept());
+  CHECK(m.contacts.results_cycle == 333);
+  REQUIRE(h.deck("save deferred.sav\n"));
+  test::Harness straight;
+  REQUIRE(straight.deck(deck));
+  straight.session.cycle(333);   // the API's default: the last step writes them
+  CHECK(straight.session.state().contacts.results_cycle == 333);
+  straight.session.save("straight.sav");
+  const std::string a = test::slurp(dir.path() / "deferred.sav"), b = test::slurp(dir.path() / "straight.sav");
+  CHECK(!a.empty());
+  CHECK(a == b);
 }
