@@ -43,7 +43,10 @@ const Command cycle_command = {
     "for what happened, mostly contacts that form and break within a few steps (impacts). A long run shows its progress "
     "(cycles/s, time left): a bar redrawn in place at the interactive prompt, a plain line every 10 s "
     "otherwise (SET progress). At the end one line gives the cycle, time, step and speed, and in batch "
-    "where the time went (contact detection, forces, motion, output).",
+    "where the time went (contact detection, forces, motion, output). A CYCLE keeps no per-contact results "
+    "(forces, normals, overlaps, the balls' unbalanced forces) in memory, two fifths of a dense model's: the "
+    "first command after it that reads them takes the last step again from a copy of the step before, to "
+    "the same bits (unless HIST or DUMP recorded that step, or the run is on several ranks).",
     {}, run_cycle};
 
 static void run_solve(Context& ctx, Args& args) {

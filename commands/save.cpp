@@ -15,7 +15,10 @@ static void run_save(Context& ctx, Args& args) {
 const Command save_command = {
     "SAVE", {}, "SAVE file", "write the whole state",
     "Writes the whole state (balls, contacts with their shear history, materials, settings, groups, energy) "
-    "to a versioned binary file with a checksum. The file is written to a temporary name and renamed, so "
+    "to a versioned binary file with a checksum. Of the pair list it writes the pairs that touch or carry a "
+    "shear history (the rest are the search's spare candidates, found again after RESTART), so the bytes "
+    "of a state do not depend on when the list was made: a run cut into CYCLEs, or on P ranks, saves the "
+    "bytes of the straight serial run. The file is written to a temporary name and renamed, so "
     "an existing save is never left half-written. The histories (HIST) are saved with their settings and the rows "
     "they hold in memory; the backend choice is not saved.",
     {}, run_save};
