@@ -5,6 +5,7 @@
 #include "commands/common.hpp"
 #include "interp/summary.hpp"
 #include "physics/measure.hpp"
+#include "support/comm.hpp"
 
 namespace trubal {
 
@@ -15,7 +16,9 @@ static void finish_run(Context& ctx, ProgressReporter& progress, const CycleResu
   progress.finish();
   report_cycle_result(ctx, r, asked);
   if (r.interrupted && !ctx.interp.interactive)
-    throw InputError(fmt::format("interrupted by Ctrl-C at cycle {}", ctx.session.state().cycle));
+    throw InputError(fmt::format("interrupted by {} at cycle {}",
+                                 comm::size() > 1 ? "a signal (Ctrl-C at mpirun, or SIGUSR1)" : "Ctrl-C",
+                                 ctx.session.state().cycle));
   const auto& m = ctx.session.state();   // cycle, time, counts: the deferred results are not read
   double rate = seconds > 0 ? r.done * static_cast<double>(m.balls.size()) / seconds : 0;
   std::string split = r.done > 0 && !ctx.interp.interactive ? phase_split(r.times, r.seconds) : "";
@@ -35,7 +38,8 @@ static void run_cycle(Context& ctx, Args& args) {
 const Command cycle_command = {
     "CYCLE", {}, "CYCLE n", "n time steps",
     "Runs n time steps. Ctrl-C stops at the end of the current step and keeps the model (in a batch run the "
-    "deck then stops). A run that goes unstable stops with a message naming the cycle, a ball and a "
+    "deck then stops). Under mpirun, Ctrl-C ends the job (mpirun's way): the ranks stop together and rank 0 "
+    "says at which cycle; SIGUSR1 sent to mpirun stops the CYCLE as Ctrl-C does without it. A run that goes unstable stops with a message naming the cycle, a ball and a "
     "suggested FRAC, and leaves the last good state to print or save. When the energy balance (PRINT energy) "
     "moved during the CYCLE by more than 1% of the energy that moved (the largest energy in play: kinetic, "
     "strain, and the changes of the potential and the works), a warning says so once at the end, with the "

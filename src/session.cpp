@@ -163,7 +163,7 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   gen_interrupted = false;
   std::vector<std::array<double, 4>> made;
   for (std::size_t tries = 0; placed < n && tries < max_tries && failures < kFailuresInARow; ++tries) {
-    if ((tries & 4095) == 0 && interrupt_requested().load()) {
+    if ((tries & 4095) == 0 && interrupt_now()) {
       interrupt_requested() = false;
       gen_interrupted = true;
       break;

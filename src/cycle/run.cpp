@@ -16,6 +16,7 @@
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
 #include "physics/walls.hpp"
+#include "support/comm.hpp"
 
 namespace trubal {
 namespace {
@@ -23,6 +24,7 @@ namespace {
 constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs less than one step's memory traffic
 constexpr int kFlippingSteps = 20;   // steps running with a negative kinetic term that stop the run (below)
 constexpr double kProgressSeconds = 0.2;
+constexpr std::int64_t kAgreeEvery = 16;   // steps between the ranks' checks of an interrupt
 
 double resting_energy_floor(const Model& model) {
   double sum = 0;
@@ -287,7 +289,17 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     // The per-pair results measurements read are written only where someone will read them: the
     // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (Snapshot::restore finds them
     // current where the next step fails) and the cycles history and dumps record.
-    const bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
+    bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
+    // Under mpirun every rank takes the same steps: they stop together, agreeing every
+    // kAgreeEvery steps (a rank that stopped alone would leave the others waiting for its part).
+    if (control.interrupt && comm::size() > 1) {
+      stopping = false;
+      if (s % kAgreeEvery == 0) {
+        std::vector<double> any{control.interrupt->load() ? 1.0 : 0.0};
+        comm::max_all(any);
+        stopping = any[0] > 0;
+      }
+    }
     const bool observed = control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1));
     // defer: the last step's results are made when read, from a copy of the step before.
     const bool deferred = defer && s == n && !stopping && !observed;

@@ -76,7 +76,7 @@ std::size_t place(const Model& model, const Region& g, const PackRequest& q, Pla
     const double r = scale * balls[k][3];
     bool placed = false;
     for (std::size_t failures = 0; failures < kFailuresInARow; ++failures) {
-      if ((++tries & 4095) == 0 && interrupt_requested().load()) {
+      if ((++tries & 4095) == 0 && interrupt_now()) {
         interrupt_requested() = false;
         interrupted = true;
         return k;
@@ -212,7 +212,7 @@ PackResult pack(const Model& model, const PackRequest& q) {
     const int took = most > 0 ? relaxation.relax(std::cbrt(next), most) : -1;
     ++out.stages;
     out.sweeps += took > 0 ? took : most;
-    if (interrupt_requested().load()) {
+    if (interrupt_now()) {
       interrupt_requested() = false;
       out.interrupted = true;
       out.balls = good;

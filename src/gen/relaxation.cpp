@@ -26,7 +26,7 @@ struct Relaxation::Impl {
     scale_ = scale;
     build();
     for (int sweep = 1; sweep <= most; ++sweep) {
-      if ((sweep & 15) == 0 && interrupt_requested().load()) return -1;
+      if ((sweep & 15) == 0 && interrupt_now()) return -1;
       const double worst = sweep_once();
       if (worst <= kOverlapTolerance) return sweep;
       if (moved_too_far()) build();

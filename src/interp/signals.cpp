@@ -1,6 +1,9 @@
 #include "interp/signals.hpp"
 
 #include <csignal>
+#include <vector>
+
+#include "support/comm.hpp"
 
 namespace trubal {
 
@@ -9,12 +12,14 @@ std::atomic<bool>& interrupt_requested() {
   return flag;
 }
 
-static void on_sigint(int) {
+static void on_sigint(int signal) {
   if (interrupt_requested().exchange(true)) {
-    std::signal(SIGINT, SIG_DFL);
-    std::raise(SIGINT);
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
   }
 }
+
+static void on_sigusr1(int) { interrupt_requested().store(true); }
 
 void install_interrupt_handler() {
   struct sigaction sa {};
@@ -22,6 +27,22 @@ void install_interrupt_handler() {
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART;
   sigaction(SIGINT, &sa, nullptr);
+  if (comm::size() > 1) {
+    sigaction(SIGTERM, &sa, nullptr);
+    struct sigaction usr {};
+    usr.sa_handler = on_sigusr1;
+    sigemptyset(&usr.sa_mask);
+    usr.sa_flags = SA_RESTART;
+    sigaction(SIGUSR1, &usr, nullptr);
+  }
+}
+
+bool interrupt_now() {
+  if (comm::size() == 1) return interrupt_requested().load();
+  std::vector<double> any{interrupt_requested().load() ? 1.0 : 0.0};
+  comm::max_all(any);
+  if (any[0] > 0) interrupt_requested().store(true);
+  return any[0] > 0;
 }
 
 }  // namespace trubal

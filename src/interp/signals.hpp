@@ -7,7 +7,14 @@ namespace trubal {
 
 std::atomic<bool>& interrupt_requested();
 // Installs the SIGINT handler that sets interrupt_requested() (a second Ctrl-C while the flag is
-// still set ends the program the usual way).
+// still set ends the program the usual way). Under mpirun (several ranks) also SIGUSR1, which
+// mpirun forwards to every rank, and SIGTERM, which mpirun sends them when it is itself
+// interrupted (Ctrl-C at its terminal), a second before it kills them.
 void install_interrupt_handler();
+
+// Whether to stop now: interrupt_requested(), under mpirun agreed among the ranks (any rank's flag
+// stops all, and sets every rank's). A collective call there: every rank makes it at the same
+// point of the same computation (GEN's placement, a CYCLE's step).
+bool interrupt_now();
 
 }  // namespace trubal

@@ -5,6 +5,7 @@
 // or machine has no MPI.
 #include <catch2/catch.hpp>
 
+#include <filesystem>
 #include <string>
 
 #include "interp_support.hpp"
@@ -225,5 +226,43 @@ cycle 400
     CHECK_THAT(out, Catch::Contains("last step shared by: the spatial decomposition"));
     CHECK(slurp(dir.path() / "balls.csv") == balls);
     CHECK(slurp(dir.path() / "contacts.csv") == contacts);
+  }
+}
+
+// Ctrl-C under mpirun: mpirun forwards SIGUSR1 to the ranks, and a CYCLE stops as Ctrl-C stops it
+// in a serial run; Ctrl-C (or SIGTERM) at mpirun itself ends the job (SIGTERM to the ranks, SIGKILL
+// a second later), and the ranks stop together and say where. A rank that stopped alone would leave the
+// others waiting in the step's exchange: the time limit would end the run, without the message.
+TEST_CASE("distributed: a signal stops every rank's CYCLE at the same step, with one message", "[mpi]") {
+  if (!have_mpi()) return;
+  const std::string deck = std::string(R"(backend mpi
+start 0.007 0.007 0.007
+prop kn 1e5 ks 1e5 fric 26.57 dens 2650
+gen 500 0.0003 0.0005 seed 5
+damp local 0.7
+)") + "save before.sav\ncycle 100000000\nsave after.sav\n";
+  // mpirun takes SIGTERM as it takes Ctrl-C (it ends the job: SIGTERM to the ranks, SIGKILL a
+  // second later); the test sends TERM because a shell's background job ignores SIGINT.
+  for (const char* signal : {"USR1", "TERM"}) {
+    INFO("SIG" << signal << " to mpirun");
+    TempDir dir;
+    const std::string deck_path = dir.write("deck.dat", deck);
+    // The signal goes once the CYCLE has begun (before.sav is written just before it).
+    const int status = shell(
+        "cd " + quote(dir.str()) +
+        " || exit 1; (env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+        "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np 2 " + quote(TRUBAL_EXE) + " " + deck_path +
+        " >out.txt 2>&1; echo $? >status.txt) & launched=$!; "
+        "for i in $(seq 1 600); do [ -e before.sav ] && break; sleep 0.1; done; sleep 1; "
+        // this test's mpirun alone (the deck's path is unique; its ranks and `timeout` do not match)
+        "pkill -" + signal + " -f '^mpirun -np 2 .*" + deck_path + "'; wait $launched");
+    REQUIRE(status == 0);
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(std::stoi(slurp(dir.path() / "status.txt")) != 0);
+    CHECK_THAT(out, Catch::Contains("interrupted by a signal (Ctrl-C at mpirun, or SIGUSR1) at cycle "));
+    const auto at = out.find("interrupted by a signal");
+    CHECK(out.find("interrupted by a signal", at + 1) == std::string::npos);   // rank 0 alone says it
+    CHECK_FALSE(std::filesystem::exists(dir.path() / "after.sav"));   // the deck stopped there
   }
 }
