@@ -287,8 +287,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   try {
   for (std::int64_t s = 1; s <= n; ++s) {
     // The per-pair results measurements read are written only where someone will read them: the
-    // last step (PRINT, SOLVE), a step Ctrl-C ends, snapshot steps (Snapshot::restore finds them
-    // current where the next step fails) and the cycles history and dumps record.
+    // last step (PRINT, SOLVE; CYCLE's defers it: make_results), a step Ctrl-C ends, snapshot steps
+    // (Snapshot::restore finds them current where the next step fails; not where results are
+    // deferred, as the rescue takes the step again) and the cycles history and dumps record.
     bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
     // Under mpirun every rank takes the same steps: they stop together, agreeing every
     // kAgreeEvery steps (a rank that stopped alone would leave the others waiting for its part).
