@@ -132,7 +132,6 @@ std::size_t Session::CentreHash::operator()(const std::array<double, 3>& c) cons
 
 
 std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range) {
-  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   if (!(rlo > 0) || rhi < rlo) throw std::runtime_error("GEN: radii must satisfy 0 < rlo <= rhi");
   const Space& s = model_.space;
@@ -205,7 +204,6 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
 }
 
 PackResult Session::generate(const GenSpec& spec) {
-  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   SizeDistribution sizes = spec.sizes;
   check(sizes);
@@ -270,7 +268,6 @@ PackResult Session::generate(const GenSpec& spec) {
 
 std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
                                  const Range& range, Layers layers) {
-  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   if (!(d > 0)) throw std::runtime_error("LATTICE: the diameter must be positive");
   const bool periodic_x = model_.space.wraps(0), periodic_y = model_.space.wraps(1);
@@ -304,7 +301,6 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
 }
 
 std::size_t Session::delete_balls(const Range& range) {
-  make_results(model_, *pipeline_);   // of the state before the change
   require_started();
   std::vector<bool> remove(model_.balls.size(), false);
   for (auto k : select(range)) remove[k] = true;
@@ -312,7 +308,7 @@ std::size_t Session::delete_balls(const Range& range) {
 }
 
 std::size_t Session::define_group(const std::string& name, const Range& range) {
-  make_results(model_, *pipeline_);   // of the state before the change
+  make_results(model_, *pipeline_);   // groups are state the step taken again puts back: before the change
   require_started();
   std::vector<std::int64_t> ids;
   for (auto k : select(range)) ids.push_back(model_.balls.id[k]);

@@ -1,8 +1,9 @@
 #include "cycle/pipeline.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
-#include <cstring>
+#include <cstdint>
 
 #include "cycle/pair_list.hpp"
 #include "cycle/wall_list.hpp"
@@ -185,7 +186,7 @@ void Pipeline::move_walls(Model& model, double dt) {
 }
 
 bool Pipeline::Deferred::same(const Deferred& o) const {
-  auto bits = [](double v) { std::uint64_t b; std::memcpy(&b, &v, sizeof b); return b; };
+  auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
   return model == o.model && cycle == o.cycle && bits(time) == bits(o.time) &&
          bits(friction_work) == bits(o.friction_work) && bits(damping_work) == bits(o.damping_work) &&
          bits(boundary_work) == bits(o.boundary_work) && bits(kinetic) == bits(o.kinetic);

@@ -293,14 +293,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     bool stopping = control.interrupt && control.interrupt->load(std::memory_order_relaxed);
     // Under mpirun every rank takes the same steps: they stop together, agreeing every
     // kAgreeEvery steps (a rank that stopped alone would leave the others waiting for its part).
-    if (control.interrupt && comm::size() > 1) {
-      stopping = false;
-      if (s % kAgreeEvery == 0) {
-        std::vector<double> any{control.interrupt->load() ? 1.0 : 0.0};
-        comm::max_all(any);
-        stopping = any[0] > 0;
-      }
-    }
+    if (control.interrupt && comm::size() > 1) stopping = s % kAgreeEvery == 0 && comm::any_all(control.interrupt->load());
     const bool observed = control.after_step && (!control.reads_contacts || control.reads_contacts(model.cycle + 1));
     // defer: the last step's results are made when read, from a copy of the step before.
     const bool deferred = defer && s == n && !stopping && !observed;

@@ -1,7 +1,6 @@
 #include "interp/signals.hpp"
 
 #include <csignal>
-#include <vector>
 
 #include "support/comm.hpp"
 
@@ -39,10 +38,9 @@ void install_interrupt_handler() {
 
 bool interrupt_now() {
   if (comm::size() == 1) return interrupt_requested().load();
-  std::vector<double> any{interrupt_requested().load() ? 1.0 : 0.0};
-  comm::max_all(any);
-  if (any[0] > 0) interrupt_requested().store(true);
-  return any[0] > 0;
+  const bool any = comm::any_all(interrupt_requested().load());
+  if (any) interrupt_requested().store(true);
+  return any;
 }
 
 }  // namespace trubal

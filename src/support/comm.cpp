@@ -151,6 +151,11 @@ void max_all([[maybe_unused]] std::vector<double>& values) {
     MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
 #endif
 }
+bool any_all(bool mine) {
+  std::vector<double> any{mine ? 1.0 : 0.0};
+  max_all(any);
+  return any[0] > 0;
+}
 void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) { gather_parts(mine, all); }
 
 }  // namespace trubal::comm

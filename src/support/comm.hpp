@@ -42,5 +42,7 @@ void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vec
 
 // The largest of each rank's values, element by element, on every rank (exact in any order).
 void max_all(std::vector<double>& values);
+// Whether any rank's `mine` is true, on every rank (a collective call; on one rank: mine).
+bool any_all(bool mine);
 
 }  // namespace trubal::comm
