@@ -64,20 +64,23 @@ void gather(Visit&& visit, const void* from, void* to, const std::vector<std::ui
   });
 }
 const auto visit_balls = [](void* p, auto&& f) { static_cast<Balls*>(p)->for_each_array(f); };
-const auto visit_pairs = [](void* p, auto&& f) { static_cast<ContactTable*>(p)->for_each_pair_array(f); };
+// A part takes the pair list and the shear history; its results are written by the steps that
+// write them (ParallelStep::run keeps them there), so a whole table without results cuts alike.
+const auto visit_pairs = [](void* p, auto&& f) {
+  ContactTable& c = *static_cast<ContactTable*>(p);
+  f(c.i); f(c.j); f(c.image_x); f(c.image_y); f(c.image_z); f(c.fsx); f(c.fsy); f(c.fsz);
+};
 const auto visit_walls = [](void* p, auto&& f) { static_cast<WallContacts*>(p)->for_each_array(f); };
 
 // What a step changes, the arrays sync() gathers: the balls' motion and unbalanced forces, every
-// pair's and wall contact's history and results (not their structure: balls, images).
+// pair's and wall contact's history, and the pairs' results where the last step wrote them (not
+// their structure: balls, images).
 template <class F> void each_moving_ball_array(Balls& b, F&& f) {
   for (auto* v : {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz})
     f(*v);
 }
-template <class F> void each_moving_pair_array(ContactTable& c, F&& f) {
-  f(c.state);
-  for (auto* v : {&c.fsx, &c.fsy, &c.fsz, &c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fx, &c.fy, &c.fz, &c.tx, &c.ty,
-                  &c.tz, &c.kn_eff, &c.ks_eff, &c.cn_eff, &c.work_friction, &c.work_damping})
-    f(*v);
+template <class F> void each_history_array(ContactTable& c, F&& f) {
+  for (auto* v : {&c.fsx, &c.fsy, &c.fsz}) f(*v);
 }
 template <class F> void each_moving_wall_array(WallContacts& w, F&& f) {
   f(w.state);
@@ -205,7 +208,8 @@ void BrickStep::split(const Model& full, const VerletReference& ref) {
     part_.contacts.i[q] = local[part_.contacts.i[q]];
     part_.contacts.j[q] = local[part_.contacts.j[q]];
   }
-  part_.contacts.results_cycle = c.results_cycle;
+  part_.contacts.drop_results();   // (a step that writes them makes them: visit_pairs)
+  results_written_ = false;
   part_.contacts.list_version = next_part_version();
   std::vector<std::uint32_t> walls;
   rank_walls_.assign(ranks, {});
@@ -298,6 +302,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   StepSums mine;
   step_.run(pool, part_, scratch_, kernels_, mine, times, ref_.x.size() == m ? &ref_ : nullptr);
   current_ = false;
+  results_written_ = kernels.contacts == kernels.contacts_full;
 
   // The ghosts' new state, from their owners.
   const int ranks = comm::size();
@@ -393,15 +398,23 @@ struct ArrayList {
   void operator()(std::vector<std::uint8_t>& v) { bytes.push_back(&v); }
 };
 
+// release: each of the part's arrays is freed once gathered (so the peak holds one of them beside
+// the whole model's).
 template <class Each, class S>
 void gather_set(Each&& each, S& part, S& whole, const std::vector<std::uint32_t>& mine,
                 const std::vector<std::vector<std::uint32_t>>& by_rank, std::vector<double>& out,
-                std::vector<double>& in) {
+                std::vector<double>& in, bool release = false) {
   ArrayList from, to;
   each(part, [&](auto& v) { from(v); });
   each(whole, [&](auto& v) { to(v); });
-  for (std::size_t a = 0; a < from.reals.size(); ++a) gather_array(*from.reals[a], *to.reals[a], mine, by_rank, out, in);
-  for (std::size_t a = 0; a < from.bytes.size(); ++a) gather_array(*from.bytes[a], *to.bytes[a], mine, by_rank, out, in);
+  for (std::size_t a = 0; a < from.reals.size(); ++a) {
+    gather_array(*from.reals[a], *to.reals[a], mine, by_rank, out, in);
+    if (release) std::vector<double>().swap(*from.reals[a]);
+  }
+  for (std::size_t a = 0; a < from.bytes.size(); ++a) {
+    gather_array(*from.bytes[a], *to.bytes[a], mine, by_rank, out, in);
+    if (release) std::vector<std::uint8_t>().swap(*from.bytes[a]);
+  }
 }
 
 }  // namespace
@@ -411,8 +424,18 @@ void BrickStep::sync(Model& full) {
   std::vector<double> out, in;
   gather_set([](Balls& b, auto&& f) { each_moving_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
              out, in);
-  gather_set([](ContactTable& c, auto&& f) { each_moving_pair_array(c, f); }, part_.contacts, full.contacts,
-             owned_pairs_, rank_pairs_, out, in);
+  gather_set([](ContactTable& c, auto&& f) { each_history_array(c, f); }, part_.contacts, full.contacts, owned_pairs_,
+             rank_pairs_, out, in);
+  // The results only where the parts' last step wrote them (the same on every rank): a lean step's
+  // table holds none worth reading, and a whole table that dropped its results stays without. The
+  // part's go once gathered: nothing reads them there, and the next step that writes results
+  // makes them again (ParallelStep::run).
+  if (results_written_) {
+    full.contacts.keep_results();
+    gather_set([](ContactTable& c, auto&& f) { c.for_each_result_array(f); }, part_.contacts, full.contacts,
+               owned_pairs_, rank_pairs_, out, in, true);
+    results_written_ = false;
+  }
   gather_set([](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
              full.wall_contacts, owned_walls_, rank_walls_, out, in);
   current_ = true;

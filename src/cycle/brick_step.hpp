@@ -83,6 +83,7 @@ class BrickStep {
   StepKernels kernels_;                     // the cycle's, with the part's pair laws
   bool live_ = false;
   bool current_ = true;                     // `full` holds the parts' state
+  bool results_written_ = false;            // the parts' last step wrote the pairs' results
   const Model* model_ = nullptr;
   std::uint64_t list_version_ = 0, wall_version_ = 0;
   std::size_t full_balls_ = 0;

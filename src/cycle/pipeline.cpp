@@ -154,6 +154,7 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
 }
 
 void Pipeline::rewind_step() {
+  bricks_.drop();         // the ranks' parts hold the state after the step, not the one put back
   moved_known_ = false;   // the displacements are measured again at the positions put back
   fresh_ = false;
   wall_travel_ = wall_travel_at_step_;
@@ -163,7 +164,6 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   wall_travel_at_step_ = wall_travel_;
   if (distributed_) {
     shared_by_ = "the spatial decomposition";
-    model.contacts.keep_results();   // the ranks' parts are cut from the whole table, results too
     brick_step(model, kernels, sums);
     move_walls(model, kernels.dt);
     return;
@@ -205,6 +205,9 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
     lines.emplace_back("pair list skin", format_number(ref_.skin()));
     lines.emplace_back("pair list rebuilds", std::to_string(ref_.rebuilds()));
   }
+  if (results_made_ > 0)
+    lines.emplace_back("contact results made when read", std::to_string(results_made_) +
+                                                             " (a CYCLE's last step taken again, since BACKEND)");
   const int used = step_.active();
   if (used > 0 && used < pool_.size())
     lines.emplace_back("threads used", std::to_string(used) +

@@ -92,6 +92,8 @@ class Pipeline {
   }
   const Deferred& deferred() const { return deferred_; }
   void clear_deferred() { deferred_ = {}; }
+  // make_results took a CYCLE's last step again (PRINT info counts them).
+  void count_results_made() { ++results_made_; }
 
  private:
   void rebuild(Model& model);
@@ -120,6 +122,7 @@ class Pipeline {
   double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)
   Snapshot rescue_;
   Deferred deferred_;
+  std::int64_t results_made_ = 0;
 };
 
 // A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument).

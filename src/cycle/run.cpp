@@ -135,7 +135,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // before, is kept as this run's copy (the rescue takes that step again).
   if (!pipeline.results_deferred(model)) snapshot.take(model);
   pipeline.clear_deferred();
-  const bool defer = control.defer_results && !pipeline.distributed();
+  const bool defer = control.defer_results;
   if (defer) {
     // Results not of this state are of no use (the servo has read them already).
     if (model.contacts.results_cycle != model.cycle && !servo_reads_table) model.contacts.drop_results();
@@ -298,7 +298,10 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     // defer: the last step's results are made when read, from a copy of the step before.
     const bool deferred = defer && s == n && !stopping && !observed;
     const bool details = (s == n && !deferred) || stopping || (!defer && (s + 1) % kSnapshotEvery == 0) || observed;
-    if (deferred && snapshot.cycle != model.cycle) snapshot.take(model);
+    if (deferred && snapshot.cycle != model.cycle) {
+      pipeline.sync(model);   // a distributed run's state, gathered from the ranks' parts
+      snapshot.take(model);
+    }
     const StepTotals sums = advance(details);
 
     // The balance at t, the time of this step's force pass.
@@ -353,7 +356,10 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       control.after_step(model);
       timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
     }
-    if ((s + 1) % kSnapshotEvery == 0) snapshot.take(model);   // the rescue steps on to cycles on kSnapshotEvery
+    if ((s + 1) % kSnapshotEvery == 0) {   // the rescue steps on to cycles on kSnapshotEvery
+      pipeline.sync(model);                 // (current already where the step wrote its results)
+      snapshot.take(model);
+    }
     if (control.progress && (s & 7) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_progress).count() > kProgressSeconds) {
@@ -385,6 +391,7 @@ void make_results(Model& model, Pipeline& pipeline) {
     pipeline.rescue().restore(model);
     pipeline.rewind_step();
     const CycleResult r = run_cycles(model, pipeline, 1, {});   // its one step writes the results
+    pipeline.count_results_made();
     if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
       throw std::logic_error(fmt::format(
           "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));

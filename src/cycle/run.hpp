@@ -25,8 +25,9 @@ struct CycleControl {
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the
   // result arrays are freed, and make_results takes the last step again from the rescue copy when
-  // they are read (CYCLE's way: their memory is two fifths of the model's). A run on several
-  // ranks, one stopped early and one whose last step an observer reads write them as usual.
+  // they are read (CYCLE's way: their memory is two fifths of the model's). On several ranks the
+  // make_results that follows is a collective call, like every command. One stopped early and one
+  // whose last step an observer reads write them as usual.
   bool defer_results = false;
 };
 

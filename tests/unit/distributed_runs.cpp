@@ -98,6 +98,9 @@ cycle 1500
     INFO(ranks << " ranks\n" << out);
     CHECK_THAT(out, Catch::Contains("last step shared by: the spatial decomposition"));
     CHECK_THAT(out, Catch::Contains("balls per rank: "));
+    // Each CYCLE left its last step's results to be made when read, as serial does (SAVE after the
+    // first, PRINT balls after the second): the ranks held no result arrays while they ran.
+    CHECK_THAT(out, Catch::Contains("contact results made when read: 2 "));
     CHECK(slurp(dir.path() / "s.sav") == slurp(serial.path() / "s.sav"));
     CHECK(slurp(dir.path() / "balls.csv") == balls);
     CHECK(slurp(dir.path() / "contacts.csv") == contacts);
