@@ -451,6 +451,18 @@ void BrickStep::loads_changed(const Model& full) {
   }
 }
 
+void BrickStep::release() {
+  live_ = false;
+  auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  part_ = Model{};
+  scratch_ = StepScratch{};
+  step_ = ParallelStep{};
+  ref_ = VerletReference{};
+  free(owner_); free(global_ball_); free(owned_); free(owned_pairs_); free(owned_walls_);
+  free(rank_balls_); free(rank_pairs_); free(rank_walls_); free(send_); free(recv_); free(send_buf_); free(recv_buf_);
+  free(sums_out_); free(sums_in_);
+}
+
 std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   std::vector<std::pair<std::string, std::string>> lines;
   if (splits_ == 0) return lines;

@@ -72,6 +72,8 @@ class BrickStep {
   void loads_changed(const Model& full);
   // The parts are dropped (the whole model was changed, or is to be stepped another way).
   void drop() { live_ = false; }
+  // Dropped, and their memory given back (the next split makes them afresh).
+  void release();
 
   std::vector<std::pair<std::string, std::string>> info() const;
 

@@ -4,6 +4,7 @@
 #include <bit>
 #include <chrono>
 #include <cstdint>
+#include <utility>
 
 #include "cycle/pair_list.hpp"
 #include "cycle/wall_list.hpp"
@@ -154,7 +155,11 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
 }
 
 void Pipeline::rewind_step() {
-  bricks_.drop();         // the ranks' parts hold the state after the step, not the one put back
+  // The ranks' parts hold the state after the step, not the one put back. Every rank holds the
+  // whole model: each takes that one step on all of it, as serial does (the same bits), so the
+  // parts' memory goes back before the results are made (the peak of a read after a CYCLE).
+  bricks_.release();
+  whole_next_ = distributed_;
   moved_known_ = false;   // the displacements are measured again at the positions put back
   fresh_ = false;
   wall_travel_ = wall_travel_at_step_;
@@ -162,7 +167,7 @@ void Pipeline::rewind_step() {
 
 void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   wall_travel_at_step_ = wall_travel_;
-  if (distributed_) {
+  if (distributed_ && !std::exchange(whole_next_, false)) {
     shared_by_ = "the spatial decomposition";
     brick_step(model, kernels, sums);
     move_walls(model, kernels.dt);

@@ -110,6 +110,7 @@ class Pipeline {
   ParallelStep step_;
   BrickStep bricks_;
   bool distributed_ = false;        // BACKEND mpi on several ranks: every step by the decomposition
+  bool whole_next_ = false;         // but the next (rewind_step): on the whole model, on every rank
   std::string shared_by_;           // how the last distributed step was shared among the ranks (PRINT info)
   VerletReference ref_;
   PairCandidates pairs_;
