@@ -73,7 +73,6 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   TRUBAL_PTR(state, c.state);
-  TRUBAL_PTR(next_x, scratch.fsx_next); TRUBAL_PTR(next_y, scratch.fsy_next); TRUBAL_PTR(next_z, scratch.fsz_next);
   TRUBAL_PTR(ball_sum, scratch.ball_force); TRUBAL_PTR(cn_sum, scratch.ball_cn);
   const PairInputs in(model);
   const bool periodic = in.periodic;
@@ -85,8 +84,8 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   std::array<double, 9> moments{};   // force_moment (6), then stiffness_moment (3)
   BallParts* __restrict parts = scratch.ball_parts.data();
   ContactBatch B;
-  // StepScratch::history_in_place: the new history of a batch is made here, then copied over the old.
-  const bool in_place = scratch.history_in_place;
+  // The new history of a batch is made here, then copied over the old (the cross pairs another
+  // thread computes read a copy of it: CrossLoop).
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
   // The running sum of the ball whose pairs the list is on.
   constexpr std::size_t kNone = ~std::size_t{0};
@@ -110,16 +109,11 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
       const std::size_t p = p0 + q;
       in.gather<kLaw, kOneLaw>(B, q, k, p, pi[p], pj[p]);
     }
-    if (in_place) {   // one thread walks the list: the batch's new history goes back where it was read
-      contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz);
-      if constexpr (kLaw.shear) {
-        std::copy(hx, hx + count, fsx + p0);
-        std::copy(hy, hy + count, fsy + p0);
-        std::copy(hz, hz + count, fsz + p0);
-      }
-    } else {
-      contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, next_x + p0,
-                                    next_y + p0, next_z + p0);
+    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz);
+    if constexpr (kLaw.shear) {   // the batch's new history goes back where it was read
+      std::copy(hx, hx + count, fsx + p0);
+      std::copy(hy, hy + count, fsy + p0);
+      std::copy(hz, hz + count, fsz + p0);
     }
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q;
@@ -184,11 +178,11 @@ void contact_loop(Model& model, StepScratch& scratch, const StepKernels& k, std:
 
 // Pairs (i, j) with i below ball_begin and j in [ball_begin, ball_end), given in list order (so
 // ascending i for each j, and the owner's data read in order): their forces on j, added first
-// (lower partners come first in j's order), from the history before this step. The thread that
-// owns i computes the same pairs with the same arithmetic.
+// (lower partners come first in j's order), from the history before this step (`history`, a copy:
+// CrossLoop). The thread that owns i computes the same pairs with the same arithmetic.
 template <ContactFeatures F>
 void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t ball_begin, std::size_t ball_end,
-                const std::uint32_t* pairs, std::size_t pair_count) {
+                const std::uint32_t* pairs, std::size_t pair_count, const double* history) {
   ContactTable& c = model.contacts;
   std::fill(scratch.ball_force.begin() + ball_begin, scratch.ball_force.begin() + ball_end, PairForce{});
   std::fill(scratch.ball_cn.begin() + ball_begin, scratch.ball_cn.begin() + ball_end, 0.0);
@@ -196,7 +190,6 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   if (k.moments) std::fill(scratch.ball_moments.begin() + ball_begin, scratch.ball_moments.begin() + ball_end, std::array<double, 9>{});
   if (pair_count == 0) return;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
-  TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   const PairInputs in(model);
   const bool one_law = k.laws.type_count == 1;
   ContactBatch B;
@@ -207,9 +200,11 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       const std::size_t p = pairs[q0 + q];
       if (one_law) in.gather<F, true>(B, q, k, p, pi[p], pj[p]);
       else in.gather<F, false>(B, q, k, p, pi[p], pj[p]);
-      if constexpr (F.shear) { hx[q] = fsx[p]; hy[q] = fsy[p]; hz[q] = fsz[p]; }
+      if constexpr (F.shear) {
+        hx[q] = history[q0 + q]; hy[q] = history[pair_count + q0 + q]; hz[q] = history[2 * pair_count + q0 + q];
+      }
     }
-    // The new history is the owner's to write: here it goes to a scratch copy.
+    // The new history is the owner's to write: here it goes to a scratch copy, unread.
     if (one_law) contact_forces<F, true>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
     else contact_forces<F, false>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
     for (std::size_t q = 0; q < count; ++q) {

@@ -115,8 +115,11 @@ using ContactLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size
                              std::size_t own_end);
 // Zeroes the sums of balls [ball_begin, ball_end) and adds the pairs they have with lower balls
 // outside the range (cross pairs: `pairs`, `count` of them, in list order), before any ContactLoop.
+// `history`: their shear history before the step (count x, then count y, then count z; read where
+// the scene has friction), copied before the pass, since the thread that owns a cross pair writes
+// its new history over the table's meanwhile.
 using CrossLoop = void (*)(Model&, StepScratch&, const StepKernels&, std::size_t ball_begin, std::size_t ball_end,
-                           const std::uint32_t* pairs, std::size_t count);
+                           const std::uint32_t* pairs, std::size_t count, const double* history);
 // What the wall contacts add to each wall (exact sums: each thread or rank keeps its own, and they
 // merge to the same bits in any order).
 struct WallLoad {

@@ -159,37 +159,36 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     for (std::size_t k = first; k < last; ++k)
       kernels.walls(model, scratch, kernels, block_wall(k), block_wall(k + 1), &wall_loads_[t * wall_count]);
   };
-  // Shared among threads, the history is read from fsx.. and written to fsx_next..: a thread's cross
-  // pairs may belong to a thread that is already writing, so the two passes need no barrier
-  // between them. On one thread it is written in place (StepScratch::history_in_place).
-  const bool swap_history = parallel && kernels.features.friction;
-  scratch.history_in_place = !parallel;
-  if (swap_history && scratch.fsx_next.size() != c.size()) {
-    scratch.fsx_next.resize(c.size());
-    scratch.fsy_next.resize(c.size());
-    scratch.fsz_next.resize(c.size());
-  }
+  // Every pair's owner writes its new history over the table's, a batch at a time; a thread's cross
+  // pairs belong to an earlier thread, which may already be writing them, so their history before
+  // the step is copied first (a few pairs: those across the threads' boundaries), and the passes
+  // need no barrier between them.
   if (parallel) {
+    cross_history_.resize(parts);
+    for (int t = 0; t < parts; ++t) {
+      std::vector<double>& h = cross_history_[t];
+      const std::vector<std::uint32_t>& list = cross_[t];
+      const std::size_t n = kernels.features.friction ? list.size() : 0;
+      h.resize(3 * n);
+      for (std::size_t q = 0; q < n; ++q) {
+        h[q] = c.fsx[list[q]]; h[n + q] = c.fsy[list[q]]; h[2 * n + q] = c.fsz[list[q]];
+      }
+    }
     pool.run([&](int t) {
       if (t >= parts) return;
       const std::size_t own_end = block_ball(first_block_[t + 1]);
-      kernels.cross(model, scratch, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size());
+      kernels.cross(model, scratch, kernels, block_ball(first_block_[t]), own_end, cross_[t].data(), cross_[t].size(),
+                    cross_history_[t].data());
       for (std::size_t k = first_block_[t]; k < first_block_[t + 1]; ++k)   // block by block: the same batches
         kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), own_end);
       walls(first_block_[t], first_block_[t + 1], t);
     });
   } else {   // every block on this thread: no cross pairs
-    kernels.cross(model, scratch, kernels, 0, balls, nullptr, 0);
+    kernels.cross(model, scratch, kernels, 0, balls, nullptr, 0, nullptr);
     for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), balls);
     walls(0, blocks, 0);
   }
   if (wall_count) add_wall_loads(model, threads);
-  if (swap_history) {
-    ContactTable& table = model.contacts;
-    table.fsx.swap(scratch.fsx_next);
-    table.fsy.swap(scratch.fsy_next);
-    table.fsz.swap(scratch.fsz_next);
-  }
   const auto t1 = Clock::now();
 
   // The balls in equal shares (the contact split may be uneven, to even out cross pairs).

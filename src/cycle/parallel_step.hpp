@@ -6,9 +6,9 @@
 // ball's sum is thus the same additions in the same order (lower partners ascending, then higher
 // ones) for every thread count; the global sums (energies) are exact sums, merged from the threads'
 // parts (kernels.hpp, StepSums). So the
-// answer is the serial one, bit for bit. The new shear history goes to a second buffer, swapped in
-// after the pass, so that cross pairs read the old one without a barrier. The motion pass then
-// gives each thread an equal share of the balls.
+// answer is the serial one, bit for bit. Each pair's owner writes its new shear history in place;
+// the cross pairs read a copy of theirs made before the pass, so no barrier is needed between
+// the two. The motion pass then gives each thread an equal share of the balls.
 //
 // Whether the threads share a step at all is timed (ParallelStep::share_now); the split itself is
 // by pair counts, not by measured thread speeds (bench/NOTES.md says why).
@@ -72,6 +72,7 @@ class ParallelStep {
   std::vector<WallLoad> wall_loads_;       // per thread, per wall
   std::vector<std::size_t> first_block_;   // per thread, then the block count
   std::vector<std::vector<std::uint32_t>> cross_;   // per thread: its cross pairs, in list order
+  std::vector<std::vector<double>> cross_history_;  // per thread: their history before the step (CrossLoop)
   std::uint64_t split_version_ = 0;
   std::vector<double> moved_;
   double moved2_ = 0;

@@ -1,5 +1,5 @@
 // The working memory of a step, kept by the pipeline between steps and never saved: the index of
-// the pair list the contact loops walk, the per-ball contact sums, the next shear history.
+// the pair list the contact loops walk, the per-ball contact sums.
 #pragma once
 
 #include <array>
@@ -37,12 +37,6 @@ struct StepScratch {
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
   std::vector<std::array<double, 9>> ball_moments;
-  // The shear history a step shared among threads writes (read from the table's, which other
-  // threads may still read for their cross pairs), swapped in after the contact pass. A step on one
-  // thread (history_in_place) writes the table's own, a batch at a time: no cross pairs read it,
-  // and these stay empty (24 bytes a pair less).
-  std::vector<double> fsx_next, fsy_next, fsz_next;
-  bool history_in_place = true;
   // The wall contacts' index: the first with ball >= b, for b = 0 .. balls.
   std::vector<std::uint32_t> wall_run_begin;
   // A rank's part of a spatially decomposed run (cycle/brick_step.hpp): 1 for a ball another rank
