@@ -302,7 +302,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   StepSums mine;
   step_.run(pool, part_, scratch_, kernels_, mine, times, ref_.x.size() == m ? &ref_ : nullptr);
   current_ = false;
-  results_written_ = kernels.contacts == kernels.contacts_full;
+  results_written_ = kernels.writes_results();
 
   // The ghosts' new state, from their owners.
   const int ranks = comm::size();

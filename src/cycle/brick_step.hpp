@@ -85,7 +85,9 @@ class BrickStep {
   StepKernels kernels_;                     // the cycle's, with the part's pair laws
   bool live_ = false;
   bool current_ = true;                     // `full` holds the parts' state
-  bool results_written_ = false;            // the parts' last step wrote the pairs' results
+  // The parts' last step wrote the pairs' results, not yet gathered (the same on every rank, which
+  // a part's own results_kept() is not: an empty part's table counts as kept).
+  bool results_written_ = false;
   const Model* model_ = nullptr;
   std::uint64_t list_version_ = 0, wall_version_ = 0;
   std::size_t full_balls_ = 0;

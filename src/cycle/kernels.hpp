@@ -189,6 +189,8 @@ struct StepKernels {
   CrossLoop cross = nullptr;
   WallLoop walls = nullptr, walls_full = nullptr, walls_lean = nullptr;   // full: also the wall contacts' results
   MotionLoop motion = nullptr, motion_full = nullptr, motion_lean = nullptr;   // full: also Balls::fx.. mz
+  // Whether this step writes the per-pair results (run_cycles picked contacts_full).
+  bool writes_results() const { return contacts == contacts_full; }
 };
 
 // The kernels for the model as it is now (materials, damping, fixities, loads).

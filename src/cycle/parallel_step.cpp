@@ -138,7 +138,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
                        PhaseTimes& times, const VerletReference* moved) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  if (kernels.contacts == kernels.contacts_full) model.contacts.keep_results();   // where they were not kept
+  if (kernels.writes_results()) model.contacts.keep_results();   // where they were not kept
   const ContactTable& c = model.contacts;
   const std::size_t balls = model.balls.size();
   const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;

@@ -131,9 +131,14 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
   if (servo_reads_table) make_results(model, pipeline);
   Snapshot& snapshot = pipeline.rescue();
+  // The rescue copy of the state now (a distributed run's gathered from the ranks' parts first).
+  auto take_copy = [&] {
+    pipeline.sync(model);
+    snapshot.take(model);
+  };
   // A CYCLE right after one that deferred its last step's results: the rescue copy, of the step
   // before, is kept as this run's copy (the rescue takes that step again).
-  if (!pipeline.results_deferred(model)) snapshot.take(model);
+  if (!pipeline.results_deferred(model)) take_copy();
   pipeline.clear_deferred();
   const bool defer = control.defer_results;
   if (defer) {
@@ -298,10 +303,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     // defer: the last step's results are made when read, from a copy of the step before.
     const bool deferred = defer && s == n && !stopping && !observed;
     const bool details = (s == n && !deferred) || stopping || (!defer && (s + 1) % kSnapshotEvery == 0) || observed;
-    if (deferred && snapshot.cycle != model.cycle) {
-      pipeline.sync(model);   // a distributed run's state, gathered from the ranks' parts
-      snapshot.take(model);
-    }
+    if (deferred && snapshot.cycle != model.cycle) take_copy();
     const StepTotals sums = advance(details);
 
     // The balance at t, the time of this step's force pass.
@@ -356,10 +358,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       control.after_step(model);
       timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
     }
-    if ((s + 1) % kSnapshotEvery == 0) {   // the rescue steps on to cycles on kSnapshotEvery
-      pipeline.sync(model);                 // (current already where the step wrote its results)
-      snapshot.take(model);
-    }
+    if ((s + 1) % kSnapshotEvery == 0) take_copy();   // the rescue steps on to cycles on kSnapshotEvery
     if (control.progress && (s & 7) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_progress).count() > kProgressSeconds) {
