@@ -12,7 +12,8 @@ constexpr std::size_t kParallelSearch = 4096;
 
 }  // namespace
 
-void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool) {
+void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool, std::size_t i_begin,
+                         std::size_t i_end) {
   out.clear();
   const Balls& b = model.balls;
   const Space& s = model.space;
@@ -136,10 +137,13 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
     if (few_cells) search(begin, end, mine);
     else search_bins(begin, end, mine);
   };
-  const int parts = pool && n >= kParallelSearch ? pool->size() : 1;
-  if (parts == 1) { search_any(0, n, out); return; }
+  const std::size_t first = std::min(i_begin, n), last = std::clamp(i_end, first, n), count = last - first;
+  const int parts = pool && count >= kParallelSearch ? pool->size() : 1;
+  if (parts == 1) { search_any(first, last, out); return; }
   std::vector<PairCandidates> lists(parts);
-  pool->run([&](int t) { search_any(split_point(n, parts, t), split_point(n, parts, t + 1), lists[t]); });
+  pool->run([&](int t) {
+    search_any(first + split_point(count, parts, t), first + split_point(count, parts, t + 1), lists[t]);
+  });
   for (const PairCandidates& part : lists) out.append(part);
 }
 

@@ -98,6 +98,9 @@ cycle 1500
     INFO(ranks << " ranks\n" << out);
     CHECK_THAT(out, Catch::Contains("last step shared by: the spatial decomposition"));
     CHECK_THAT(out, Catch::Contains("balls per rank: "));
+    // Each rank searched its own range of balls and the lists were joined: the files below are
+    // serial's only if the joined list is the serial list.
+    CHECK_THAT(out, Catch::Contains("pair search: shared"));
     // Each CYCLE left its last step's results to be made when read, as serial does (SAVE after the
     // first, PRINT balls after the second): the ranks held no result arrays while they ran.
     CHECK_THAT(out, Catch::Contains("contact results made when read: 2 "));

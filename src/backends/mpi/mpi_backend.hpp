@@ -1,5 +1,6 @@
 // BACKEND mpi: the step shared among the ranks of `mpirun -np P trubal` (cycle/parallel_step.hpp
-// says how); the pairs are found as the serial backend finds them, on every rank.
+// says how); the pairs are found as the serial backend finds them, the search shared among the
+// ranks by ranges of ball indices.
 #pragma once
 
 #include <memory>

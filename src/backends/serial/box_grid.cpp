@@ -21,10 +21,11 @@ void BoxGrid::fill(const Balls& balls, double min_size, const std::array<int, 3>
   }
 }
 
-void BoxGrid::find_pairs(const Balls& balls, double skin, PairCandidates& out) const {
+void BoxGrid::find_pairs(const Balls& balls, double skin, PairCandidates& out, std::size_t i_begin,
+                         std::size_t i_end) const {
   out.clear();
   std::vector<std::uint32_t> near;
-  for (std::size_t i = 0; i < balls.size(); ++i) {
+  for (std::size_t i = i_begin; i < std::min(i_end, balls.size()); ++i) {
     const auto& dims = shape_.dims;
     const int c = cell_[i];
     const int cx = c % dims[0], cy = (c / dims[0]) % dims[1], cz = c / (dims[0] * dims[1]);

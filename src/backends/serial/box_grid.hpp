@@ -16,8 +16,10 @@ class BoxGrid {
   // Hangs every ball on its box. Boxes are at least min_size wide so that touching candidates lie
   // in neighbouring boxes; `asked` (Space::boxes, 0: automatic) caps the count per axis.
   void fill(const Balls& balls, double min_size, const std::array<int, 3>& asked);
-  // Pairs i < j closer than R_i + R_j + skin, sorted by (i, j).
-  void find_pairs(const Balls& balls, double skin, PairCandidates& out) const;
+  // Pairs i < j closer than R_i + R_j + skin, sorted by (i, j); with i_begin, i_end: only those
+  // whose ball i is in [i_begin, i_end).
+  void find_pairs(const Balls& balls, double skin, PairCandidates& out, std::size_t i_begin = 0,
+                  std::size_t i_end = ~std::size_t{0}) const;
 
   const std::array<int, 3>& dims() const { return shape_.dims; }
   double cell_size() const { return shape_.size[0]; }
