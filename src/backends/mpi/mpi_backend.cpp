@@ -3,8 +3,7 @@
 #include <cstring>
 #include <string>
 
-#include "backends/periodic_pairs.hpp"
-#include "backends/serial/box_grid.hpp"
+#include "backends/serial/serial_backend.hpp"
 #include "support/comm.hpp"
 #include "support/format_number.hpp"
 #include "support/thread_pool.hpp"
@@ -25,17 +24,10 @@ class MpiBackend final : public Backend {
  public:
   std::string name() const override { return "mpi"; }
   void find_pairs(const Model& model, double skin, ThreadPool&, PairCandidates& out) override {
-    const Balls& b = model.balls;
     const int ranks = comm::size(), rank = comm::rank();
-    const std::size_t n = b.size();
-    const std::size_t begin = split_point(n, ranks, rank), end = split_point(n, ranks, rank + 1);
+    const std::size_t n = model.balls.size();
     PairCandidates& mine = ranks > 1 ? mine_ : out;
-    if (model.space.periodic) {
-      find_periodic_pairs(model, skin, mine, nullptr, begin, end);
-    } else {
-      grid_.fill(b, 2 * b.max_radius() + skin, model.space.boxes);
-      grid_.find_pairs(b, skin, mine, begin, end);
-    }
+    find_serial_pairs(model, skin, grid_, mine, split_point(n, ranks, rank), split_point(n, ranks, rank + 1));
     if (ranks == 1) return;
     // Every rank's pairs, as records, in rank order.
     const std::size_t m = mine.i.size();

@@ -12,13 +12,7 @@ class SerialBackend final : public Backend {
   std::string name() const override { return "serial"; }
 
   void find_pairs(const Model& model, double skin, ThreadPool&, PairCandidates& out) override {
-    const Balls& b = model.balls;
-    if (model.space.periodic) {
-      find_periodic_pairs(model, skin, out);
-      return;
-    }
-    grid_.fill(b, 2 * b.max_radius() + skin, model.space.boxes);
-    grid_.find_pairs(b, skin, out);
+    find_serial_pairs(model, skin, grid_, out);
   }
 
   std::vector<std::pair<std::string, std::string>> info() const override { return box_info(grid_.dims(), grid_.cell_size()); }
@@ -30,5 +24,16 @@ class SerialBackend final : public Backend {
 }  // namespace
 
 std::unique_ptr<Backend> make_serial_backend() { return std::make_unique<SerialBackend>(); }
+
+void find_serial_pairs(const Model& model, double skin, BoxGrid& grid, PairCandidates& out, std::size_t i_begin,
+                       std::size_t i_end) {
+  const Balls& b = model.balls;
+  if (model.space.periodic) {
+    find_periodic_pairs(model, skin, out, nullptr, i_begin, i_end);
+    return;
+  }
+  grid.fill(b, 2 * b.max_radius() + skin, model.space.boxes);
+  grid.find_pairs(b, skin, out, i_begin, i_end);
+}
 
 }  // namespace trubal
