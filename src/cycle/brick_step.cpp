@@ -1,6 +1,7 @@
 #include "cycle/brick_step.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -8,7 +9,6 @@
 
 #include "cycle/sum_exchange.hpp"
 #include "model/periodic_cell.hpp"
-#include "support/comm.hpp"
 
 namespace trubal {
 namespace {
@@ -107,7 +107,8 @@ void take_kernels(const StepKernels& from, StepKernels& to) {
 
 std::uint64_t next_part_version() {
   // Far above the versions install_pairs and the wall list hand out, so a part's never equals one.
-  static std::uint64_t versions = std::uint64_t{1} << 62;
+  // (Atomic: the threads of one process make their parts at once.)
+  static std::atomic<std::uint64_t> versions{std::uint64_t{1} << 62};
   return ++versions;
 }
 
@@ -131,10 +132,11 @@ void BrickStep::apply_field(Model& full, const FieldChange& change) {
   std::vector<double> out, in;
   pack(work, out);
   pack(gross, out);
-  comm::allgather(out, in);
+  team_->allgather(out, in);
+  if (team_->shares_whole() && team_->rank() != 0) return;   // member 0 adds to the one whole model
   ExactSum all_work, all_gross;
   const double* p = in.data();
-  for (int r = 0; r < comm::size(); ++r) {
+  for (int r = 0; r < team_->size(); ++r) {
     ExactSum w, g;
     unpack(w, p);
     unpack(g, p);
@@ -156,7 +158,7 @@ bool BrickStep::live_for(const Model& full) const {
 }
 
 void BrickStep::split(const Model& full, const VerletReference& ref) {
-  const int ranks = comm::size(), me = comm::rank();
+  const int ranks = team_->size(), me = team_->rank();
   const Balls& b = full.balls;
   const std::size_t n = b.size();
   const ContactTable& c = full.contacts;
@@ -291,6 +293,8 @@ void BrickStep::split(const Model& full, const VerletReference& ref) {
 }
 
 void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, StepSums& sums, PhaseTimes& times) {
+  // (Members sharing one whole model read its space and walls here, before the exchange below;
+  // member 0 writes its walls' loads after it.)
   // The space and the walls are the whole model's (the cell's strain and the walls' motion and
   // servos act on it between steps).
   part_.space = full.space;
@@ -305,14 +309,14 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   results_written_ = kernels.writes_results();
 
   // The ghosts' new state, from their owners.
-  const int ranks = comm::size();
+  const int ranks = team_->size();
   for (int r = 0; r < ranks; ++r) {
     double* out = send_buf_[r].data();
     for (std::uint32_t k : send_[r]) {
       for (double v : {b.x[k], b.y[k], b.z[k], b.vx[k], b.vy[k], b.vz[k], b.wx[k], b.wy[k], b.wz[k]}) *out++ = v;
     }
   }
-  comm::exchange(send_buf_, recv_buf_);
+  team_->exchange(send_buf_, recv_buf_);
   for (int r = 0; r < ranks; ++r) {
     const double* in = recv_buf_[r].data();
     for (std::uint32_t k : recv_[r]) {
@@ -344,14 +348,15 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   for (std::size_t w = 0; w < wall_count; ++w) pack(loads[w], sums_out_);
   sums_out_.push_back(moved2);
   sums_out_.push_back(outside ? 1.0 : 0.0);
-  comm::allgather(sums_out_, sums_in_);
+  team_->allgather(sums_out_, sums_in_);
+  const bool adds = !team_->shares_whole() || team_->rank() == 0;   // to the one whole model, once
   moved2_ = 0;
   double outside_any = 0;
   std::vector<WallLoad> totals(wall_count);
   const double* in = sums_in_.data();
   for (int r = 0; r < ranks; ++r) {
     StepSums part = unpack_sums(in);
-    sums.add(part);
+    if (adds) sums.add(part);
     for (std::size_t w = 0; w < wall_count; ++w) {
       WallLoad load = unpack_load(in);
       totals[w].add(load);
@@ -360,7 +365,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
     outside_any = std::max(outside_any, *in++);
   }
   outside_box_ = outside_any != 0;
-  if (wall_count) set_wall_loads(full.walls, totals);
+  if (wall_count && adds) set_wall_loads(full.walls, totals);
 }
 
 bool BrickStep::outside_cell(const Model& full) {
@@ -369,7 +374,7 @@ bool BrickStep::outside_cell(const Model& full) {
   // The part's ghosts are current, and each is some rank's own ball: the same answer as the owned
   // balls' alone.
   std::vector<double> any{trubal::outside_cell(part_, 0, part_.balls.size()) ? 1.0 : 0.0};
-  comm::max_all(any);
+  team_->max_all(any);
   return any[0] != 0;
 }
 
@@ -378,13 +383,19 @@ namespace {
 // Each array's values at this rank's `mine` (part indices) to every rank, written into the whole
 // model's copy at each rank's `by_rank` (whole-model indices): one array at a time, so the buffers
 // hold one array's values, not the whole state.
+// Members sharing one whole model write only their own values into it (disjoint elements).
 template <class T>
-void gather_array(const std::vector<T>& part, std::vector<T>& whole, const std::vector<std::uint32_t>& mine,
+void gather_array(Team& team, const std::vector<T>& part, std::vector<T>& whole, const std::vector<std::uint32_t>& mine,
                   const std::vector<std::vector<std::uint32_t>>& by_rank, std::vector<double>& out,
                   std::vector<double>& in) {
+  if (team.shares_whole()) {
+    const std::vector<std::uint32_t>& at = by_rank[team.rank()];
+    for (std::size_t q = 0; q < mine.size(); ++q) whole[at[q]] = part[mine[q]];
+    return;
+  }
   out.clear();
   for (std::uint32_t q : mine) out.push_back(static_cast<double>(part[q]));
-  comm::allgather(out, in);
+  team.allgather(out, in);
   const double* p = in.data();
   for (const auto& ranks_own : by_rank)
     for (std::uint32_t k : ranks_own) whole[k] = static_cast<T>(*p++);
@@ -401,18 +412,18 @@ struct ArrayList {
 // release: each of the part's arrays is freed once gathered (so the peak holds one of them beside
 // the whole model's).
 template <class Each, class S>
-void gather_set(Each&& each, S& part, S& whole, const std::vector<std::uint32_t>& mine,
+void gather_set(Team& team, Each&& each, S& part, S& whole, const std::vector<std::uint32_t>& mine,
                 const std::vector<std::vector<std::uint32_t>>& by_rank, std::vector<double>& out,
                 std::vector<double>& in, bool release = false) {
   ArrayList from, to;
   each(part, [&](auto& v) { from(v); });
   each(whole, [&](auto& v) { to(v); });
   for (std::size_t a = 0; a < from.reals.size(); ++a) {
-    gather_array(*from.reals[a], *to.reals[a], mine, by_rank, out, in);
+    gather_array(team, *from.reals[a], *to.reals[a], mine, by_rank, out, in);
     if (release) std::vector<double>().swap(*from.reals[a]);
   }
   for (std::size_t a = 0; a < from.bytes.size(); ++a) {
-    gather_array(*from.bytes[a], *to.bytes[a], mine, by_rank, out, in);
+    gather_array(team, *from.bytes[a], *to.bytes[a], mine, by_rank, out, in);
     if (release) std::vector<std::uint8_t>().swap(*from.bytes[a]);
   }
 }
@@ -422,21 +433,23 @@ void gather_set(Each&& each, S& part, S& whole, const std::vector<std::uint32_t>
 void BrickStep::sync(Model& full) {
   if (!live_ || current_ || model_ != &full) return;
   std::vector<double> out, in;
-  gather_set([](Balls& b, auto&& f) { each_moving_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
+  gather_set(*team_, [](Balls& b, auto&& f) { each_moving_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
              out, in);
-  gather_set([](ContactTable& c, auto&& f) { each_history_array(c, f); }, part_.contacts, full.contacts, owned_pairs_,
+  gather_set(*team_, [](ContactTable& c, auto&& f) { each_history_array(c, f); }, part_.contacts, full.contacts, owned_pairs_,
              rank_pairs_, out, in);
   // The results only where the parts' last step wrote them (the same on every rank): a lean step's
   // table holds none worth reading, and a whole table that dropped its results stays without. The
   // part's go once gathered: nothing reads them there, and the next step that writes results
   // makes them again (ParallelStep::run).
   if (results_written_) {
-    full.contacts.keep_results();
-    gather_set([](ContactTable& c, auto&& f) { c.for_each_result_array(f); }, part_.contacts, full.contacts,
+    // (Members sharing one whole model: member 0 makes its arrays, then every member writes its own.)
+    if (!team_->shares_whole() || team_->rank() == 0) full.contacts.keep_results();
+    if (team_->shares_whole()) team_->barrier();
+    gather_set(*team_, [](ContactTable& c, auto&& f) { c.for_each_result_array(f); }, part_.contacts, full.contacts,
                owned_pairs_, rank_pairs_, out, in, true);
     results_written_ = false;
   }
-  gather_set([](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
+  gather_set(*team_, [](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
              full.wall_contacts, owned_walls_, rank_walls_, out, in);
   current_ = true;
 }
@@ -466,8 +479,9 @@ void BrickStep::release() {
 std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   std::vector<std::pair<std::string, std::string>> lines;
   if (splits_ == 0) return lines;
-  lines.emplace_back("balls per rank", std::to_string(least_balls_) + " to " + std::to_string(most_balls_) +
-                                           " (rank 0 also holds " + std::to_string(ghosts_) + " ghosts)");
+  const std::string member = team_->shares_whole() ? "thread" : "rank";
+  lines.emplace_back("balls per " + member, std::to_string(least_balls_) + " to " + std::to_string(most_balls_) +
+                                                " (" + member + " 0 also holds " + std::to_string(ghosts_) + " ghosts)");
   lines.emplace_back("decompositions made", std::to_string(splits_));
   return lines;
 }

@@ -28,6 +28,7 @@
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
 #include "cycle/step_scratch.hpp"
+#include "cycle/team.hpp"
 #include "cycle/verlet.hpp"
 #include "model/model.hpp"
 #include "support/thread_pool.hpp"
@@ -41,6 +42,10 @@ void apply_field_change(Balls& balls, const FieldChange& change, std::size_t beg
 
 class BrickStep {
  public:
+  // The members sharing the step: the ranks of the MPI run (the default), or the threads of one
+  // process, one BrickStep each (cycle/team.hpp).
+  void set_team(Team& team) { team_ = &team; }
+
   // The parts hold the current state of `full` (which may be older).
   bool live_for(const Model& full) const;
   bool live() const { return live_; }
@@ -78,6 +83,7 @@ class BrickStep {
   std::vector<std::pair<std::string, std::string>> info() const;
 
  private:
+  Team* team_ = &rank_team();
   Model part_;
   StepScratch scratch_;
   ParallelStep step_;

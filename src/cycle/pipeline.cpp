@@ -20,6 +20,15 @@ namespace {
 // costs more.
 constexpr std::size_t kParallelBalls = 8192;
 
+// The threads share the steps in space (one part of the decomposition each, cycle/brick_step.hpp)
+// where the model has at least kSpaceBalls balls and a split of the balls by numbers into one
+// contiguous range per thread would leave at least kSpaceCross of the pairs across two ranges:
+// balls numbered far from their places (read from another program's file in random order), which
+// the split by numbers shares badly (each such pair is computed twice, its balls scattered). A part
+// copies its balls, so smaller scenes and well numbered ones keep the split by numbers.
+constexpr std::size_t kSpaceBalls = 4096;
+constexpr double kSpaceCross = 0.25;
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -29,10 +38,47 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads)
     : backend_(std::move(backend)), pool_(threads > 0 ? threads : default_threads(backend_->name())) {
   distributed_ = backend_->distributed() && comm::size() > 1;
+  const int members = distributed_ ? 1 : pool_.size();
+  for (int t = 0; t < members; ++t) bricks_.push_back(std::make_unique<BrickStep>());
+  if (members > 1) {
+    thread_team_ = std::make_unique<ThreadTeam::Shared>(members);
+    member_times_.resize(members);
+    for (int t = 0; t < members; ++t) {
+      thread_members_.push_back(std::make_unique<ThreadTeam>(*thread_team_, t));
+      bricks_[t]->set_team(*thread_members_[t]);
+      solo_pools_.push_back(std::make_unique<ThreadPool>(1));
+    }
+  }
+}
+
+template <class F> void Pipeline::each_part(F&& f) {
+  if (bricks_.size() == 1) { f(*bricks_[0], 0); return; }
+  pool_.run([&](int t) { f(*bricks_[t], t); });
+}
+
+bool Pipeline::threads_in_space(const Model& model) {
+  if (distributed_ || bricks_.size() < 2 || !backend_->keeps_list()) return false;
+  const int rule = split_rule.load(std::memory_order_relaxed);
+  if (rule != 0) return rule > 0;
+  const ContactTable& c = model.contacts;
+  if (space_model_ == &model && space_version_ == c.list_version) return space_verdict_;
+  space_model_ = &model;
+  space_version_ = c.list_version;
+  const std::size_t n = model.balls.size();
+  space_verdict_ = false;
+  if (n < kSpaceBalls || c.size() == 0) return false;
+  const int parts = static_cast<int>(bricks_.size());
+  std::vector<std::uint8_t> range(n);
+  for (int t = 0; t < parts; ++t)
+    for (std::size_t k = split_point(n, parts, t); k < split_point(n, parts, t + 1); ++k) range[k] = static_cast<std::uint8_t>(t);
+  std::size_t cross = 0;
+  for (std::size_t p = 0; p < c.size(); ++p) cross += range[c.i[p]] != range[c.j[p]];
+  space_verdict_ = static_cast<double>(cross) >= kSpaceCross * static_cast<double>(c.size());
+  return space_verdict_;
 }
 
 void Pipeline::invalidate() {
-  bricks_.drop();
+  for (auto& part : bricks_) part->drop();
   ref_.invalidate();
   moved_known_ = false;
   fresh_ = false;
@@ -92,12 +138,12 @@ void Pipeline::rebuild(Model& model) {
 }
 
 void Pipeline::sync(Model& model) {
-  if (bricks_.live_for(model)) bricks_.sync(model);
+  if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.sync(model); });
 }
 
 void Pipeline::apply_field(Model& model, const FieldChange& change) {
   if (!change.any) return;
-  if (bricks_.live_for(model)) return bricks_.apply_field(model, change);
+  if (bricks().live_for(model)) return each_part([&](BrickStep& part, int) { part.apply_field(model, change); });
   ExactSum work, gross;
   apply_field_change(model.balls, change, 0, model.balls.size(), nullptr, work, gross);
   model.energy.boundary_work += work.value();
@@ -105,23 +151,24 @@ void Pipeline::apply_field(Model& model, const FieldChange& change) {
 }
 
 void Pipeline::loads_changed(Model& model) {
-  if (bricks_.live_for(model)) bricks_.loads_changed(model);
+  if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.loads_changed(model); });
 }
 
 void Pipeline::reduce_cell_tilt(Model& model) {
   const Space before = model.space;
-  if (trubal::reduce_cell_tilt(model) && bricks_.live_for(model)) bricks_.reduce_tilt(before);
+  if (trubal::reduce_cell_tilt(model) && bricks().live_for(model))
+    each_part([&](BrickStep& part, int) { part.reduce_tilt(before); });
 }
 
 bool Pipeline::may_be_outside_box(const Model& model) const {
-  return !bricks_.live_for(model) || bricks_.outside_box();
+  return !bricks().live_for(model) || bricks().outside_box();
 }
 
 void Pipeline::prepare(Model& model) {
   // The whole model is about to be read and changed: the ranks' parts first, then dropped.
-  if (bricks_.live()) {
-    if (bricks_.live_for(model)) bricks_.sync(model);
-    bricks_.drop();
+  if (bricks().live()) {
+    sync(model);
+    for (auto& part : bricks_) part->drop();
     moved_known_ = false;
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -137,20 +184,33 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
   // step; a wrap or a rebuild goes through the whole model.
   const auto t0 = std::chrono::steady_clock::now();
   bool whole = true;
-  if (bricks_.live_for(model)) {   // (every rank decides alike: each input is the same on all)
-    const bool outside = bricks_.outside_cell(model);   // a collective call, made unconditionally
+  if (bricks().live_for(model)) {   // (every rank decides alike: each input is the same on all)
+    bool outside = false;           // a collective call, made unconditionally
+    each_part([&](BrickStep& part, int t) {
+      const bool mine = part.outside_cell(model);
+      if (t == 0) outside = mine;
+    });
     const double limit2 = ref_.displacement_limit2(model);
-    whole = outside || !(limit2 >= 0) || !(bricks_.moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
+    whole = outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
   }
   times_.detect += seconds_since(t0);
   if (whole) {
-    if (bricks_.live() || !fresh_ || model_ != &model) prepare(model);   // syncs and drops the parts first
+    if (bricks().live() || !fresh_ || model_ != &model) prepare(model);   // syncs and drops the parts first
+    if (!distributed_ && !threads_in_space(model)) {   // the new list is better shared by numbers
+      space_threads_ = false;
+      shared_by_ = "ball numbers";
+      whole_step(model, kernels, sums);
+      return;
+    }
     const auto t1 = std::chrono::steady_clock::now();
-    bricks_.split(model, ref_);
+    each_part([&](BrickStep& part, int) { part.split(model, ref_); });
     times_.detect += seconds_since(t1);
   }
   fresh_ = false;
-  bricks_.step(pool_, model, kernels, sums, times_);
+  each_part([&](BrickStep& part, int t) {
+    if (distributed_) part.step(pool_, model, kernels, sums, times_);
+    else part.step(*solo_pools_[t], model, kernels, sums, t == 0 ? times_ : member_times_[t]);
+  });
   moved_known_ = false;
 }
 
@@ -158,8 +218,8 @@ void Pipeline::rewind_step() {
   // The ranks' parts hold the state after the step, not the one put back. Every rank holds the
   // whole model: each takes that one step on all of it, as serial does (the same bits), so the
   // parts' memory goes back before the results are made (the peak of a read after a CYCLE).
-  bricks_.release();
-  whole_next_ = distributed_;
+  for (auto& part : bricks_) part->release();
+  whole_next_ = true;
   moved_known_ = false;   // the displacements are measured again at the positions put back
   fresh_ = false;
   wall_travel_ = wall_travel_at_step_;
@@ -167,12 +227,33 @@ void Pipeline::rewind_step() {
 
 void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   wall_travel_at_step_ = wall_travel_;
-  if (distributed_ && !std::exchange(whole_next_, false)) {
+  const bool whole_now = std::exchange(whole_next_, false);
+  if (distributed_ && !whole_now) {
     shared_by_ = "the spatial decomposition";
     brick_step(model, kernels, sums);
     move_walls(model, kernels.dt);
     return;
   }
+  if (!distributed_ && bricks_.size() > 1 && !whole_now) {
+    // The threads: in space while the parts are live (brick_step decides again at the next list),
+    // else as the current list says.
+    if (!bricks().live_for(model) && (!fresh_ || model_ != &model)) prepare(model);
+    if (bricks().live_for(model) || threads_in_space(model)) {
+      space_threads_ = true;
+      shared_by_ = "the spatial decomposition, a part per thread";
+      brick_step(model, kernels, sums);
+      move_walls(model, kernels.dt);
+      return;
+    }
+    space_threads_ = false;
+    shared_by_ = "ball numbers";
+  }
+  whole_step(model, kernels, sums);
+  move_walls(model, kernels.dt);
+}
+
+void Pipeline::whole_step(Model& model, const StepKernels& kernels, StepSums& sums) {
+  if (bricks().live()) prepare(model);   // the parts' state into the whole model, the parts dropped
   // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
   if (!fresh_ || model_ != &model) prepare(model);
   fresh_ = false;
@@ -180,8 +261,6 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   if (kernels.moments) scratch_.ball_moments.resize(model.balls.size());   // the contact loops zero their balls'
   step_.run(pool_, model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
   moved_known_ = measure;
-  // The walls move with the balls (their velocities are those of the step, like the balls' at t + dt/2).
-  move_walls(model, kernels.dt);
 }
 
 void Pipeline::move_walls(Model& model, double dt) {
@@ -198,14 +277,14 @@ bool Pipeline::Deferred::same(const Deferred& o) const {
 }
 
 PipelineCounters Pipeline::counters() const {
-  return {ref_.rebuilds(), step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0, backend_->pair_tests()};
+  return {ref_.rebuilds(), space_threads_ ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0, backend_->pair_tests()};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   auto lines = backend_->info();
   if (!shared_by_.empty()) lines.emplace_back("last step shared by", shared_by_);
-  if (shared_by_ == "the spatial decomposition")
-    for (auto& line : bricks_.info()) lines.push_back(std::move(line));
+  if (shared_by_.starts_with("the spatial decomposition"))
+    for (auto& line : bricks().info()) lines.push_back(std::move(line));
   if (backend_->keeps_list()) {
     lines.emplace_back("pair list skin", format_number(ref_.skin()));
     lines.emplace_back("pair list rebuilds", std::to_string(ref_.rebuilds()));
@@ -214,7 +293,7 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
     lines.emplace_back("contact results made when read", std::to_string(results_made_) +
                                                              " (a CYCLE's last step taken again, since BACKEND)");
   const int used = step_.active();
-  if (used > 0 && used < pool_.size())
+  if (!space_threads_ && used > 0 && used < pool_.size())
     lines.emplace_back("threads used", std::to_string(used) +
                                            (used > 1 ? " (one per block of 256 balls)"
                                                      : " (the balls fill one block of 256, or sharing the step was "

@@ -4,6 +4,7 @@
 // Threads are a setting of the pipeline; the backend is only its pair search.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <utility>
@@ -16,6 +17,7 @@
 #include "cycle/phase_times.hpp"
 #include "cycle/snapshot.hpp"
 #include "cycle/step_scratch.hpp"
+#include "cycle/team.hpp"
 #include "cycle/verlet.hpp"
 #include "support/thread_pool.hpp"
 
@@ -61,6 +63,10 @@ class Pipeline {
   // only where a distributed run's ranks found none; the caller then need not sync to look).
   bool may_be_outside_box(const Model& model) const;
 
+  // Tests: 0 lets each pair list decide whether the threads share the steps in space (the default),
+  // 1 always shares them so where there are threads, -1 never does; for every Pipeline of the process.
+  static inline std::atomic<int> split_rule{0};
+
   PipelineCounters counters() const;
   std::vector<std::pair<std::string, std::string>> info() const;
   // Time spent in each phase since reset_times().
@@ -99,8 +105,17 @@ class Pipeline {
   void rebuild(Model& model);
   bool needs_rebuild(const Model& model);
   bool any_outside(const Model& model);
-  // A step of a distributed run by the spatial decomposition, where it applies.
+  // A step by the spatial decomposition (a distributed run's, or the threads' where it applies).
   void brick_step(Model& model, const StepKernels& kernels, StepSums& sums);
+  // A step on the whole model, its contacts and motion shared among the threads by ball numbers.
+  void whole_step(Model& model, const StepKernels& kernels, StepSums& sums);
+  // Whether the threads of this process share the step in space (the decomposition, one part per
+  // thread) rather than by ball numbers: decided for each pair list (split_rule, kSpaceBalls).
+  bool threads_in_space(const Model& model);
+  // f(part, member) on every part of the decomposition: this rank's alone, or each thread's on its thread.
+  template <class F> void each_part(F&& f);
+  BrickStep& bricks() { return *bricks_[0]; }
+  const BrickStep& bricks() const { return *bricks_[0]; }
   // The walls' motion over a step, and how far any wall's surface may have gone since the search.
   void move_walls(Model& model, double dt);
 
@@ -108,7 +123,16 @@ class Pipeline {
   ThreadPool pool_;
   StepScratch scratch_;
   ParallelStep step_;
-  BrickStep bricks_;
+  // The decomposition's parts held here: this rank's (one), or one per thread of the pool.
+  std::vector<std::unique_ptr<BrickStep>> bricks_;
+  std::unique_ptr<ThreadTeam::Shared> thread_team_;
+  std::vector<std::unique_ptr<ThreadTeam>> thread_members_;
+  std::vector<std::unique_ptr<ThreadPool>> solo_pools_;   // per thread: its part's pool of one
+  std::vector<PhaseTimes> member_times_;                 // threads 1..: their parts' times (not reported)
+  bool space_threads_ = false;      // the threads share the steps in space now
+  const Model* space_model_ = nullptr;   // the list threads_in_space() last decided for
+  std::uint64_t space_version_ = 0;
+  bool space_verdict_ = false;
   bool distributed_ = false;        // BACKEND mpi on several ranks: every step by the decomposition
   bool whole_next_ = false;         // but the next (rewind_step): on the whole model, on every rank
   std::string shared_by_;           // how the last distributed step was shared among the ranks (PRINT info)

@@ -17,7 +17,7 @@ using namespace trubal::test;
 
 namespace {
 
-struct Variant { const char* backend; int threads; };
+struct Variant { const char* backend; int threads; bool in_space = false; };
 
 // The threads share the work even where one would be as fast (the small scenes), so that the split
 // is what is tested.
@@ -26,11 +26,19 @@ struct ShareRule {
   ~ShareRule() { ParallelStep::share_rule = 0; }
 };
 
-const Variant kVariants[] = {{"allpairs", 1}, {"allpairs", 2}, {"allpairs", 3}, {"threaded", 1},
-                             {"threaded", 2}, {"threaded", 3}, {"threaded", 4}};
+// in_space: the threads share each step in space, a part of the decomposition each (Pipeline::split_rule).
+const Variant kVariants[] = {{"allpairs", 1},         {"allpairs", 2},        {"allpairs", 3},
+                             {"threaded", 1},         {"threaded", 2},        {"threaded", 3},
+                             {"threaded", 4},         {"threaded", 2, true},  {"threaded", 3, true}};
 
-Model run(const Scene& scene, const std::string& backend_name, int threads, int cycles) {
+struct SplitRule {
+  explicit SplitRule(int rule) { Pipeline::split_rule = rule; }
+  ~SplitRule() { Pipeline::split_rule = 0; }
+};
+
+Model run(const Scene& scene, const std::string& backend_name, int threads, int cycles, bool in_space = false) {
   const ShareRule share(1);
+  const SplitRule split(in_space ? 1 : -1);
   Model model = scene.model;
   auto backend = make_pipeline(backend_name, threads);
   const CycleResult r = run_cycles(model, *backend, cycles, {});
@@ -58,8 +66,8 @@ void check_scene(const Scene& scene, bool all_variants = true) {
   REQUIRE(expected.contacts.size() > 0);
   for (const Variant& v : kVariants) {
     if (!all_variants && v.threads != 2) continue;
-    INFO(v.backend << " on " << v.threads << " threads");
-    const Model model = run(scene, v.backend, v.threads, scene.cycles);
+    INFO(v.backend << " on " << v.threads << " threads" << (v.in_space ? ", in space" : ""));
+    const Model model = run(scene, v.backend, v.threads, scene.cycles, v.in_space);
     CHECK(difference(expected, picture(model)) == "");
     if (std::string(v.backend) == "threaded") same_energy(reference, model);
   }
@@ -127,6 +135,30 @@ TEST_CASE("backends: threads share a step only where it pays, with the same answ
       else CHECK((used == 1 || used == 2));
       CHECK(difference(expected, picture(model)) == "");
     }
+  }
+}
+
+TEST_CASE("backends: threads share the step in space where ball numbers are far from the places, same answer",
+          "[backends]") {
+  // 4400 balls (at least kSpaceBalls). Numbered layer by layer, a split of the numbers in two
+  // leaves few pairs across the halves: the threads share by numbers. Numbered by layer parity,
+  // about two pairs in three join the halves: they share in space, a part each. Both the serial bits.
+  for (bool by_parity : {false, true}) {
+    INFO((by_parity ? "numbered by layer parity" : "numbered layer by layer"));
+    const Scene scene = fcc_compression(11, 10, 10, by_parity);
+    REQUIRE(scene.model.balls.size() >= 4096);
+    Model serial_model = scene.model;
+    auto serial = make_pipeline("serial", 1);
+    REQUIRE(run_cycles(serial_model, *serial, 60, {}).done == 60);
+    const ShareRule share(1);
+    Model model = scene.model;
+    auto threaded = make_pipeline("threaded", 2);
+    REQUIRE(run_cycles(model, *threaded, 60, {}).done == 60);
+    CHECK(difference(picture(serial_model), picture(model)) == "");
+    std::string shared_by;
+    for (const auto& [name, value] : threaded->info())
+      if (name == "last step shared by") shared_by = value;
+    CHECK(shared_by == (by_parity ? "the spatial decomposition, a part per thread" : "ball numbers"));
   }
 }
 

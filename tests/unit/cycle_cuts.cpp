@@ -17,6 +17,7 @@
 
 #include "interp_support.hpp"
 #include "scene_decks.hpp"
+#include "cycle/pipeline.hpp"
 #include "support/comm.hpp"
 
 using namespace trubal;
@@ -105,6 +106,7 @@ wall id 2 velocity 0.05 0 0
 
 struct Result {
   std::string balls, contacts, history, walls;
+  std::string info = {};   // PRINT info at the end
 };
 
 // Runs the scene with `cycling` (its cycle lines) after the setup, on `backend`.
@@ -113,13 +115,14 @@ Result run(const Scene& scene, const std::string& backend, const std::string& cy
   WorkingDir cd(dir.path());
   Harness h;
   const std::string deck = "backend " + backend + "\n" + scene.setup + scene.during + cycling +
-                           "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\n";
+                           "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\n"
+                           "print info\n";
   const bool ok = h.deck(deck);
   INFO(deck);
   INFO(h.err.str());
   REQUIRE(ok);
   return {slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
-          slurp(dir.path() / "walls.csv")};
+          slurp(dir.path() / "walls.csv"), h.out.str()};
 }
 
 // The cuts of a run of n cycles. `keeps_history`: the history file is the unbroken one's (every cut
@@ -207,22 +210,35 @@ void check_reference(const Scene& scene, const Result& r) {
   CHECK(checked == sums.size());
 }
 
-void check_scene(const Scene& scene) {
+// in_space: the threads share every step in space (Pipeline::split_rule 1, a part of the
+// decomposition per thread), on 2 and 3 threads only; else every backend.
+void check_scene(const Scene& scene, bool in_space = false) {
   const std::string unbroken = "cycle " + std::to_string(scene.cycles) + "\n";
   const Result serial = run(scene, "serial", unbroken);
   REQUIRE(lines_of(serial.contacts).size() > 50);   // a scene with contacts to carry history (the shear box has 94)
   REQUIRE(lines_of(serial.history).size() > 10);
-  check_reference(scene, serial);
-  for (const std::string backend : {"serial", "threaded threads 2", "threaded threads 3", "allpairs threads 2"}) {
+  if (!in_space) check_reference(scene, serial);
+  const std::vector<std::string> backends =
+      in_space ? std::vector<std::string>{"threaded threads 2", "threaded threads 3"}
+               : std::vector<std::string>{"serial", "threaded threads 2", "threaded threads 3", "allpairs threads 2"};
+  struct SplitRule {
+    explicit SplitRule(int rule) { Pipeline::split_rule = rule; }
+    ~SplitRule() { Pipeline::split_rule = 0; }
+  } rule(in_space ? 1 : -1);
+  for (const std::string& backend : backends) {
     std::vector<Cut> all = cuts(scene);
     if (backend != "serial") all.insert(all.begin(), {"unbroken", unbroken, true});
     for (const Cut& cut : all) {
+      // (In space on 3 threads: the unbroken run and the restart only, to keep the suite short.)
+      if (in_space && backend == "threaded threads 3" && cut.name != "unbroken" && cut.name != "save and restart") continue;
       INFO(scene.name << " on " << backend << ", cut: " << cut.name);
       const Result other = run(scene, backend, cut.lines);
       CHECK(other.balls == serial.balls);
       CHECK(other.contacts == serial.contacts);
       CHECK(other.walls == serial.walls);
       if (cut.keeps_history) CHECK(other.history == serial.history);
+      if (in_space && cut.name != "switch to allpairs 3")   // (allpairs keeps no list to share out)
+        CHECK_THAT(other.info, Catch::Contains("last step shared by: the spatial decomposition, a part per thread"));
     }
   }
 }
@@ -295,6 +311,13 @@ TEST_CASE("cycle cuts: walls of every kind, moving and servo-driven", "[cuts][ba
 
 TEST_CASE("cycle cuts: a shear box, periodic in x and y between walls across z", "[cuts][backends][walls]") {
   check_scene(kShearBox);
+}
+
+TEST_CASE("cycle cuts: threads sharing the step in space on 2 and 3 threads give the serial bits, every scene",
+          "[cuts][backends]") {
+  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox}) {
+    check_scene(*scene, true);   // (and every run's PRINT info says the threads shared it in space)
+  }
 }
 
 TEST_CASE("cycle cuts: BACKEND mpi on 2 and 3 ranks gives the serial bits, every scene", "[cuts][mpi]") {
