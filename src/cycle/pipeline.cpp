@@ -4,6 +4,8 @@
 #include <bit>
 #include <chrono>
 #include <cstdint>
+#include <exception>
+#include <mutex>
 #include <utility>
 
 #include "cycle/pair_list.hpp"
@@ -53,7 +55,31 @@ Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads)
 
 template <class F> void Pipeline::each_part(F&& f) {
   if (bricks_.size() == 1) { f(*bricks_[0], 0); return; }
-  pool_.run([&](int t) { f(*bricks_[t], t); });
+  // A thread that fails (out of memory) releases the others from the team's barriers, so the
+  // pool returns and rethrows its error instead of waiting forever; the parts are then dropped.
+  // The error rethrown is the thread's that failed first, not the others' "another thread failed".
+  thread_team_->sync.reset();
+  std::mutex first_mutex;
+  std::exception_ptr first;
+  try {
+    pool_.run([&](int t) {
+      try {
+        f(*bricks_[t], t);
+      } catch (const TeamAborted&) {
+        throw;
+      } catch (...) {
+        {
+          std::lock_guard<std::mutex> lock(first_mutex);
+          if (!first) first = std::current_exception();
+        }
+        thread_team_->sync.abort();
+        throw;
+      }
+    });
+  } catch (...) {
+    if (first) std::rethrow_exception(first);
+    throw;
+  }
 }
 
 bool Pipeline::threads_in_space(const Model& model) {

@@ -1,6 +1,7 @@
 #include "cycle/team.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <thread>
 
 #include "support/comm.hpp"
@@ -27,6 +28,10 @@ class RankTeam final : public Team {
 }  // namespace
 
 void SpinBarrier::arrive_and_wait() {
+  auto check = [&] {
+    if (aborted_.load(std::memory_order_acquire)) throw TeamAborted();
+  };
+  check();
   const std::uint64_t generation = generation_.load(std::memory_order_acquire);
   if (arrived_.fetch_add(1, std::memory_order_acq_rel) + 1 == members_) {   // the last: release the others
     arrived_.store(0, std::memory_order_relaxed);
@@ -37,6 +42,7 @@ void SpinBarrier::arrive_and_wait() {
 #if defined(__x86_64__) || defined(__i386__)
     if (spins < 4096) { __builtin_ia32_pause(); continue; }
 #endif
+    check();
     std::this_thread::yield();
   }
 }

@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <stdexcept>
 #include <cstddef>
 #include <vector>
 
@@ -41,15 +42,28 @@ Team& rank_team();
 // then yielding its core), as the pool's workers wait for work (support/thread_pool.cpp), because
 // the members meet four times a step, a few hundred microseconds apart, and a futex sleep and wake
 // each time costs more than the wait.
+// What a member waiting at an aborted barrier throws.
+struct TeamAborted : std::runtime_error {
+  TeamAborted() : std::runtime_error("another thread of the step failed") {}
+};
+
+// A member that fails (an exception) calls abort(): the others, waiting or arriving later, throw
+// instead of waiting for it forever; reset() (while no member is inside) makes it whole again.
 class SpinBarrier {
  public:
   explicit SpinBarrier(int members) : members_(members) {}
   void arrive_and_wait();
+  void abort() { aborted_.store(true, std::memory_order_release); }
+  void reset() {
+    arrived_.store(0, std::memory_order_relaxed);
+    aborted_.store(false, std::memory_order_release);
+  }
 
  private:
   const int members_;
   std::atomic<int> arrived_{0};
   std::atomic<std::uint64_t> generation_{0};
+  std::atomic<bool> aborted_{false};
 };
 
 // The threads of one process: one ThreadTeam per thread, over one ThreadTeam::Shared.
