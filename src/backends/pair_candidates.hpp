@@ -1,6 +1,7 @@
 // What a backend's pair search returns: the pairs that may touch, for the cycle to install.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -10,6 +11,9 @@ namespace trubal {
 struct PairCandidates {
   std::vector<std::uint32_t> i, j;
   std::vector<std::int8_t> image_x, image_y, image_z;
+  // The bins per axis of the periodic search that made the list (backends/periodic_pairs.hpp);
+  // zero after a search by boxes (PRINT info reports the one that ran).
+  std::array<int, 3> periodic_bins{};
   void clear() { i.clear(); j.clear(); image_x.clear(); image_y.clear(); image_z.clear(); }
   void push(std::uint32_t a, std::uint32_t b) {
     i.push_back(a); j.push_back(b); image_x.push_back(0); image_y.push_back(0); image_z.push_back(0);

@@ -139,6 +139,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
   };
   const std::size_t first = std::min(i_begin, n), last = std::clamp(i_end, first, n), count = last - first;
   const int parts = pool && count >= kParallelSearch ? pool->size() : 1;
+  out.periodic_bins = dims;
   if (parts == 1) { search_any(first, last, out); return; }
   std::vector<PairCandidates> lists(parts);
   pool->run([&](int t) {

@@ -94,9 +94,9 @@ bool Pipeline::threads_in_space(const Model& model) {
   space_verdict_ = false;
   if (n < kSpaceBalls || c.size() == 0) return false;
   const int parts = static_cast<int>(bricks_.size());
-  std::vector<std::uint8_t> range(n);
+  std::vector<std::uint16_t> range(n);   // (BACKEND allows up to 4096 threads)
   for (int t = 0; t < parts; ++t)
-    for (std::size_t k = split_point(n, parts, t); k < split_point(n, parts, t + 1); ++k) range[k] = static_cast<std::uint8_t>(t);
+    for (std::size_t k = split_point(n, parts, t); k < split_point(n, parts, t + 1); ++k) range[k] = static_cast<std::uint16_t>(t);
   std::size_t cross = 0;
   for (std::size_t p = 0; p < c.size(); ++p) cross += range[c.i[p]] != range[c.j[p]];
   space_verdict_ = static_cast<double>(cross) >= kSpaceCross * static_cast<double>(c.size());

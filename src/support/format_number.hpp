@@ -15,8 +15,13 @@ inline std::string format_number(double v) {
   return buf;
 }
 
-// The info lines of a backend that hangs balls on boxes.
-inline std::vector<std::pair<std::string, std::string>> box_info(const std::array<int, 3>& boxes, double box_size) {
+// The info lines of a backend that hangs balls on boxes; periodic_bins (nonzero): the last search
+// was the periodic cell's (backends/periodic_pairs.hpp), whose bins are reported instead.
+inline std::vector<std::pair<std::string, std::string>> box_info(const std::array<int, 3>& boxes, double box_size,
+                                                                 const std::array<int, 3>& periodic_bins = {}) {
+  if (periodic_bins[0] > 0)
+    return {{"contact boxes", std::to_string(periodic_bins[0]) + " x " + std::to_string(periodic_bins[1]) + " x " +
+                                  std::to_string(periodic_bins[2]) + " (the periodic search's, across the cell)"}};
   return {{"contact boxes", std::to_string(boxes[0]) + " x " + std::to_string(boxes[1]) + " x " + std::to_string(boxes[2])},
           {"box size", format_number(box_size)}};
 }

@@ -84,3 +84,33 @@ TEST_CASE("backends: allpairs above maxmem stops CYCLE with a clear error, model
   CHECK(h.line("cycle 10"));
   CHECK(h.session.model().cycle == 10);
 }
+
+TEST_CASE("backends: PRINT info reports the boxes of the search that ran, the periodic one's in a periodic space",
+          "[backends]") {
+  // A box space: the boxes of TRUBAL's search. A box with periodic x and y: the periodic search's
+  // bins (the boxes are never made; reporting their empty 1 x 1 x 1 misled).
+  for (const char* backend : {"serial", "threaded threads 2"}) {
+    INFO(backend);
+    for (bool periodic : {false, true}) {
+      INFO((periodic ? "periodic in x and y" : "a box"));
+      Harness h;
+      const std::string deck = std::string("start box 0 0.2 0 0.2 0 0.1") + (periodic ? " x periodic y periodic" : "") +
+                               "\nprop kn 1e5 ks 1e5 fric 30 dens 2650\nbackend " + backend +
+                               "\nlattice fcc 0.02 10 10 2 origin 0.01 0.01 0.01\ncycle 2\n";
+      REQUIRE(h.deck(deck));
+      h.out.str("");
+      REQUIRE(h.line("print info"));
+      const std::string info = h.out.str();
+      const auto at = info.find("contact boxes: ");
+      REQUIRE(at != std::string::npos);
+      const std::string line = info.substr(at, info.find('\n', at) - at);
+      if (periodic) {
+        CHECK_THAT(line, Catch::EndsWith("(the periodic search's, across the cell)"));
+        CHECK(line.find("contact boxes: 1 x 1 x") == std::string::npos);   // 0.2 wide, balls 0.02 apart: several bins
+      } else {
+        CHECK_THAT(info, Catch::Contains("box size: "));
+        CHECK(line.find("periodic") == std::string::npos);
+      }
+    }
+  }
+}

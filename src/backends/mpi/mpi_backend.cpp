@@ -27,7 +27,9 @@ class MpiBackend final : public Backend {
     const int ranks = comm::size(), rank = comm::rank();
     const std::size_t n = model.balls.size();
     PairCandidates& mine = ranks > 1 ? mine_ : out;
+    mine.periodic_bins = {};
     find_serial_pairs(model, skin, grid_, mine, split_point(n, ranks, rank), split_point(n, ranks, rank + 1));
+    periodic_bins_ = mine.periodic_bins;
     if (ranks == 1) return;
     // Every rank's pairs, as records, in rank order.
     const std::size_t m = mine.i.size();
@@ -57,7 +59,7 @@ class MpiBackend final : public Backend {
   }
   bool distributed() const override { return true; }
   std::vector<std::pair<std::string, std::string>> info() const override {
-    auto lines = box_info(grid_.dims(), grid_.cell_size());
+    auto lines = box_info(grid_.dims(), grid_.cell_size(), periodic_bins_);
     lines.emplace_back("pair search", "shared: each rank searches the pairs of its range of ball indices, and every "
                                       "rank joins the ranks' lists in order (the serial list)");
     lines.emplace_back("decomposition",
@@ -68,6 +70,7 @@ class MpiBackend final : public Backend {
 
  private:
   BoxGrid grid_;
+  std::array<int, 3> periodic_bins_{};   // of the last search, where it was the periodic one
   PairCandidates mine_;
   std::vector<std::uint8_t> send_, recv_;
 };

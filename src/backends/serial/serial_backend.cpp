@@ -12,13 +12,16 @@ class SerialBackend final : public Backend {
   std::string name() const override { return "serial"; }
 
   void find_pairs(const Model& model, double skin, ThreadPool&, PairCandidates& out) override {
+    out.periodic_bins = {};
     find_serial_pairs(model, skin, grid_, out);
+    periodic_bins_ = out.periodic_bins;
   }
 
-  std::vector<std::pair<std::string, std::string>> info() const override { return box_info(grid_.dims(), grid_.cell_size()); }
+  std::vector<std::pair<std::string, std::string>> info() const override { return box_info(grid_.dims(), grid_.cell_size(), periodic_bins_); }
 
  private:
   BoxGrid grid_;
+  std::array<int, 3> periodic_bins_{};   // of the last search, where it was the periodic one
 };
 
 }  // namespace

@@ -13,17 +13,20 @@ class ThreadedBackend final : public Backend {
 
   void find_pairs(const Model& model, double skin, ThreadPool& pool, PairCandidates& out) override {
     const Balls& b = model.balls;
+    periodic_bins_ = {};
     if (model.space.periodic) {
       find_periodic_pairs(model, skin, out, &pool);
+      periodic_bins_ = out.periodic_bins;
       return;
     }
     grid_.find(pool, b, 2 * b.max_radius() + skin, model.space.boxes, skin, out);
   }
 
-  std::vector<std::pair<std::string, std::string>> info() const override { return box_info(grid_.dims(), grid_.cell_size()); }
+  std::vector<std::pair<std::string, std::string>> info() const override { return box_info(grid_.dims(), grid_.cell_size(), periodic_bins_); }
 
  private:
   CellPairs grid_;
+  std::array<int, 3> periodic_bins_{};   // of the last search, where it was the periodic one
 };
 
 }  // namespace
