@@ -29,8 +29,7 @@ constexpr std::size_t kParallelBalls = 8192;
 // the split by numbers shares badly (each such pair is computed twice, its balls scattered). A part
 // copies its balls, so smaller scenes and well numbered ones keep the split by numbers. The two
 // bounds are not tuned: measured only at the extremes (the peers' settle scene, numbered at random,
-// half its pairs across: in space 1.6x one thread, by numbers no faster than one; the dense block
-// numbered by layers, a few percent across: by numbers as fast as the decomposition).
+// half its pairs across: in space 1.6x one thread, by numbers no faster than one).
 constexpr std::size_t kSpaceBalls = 4096;
 constexpr double kSpaceCross = 0.25;
 
