@@ -14,6 +14,7 @@ using namespace trubal;
 namespace {
 
 // f(member) on `members` threads at once; each thread's exception (or none) in member order.
+// Catch's assertions are not thread-safe: the threads record, the test's own thread asserts.
 template <class F> std::vector<std::exception_ptr> on_threads(int members, F&& f) {
   std::vector<std::exception_ptr> errors(members);
   std::vector<std::thread> threads;
@@ -36,10 +37,11 @@ TEST_CASE("team: the threads' gather, exchange and max give every member every m
   ThreadTeam::Shared shared(kMembers);
   std::vector<std::vector<double>> gathered(kMembers), maxima(kMembers);
   std::vector<std::vector<std::vector<double>>> received(kMembers);
+  std::vector<int> sizes(kMembers), ranks(kMembers);
   const auto errors = on_threads(kMembers, [&](int me) {
     ThreadTeam team(shared, me);
-    REQUIRE(team.size() == kMembers);
-    REQUIRE(team.rank() == me);
+    sizes[me] = team.size();
+    ranks[me] = team.rank();
     for (int round = 0; round < 50; ++round) {   // repeated: no member may overtake a round
       std::vector<double> mine(me + 1, 10.0 * me + round);   // parts of different sizes
       team.allgather(mine, gathered[me]);
@@ -61,6 +63,8 @@ TEST_CASE("team: the threads' gather, exchange and max give every member every m
   const int last = 49;
   for (int me = 0; me < kMembers; ++me) {
     INFO("member " << me);
+    CHECK(sizes[me] == kMembers);
+    CHECK(ranks[me] == me);
     std::vector<double> all;
     for (int r = 0; r < kMembers; ++r) all.insert(all.end(), r + 1, 10.0 * r + last);
     CHECK(gathered[me] == all);
@@ -97,11 +101,15 @@ TEST_CASE("team: a member that fails releases the others from the barrier", "[ba
   REQUIRE(errors[2] != nullptr);
   // Made whole again, the barrier works for the next step.
   shared.sync.reset();
+  std::vector<std::size_t> sizes(kMembers);
   const auto again = on_threads(kMembers, [&](int me) {
     ThreadTeam team(shared, me);
     std::vector<double> mine{1.0}, all;
     team.allgather(mine, all);
-    REQUIRE(all.size() == kMembers);
+    sizes[me] = all.size();
   });
-  for (const auto& e : again) CHECK(e == nullptr);
+  for (int me = 0; me < kMembers; ++me) {
+    CHECK(again[me] == nullptr);
+    CHECK(sizes[me] == kMembers);
+  }
 }
