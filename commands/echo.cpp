@@ -5,7 +5,7 @@ namespace trubal {
 static void run_echo(Context& ctx, Args& args) { ctx.out << args.rest() << '\n'; }
 
 const Command echo_command = {"ECHO", {}, "ECHO text", "print a line of text",
-                              "Prints its words (after $variables are replaced).", {}, run_echo};
+                              "Prints its words (after $variables are replaced).", {}, run_echo, true};
 
 static void run_title(Context& ctx, Args& args) {
   std::string title = args.rest();

@@ -57,6 +57,6 @@ const Command prop_command = {
     "contact dashpot giving restitution e in a head-on impact. kn and ks are the stiffness of a contact "
     "between two balls of this type; two types meet with k = 2 k1 k2 / (k1 + k2) (each ball a spring of "
     "stiffness 2k in series), the smaller friction and the smaller cohesion.",
-    {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest"}, run_prop};
+    {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest"}, run_prop, true};
 
 }  // namespace trubal

@@ -73,6 +73,10 @@ int run(int argc, char** argv) {
   }
 
   const auto start = std::chrono::steady_clock::now();
+  // A batch deck's output in large writes, at a terminal too (and under mpirun, whose pseudo
+  // terminal would make every line a write it forwards): what must be seen when it happens is
+  // flushed where it happens (each command that is not quick, progress, errors and warnings).
+  if (interactive_deck.empty() && (!deck.empty() || !::isatty(STDIN_FILENO))) std::setvbuf(stdout, nullptr, _IOFBF, 1 << 16);
   NullBuffer nothing;
   std::ostream null_out(&nothing), null_err(&nothing);
   const bool root = trubal::comm::root();

@@ -63,6 +63,11 @@ struct Command {
   std::string_view help;                     // paragraphs for HELP name and the man page
   std::vector<std::string_view> words;       // argument keywords, for Tab completion
   void (*run)(Context&, Args&);
+  // Ends within microseconds whatever the model (a deck may hold a million of it, as BALL lines):
+  // a batch deck's echo of it is not flushed before it runs (a write per line is most of the time
+  // such a deck takes, and under mpirun each goes through mpirun's forwarding); any other command,
+  // an error or a warning flushes it.
+  bool quick = false;
 };
 
 // The command table (commands/table.cpp): the dispatcher, HELP, completion and the man-page test

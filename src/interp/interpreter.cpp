@@ -98,8 +98,13 @@ void Interpreter::execute(const std::string& line) {
   auto words = split_words(expanded);
   if (words.empty()) return;
   const Command& command = find_command(words[0]);
-  // Flushed before it runs: a long or hung command shows its own line.
-  if (echo && !interactive) output_.out() << "trubal> " << printable(expanded, 400) << '\n' << std::flush;
+  // Flushed before it runs: a long or hung command shows its own line (a quick one's waits for the
+  // next command that is not, or for an error: Command::quick).
+  const bool flush = interactive || !command.quick;
+  if (echo && !interactive) {
+    output_.out() << "trubal> " << printable(expanded, 400) << '\n';
+    if (flush) output_.out() << std::flush;
+  }
   words.erase(words.begin());
   Args args(command.usage, std::move(words));
   Context ctx{session_, *this, output_.out()};
@@ -123,8 +128,8 @@ void Interpreter::execute(const std::string& line) {
       throw std::runtime_error(message);
     }
   }
-  output_.out().flush();
-  const std::string log_failure = output_.take_log_failure();
+  if (flush) output_.out().flush();
+  const std::string log_failure = output_.take_log_failure();   // (with a log on, it flushes)
   if (!log_failure.empty()) output_.err() << "warning: " << log_failure << '\n';
 }
 

@@ -235,6 +235,46 @@ TEST_CASE("interp errors: batch mode echoes each command and STOP ends the deck"
   CHECK(h.err.str().empty());
 }
 
+namespace {
+// A screen that records what it held at each flush.
+struct FlushLog : std::stringbuf {
+  std::vector<std::string> flushed;
+  int sync() override {
+    flushed.push_back(str());
+    return 0;
+  }
+};
+}  // namespace
+
+TEST_CASE("interp errors: a batch deck flushes the echo before a command that may take long, not before each BALL",
+          "[interp][errors]") {
+  // A deck of a million BALL lines spent most of its time writing each echo line by itself (and
+  // under mpirun each write went through mpirun): quick commands wait for the next flush.
+  FlushLog screen;
+  std::ostream out(&screen);
+  std::ostringstream err;
+  Output output(out, err);
+  Session session;
+  Interpreter interp(session, output);
+  interp.echo = true;
+  std::string deck = "start box 0 100 0 100 0 100\nprop kn 1e5 dens 1000\n";
+  for (int k = 0; k < 200; ++k) deck += fmt::format("ball {} {} {} 0.4\n", 1 + (k % 10), 1 + (k / 10) % 10, 1 + k / 100);
+  deck += "cycle 1\necho done\n";
+  std::istringstream in(deck);
+  REQUIRE(interp.run_deck(in, "deck.dat"));
+  // Every line is there, in order.
+  const std::string all = screen.str();
+  CHECK(all.find("trubal> ball 1 1 1 0.4\n") < all.find("trubal> cycle 1\n"));
+  CHECK(all.find("trubal> cycle 1\n") < all.find("trubal> echo done\ndone\n"));
+  // START flushes (before and after), the 200 BALL lines and PROP do not: far fewer flushes than lines.
+  CHECK(screen.flushed.size() < 10);
+  // CYCLE's line was on the screen before it ran: some flush ends with it.
+  bool shown = false;
+  for (const auto& f : screen.flushed) shown = shown || f.ends_with("trubal> cycle 1\n");
+  CHECK(shown);
+  CHECK(err.str().empty());
+}
+
 TEST_CASE("interp errors: inputs that hung, overflowed or ran on nothing are errors now", "[interp][errors][hard]") {
   // A shear rate that moves the cell by more than half an edge a step: the tilt reduction could
   // never catch up (past 2^53 the subtraction changed nothing, and CYCLE hung).
