@@ -26,6 +26,7 @@ trap 'rm -rf "$W"' EXIT
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 SCENES_OUT=$W python3 "$PEERS/gen_scenes.py" fcc >/dev/null
 echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; $STEPS steps, median of $REPS"
+"$HERE/core_speeds.sh"   # a lopsided machine shows beside its figures
 for N in $SIZES; do
   [ -f "$W/fcc_$N.xyz" ] || { echo "no scene with N=$N (1680, 13500, 108000)" >&2; exit 2; }
   python3 - "$W" "$N" "$STEPS" "$RANKS" <<'PY'
@@ -99,3 +100,4 @@ for k in med:
                   f"{whole[f'lammps_{p}'] / whole[k]:.2f}x whole process")
 PY
 done
+"$HERE/core_speeds.sh"

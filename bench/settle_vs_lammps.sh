@@ -51,6 +51,7 @@ PY
 LMP="lmp -in $PEERS/lammps_settle.in -var data $W/settle_$N.data -var nsteps $STEPS"
 t() { local s; s=$(date +%s.%N); "$@" >"$W/last.out" 2>&1 || { cat "$W/last.out" >&2; exit 1; }; echo "$(date +%s.%N) - $s" | bc; }
 echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; settle N=$N, $STEPS steps, $REPS interleaved runs"
+"$HERE/core_speeds.sh"   # a lopsided machine shows beside its figures
 for r in $(seq "$REPS"); do
   echo "lammps_1 $(cd "$W" && t $LMP)" >>"$W/times"; cp "$W/last.out" "$W/lammps_1.out"
   echo "trubal_serial $(cd "$W" && t "$TRUBAL" serial.dat)" >>"$W/times"; cp "$W/last.out" "$W/serial.out"
@@ -80,3 +81,4 @@ for k in ("serial", "threaded2"):
     print(f"  trubal {k}: coordination {grab(f'{w}/{k}.out', r'coordination[^0-9]*([0-9.eE+-]+)')}, "
           f"cycling {grab(f'{w}/{k}.out', r'cycles in ([0-9.eE+-]+) s')} s")
 PY
+"$HERE/core_speeds.sh"

@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <type_traits>
+
+#include <fmt/format.h>
 
 #include "cycle/sum_exchange.hpp"
 #include "model/periodic_cell.hpp"
@@ -17,10 +21,10 @@ constexpr std::uint32_t kAbsent = ~std::uint32_t{0};
 constexpr std::size_t kHalo = 9;   // a ghost's state each step: position, velocity, spin
 
 // Owners by recursive coordinate bisection: the balls of a box are cut across its longest extent
-// at the count that gives each side its share of the ranks. Ties and non-finite coordinates are
-// ordered by index, so every rank computes the same owners.
+// at the count that gives each side the sum of its ranks' shares. Ties and non-finite coordinates
+// are ordered by index, so every rank computes the same owners (from the same shares).
 void bisect(const Balls& b, std::vector<std::uint32_t>& order, std::size_t lo, std::size_t hi, int parts, int first,
-            std::vector<int>& owner) {
+            const std::vector<double>& shares, std::vector<int>& owner) {
   if (parts <= 1 || hi - lo <= 1) {
     for (std::size_t q = lo; q < hi; ++q) owner[order[q]] = first;
     return;
@@ -40,14 +44,18 @@ void bisect(const Balls& b, std::vector<std::uint32_t>& order, std::size_t lo, s
   const int axis = extent[0] >= extent[1] && extent[0] >= extent[2] ? 0 : (extent[1] >= extent[2] ? 1 : 2);
   const std::vector<double>& x = *pos[axis];
   const int left = parts / 2;
-  const std::size_t cut = lo + (hi - lo) * static_cast<std::size_t>(left) / static_cast<std::size_t>(parts);
+  double left_share = 0, all_share = 0;
+  for (int r = first; r < first + parts; ++r) (r < first + left ? left_share : all_share) += shares[r];
+  all_share += left_share;
+  const auto count = static_cast<double>(hi - lo);
+  const std::size_t cut = lo + static_cast<std::size_t>(std::clamp(std::round(count * left_share / all_share), 1.0, count - 1));
   auto key = [&](std::uint32_t k) { return std::isfinite(x[k]) ? x[k] : std::numeric_limits<double>::infinity(); };
   std::nth_element(order.begin() + lo, order.begin() + cut, order.begin() + hi, [&](std::uint32_t p, std::uint32_t q) {
     const double kp = key(p), kq = key(q);
     return kp < kq || (kp == kq && p < q);
   });
-  bisect(b, order, lo, cut, left, first, owner);
-  bisect(b, order, cut, hi, parts - left, first + left, owner);
+  bisect(b, order, lo, cut, left, first, shares, owner);
+  bisect(b, order, cut, hi, parts - left, first + left, shares, owner);
 }
 
 // `to`'s arrays are `from`'s at the picked indices (the visitor lists a struct's arrays in one order).
@@ -157,6 +165,33 @@ bool BrickStep::live_for(const Model& full) const {
          full.wall_contacts.list_version == wall_version_;
 }
 
+void BrickStep::update_shares() {
+  // Every member's speed since the last split (its own balls' forces and motion, not the waits):
+  // the next shares are halfway between the last ones and the speeds' proportions, each clamped
+  // between half and twice an equal share (then normalised), so that one noisy interval moves
+  // them little. A core slowed
+  // by the machine, or a part where the contacts crowd, gets fewer balls.
+  const int ranks = team_->size();
+  if (shares_.size() != static_cast<std::size_t>(ranks)) shares_.assign(ranks, 1.0 / ranks);
+  std::vector<double> mine{work_seconds_, work_ball_steps_}, all;
+  team_->allgather(mine, all);   // (a collective call: every member splits at once)
+  work_seconds_ = work_ball_steps_ = 0;
+  std::vector<double> speed(ranks, 0.0);
+  double total = 0;
+  for (int r = 0; r < ranks; ++r) {
+    const double seconds = all[2 * r], ball_steps = all[2 * r + 1];
+    if (!(seconds > 1e-4 && ball_steps > 0)) return;   // too little to go by: the shares stay
+    speed[r] = ball_steps / seconds;
+    total += speed[r];
+  }
+  double sum = 0;
+  for (int r = 0; r < ranks; ++r) {
+    shares_[r] = std::clamp(0.5 * shares_[r] + 0.5 * speed[r] / total, 0.5 / ranks, 2.0 / ranks);
+    sum += shares_[r];
+  }
+  for (double& s : shares_) s /= sum;
+}
+
 void BrickStep::split(const Model& full, const VerletReference& ref) {
   const int ranks = team_->size(), me = team_->rank();
   const Balls& b = full.balls;
@@ -164,10 +199,11 @@ void BrickStep::split(const Model& full, const VerletReference& ref) {
   const ContactTable& c = full.contacts;
   const WallContacts& wc = full.wall_contacts;
   owner_.assign(n, 0);
+  update_shares();
   {
     std::vector<std::uint32_t> order(n);
     std::iota(order.begin(), order.end(), 0u);
-    bisect(b, order, 0, n, ranks, 0, owner_);
+    bisect(b, order, 0, n, ranks, 0, shares_, owner_);
   }
   // The part: owned balls (1) and their partners owned elsewhere (2, ghosts); the pairs touching
   // an owned ball; for each other rank, the owned balls that are its ghosts.
@@ -304,7 +340,12 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   const std::size_t m = b.size();
   if (kernels_.moments) scratch_.ball_moments.resize(m);
   StepSums mine;
+  const auto t0 = std::chrono::steady_clock::now();
   step_.run(pool, part_, scratch_, kernels_, mine, times, ref_.x.size() == m ? &ref_ : nullptr);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed)) seconds *= 3;
+  work_seconds_ += seconds;
+  work_ball_steps_ += static_cast<double>(owned_.size());
   current_ = false;
   results_written_ = kernels.writes_results();
 
@@ -482,6 +523,9 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   const std::string member = team_->shares_whole() ? "thread" : "rank";
   lines.emplace_back("balls per " + member, std::to_string(least_balls_) + " to " + std::to_string(most_balls_) +
                                                 " (" + member + " 0 also holds " + std::to_string(ghosts_) + " ghosts)");
+  std::string shares;
+  for (double share : shares_) fmt::format_to(std::back_inserter(shares), "{}{:.2f}", shares.empty() ? "" : " ", share);
+  lines.emplace_back("shares of the balls", shares + " (by " + member + ", in proportion to the speed each stepped its own balls at)");
   lines.emplace_back("decompositions made", std::to_string(splits_));
   return lines;
 }

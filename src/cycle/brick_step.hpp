@@ -2,8 +2,10 @@
 // their partners, and the ranks exchange only the ghosts' new state each step (doc/distributed.md).
 //
 // How the answer stays the serial one, bit for bit, for any rank count:
-// - The owners are a recursive bisection of the balls by count (any split gives the same bits; the
-//   split only decides the speed). It is made again at every pair-list rebuild.
+// - The owners are a recursive bisection of the balls (any split gives the same bits; the split
+//   only decides the speed), each member's share of the balls in proportion to the speed it stepped
+//   its own balls at since the split before (equal shares at first). It is made again at every
+//   pair-list rebuild.
 // - A rank's part is a Model of its own balls and their partners in the pair list (the ghosts),
 //   numbered in the order of the whole model's indices, with the whole list's pairs that touch an
 //   owned ball, in list order. So every owned ball meets its partners in the serial order and sums
@@ -17,6 +19,7 @@
 //   are made afresh from it.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -82,7 +85,14 @@ class BrickStep {
 
   std::vector<std::pair<std::string, std::string>> info() const;
 
+  // Tests: the member whose own work is counted this many times slower (as a busy core would make
+  // it), to see the shares follow; -1: none.
+  static inline std::atomic<int> slow_member_for_test{-1};
+
  private:
+  // The shares of the next split, from every member's speed since the last (a collective call).
+  void update_shares();
+
   Team* team_ = &rank_team();
   Model part_;
   StepScratch scratch_;
@@ -110,6 +120,10 @@ class BrickStep {
   bool outside_box_ = false;
   std::size_t ghosts_ = 0, most_balls_ = 0, least_balls_ = 0, most_ghosts_ = 0;
   std::size_t splits_ = 0;
+  // Each member's share of the balls at the next split (the same on every member), and this
+  // member's own stepping since the last split: seconds in its forces and motion, ball-steps.
+  std::vector<double> shares_;
+  double work_seconds_ = 0, work_ball_steps_ = 0;
 };
 
 }  // namespace trubal

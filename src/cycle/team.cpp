@@ -32,19 +32,25 @@ void SpinBarrier::arrive_and_wait() {
     if (aborted_.load(std::memory_order_acquire)) throw TeamAborted();
   };
   check();
-  const std::uint64_t generation = generation_.load(std::memory_order_acquire);
+  const std::uint32_t generation = generation_.load(std::memory_order_acquire);
   if (arrived_.fetch_add(1, std::memory_order_acq_rel) + 1 == members_) {   // the last: release the others
     arrived_.store(0, std::memory_order_relaxed);
     generation_.store(generation + 1, std::memory_order_release);
+    generation_.notify_all();   // (no system call unless someone sleeps)
     return;
   }
+  // Spin a while (the others are usually a few microseconds behind), then yield a little, then
+  // sleep on the word (a futex): where the machine has more runnable threads than cores (another
+  // program busy on one), a waiter that kept spinning would take the time the late member needs.
   for (int spins = 0; generation_.load(std::memory_order_acquire) == generation; ++spins) {
 #if defined(__x86_64__) || defined(__i386__)
     if (spins < 4096) { __builtin_ia32_pause(); continue; }
 #endif
     check();
-    std::this_thread::yield();
+    if (spins < 4096 + 64) std::this_thread::yield();
+    else generation_.wait(generation, std::memory_order_acquire);
   }
+  check();   // (an abort also changes the word)
 }
 
 Team& rank_team() {

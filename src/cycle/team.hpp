@@ -39,9 +39,10 @@ class Team {
 Team& rank_team();
 
 // A barrier for the threads of one step: a member that arrives early spins (the pause instruction,
-// then yielding its core), as the pool's workers wait for work (support/thread_pool.cpp), because
-// the members meet four times a step, a few hundred microseconds apart, and a futex sleep and wake
-// each time costs more than the wait.
+// 4096 times, then yielding its core a little), because the members meet four times a step, a few
+// hundred microseconds apart, and a futex sleep and wake each time costs more than such a wait;
+// past that it sleeps on a futex, so that where the machine has more busy threads than cores a
+// waiter does not take the time the late member needs.
 // What a member waiting at an aborted barrier throws.
 struct TeamAborted : std::runtime_error {
   TeamAborted() : std::runtime_error("another thread of the step failed") {}
@@ -53,7 +54,11 @@ class SpinBarrier {
  public:
   explicit SpinBarrier(int members) : members_(members) {}
   void arrive_and_wait();
-  void abort() { aborted_.store(true, std::memory_order_release); }
+  void abort() {
+    aborted_.store(true, std::memory_order_release);
+    generation_.fetch_add(1, std::memory_order_acq_rel);   // wakes the sleepers, who then see the abort
+    generation_.notify_all();
+  }
   void reset() {
     arrived_.store(0, std::memory_order_relaxed);
     aborted_.store(false, std::memory_order_release);
@@ -62,7 +67,7 @@ class SpinBarrier {
  private:
   const int members_;
   std::atomic<int> arrived_{0};
-  std::atomic<std::uint64_t> generation_{0};
+  std::atomic<std::uint32_t> generation_{0};   // (32 bits: a futex word; it only has to change)
   std::atomic<bool> aborted_{false};
 };
 

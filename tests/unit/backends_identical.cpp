@@ -3,12 +3,14 @@
 // scenes are big enough (several kReduceBlock blocks of pairs and of balls) that the threads
 // really split the work.
 #include <catch2/catch.hpp>
-
+#include <cstdio>
+#include <map>
 #include <cstdlib>
 #include <stdexcept>
 
 #include "backends/periodic_pairs.hpp"
 #include "model/periodic_cell.hpp"
+#include "cycle/brick_step.hpp"
 #include "cycle/parallel_step.hpp"
 #include "backends_scenes.hpp"
 
@@ -160,6 +162,39 @@ TEST_CASE("backends: threads share the step in space where ball numbers are far 
       if (name == "last step shared by") shared_by = value;
     CHECK(shared_by == (by_parity ? "the spatial decomposition, a part per thread" : "ball numbers"));
   }
+}
+
+TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewer balls), same answer", "[backends]") {
+  // Member 1's work counted three times slower (BrickStep::slow_member_for_test, as a core the
+  // machine slows would be): from the second decomposition on, its share of the balls falls below
+  // half and stays about at the floor of half an equal share; the bits stay serial's.
+  const Scene scene = fcc_compression(11, 10, 10, true);
+  Model serial_model = scene.model;
+  auto serial = make_pipeline("serial", 1);
+  constexpr int kCycles = 400;
+  REQUIRE(run_cycles(serial_model, *serial, kCycles, {}).done == kCycles);
+  const ShareRule share(1);
+  const SplitRule split(1);
+  BrickStep::slow_member_for_test = 1;
+  Model model = scene.model;
+  auto threaded = make_pipeline("threaded", 2);
+  const bool done = run_cycles(model, *threaded, kCycles, {}).done == kCycles;
+  BrickStep::slow_member_for_test = -1;
+  REQUIRE(done);
+  CHECK(difference(picture(serial_model), picture(model)) == "");
+  std::map<std::string, std::string> info;
+  for (const auto& [name, value] : threaded->info()) info[name] = value;
+  INFO("decompositions made: " << info["decompositions made"] << "; shares: " << info["shares of the balls"]
+                               << "; balls per thread: " << info["balls per thread"]);
+  REQUIRE(std::stoi(info["decompositions made"]) >= 3);
+  double first = 0, second = 0;
+  REQUIRE(std::sscanf(info["shares of the balls"].c_str(), "%lf %lf", &first, &second) == 2);
+  CHECK(second < 0.45);     // three times slower: the share heads for 1/4, halfway at each split
+  CHECK(second >= 0.24);    // never far below half an equal share (clamped there, then normalised)
+  CHECK(first + second == Approx(1.0).margin(0.011));   // (printed to two places)
+  std::size_t least = 0, most = 0;
+  REQUIRE(std::sscanf(info["balls per thread"].c_str(), "%zu to %zu", &least, &most) == 2);
+  CHECK(static_cast<double>(least) < 0.9 * static_cast<double>(most));
 }
 
 TEST_CASE("backends: the periodic pair search finds what testing every pair at its nearest image finds", "[backends][periodic]") {

@@ -63,7 +63,7 @@ class MpiBackend final : public Backend {
     lines.emplace_back("pair search", "shared: each rank searches the pairs of its range of ball indices, and every "
                                       "rank joins the ranks' lists in order (the serial list)");
     lines.emplace_back("decomposition",
-                       "recursive bisection of the balls by count, made again at every pair-list rebuild; each rank "
+                       "recursive bisection of the balls, each rank's share in proportion to its speed, made again at every pair-list rebuild; each rank "
                        "steps its own balls with ghost copies of their partners");
     return lines;
   }
