@@ -57,7 +57,7 @@ PY
     whole=$(echo "$(date +%s.%N) - $s" | bc)
     secs=$(grep -o "($STEPS cycles in [0-9.e+-]* s" "$W/$name.out" | tail -1 | awk '{print $4}')
     rss=$(sed -n 's/^peak memory: \([0-9 ]*\) MiB.*/\1/p' "$W/$name.out" | tail -1)
-    echo "$name $secs $whole $rss" >>"$W/times"
+    echo "$name ${secs:--} $whole $rss" >>"$W/times"   # (-: no stepping time found)
   }
   for r in $(seq "$REPS"); do
     one serial "$TRUBAL" serial.dat
@@ -67,7 +67,8 @@ PY
       if command -v lmp >/dev/null; then
         s=$(date +%s.%N)
         mpirun -np "$p" lmp -in "$PEERS/lammps_fcc.in" -var data "$W/fcc_$N.data" -var nsteps "$STEPS" >"$W/lmp.out" 2>&1 &&
-          echo "lammps_$p $(sed -n "s/^Loop time of \([0-9.e+-]*\) on .* for $STEPS steps.*/\1/p" "$W/lmp.out" | head -1) $(echo "$(date +%s.%N) - $s" | bc)" >>"$W/times"
+          loop=$(sed -n "s/^Loop time of \([0-9.e+-]*\) on .* for $STEPS steps.*/\1/p" "$W/lmp.out" | head -1) &&
+          echo "lammps_$p ${loop:--} $(echo "$(date +%s.%N) - $s" | bc)" >>"$W/times"
       fi
     done
   done
@@ -77,7 +78,7 @@ w, n, steps = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 runs = {}
 for line in open(f"{w}/times"):
     parts = line.split()
-    if len(parts) < 2 or not parts[1]: continue
+    if len(parts) < 3 or parts[1] == "-": continue   # (a run whose stepping time was not found)
     # name, stepping time (trubal's cycling, LAMMPS's loop), whole process, peak RSS of each rank
     runs.setdefault(parts[0], []).append((float(parts[1]), float(parts[2]), [int(x) for x in parts[3:]]))
 med = {k: statistics.median(t for t, _, _ in v) for k, v in runs.items()}

@@ -45,7 +45,7 @@ const Command backend_command = {
     "(N(N-1)/2 pair slots of one byte; it cannot miss a contact); it refuses to take more than `maxmem` bytes "
     "(default 4 GiB or half the physical memory, the smaller). mpi: under `mpirun -np P trubal deck.dat` "
     "(the default backend there) the step is shared among the P ranks by a spatial decomposition: the balls "
-    "are split by recursive coordinate bisection into P groups, each the share of the balls its rank stepped fastest (equal at first; then in proportion to the speed each rank stepped its own balls at since the last split, so that a rank on a slower core, or with more contacts a ball, gets fewer; PRINT info shows the shares) (made again at every pair-list "
+    "are split by recursive coordinate bisection into P groups (equal at first, then each rank's share in proportion to the speed it stepped its own balls at since the last split, so that a rank on a slower core, or with more contacts a ball, gets fewer; PRINT info shows the shares; made again at every pair-list "
     "rebuild), each rank steps its own balls with ghost copies of their partners (at a rebuild each rank "
     "searches the pairs of its range of ball numbers, and the ranks' lists are joined, in order, into the "
     "serial list), and each step the owners "

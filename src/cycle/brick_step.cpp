@@ -169,10 +169,11 @@ void BrickStep::update_shares() {
   // Every member's speed since the last split (its own balls' forces and motion, not the waits):
   // the next shares are halfway between the last ones and the speeds' proportions, each clamped
   // between half and twice an equal share (then normalised), so that one noisy interval moves
-  // them little. A core slowed
-  // by the machine, or a part where the contacts crowd, gets fewer balls.
+  // them little. A core slowed by the machine, or a part where the contacts crowd, gets fewer
+  // balls.
   const int ranks = team_->size();
   if (shares_.size() != static_cast<std::size_t>(ranks)) shares_.assign(ranks, 1.0 / ranks);
+  if (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed)) work_seconds_ *= 3;
   std::vector<double> mine{work_seconds_, work_ball_steps_}, all;
   team_->allgather(mine, all);   // (a collective call: every member splits at once)
   work_seconds_ = work_ball_steps_ = 0;
@@ -342,9 +343,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   StepSums mine;
   const auto t0 = std::chrono::steady_clock::now();
   step_.run(pool, part_, scratch_, kernels_, mine, times, ref_.x.size() == m ? &ref_ : nullptr);
-  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed)) seconds *= 3;
-  work_seconds_ += seconds;
+  work_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   work_ball_steps_ += static_cast<double>(owned_.size());
   current_ = false;
   results_written_ = kernels.writes_results();

@@ -85,8 +85,8 @@ class BrickStep {
 
   std::vector<std::pair<std::string, std::string>> info() const;
 
-  // Tests: the member whose own work is counted this many times slower (as a busy core would make
-  // it), to see the shares follow; -1: none.
+  // Tests: the member (team rank) whose own work is counted three times slower at each split, as a
+  // busy core would make it, to see the shares follow; -1: none.
   static inline std::atomic<int> slow_member_for_test{-1};
 
  private:
