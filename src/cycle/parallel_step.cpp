@@ -5,28 +5,6 @@
 
 namespace trubal {
 
-namespace {
-
-// Whether the threads share the step at all is timed, not predicted: balls numbered so that most
-// pairs join distant numbers (the Rowe decks make all large layers, then all small ones) make the
-// cross pairs scattered and slow, and small scenes pay more for waking threads than any cost model
-// says. A trial of kTrialChunks chunks of kTrialChunk steps, shared and on one thread in turn (the
-// first kTrialWarm steps of each chunk not counted: data moving between the cores' caches), whenever
-// the ball count or the pool changes and every kRetrial steps; one thread takes over only where its
-// median step is kSingleGain times faster than the shared one: a wrong verdict for one thread costs
-// up to half the speed, one for sharing a few percent.
-constexpr int kTrialChunks = 8, kTrialChunk = 16, kTrialWarm = 4;
-constexpr std::int64_t kRetrial = 20000;
-constexpr double kSingleGain = 1.05;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
-}  // namespace
-
 void ParallelStep::split(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts) {
   const std::size_t blocks = (balls + kContactBalls - 1) / kContactBalls;
   split_version_ = c.list_version;
@@ -100,24 +78,7 @@ void ParallelStep::add_wall_loads(Model& model, int parts) {
 bool ParallelStep::share_now(std::size_t balls, int parts) {
   const int rule = share_rule.load(std::memory_order_relaxed);
   if (rule != 0) return rule > 0;
-  if (trial_step_ == 0 && (balls != trial_balls_ || parts != trial_parts_ || ++since_trial_ >= kRetrial)) {
-    trial_balls_ = balls;
-    trial_parts_ = parts;
-    since_trial_ = 0;
-    trial_step_ = 1;
-    trial_[0].clear();
-    trial_[1].clear();
-  }
-  if (trial_step_ == 0) return share_;
-  return ((trial_step_ - 1) / kTrialChunk) % 2 == 0;   // chunks shared, single, shared, ...
-}
-
-void ParallelStep::trial_time(bool shared, double seconds) {
-  if ((trial_step_ - 1) % kTrialChunk >= kTrialWarm) trial_[shared ? 1 : 0].push_back(seconds);
-  if (++trial_step_ > kTrialChunks * kTrialChunk) {
-    trial_step_ = 0;
-    share_ = !(median(trial_[0]) * kSingleGain < median(trial_[1]));
-  }
+  return trial_.shared_now(static_cast<std::uint64_t>(balls) << 16 ^ static_cast<std::uint64_t>(parts));
 }
 
 void ParallelStep::cross_lists(const ContactTable& c, std::size_t balls, int parts) {
@@ -206,7 +167,8 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   for (double m : moved_) moved2_ = std::max(moved2_, m);
   for (StepSums& part : thread_sums_) sums.add(part);
   const auto t2 = Clock::now();
-  if (trial_step_ > 0) trial_time(parallel, std::chrono::duration<double>(t2 - t0).count());
+  if (parts > 1 && share_rule.load(std::memory_order_relaxed) == 0 && trial_.in_trial())
+    trial_.record(parallel, std::chrono::duration<double>(t2 - t0).count());
   times.forces += std::chrono::duration<double>(t1 - t0).count();
   times.motion += std::chrono::duration<double>(t2 - t1).count();
 }

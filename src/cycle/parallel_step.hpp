@@ -21,6 +21,7 @@
 #include "cycle/kernels.hpp"
 #include "cycle/phase_times.hpp"
 #include "cycle/step_scratch.hpp"
+#include "cycle/timed_choice.hpp"
 #include "cycle/verlet.hpp"
 #include "model/model.hpp"
 
@@ -44,7 +45,7 @@ class ParallelStep {
   // at most one per pair block, all of them while a trial runs; 0 before the first step.
   int active() const {
     const int rule = share_rule.load(std::memory_order_relaxed);
-    const bool sharing = rule != 0 ? rule > 0 : trial_step_ > 0 || share_;
+    const bool sharing = rule != 0 ? rule > 0 : trial_.in_trial() || trial_.verdict();
     return sharing ? split_parts_ : 1;
   }
   // Tests: 0 times whether sharing pays (the default), 1 always shares (small scenes still exercise
@@ -78,15 +79,9 @@ class ParallelStep {
   double moved2_ = 0;
   int split_parts_ = 0;
 
-  // Whether this step shares the work (a trial step or the trial's verdict); records a trial step's time.
+  // Whether this step shares the work (cycle/timed_choice.hpp: a trial step or the trial's verdict).
   bool share_now(std::size_t balls, int parts);
-  void trial_time(bool shared, double seconds);
-  bool share_ = true;                  // the last trial's verdict
-  int trial_step_ = 0;                 // 1.. within a trial, 0 outside
-  std::vector<double> trial_[2];       // step times: [0] one thread, [1] shared
-  std::size_t trial_balls_ = 0;        // what the last trial ran on
-  int trial_parts_ = 0;
-  std::int64_t since_trial_ = 0;
+  TimedChoice trial_;
 };
 
 }  // namespace trubal

@@ -33,6 +33,9 @@ constexpr std::size_t kParallelBalls = 8192;
 constexpr std::size_t kSpaceBalls = 4096;
 constexpr double kSpaceCross = 0.25;
 
+// PRINT info's "last step shared by" where such a scene's steps are timed faster on one thread.
+constexpr const char* kOneThread = "one thread (sharing the steps in space was timed slower)";
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -115,9 +118,10 @@ void Pipeline::invalidate() {
 
 bool Pipeline::any_outside(const Model& model) {
   const std::size_t n = model.balls.size();
-  const int parts = pool_.size();
+  ThreadPool& pool = pool_now();
+  const int parts = pool.size();
   partial_.assign(parts, 0.0);
-  pool_.run([&](int t) {
+  pool.run([&](int t) {
     partial_[t] = outside_cell(model, split_point(n, parts, t), split_point(n, parts, t + 1)) ? 1.0 : 0.0;
   }, n >= kParallelBalls);
   return std::any_of(partial_.begin(), partial_.end(), [](double m) { return m != 0; });
@@ -136,9 +140,10 @@ bool Pipeline::needs_rebuild(const Model& model) {
   if (known) return !(step_.moved2() <= limit2);
   const Balls& b = model.balls;
   const std::size_t n = b.size();
-  const int parts = pool_.size();
+  ThreadPool& pool = pool_now();
+  const int parts = pool.size();
   partial_.assign(parts, 0.0);
-  pool_.run([&](int t) { partial_[t] = ref_.max_displacement2(b, split_point(n, parts, t), split_point(n, parts, t + 1)); },
+  pool.run([&](int t) { partial_[t] = ref_.max_displacement2(b, split_point(n, parts, t), split_point(n, parts, t + 1)); },
             n >= kParallelBalls);
   double moved2 = 0;
   for (double m : partial_) moved2 = std::max(moved2, m);   // a max is exact in any order
@@ -154,11 +159,11 @@ void Pipeline::rebuild(Model& model) {
     if (model.space.periodic) skin = periodic_skin(model, skin);
   }
   check_periodic_cell(model);
-  backend_->find_pairs(model, skin, pool_, pairs_);
+  backend_->find_pairs(model, skin, pool_now(), pairs_);
   // A backend asked every step mostly finds the list it found before: nothing to carry over then.
   if (backend_->keeps_list() || model_ != &model || !holds_pairs(model.contacts, pairs_)) install_pairs(model.contacts, pairs_);
   if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
-  if (!model.walls.empty() || model.wall_contacts.size() > 0) find_wall_contacts(model, skin, pool_);
+  if (!model.walls.empty() || model.wall_contacts.size() > 0) find_wall_contacts(model, skin, pool_now());
   if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
   wall_travel_ = 0;
   if (backend_->keeps_list()) ref_.record(model, skin);
@@ -265,17 +270,35 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   if (!distributed_ && bricks_.size() > 1 && !whole_now) {
     // The threads: in space while the parts are live (brick_step decides again at the next list),
     // else as the current list says.
+    // (on one thread if the last step was: one_thread_ holds until a step is shared again)
+    const auto t0 = std::chrono::steady_clock::now();   // a trial times the whole step, its search too
     if (!bricks().live_for(model) && (!fresh_ || model_ != &model)) prepare(model);
     if (bricks().live_for(model) || threads_in_space(model)) {
-      space_threads_ = true;
-      shared_by_ = "the spatial decomposition, a part per thread";
-      brick_step(model, kernels, sums);
+      // In space, or on one thread where sharing it was timed slower (cycle/timed_choice.hpp).
+      const bool timed = split_rule.load(std::memory_order_relaxed) == 0 &&
+                         ParallelStep::share_rule.load(std::memory_order_relaxed) == 0;
+      const bool in_space =
+          !timed || space_choice_.shared_now(static_cast<std::uint64_t>(model.balls.size()) << 16 ^
+                                             static_cast<std::uint64_t>(pool_.size()));
+      one_thread_ = !in_space;
+      if (in_space) {
+        space_threads_ = true;
+        shared_by_ = "the spatial decomposition, a part per thread";
+        brick_step(model, kernels, sums);
+      } else {
+        space_threads_ = false;
+        shared_by_ = kOneThread;
+        whole_step(model, kernels, sums);
+      }
+      if (timed && space_choice_.in_trial())
+        space_choice_.record(in_space, seconds_since(t0) * (in_space ? space_time_scale_for_test.load() : 1.0));
       move_walls(model, kernels.dt);
       return;
     }
     space_threads_ = false;
     shared_by_ = "ball numbers";
   }
+  one_thread_ = false;
   whole_step(model, kernels, sums);
   move_walls(model, kernels.dt);
 }
@@ -287,7 +310,7 @@ void Pipeline::whole_step(Model& model, const StepKernels& kernels, StepSums& su
   fresh_ = false;
   const bool measure = backend_->keeps_list() && ref_.x.size() == model.balls.size();
   if (kernels.moments) scratch_.ball_moments.resize(model.balls.size());   // the contact loops zero their balls'
-  step_.run(pool_, model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
+  step_.run(pool_now(), model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
   moved_known_ = measure;
 }
 
@@ -321,7 +344,10 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
     lines.emplace_back("contact results made when read", std::to_string(results_made_) +
                                                              " (a CYCLE's last step taken again, since BACKEND)");
   const int used = step_.active();
-  if (!space_threads_ && used > 0 && used < pool_.size())
+  if (shared_by_ == kOneThread)
+    lines.emplace_back("threads used", "1 (the last trial of the split in space found one thread faster: another "
+                                       "program busy on a core, or a scene too small to share)");
+  else if (!space_threads_ && used > 0 && used < pool_.size())
     lines.emplace_back("threads used", std::to_string(used) +
                                            (used > 1 ? " (one per block of 256 balls)"
                                                      : " (the balls fill one block of 256, or sharing the step was "

@@ -18,6 +18,7 @@
 #include "cycle/snapshot.hpp"
 #include "cycle/step_scratch.hpp"
 #include "cycle/team.hpp"
+#include "cycle/timed_choice.hpp"
 #include "cycle/verlet.hpp"
 #include "support/thread_pool.hpp"
 
@@ -66,6 +67,9 @@ class Pipeline {
   // Tests: 0 lets each pair list decide whether the threads share the steps in space (the default),
   // 1 always shares them so where there are threads, -1 never does; for every Pipeline of the process.
   static inline std::atomic<int> split_rule{0};
+  // Tests: the split in space's trial steps count this many times their time (1000: the trial finds
+  // one thread faster, 0.001: the split), so either verdict can be asserted on any machine.
+  static inline std::atomic<double> space_time_scale_for_test{1.0};
 
   PipelineCounters counters() const;
   std::vector<std::pair<std::string, std::string>> info() const;
@@ -108,12 +112,16 @@ class Pipeline {
   // A step by the spatial decomposition (a distributed run's, or the threads' where it applies).
   void brick_step(Model& model, const StepKernels& kernels, StepSums& sums);
   // A step on the whole model, its contacts and motion shared among the threads by ball numbers.
+  // (On this thread alone where one_thread_ says so: the split in space's timed fallback.)
   void whole_step(Model& model, const StepKernels& kernels, StepSums& sums);
   // Whether the threads of this process share the step in space (the decomposition, one part per
   // thread) rather than by ball numbers: decided for each pair list (split_rule, kSpaceBalls).
   bool threads_in_space(const Model& model);
   // f(part, member) on every part of the decomposition: this rank's alone, or each thread's on its thread.
   template <class F> void each_part(F&& f);
+  // The threads of the search and the step's tests: one where the split in space's trial found one
+  // thread faster (the pool's others would wake at every step and spin beside another program).
+  ThreadPool& pool_now() { return one_thread_ ? *solo_pools_[0] : pool_; }
   BrickStep& bricks() { return *bricks_[0]; }
   const BrickStep& bricks() const { return *bricks_[0]; }
   // The walls' motion over a step, and how far any wall's surface may have gone since the search.
@@ -133,6 +141,8 @@ class Pipeline {
   const Model* space_model_ = nullptr;   // the list threads_in_space() last decided for
   std::uint64_t space_version_ = 0;
   bool space_verdict_ = false;
+  bool one_thread_ = false;         // this step runs on one thread (space_choice_'s verdict)
+  TimedChoice space_choice_;        // where the list says in space: whether in space or on one thread
   bool distributed_ = false;        // BACKEND mpi on several ranks: every step by the decomposition
   bool whole_next_ = false;         // but the next (rewind_step): on the whole model, on every rank
   std::string shared_by_;           // how the last distributed step was shared among the ranks (PRINT info)

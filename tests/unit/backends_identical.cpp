@@ -164,6 +164,40 @@ TEST_CASE("backends: threads share the step in space where ball numbers are far 
   }
 }
 
+TEST_CASE("backends: the split in space falls back to one thread where the trial times it slower, same answer",
+          "[backends]") {
+  // 4400 balls numbered by layer parity: the list says in space. The trial (cycle/timed_choice.hpp,
+  // 128 steps from the first) times the split in space against one thread; its in-space steps
+  // counted 1000 times slower, one thread must win (and the steps after it run on one thread), a
+  // thousandth, the split must. Either way, through every switch between the two, the serial bits.
+  const Scene scene = fcc_compression(11, 10, 10, true);
+  Model serial_model = scene.model;
+  auto serial = make_pipeline("serial", 1);
+  constexpr int kCycles = 200;
+  REQUIRE(run_cycles(serial_model, *serial, kCycles, {}).done == kCycles);
+  const ShareRule share(0);
+  const SplitRule split(0);
+  for (double scale : {1000.0, 0.001}) {
+    INFO("in-space trial steps counted " << scale << " times their time");
+    Pipeline::space_time_scale_for_test = scale;
+    Model model = scene.model;
+    auto threaded = make_pipeline("threaded", 2);
+    const bool done = run_cycles(model, *threaded, kCycles, {}).done == kCycles;
+    Pipeline::space_time_scale_for_test = 1.0;
+    REQUIRE(done);
+    CHECK(difference(picture(serial_model), picture(model)) == "");
+    std::map<std::string, std::string> info;
+    for (const auto& [name, value] : threaded->info()) info[name] = value;
+    if (scale > 1) {
+      CHECK(info["last step shared by"] == "one thread (sharing the steps in space was timed slower)");
+      CHECK(threaded->counters().threads_used == 1);
+    } else {
+      CHECK(info["last step shared by"] == "the spatial decomposition, a part per thread");
+      CHECK(threaded->counters().threads_used == 2);
+    }
+  }
+}
+
 TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewer balls), same answer", "[backends]") {
   // Member 1's work counted three times slower (BrickStep::slow_member_for_test, as a core the
   // machine slows would be): from the second decomposition on, its share of the balls falls below
