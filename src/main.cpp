@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include <chrono>
@@ -86,6 +87,11 @@ int run(int argc, char** argv) {
   trubal::Interpreter interp(session, output);
   trubal::install_interrupt_handler();
 
+  // Tests: "R L" makes rank R's command at line L of the deck fail there alone (distributed_runs.cpp).
+  if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
+    int rank = -1, line = 0;
+    if (std::sscanf(at, "%d %d", &rank, &line) == 2 && rank == trubal::comm::rank()) interp.fail_line_for_test = line;
+  }
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).
   std::int64_t stdin_deck = deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO)) ? 1 : 0;
@@ -94,6 +100,7 @@ int run(int argc, char** argv) {
     interp.run_file(interactive_deck);   // errors are reported; the shell opens anyway
     if (!interp.stopped()) trubal::run_shell(interp);
   } else if (stdin_deck) {
+    interp.agree_lazily = true;   // the deck's first error ends the run
     if (trubal::comm::size() == 1) {   // read as it comes: a pipe may feed commands one by one
       status = interp.run_deck(std::cin, "<stdin>") ? 0 : 1;
     } else {   // rank 0 reads it all, and hands it to the others
@@ -101,6 +108,7 @@ int run(int argc, char** argv) {
       status = interp.run_deck(in, "<stdin>") ? 0 : 1;
     }
   } else if (!deck.empty()) {
+    interp.agree_lazily = true;
     status = interp.run_file(deck) ? 0 : 1;
   } else {
     trubal::run_shell(interp);

@@ -1,5 +1,6 @@
 #include "interp/interpreter.hpp"
 
+#include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -68,14 +69,18 @@ std::optional<std::string> Interpreter::variable(const std::string& name) const 
 // Messages quote the user's words and file names: escape what a terminal would act on.
 static std::string safe(const std::string& message) { return printable(message, std::string::npos); }
 
-void Interpreter::report(const std::string& raw_message) {
+void Interpreter::report(const std::string& raw_message, const LocatedError* at) {
   const std::string message = safe(raw_message);
   last_error_ = {frames_.empty() ? std::string() : frames_.back().name, frames_.empty() ? 0 : frames_.back().line,
                  message};
+  if (at) last_error_ = {at->file, at->line, message};
   if (!report_errors) return;
   auto& err = output_.err();
   output_.out().flush();
-  if (frames_.empty()) {
+  if (at) {   // another rank's place in the deck (this one's CALLs may not be its)
+    if (at->file.empty()) err << "error: " << message << '\n';
+    else err << fmt::format("{}:{}: error: {}\n", at->file, at->line, message);
+  } else if (frames_.empty()) {
     err << "error: " << message << '\n';
   } else {
     err << fmt::format("{}:{}: error: {}\n", frames_.back().name, frames_.back().line, message);
@@ -94,13 +99,27 @@ void Interpreter::warn(const std::string& raw_message) {
 }
 
 void Interpreter::execute(const std::string& line) {
-  std::string expanded = expand_variables(line, [this](const std::string& n) { return variable(n); });
-  auto words = split_words(expanded);
-  if (words.empty()) return;
-  const Command& command = find_command(words[0]);
+  std::string expanded;
+  std::vector<std::string> words;
+  const Command* found = nullptr;
+  try {
+    expanded = expand_variables(line, [this](const std::string& n) { return variable(n); });
+    words = split_words(expanded);
+    if (words.empty()) return;
+    found = &find_command(words[0]);
+  } catch (...) {   // (every rank fails here alike; one that failed before this line is the one to report)
+    if (comm::size() > 1) settle_agreement();
+    throw;
+  }
+  const Command& command = *found;
+  ++commands_run_;
   // Flushed before it runs: a long or hung command shows its own line (a quick one's waits for the
   // next command that is not, or for an error: Command::quick).
   const bool flush = interactive || !command.quick;
+  const bool lazily = comm::size() > 1 && agree_lazily && command.quick && !interactive;
+  // The quick commands before it agreed on first (it may make collective calls), before its echo:
+  // a deck that failed earlier on another rank does not show this command as run.
+  if (comm::size() > 1 && !lazily) settle_agreement();
   if (echo && !interactive) {
     output_.out() << "trubal> " << printable(expanded, 400) << '\n';
     if (flush) output_.out() << std::flush;
@@ -108,29 +127,65 @@ void Interpreter::execute(const std::string& line) {
   words.erase(words.begin());
   Args args(command.usage, std::move(words));
   Context ctx{session_, *this, output_.out()};
-  if (comm::size() == 1) {
-    command.run(ctx, args);
-  } else {
-    // Every rank ran the command; they agree whether it failed, so that they stay in step (a file
-    // only rank 0 writes may fail there alone). The first failing rank's message is everyone's.
-    bool failed = false, reported = false;
-    std::string message;
-    try {
-      command.run(ctx, args);
-    } catch (const ReportedError&) {
-      failed = reported = true;
-    } catch (const std::exception& e) {
-      failed = true;
-      message = e.what();
-    }
-    if (comm::first_failure(failed, message) >= 0) {
-      if (reported || message.empty()) throw ReportedError{};
-      throw std::runtime_error(message);
-    }
-  }
+  if (comm::size() == 1) command.run(ctx, args);
+  else run_agreed(command, ctx, args, lazily);
   if (flush) output_.out().flush();
   const std::string log_failure = output_.take_log_failure();   // (with a log on, it flushes)
   if (!log_failure.empty()) output_.err() << "warning: " << log_failure << '\n';
+}
+
+// A failure's message travels with the failing rank's FILE:LINE: "line length file message".
+static std::string with_location(const std::string& file, int line, const std::string& message) {
+  return fmt::format("{} {} {}{}", line, file.size(), file, message);
+}
+
+void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, bool lazily) {
+  // Every rank runs the command; they agree whether it failed, so that they stay in step (a file
+  // only rank 0 writes may fail there alone). The first failing rank's message is everyone's.
+  bool failed = false, reported = false;
+  std::string message;
+  try {
+    if (fail_line_for_test > 0 && !frames_.empty() && frames_.back().line == fail_line_for_test)
+      throw std::runtime_error(fmt::format("rank {} fails here for a test (TRUBAL_TEST_FAIL_AT)", comm::rank()));
+    command.run(ctx, args);
+  } catch (const ReportedError&) {
+    failed = reported = true;
+  } catch (const std::exception& e) {
+    failed = true;
+    message = e.what();
+  }
+  if (!failed && lazily) {
+    agreement_pending_ = true;
+    return;
+  }
+  agreement_pending_ = false;
+  if (failed && !reported)
+    message = with_location(frames_.empty() ? std::string() : frames_.back().name, frames_.empty() ? 0 : frames_.back().line,
+                            message);
+  if (comm::first_failure(failed, message, commands_run_) >= 0) throw_agreed(std::move(message));
+}
+
+void Interpreter::settle_agreement() {
+  if (!std::exchange(agreement_pending_, false)) return;
+  std::string message;
+  if (comm::first_failure(false, message, commands_run_) >= 0) throw_agreed(std::move(message));
+}
+
+void Interpreter::throw_agreed(std::string message) {
+  if (message.empty()) throw ReportedError{};   // reported where it happened
+  int line = 0;
+  std::size_t length = 0;
+  const char* const end = message.data() + message.size();
+  auto [p, e1] = std::from_chars(message.data(), end, line);
+  if (e1 != std::errc{} || p == end || *p != ' ') throw std::runtime_error(message);
+  auto [q, e2] = std::from_chars(p + 1, end, length);
+  if (e2 != std::errc{} || q == end || *q != ' ' || static_cast<std::size_t>(end - q - 1) < length)
+    throw std::runtime_error(message);
+  std::string file(q + 1, length);
+  std::string text(q + 1 + length, end);
+  // Where this rank is at that line too, its own report says it (with the CALLs that led there).
+  if (!frames_.empty() && frames_.back().name == file && frames_.back().line == line) throw std::runtime_error(text);
+  throw LocatedError(std::move(file), line, std::move(text));
 }
 
 bool Interpreter::run_frames(std::istream& in, const std::string& name, const std::string& canonical,
@@ -145,15 +200,21 @@ bool Interpreter::run_frames(std::istream& in, const std::string& name, const st
         line = reader.next();
       } catch (const InputError&) {
         frames_.back().line = reader.line() + offset;
+        settle_agreement();   // a rank that failed before this line is the one to report
         throw;
       }
       if (!line) break;
       frames_.back().line = reader.line() + offset;
       execute(*line);
     }
+    if (frames_.size() == 1) settle_agreement();   // the deck's end: its last quick commands
   } catch (const ReportedError&) {
     frames_.pop_back();
     throw;
+  } catch (const LocatedError& e) {
+    report(e.what(), &e);
+    frames_.pop_back();
+    throw ReportedError{};
   } catch (const std::exception& e) {
     report(e.what());
     frames_.pop_back();

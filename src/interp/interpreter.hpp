@@ -1,10 +1,13 @@
 // Runs lines of the command language: decks (batch), CALL'd files, and lines typed at the prompt.
 #pragma once
 
+#include <cstdint>
 #include <istream>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "interp/output.hpp"
@@ -12,9 +15,19 @@
 namespace trubal {
 
 class Session;
+struct Command;
+struct Context;
+class Args;
 
 // Thrown after an error has been reported, to unwind nested CALLs without reporting it again.
 struct ReportedError {};
+
+// An error another rank met at its FILE:LINE (under mpirun, where this rank may be further on).
+struct LocatedError : std::runtime_error {
+  LocatedError(std::string f, int l, const std::string& message) : std::runtime_error(message), file(std::move(f)), line(l) {}
+  std::string file;
+  int line = 0;
+};
 
 class Interpreter {
  public:
@@ -56,6 +69,16 @@ class Interpreter {
 
   bool echo = true;                // echo commands in batch mode (SET echo on/off)
   bool interactive = false;        // lines come from the shell
+  // Under mpirun, for a batch deck whose first error ends the run (main's): the ranks agree whether
+  // a quick command (Command::quick: BALL, PROP, ECHO) failed only before the next command that is
+  // not quick and at the deck's end, not after each. A failure is still agreed where it happens
+  // (the failing rank's agreement meets the others' next), and carries its FILE:LINE, since the
+  // others may be further on by then. Elsewhere (the shell, a host, a deck before the shell) every
+  // command is agreed on as it ends: a rank that failed alone would leave the others' models changed.
+  bool agree_lazily = false;
+  // Tests (TRUBAL_TEST_FAIL_AT, main.cpp): the command at this line of a deck fails on this rank
+  // alone, as a rank that ran out of memory would (0: none).
+  int fail_line_for_test = 0;
   void request_stop() { stop_ = true; }
   bool stopped() const { return stop_; }
   // After STOP ended a deck: a host that goes on giving lines lets them run again.
@@ -72,7 +95,18 @@ class Interpreter {
   // Executes one logical line (comments and continuations already handled).
   void execute(const std::string& line);
   bool run_frames(std::istream& in, const std::string& name, const std::string& canonical, int first_line = 1);
-  void report(const std::string& message);
+  // `at`: the place another rank failed at, not this rank's.
+  void report(const std::string& message, const LocatedError* at = nullptr);
+  // Runs a command on every rank and agrees whether it failed (comm::first_failure); `lazily`: a
+  // success leaves the agreement pending (agree_lazily).
+  void run_agreed(const Command& command, Context& ctx, Args& args, bool lazily);
+  // The ranks' pending agreement on the quick commands run since the last one, if any: throws the
+  // first failing rank's error.
+  void settle_agreement();
+  // After the ranks agreed that `rank` failed with `message` (encoded with its FILE:LINE): the error.
+  [[noreturn]] void throw_agreed(std::string message);
+  bool agreement_pending_ = false;
+  std::int64_t commands_run_ = 0;   // on every rank alike: where in the deck a failure came first
 
   Session& session_;
   Output& output_;

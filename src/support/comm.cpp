@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <limits>
 
 #ifdef TRUBAL_HAVE_MPI
 #include <mpi.h>
@@ -100,12 +101,18 @@ void broadcast(std::int64_t& value) {
 #endif
 }
 
-int first_failure(bool failed, [[maybe_unused]] std::string& message) {
+int first_failure(bool failed, [[maybe_unused]] std::string& message, [[maybe_unused]] std::int64_t order) {
 #ifdef TRUBAL_HAVE_MPI
   if (g_started && g_size > 1) {
-    int mine = failed ? g_rank : g_size, first = g_size;
-    MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-    if (first == g_size) return -1;
+    // (order, rank) in one integer: the rank in the low 23 bits (MPI_Comm_size is an int, and no
+    // run has 8 million ranks), the order in the 40 bits above.
+    constexpr int kRankBits = 23;
+    constexpr std::int64_t kNone = std::numeric_limits<std::int64_t>::max();
+    const std::int64_t o = std::clamp<std::int64_t>(order, 0, (std::int64_t{1} << 40) - 1);
+    std::int64_t mine = failed ? (o << kRankBits | g_rank) : kNone, least = kNone;
+    MPI_Allreduce(&mine, &least, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+    if (least == kNone) return -1;
+    const int first = static_cast<int>(least & ((std::int64_t{1} << kRankBits) - 1));
     std::int64_t n = static_cast<std::int64_t>(message.size());
     MPI_Bcast(&n, 1, MPI_INT64_T, first, MPI_COMM_WORLD);
     message.resize(static_cast<std::size_t>(n));

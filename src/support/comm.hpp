@@ -28,9 +28,10 @@ inline bool root() { return rank() == 0; }
 void broadcast(std::string& text);
 void broadcast(std::int64_t& value);
 
-// The lowest rank on which `failed` is true, or -1 where it is true on none; that rank's
-// `message` is handed to every rank.
-int first_failure(bool failed, std::string& message);
+// The rank on which `failed` is true with the lowest `order` (then the lowest rank), or -1 where it
+// is true on none; that rank's `message` is handed to every rank. `order`: where in the deck the
+// rank failed (its count of commands run; 0 to 2^40), for ranks that may meet at different commands.
+int first_failure(bool failed, std::string& message, std::int64_t order = 0);
 
 // Every rank's part in rank order, concatenated into `all` (part sizes may differ).
 void allgather(const std::vector<double>& mine, std::vector<double>& all);

@@ -4,6 +4,7 @@
 // several ranks (one message, exit 1, no rank left hanging). Skipped with a warning where this build
 // or machine has no MPI.
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include <filesystem>
 #include <string>
@@ -25,10 +26,11 @@ bool have_mpi() {
 
 // Runs deck.dat in `dir` on `ranks` ranks (0: a plain trubal, no mpirun), with a time limit so that
 // a hang fails the test instead of stalling it; returns the exit status, output in out.txt.
-int run_deck(const TempDir& dir, int ranks) {
+// `env`: more variables for every rank ("NAME=value ...").
+int run_deck(const TempDir& dir, int ranks, const std::string& env = "") {
   const std::string launcher =
       ranks == 0 ? std::string("timeout 120 ")
-                 : "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                 : "env " + env + " OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
                    "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np " + std::to_string(ranks) + " ";
   return shell("cd " + quote(dir.str()) + " && " + launcher + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1");
 }
@@ -196,6 +198,35 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     INFO(out);
     CHECK(out.find("deck.dat:3:") != std::string::npos);
     CHECK(out.find("deck.dat:3:") == out.rfind("deck.dat:3:"));
+  }
+  SECTION("a quick command (BALL) failing on one rank alone stops every rank at that rank's FILE:LINE") {
+    // In a batch deck the ranks agree on quick commands only before the next command that is not
+    // quick, or at the deck's end (Interpreter::agree_lazily): the others go on past the failing
+    // line, so the error must carry the failing rank's place. Lines 3-42 are BALL lines; rank 1 or
+    // rank 0 fails at line 10, then a CYCLE follows; or at the deck's last line (nothing follows);
+    // or at line 10 where line 20 is bad on every rank (the earlier failure is the one reported).
+    std::string deck = "start 0.01 0.01 0.01\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    for (int k = 0; k < 40; ++k)
+      deck += fmt::format("{}ball {} 0.005 0.005 0.00008\n", k == 17 ? "#" : "", 0.001 + 0.0002 * k);
+    for (const char* kind : {"cycle follows", "deck ends", "later error"}) {
+      for (const int rank : {1, 0}) {
+        const int line = kind == std::string("deck ends") ? 42 : 10;
+        INFO(kind << ": rank " << rank << " fails at line " << line);
+        std::string text = deck;
+        if (kind == std::string("later error")) text.replace(text.find("#ball"), 1, "ball 1 2\n#");   // line 20
+        if (kind != std::string("deck ends")) text += "cycle 10\nprint info\n";
+        TempDir dir;
+        dir.write("deck.dat", text);
+        const std::string env = fmt::format("TRUBAL_TEST_FAIL_AT='{} {}'", rank, line);
+        CHECK(run_deck(dir, 2, env) == 1);   // not 124: no rank waits for the others
+        const std::string out = slurp(dir.path() / "out.txt");
+        INFO(out);
+        const std::string where = fmt::format("deck.dat:{}: error: rank {} fails here", line, rank);
+        CHECK(out.find(where) != std::string::npos);
+        CHECK(out.find(": error:") == out.rfind(": error:"));   // one message
+        CHECK(out.find("cycle 10") == std::string::npos);       // the CYCLE did not run
+      }
+    }
   }
 }
 
