@@ -171,10 +171,8 @@ TEST_CASE("backends: the split in space falls back to one thread where the trial
   // counted 1000 times slower, one thread must win (and the steps after it run on one thread), a
   // thousandth, the split must. Either way, through every switch between the two, the serial bits.
   const Scene scene = fcc_compression(11, 10, 10, true);
-  Model serial_model = scene.model;
-  auto serial = make_pipeline("serial", 1);
   constexpr int kCycles = 200;
-  REQUIRE(run_cycles(serial_model, *serial, kCycles, {}).done == kCycles);
+  const Model serial_model = run(scene, "serial", 1, kCycles);
   const ShareRule share(0);
   const SplitRule split(0);
   for (double scale : {1000.0, 0.001}) {
@@ -203,10 +201,8 @@ TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewe
   // machine slows would be): from the second decomposition on, its share of the balls falls below
   // half and stays about at the floor of half an equal share; the bits stay serial's.
   const Scene scene = fcc_compression(11, 10, 10, true);
-  Model serial_model = scene.model;
-  auto serial = make_pipeline("serial", 1);
   constexpr int kCycles = 400;
-  REQUIRE(run_cycles(serial_model, *serial, kCycles, {}).done == kCycles);
+  const Model serial_model = run(scene, "serial", 1, kCycles);
   const ShareRule share(1);
   const SplitRule split(1);
   BrickStep::slow_member_for_test = 1;
