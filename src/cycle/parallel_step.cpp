@@ -78,7 +78,7 @@ void ParallelStep::add_wall_loads(Model& model, int parts) {
 bool ParallelStep::share_now(std::size_t balls, int parts) {
   const int rule = share_rule.load(std::memory_order_relaxed);
   if (rule != 0) return rule > 0;
-  return trial_.shared_now(static_cast<std::uint64_t>(balls) << 16 ^ static_cast<std::uint64_t>(parts));
+  return trial_.shared_now(balls, parts);
 }
 
 void ParallelStep::cross_lists(const ContactTable& c, std::size_t balls, int parts) {

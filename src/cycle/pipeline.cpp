@@ -277,9 +277,7 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
       // In space, or on one thread where sharing it was timed slower (cycle/timed_choice.hpp).
       const bool timed = split_rule.load(std::memory_order_relaxed) == 0 &&
                          ParallelStep::share_rule.load(std::memory_order_relaxed) == 0;
-      const bool in_space =
-          !timed || space_choice_.shared_now(static_cast<std::uint64_t>(model.balls.size()) << 16 ^
-                                             static_cast<std::uint64_t>(pool_.size()));
+      const bool in_space = !timed || space_choice_.shared_now(model.balls.size(), pool_.size());
       one_thread_ = !in_space;
       if (in_space) {
         space_threads_ = true;

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -23,8 +24,9 @@ class TimedChoice {
   static constexpr double kSingleGain = 1.05;
 
   // Whether this step is shared (a trial's chunk, or the last trial's verdict); a trial starts where
-  // `what` differs from the last trial's or kRetrial steps have passed since it.
-  bool shared_now(std::uint64_t what) {
+  // the ball count or the threads differ from the last trial's or kRetrial steps have passed since it.
+  bool shared_now(std::size_t balls, int threads) {
+    const std::uint64_t what = static_cast<std::uint64_t>(balls) << 16 ^ static_cast<std::uint64_t>(threads);
     if (step_ == 0 && (what != what_ || ++since_ >= kRetrial)) {
       what_ = what;
       since_ = 0;
@@ -45,8 +47,6 @@ class TimedChoice {
       shared_ = !(median(times_[0]) * kSingleGain < median(times_[1]));
     }
   }
-  // Forget the verdict: the next shared_now() starts a trial.
-  void reset() { *this = TimedChoice{}; }
 
  private:
   static double median(std::vector<double> v) {

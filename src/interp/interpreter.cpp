@@ -71,21 +71,18 @@ static std::string safe(const std::string& message) { return printable(message, 
 
 void Interpreter::report(const std::string& raw_message, const LocatedError* at) {
   const std::string message = safe(raw_message);
-  last_error_ = {frames_.empty() ? std::string() : frames_.back().name, frames_.empty() ? 0 : frames_.back().line,
-                 message};
-  if (at) last_error_ = {at->file, at->line, message};
+  // Another rank's place in the deck (this one's CALLs may not be its), or this rank's.
+  last_error_ = at ? Error{at->file, at->line, message} : Error{here_file(), here_line(), message};
   if (!report_errors) return;
   auto& err = output_.err();
   output_.out().flush();
-  if (at) {   // another rank's place in the deck (this one's CALLs may not be its)
-    if (at->file.empty()) err << "error: " << message << '\n';
-    else err << fmt::format("{}:{}: error: {}\n", at->file, at->line, message);
-  } else if (frames_.empty()) {
+  if (at ? at->file.empty() : frames_.empty()) {
     err << "error: " << message << '\n';
   } else {
-    err << fmt::format("{}:{}: error: {}\n", frames_.back().name, frames_.back().line, message);
-    for (auto f = frames_.rbegin() + 1; f != frames_.rend(); ++f)
-      err << fmt::format("{}:{}: note: called from here\n", f->name, f->line);
+    err << fmt::format("{}:{}: error: {}\n", last_error_.file, last_error_.line, message);
+    if (!at)
+      for (auto f = frames_.rbegin() + 1; f != frames_.rend(); ++f)
+        err << fmt::format("{}:{}: note: called from here\n", f->name, f->line);
   }
   err.flush();
 }
@@ -160,8 +157,7 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
   }
   agreement_pending_ = false;
   if (failed && !reported)
-    message = with_location(frames_.empty() ? std::string() : frames_.back().name, frames_.empty() ? 0 : frames_.back().line,
-                            message);
+    message = with_location(here_file(), here_line(), message);
   if (comm::first_failure(failed, message, commands_run_) >= 0) throw_agreed(std::move(message));
 }
 

@@ -95,6 +95,9 @@ class Interpreter {
   // Executes one logical line (comments and continuations already handled).
   void execute(const std::string& line);
   bool run_frames(std::istream& in, const std::string& name, const std::string& canonical, int first_line = 1);
+  // Where this rank is: the innermost file and line ("" and 0 outside any file).
+  std::string here_file() const { return frames_.empty() ? std::string() : frames_.back().name; }
+  int here_line() const { return frames_.empty() ? 0 : frames_.back().line; }
   // `at`: the place another rank failed at, not this rank's.
   void report(const std::string& message, const LocatedError* at = nullptr);
   // Runs a command on every rank and agrees whether it failed (comm::first_failure); `lazily`: a
@@ -103,7 +106,7 @@ class Interpreter {
   // The ranks' pending agreement on the quick commands run since the last one, if any: throws the
   // first failing rank's error.
   void settle_agreement();
-  // After the ranks agreed that `rank` failed with `message` (encoded with its FILE:LINE): the error.
+  // After the ranks agreed that a rank failed with `message` (encoded with its FILE:LINE): the error.
   [[noreturn]] void throw_agreed(std::string message);
   bool agreement_pending_ = false;
   std::int64_t commands_run_ = 0;   // on every rank alike: where in the deck a failure came first
