@@ -199,6 +199,21 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     CHECK(out.find("deck.dat:3:") != std::string::npos);
     CHECK(out.find("deck.dat:3:") == out.rfind("deck.dat:3:"));
   }
+  SECTION("a dump that rank 0 alone fails to write mid-CYCLE stops every rank at that step") {
+    // The dump of cycle 10 cannot replace a folder of its name: rank 0 fails in the CYCLE's
+    // observer while the others would go on into the next step's exchange (they hung there).
+    TempDir dir;
+    std::filesystem::create_directories(dir.path() / "out" / "d_000010.vtp");
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                          "dump vtk out/d every 10\ncycle 30\nprint info\n");
+    CHECK(run_deck(dir, 3) == 1);   // not 124
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    const auto at = out.find("deck.dat:5: error: will not replace 'out/d_000010.vtp'");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:5:", at + 1) == std::string::npos);   // one message
+    CHECK(out.find("cycle: ") == std::string::npos);                 // the deck went no further
+  }
   SECTION("a quick command (BALL) failing on one rank alone stops every rank at that rank's FILE:LINE") {
     // In a batch deck the ranks agree on quick commands only before the next command that is not
     // quick, or at the deck's end (Interpreter::agree_lazily): the others go on past the failing
