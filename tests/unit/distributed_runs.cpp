@@ -214,6 +214,26 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     CHECK(out.find("deck.dat:5:", at + 1) == std::string::npos);   // one message
     CHECK(out.find("cycle: ") == std::string::npos);                 // the deck went no further
   }
+  SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
+    // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks
+    // alone made their CYCLE record, and wait for rank 0, on steps rank 0 did not (it hung).
+    TempDir dir;
+    dir.write("afile", "a file, not a folder\n");
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 200 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                          "hist stress every 10 file afile/h.csv\n");
+    dir.write("more.txt", "cycle 30\nprint info\nquit\n");
+    const int status = shell("cd " + quote(dir.str()) +
+                             " && env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                             "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np 3 " +
+                             quote(TRUBAL_EXE) + " -i deck.dat <more.txt >out.txt 2>&1");
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(status != 124);
+    const auto at = out.find("deck.dat:4: error: cannot write the history file");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:4:", at + 1) == std::string::npos);
+    CHECK_THAT(out, Catch::Contains("cycle: 30\n"));
+  }
   SECTION("a quick command (BALL) failing on one rank alone stops every rank at that rank's FILE:LINE") {
     // In a batch deck the ranks agree on quick commands only before the next command that is not
     // quick, or at the deck's end (Interpreter::agree_lazily): the others go on past the failing
