@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "support/comm.hpp"
 #include "interp/lexer.hpp"
 
 namespace trubal {
@@ -14,9 +15,23 @@ bool next_is_number(const Args& args) { return !args.empty() && parse_real(args.
 
 // A sieve curve from a CSV or blank-separated file: diameter, percent passing on each line; lines
 // that do not start with a number (a header, comments) are skipped.
+// Under mpirun rank 0 alone reads it and hands its text to the others, as with every input file.
 void read_sieve_file(Args& args, const std::string& path, SizeDistribution& d) {
-  std::ifstream in(path);
-  if (!in) args.fail(fmt::format("cannot read the sieve curve file '{}'", path));
+  std::int64_t readable = 0;
+  std::string text;
+  if (comm::root()) {
+    std::ifstream file(path);
+    if (file) {
+      std::ostringstream all;
+      all << file.rdbuf();
+      text = all.str();
+      readable = 1;
+    }
+  }
+  comm::broadcast(readable);
+  if (!readable) args.fail(fmt::format("cannot read the sieve curve file '{}'", path));
+  comm::broadcast(text);
+  std::istringstream in(text);
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {

@@ -305,6 +305,30 @@ cycle 400
 // in a serial run; Ctrl-C (or SIGTERM) at mpirun itself ends the job (SIGTERM to the ranks, SIGKILL
 // a second later), and the ranks stop together and say where. A rank that stopped alone would leave the
 // others waiting in the step's exchange: the time limit would end the run, without the message.
+TEST_CASE("distributed: rank 0 alone reads the input files (the others need not see them)", "[mpi]") {
+  if (!have_mpi()) return;
+  // Rank 1 starts in an empty folder (an MPMD launch): the deck, a CALLed file and GEN's sieve
+  // curve are rank 0's to read. Rank 1 read the sieve curve itself, failed alone and left rank 0's
+  // GEN waiting on a collective call (a hang, or a GEN cut short).
+  TempDir dir, empty;
+  dir.write("sieve.csv", "diameter,passing\n0.0005,0\n0.0008,20\n0.001,50\n0.0015,100\n");
+  dir.write("props.dat", "prop kn 1e5 ks 1e5 fric 0.5 dens 2650\n");
+  dir.write("deck.dat", "start 0.01 0.01 0.01\ngen porosity 0.6 psd sieve file sieve.csv seed 3\ncall props.dat\n"
+                        "cycle 20\nprint balls file balls.csv\n");
+  REQUIRE(run_deck(dir, 0) == 0);
+  const std::string serial = slurp(dir.path() / "balls.csv");
+  REQUIRE(lines_of(serial).size() > 1000);
+  std::filesystem::remove(dir.path() / "balls.csv");
+  const std::string mpmd =
+      "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+      "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np 1 -wdir " + quote(dir.str()) + " " + quote(TRUBAL_EXE) +
+      " deck.dat : -np 1 -wdir " + quote(empty.str()) + " " + quote(TRUBAL_EXE) + " deck.dat";
+  const int status = shell(mpmd + " >" + quote((dir.path() / "out.txt").string()) + " 2>&1");
+  INFO(slurp(dir.path() / "out.txt"));
+  REQUIRE(status == 0);
+  CHECK(slurp(dir.path() / "balls.csv") == serial);
+}
+
 TEST_CASE("distributed: a signal stops every rank's CYCLE at the same step, with one message", "[mpi]") {
   if (!have_mpi()) return;
   const std::string deck = std::string(R"(backend mpi
