@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "cycle/brick_step.hpp"
 #include "interp/interpreter.hpp"
 #include "interp/manpage.hpp"
 #include "interp/output.hpp"
@@ -87,10 +88,14 @@ int run(int argc, char** argv) {
   trubal::Interpreter interp(session, output);
   trubal::install_interrupt_handler();
 
-  // Tests: "R L" makes rank R's command at line L of the deck fail there alone (distributed_runs.cpp).
+  // Tests: "R L" makes rank R's command at line L of the deck fail there alone, "R split" rank R's
+  // first split of the spatial decomposition (distributed_runs.cpp).
   if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
     int rank = -1, line = 0;
+    char word[8] = {};
     if (std::sscanf(at, "%d %d", &rank, &line) == 2 && rank == trubal::comm::rank()) interp.fail_line_for_test = line;
+    else if (std::sscanf(at, "%d %7s", &rank, word) == 2 && std::strcmp(word, "split") == 0)
+      trubal::BrickStep::fail_split_for_test = rank;
   }
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).

@@ -6,12 +6,16 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <new>
+#include <stdexcept>
+#include <string>
 #include <numeric>
 #include <type_traits>
 
 #include <fmt/format.h>
 
 #include "cycle/sum_exchange.hpp"
+#include "support/comm.hpp"
 #include "model/periodic_cell.hpp"
 
 namespace trubal {
@@ -194,13 +198,37 @@ void BrickStep::update_shares() {
 }
 
 void BrickStep::split(const Model& full, const VerletReference& ref) {
+  update_shares();   // (a collective call)
+  if (team_->shares_whole()) return make_part(full, ref);   // (threads: Pipeline::each_part's abort)
+  // A rank that cannot make its part (out of memory) must not leave the others stepping theirs and
+  // waiting for its ghosts: the ranks agree here, and every one stops with that rank's message.
+  std::string failure;
+  try {
+    if (team_->rank() == fail_split_for_test.load()) {
+      fail_split_for_test = -1;
+      throw std::bad_alloc();
+    }
+    make_part(full, ref);
+  } catch (const std::bad_alloc&) {
+    failure = fmt::format("rank {} ran out of memory making its part of the decomposition ({} balls in the whole "
+                          "model): run on more ranks, or on machines with more memory",
+                          team_->rank(), full.balls.size());
+  } catch (const std::exception& e) {
+    failure = e.what();
+  }
+  if (comm::first_failure(!failure.empty(), failure) >= 0) {
+    live_ = false;
+    throw std::runtime_error(failure);
+  }
+}
+
+void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   const int ranks = team_->size(), me = team_->rank();
   const Balls& b = full.balls;
   const std::size_t n = b.size();
   const ContactTable& c = full.contacts;
   const WallContacts& wc = full.wall_contacts;
   owner_.assign(n, 0);
-  update_shares();
   {
     std::vector<std::uint32_t> order(n);
     std::iota(order.begin(), order.end(), 0u);

@@ -88,8 +88,12 @@ class BrickStep {
   // Tests: the member (team rank) whose own work is counted three times slower at each split, as a
   // busy core would make it, to see the shares follow; -1: none.
   static inline std::atomic<int> slow_member_for_test{-1};
+  // Tests (TRUBAL_TEST_FAIL_AT "R split"): rank R's next split fails as if out of memory; -1: none.
+  static inline std::atomic<int> fail_split_for_test{-1};
 
  private:
+  // split()'s work: the owners, and this member's part.
+  void make_part(const Model& full, const VerletReference& ref);
   // The shares of the next split, from every member's speed since the last (a collective call).
   void update_shares();
 
