@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "backends/mpi/mpi_backend.hpp"
 #include "cycle/brick_step.hpp"
 #include "interp/interpreter.hpp"
 #include "interp/manpage.hpp"
@@ -89,13 +90,16 @@ int run(int argc, char** argv) {
   trubal::install_interrupt_handler();
 
   // Tests: "R L" makes rank R's command at line L of the deck fail there alone, "R split" rank R's
-  // first split of the spatial decomposition (distributed_runs.cpp).
+  // first split of the spatial decomposition, "R search" its first share of a pair search
+  // (distributed_runs.cpp).
   if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
     int rank = -1, line = 0;
     char word[8] = {};
     if (std::sscanf(at, "%d %d", &rank, &line) == 2 && rank == trubal::comm::rank()) interp.fail_line_for_test = line;
     else if (std::sscanf(at, "%d %7s", &rank, word) == 2 && std::strcmp(word, "split") == 0)
       trubal::BrickStep::fail_split_for_test = rank;
+    else if (std::sscanf(at, "%d %7s", &rank, word) == 2 && std::strcmp(word, "search") == 0)
+      trubal::fail_search_for_test = rank;
   }
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).

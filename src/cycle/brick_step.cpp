@@ -7,8 +7,6 @@
 #include <iterator>
 #include <limits>
 #include <new>
-#include <stdexcept>
-#include <string>
 #include <numeric>
 #include <type_traits>
 
@@ -202,24 +200,13 @@ void BrickStep::split(const Model& full, const VerletReference& ref) {
   if (team_->shares_whole()) return make_part(full, ref);   // (threads: Pipeline::each_part's abort)
   // A rank that cannot make its part (out of memory) must not leave the others stepping theirs and
   // waiting for its ghosts: the ranks agree here, and every one stops with that rank's message.
-  std::string failure;
-  try {
+  comm::together([&] {
     if (team_->rank() == fail_split_for_test.load()) {
       fail_split_for_test = -1;
       throw std::bad_alloc();
     }
     make_part(full, ref);
-  } catch (const std::bad_alloc&) {
-    failure = fmt::format("rank {} ran out of memory making its part of the decomposition ({} balls in the whole "
-                          "model): run on more ranks, or on machines with more memory",
-                          team_->rank(), full.balls.size());
-  } catch (const std::exception& e) {
-    failure = e.what();
-  }
-  if (comm::first_failure(!failure.empty(), failure) >= 0) {
-    live_ = false;
-    throw std::runtime_error(failure);
-  }
+  }, fmt::format("making its part of the decomposition ({} balls in the whole model)", full.balls.size()));
 }
 
 void BrickStep::make_part(const Model& full, const VerletReference& ref) {

@@ -160,11 +160,16 @@ void Pipeline::rebuild(Model& model) {
   }
   check_periodic_cell(model);
   backend_->find_pairs(model, skin, pool_now(), pairs_);
-  // A backend asked every step mostly finds the list it found before: nothing to carry over then.
-  if (backend_->keeps_list() || model_ != &model || !holds_pairs(model.contacts, pairs_)) install_pairs(model.contacts, pairs_);
-  if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
-  if (!model.walls.empty() || model.wall_contacts.size() > 0) find_wall_contacts(model, skin, pool_now());
-  if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
+  auto install = [&] {
+    // A backend asked every step mostly finds the list it found before: nothing to carry over then.
+    if (backend_->keeps_list() || model_ != &model || !holds_pairs(model.contacts, pairs_)) install_pairs(model.contacts, pairs_);
+    if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
+    if (!model.walls.empty() || model.wall_contacts.size() > 0) find_wall_contacts(model, skin, pool_now());
+    if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
+  };
+  // (Ranks: one that fails alone, out of memory, must not leave the others in the next collective call.)
+  if (distributed_) comm::together(install, "installing the new pair list");
+  else install();
   wall_travel_ = 0;
   if (backend_->keeps_list()) ref_.record(model, skin);
   model_ = &model;

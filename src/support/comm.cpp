@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cstdlib>
 #include <limits>
+#include <new>
+#include <stdexcept>
+#include <string>
 
 #ifdef TRUBAL_HAVE_MPI
 #include <mpi.h>
@@ -150,6 +153,19 @@ void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vec
   }
 #endif
   if (!send.empty() && !recv.empty()) recv[0] = send[0];
+}
+
+void together(const std::function<void()>& work, const std::string& doing) {
+  std::string failure;
+  try {
+    work();
+  } catch (const std::bad_alloc&) {
+    failure = "rank " + std::to_string(g_rank) + " ran out of memory " + doing +
+              ": run on more ranks, or on machines with more memory";
+  } catch (const std::exception& e) {
+    failure = e.what();
+  }
+  if (first_failure(!failure.empty(), failure) >= 0) throw std::runtime_error(failure);
 }
 
 void max_all([[maybe_unused]] std::vector<double>& values) {

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,12 @@ void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>&
 // Point to point, all at once: send[r] goes to rank r, and recv[r] (already sized to what rank r
 // sends this rank) is filled from it. Every rank calls it; empty parts cost nothing but the call.
 void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv);
+
+// Runs `work` on every rank, where a rank's failure would otherwise leave the others waiting in the
+// next collective call: an exception on any rank becomes every rank's, a std::runtime_error with the
+// message of the lowest failing rank (running out of memory named as such, `doing` saying while
+// doing what). A collective call; on one rank, only the message changes (for std::bad_alloc).
+void together(const std::function<void()>& work, const std::string& doing);
 
 // The largest of each rank's values, element by element, on every rank (exact in any order).
 void max_all(std::vector<double>& values);

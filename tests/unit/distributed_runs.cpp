@@ -214,19 +214,25 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     CHECK(out.find("deck.dat:5:", at + 1) == std::string::npos);   // one message
     CHECK(out.find("cycle: ") == std::string::npos);                 // the deck went no further
   }
-  SECTION("a rank that cannot make its part of the decomposition stops every rank's CYCLE") {
-    // Rank 1 fails as out of memory at its first split (TRUBAL_TEST_FAIL_AT "1 split"); the others
-    // must not go on stepping their parts and wait for its ghosts.
-    TempDir dir;
-    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
-                          "cycle 30\nprint info\n");
-    CHECK(run_deck(dir, 3, "TRUBAL_TEST_FAIL_AT='1 split'") == 1);   // not 124
-    const std::string out = slurp(dir.path() / "out.txt");
-    INFO(out);
-    const auto at = out.find("deck.dat:4: error: rank 1 ran out of memory making its part of the decomposition");
-    REQUIRE(at != std::string::npos);
-    CHECK(out.find("deck.dat:4:", at + 1) == std::string::npos);
-    CHECK(out.find("cycle: ") == std::string::npos);
+  SECTION("a rank out of memory in its share of the search or its part stops every rank's CYCLE") {
+    // Rank 1 fails as out of memory in its first share of the pair search, or at its first split
+    // (TRUBAL_TEST_FAIL_AT "1 search", "1 split"): the others must not go on into the gather of
+    // the lists, or step their parts and wait for its ghosts.
+    for (const char* where : {"search", "split"}) {
+      INFO(where);
+      TempDir dir;
+      dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                            "cycle 30\nprint info\n");
+      CHECK(run_deck(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='1 {}'", where)) == 1);   // not 124
+      const std::string out = slurp(dir.path() / "out.txt");
+      INFO(out);
+      const auto at = out.find(fmt::format("deck.dat:4: error: rank 1 ran out of memory {}",
+                                           where == std::string("search") ? "searching its share of the pairs"
+                                                                          : "making its part of the decomposition"));
+      REQUIRE(at != std::string::npos);
+      CHECK(out.find("deck.dat:4:", at + 1) == std::string::npos);
+      CHECK(out.find("cycle: ") == std::string::npos);
+    }
   }
   SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
     // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks

@@ -1,6 +1,7 @@
 #include "backends/mpi/mpi_backend.hpp"
 
 #include <cstring>
+#include <new>
 #include <string>
 
 #include "backends/serial/serial_backend.hpp"
@@ -28,12 +29,26 @@ class MpiBackend final : public Backend {
     const std::size_t n = model.balls.size();
     PairCandidates& mine = ranks > 1 ? mine_ : out;
     mine.periodic_bins = {};
-    find_serial_pairs(model, skin, grid_, mine, split_point(n, ranks, rank), split_point(n, ranks, rank + 1));
+    auto search = [&] {
+      if (rank == fail_search_for_test.load()) {
+        fail_search_for_test = -1;
+        throw std::bad_alloc();
+      }
+      find_serial_pairs(model, skin, grid_, mine, split_point(n, ranks, rank), split_point(n, ranks, rank + 1));
+    };
+    if (ranks == 1) {
+      search();
+      periodic_bins_ = mine.periodic_bins;
+      return;
+    }
+    // (A rank that fails its share alone must not leave the others waiting in the gather below.)
+    comm::together([&] {
+      search();
+      send_.resize(mine.i.size() * kRecord);
+    }, "searching its share of the pairs");
     periodic_bins_ = mine.periodic_bins;
-    if (ranks == 1) return;
     // Every rank's pairs, as records, in rank order.
     const std::size_t m = mine.i.size();
-    send_.resize(m * kRecord);
     for (std::size_t p = 0; p < m; ++p) {
       std::uint8_t* r = send_.data() + p * kRecord;
       std::memcpy(r, &mine.i[p], 4);

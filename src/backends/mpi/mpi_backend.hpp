@@ -3,6 +3,7 @@
 // ranks by ranges of ball indices.
 #pragma once
 
+#include <atomic>
 #include <memory>
 
 #include "backends/backend.hpp"
@@ -10,5 +11,9 @@
 namespace trubal {
 
 std::unique_ptr<Backend> make_mpi_backend();
+
+// Tests (TRUBAL_TEST_FAIL_AT "R search"): rank R's next share of the search fails as if out of
+// memory; -1: none.
+inline std::atomic<int> fail_search_for_test{-1};
 
 }  // namespace trubal
