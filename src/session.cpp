@@ -360,14 +360,13 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
   require_started();
   // `dump vtk out/tri`: the folder is made if it is not there (rank 0 writes the files).
   const std::filesystem::path folder = std::filesystem::path(base).parent_path();
-  std::string failure;
-  if (comm::root() && !folder.empty()) {
+  // (Agreed before make_results, which may search the pairs: a collective call.)
+  comm::together([&] {
+    if (!comm::root() || folder.empty()) return;
     std::error_code ec;
     std::filesystem::create_directories(folder, ec);
-    if (ec) failure = fmt::format("cannot make the folder '{}' for the dumps: {}", folder.string(), ec.message());
-  }
-  // (Agreed before make_results, which may search the pairs: a collective call.)
-  if (comm::first_failure(!failure.empty(), failure) >= 0) throw std::runtime_error(failure);
+    if (ec) throw std::runtime_error(fmt::format("cannot make the folder '{}' for the dumps: {}", folder.string(), ec.message()));
+  }, "making the dumps' folder");
   // The same files again continue their collection; other files start a new one.
   make_results(model_, *pipeline_);
   if (!dumps_ || dumps_->base() != VtkSeries(base).base()) dumps_ = std::make_unique<VtkSeries>(base, every);

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <string>
 
 #include <fmt/format.h>
 
@@ -356,22 +355,11 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     if (escapes(false)) return finish();
     if (control.after_step) {
       const auto output_start = Clock::now();
-      if (comm::size() > 1 && observed) {
-        // Rank 0 alone writes what an observer records (a history's rows, a dump's files): its
-        // failure (a full disk) is every rank's, agreed before the next step, so that no rank goes
-        // on alone into the next step's collective calls and waits there for ever.
-        std::string failure;
-        bool failed = false;
-        try {
-          control.after_step(model);
-        } catch (const std::exception& e) {
-          failed = true;
-          failure = e.what();
-        }
-        if (comm::first_failure(failed, failure) >= 0) throw std::runtime_error(failure);
-      } else {
-        control.after_step(model);
-      }
+      // Rank 0 alone writes what an observer records (a history's rows, a dump's files): its failure
+      // (a full disk) is every rank's, agreed before the next step, so that no rank goes on alone
+      // into the next step's collective calls and waits there for ever.
+      if (comm::size() > 1 && observed) comm::together([&] { control.after_step(model); }, "recording the output");
+      else control.after_step(model);
       timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
     }
     if ((s + 1) % kSnapshotEvery == 0) take_copy();   // the rescue steps on to cycles on kSnapshotEvery

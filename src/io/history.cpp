@@ -189,8 +189,12 @@ HistoryAdded History::add(std::vector<std::string> items, std::int64_t every, co
                                            "another file, or HIST reset first",
                                            file, fmt::join(live->columns, ","), live->every));
     }
-  std::string note, failure;
-  if (!file.empty() && comm::root()) try {   // a distributed run's files are rank 0's to write
+  std::string note;
+  // A distributed run's files are rank 0's to write, and its failure is every rank's: a table kept
+  // on the others alone would make their CYCLEs record (and wait for each other) on steps rank 0
+  // does not (the shell goes on after an error).
+  if (!file.empty()) comm::together([&] {
+    if (!comm::root()) return;
     if (mode == HistoryFileMode::Append) {
       note = append_to_file(*t, cycle, false);
     } else {
@@ -206,12 +210,7 @@ HistoryAdded History::add(std::vector<std::string> items, std::int64_t every, co
         throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", file, std::strerror(errno)));
       write_header(*t->out, *t);
     }
-  } catch (const std::runtime_error& e) {
-    failure = e.what();
-  }
-  // Rank 0's failure is every rank's: a table kept on the others alone would make their CYCLEs
-  // record (and wait for each other) on steps rank 0 does not (the shell goes on after an error).
-  if (!file.empty() && comm::first_failure(!failure.empty(), failure) >= 0) throw std::runtime_error(failure);
+  }, "opening the history file");
   tables_.push_back(std::move(t));
   return {*tables_.back(), false, note};
 }
