@@ -1,10 +1,9 @@
-#include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
-#include "support/comm.hpp"
 #include "interp/lexer.hpp"
 
 namespace trubal {
@@ -17,21 +16,9 @@ bool next_is_number(const Args& args) { return !args.empty() && parse_real(args.
 // that do not start with a number (a header, comments) are skipped.
 // Under mpirun rank 0 alone reads it and hands its text to the others, as with every input file.
 void read_sieve_file(Args& args, const std::string& path, SizeDistribution& d) {
-  std::int64_t readable = 0;
-  std::string text;
-  if (comm::root()) {
-    std::ifstream file(path);
-    if (file) {
-      std::ostringstream all;
-      all << file.rdbuf();
-      text = all.str();
-      readable = 1;
-    }
-  }
-  comm::broadcast(readable);
-  if (!readable) args.fail(fmt::format("cannot read the sieve curve file '{}'", path));
-  comm::broadcast(text);
-  std::istringstream in(text);
+  const std::optional<std::string> text = Interpreter::read_file_on_root(path);
+  if (!text) args.fail(fmt::format("cannot read the sieve curve file '{}'", path));
+  std::istringstream in(*text);
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {

@@ -95,11 +95,12 @@ int run(int argc, char** argv) {
   if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
     int rank = -1, line = 0;
     char word[8] = {};
-    if (std::sscanf(at, "%d %d", &rank, &line) == 2 && rank == trubal::comm::rank()) interp.fail_line_for_test = line;
-    else if (std::sscanf(at, "%d %7s", &rank, word) == 2 && std::strcmp(word, "split") == 0)
-      trubal::BrickStep::fail_split_for_test = rank;
-    else if (std::sscanf(at, "%d %7s", &rank, word) == 2 && std::strcmp(word, "search") == 0)
-      trubal::fail_search_for_test = rank;
+    if (std::sscanf(at, "%d %d", &rank, &line) == 2) {
+      if (rank == trubal::comm::rank()) interp.fail_line_for_test = line;
+    } else if (std::sscanf(at, "%d %7s", &rank, word) == 2) {
+      if (std::strcmp(word, "split") == 0) trubal::BrickStep::fail_split_for_test = rank;
+      if (std::strcmp(word, "search") == 0) trubal::fail_search_for_test = rank;
+    }
   }
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).

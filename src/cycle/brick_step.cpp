@@ -500,9 +500,12 @@ void BrickStep::sync(Model& full) {
     // (Members sharing one whole model: member 0 makes its arrays, then every member writes its own.)
     // (Ranks: the results are the largest arrays a sync makes; a rank out of memory here alone
     // must not leave the others in the gathers below.)
-    if (!team_->shares_whole()) comm::together([&] { full.contacts.keep_results(); }, "keeping the contact results");
-    else if (team_->rank() == 0) full.contacts.keep_results();
-    if (team_->shares_whole()) team_->barrier();
+    if (!team_->shares_whole()) {
+      comm::together([&] { full.contacts.keep_results(); }, "keeping the contact results");
+    } else {
+      if (team_->rank() == 0) full.contacts.keep_results();
+      team_->barrier();
+    }
     gather_set(*team_, [](ContactTable& c, auto&& f) { c.for_each_result_array(f); }, part_.contacts, full.contacts,
                owned_pairs_, rank_pairs_, out, in, true);
     results_written_ = false;

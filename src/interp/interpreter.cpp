@@ -51,6 +51,18 @@ std::string read_all(std::istream& in) { return std::string(std::istreambuf_iter
 
 }  // namespace
 
+std::optional<std::string> Interpreter::read_file_on_root(const std::string& path) {
+  FileText file = read_on_root([&] {
+    FileText f;
+    std::ifstream in(path);
+    f.ok = static_cast<bool>(in);
+    if (f.ok) f.text = read_all(in);
+    return f;
+  });
+  if (!file.ok) return std::nullopt;
+  return std::move(file.text);
+}
+
 std::string Interpreter::read_stream_on_root(std::istream& in) {
   std::string text;
   if (comm::root()) text = read_all(in);

@@ -46,6 +46,9 @@ class Interpreter {
 
   // A whole stream (a deck on standard input) as rank 0 read it, on every rank.
   static std::string read_stream_on_root(std::istream& in);
+  // A data file's text as rank 0 read it, on every rank (a collective call); nothing where rank 0
+  // could not open it.
+  static std::optional<std::string> read_file_on_root(const std::string& path);
 
   // For CALL: runs a file as part of the current command. Throws ReportedError after reporting
   // an error inside it.
