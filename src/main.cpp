@@ -102,6 +102,10 @@ int run(int argc, char** argv) {
       if (std::strcmp(word, "search") == 0) trubal::fail_search_for_test = rank;
     }
   }
+  // Measurements: every stale pair list rebuilt through the whole model, as before the ranks
+  // rebuilt them on their parts (to compare the two ways in one build).
+  if (const char* whole = std::getenv("TRUBAL_REBUILD_WHOLE"); whole && std::strcmp(whole, "1") == 0)
+    trubal::BrickStep::local_rule = -1;
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).
   std::int64_t stdin_deck = deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO)) ? 1 : 0;

@@ -32,6 +32,11 @@ class Backend {
   virtual bool keeps_list() const { return true; }
   // Whether the step is shared among the ranks of a distributed run (BACKEND mpi), not threads.
   virtual bool distributed() const { return false; }
+  // A distributed backend's search of one rank's part (cycle/brick_step.hpp: its own balls and the
+  // others' within reach of them), on this rank alone: every pair of `part` as find_pairs gives
+  // them, the same test on each pair, so a pair of two given balls is found, with the same image,
+  // in any model that holds both.
+  virtual void find_part_pairs(const Model& part, double skin, PairCandidates& out);
   // Extra lines for PRINT info ("name: value").
   virtual std::vector<std::pair<std::string, std::string>> info() const { return {}; }
   // Candidate pairs tested so far, for tests and PRINT info (0 where the backend does not count).

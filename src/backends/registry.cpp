@@ -35,6 +35,10 @@ const Entry& entry(std::string_view name) {
 
 }  // namespace
 
+void Backend::find_part_pairs(const Model&, double, PairCandidates&) {
+  throw std::logic_error("internal error: backend " + name() + " is not a distributed one and searches no rank's part");
+}
+
 std::vector<std::string> backend_names() {
   std::vector<std::string> names;
   for (const Entry& e : kBackends) names.emplace_back(e.name);

@@ -1,9 +1,11 @@
 #include "cycle/brick_step.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <new>
@@ -12,7 +14,9 @@
 
 #include <fmt/format.h>
 
+#include "cycle/pair_list.hpp"
 #include "cycle/sum_exchange.hpp"
+#include "cycle/wall_list.hpp"
 #include "support/comm.hpp"
 #include "model/periodic_cell.hpp"
 
@@ -113,6 +117,22 @@ void take_kernels(const StepKernels& from, StepKernels& to) {
   to.cross = from.cross;
   to.walls = from.walls; to.walls_full = from.walls_full; to.walls_lean = from.walls_lean;
   to.motion = from.motion; to.motion_full = from.motion_full; to.motion_lean = from.motion_lean;
+}
+
+// A ball's values as the words of a rebuild_local message: 64-bit integers (ids) by their bits,
+// narrower ones by value (exact in a double).
+template <class T> double to_word(T v) {
+  if constexpr (std::is_integral_v<T> && sizeof(T) == 8) return std::bit_cast<double>(v);
+  else return static_cast<double>(v);
+}
+template <class T> T from_word(double w) {
+  if constexpr (std::is_integral_v<T> && sizeof(T) == 8) return std::bit_cast<T>(w);
+  else return static_cast<T>(w);
+}
+std::size_t ball_words() {
+  std::size_t n = 1;   // the whole model's index first
+  Balls().for_each_array([&](auto&) { ++n; });
+  return n;
 }
 
 std::uint64_t next_part_version() {
@@ -334,6 +354,9 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
     least_balls_ = std::min(least_balls_, rank_balls_[r].size());
   }
   ++splits_;
+  max_radius_ = b.max_radius();
+  shell_base_ = 0;
+  list_local_ = false;
   moved2_ = 0;
   outside_box_ = false;
   model_ = &full;
@@ -342,6 +365,268 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   wall_version_ = wc.list_version;
   live_ = true;
   current_ = true;
+}
+
+bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool) {
+  // (Every test below reads what is the same on every rank, or is agreed on: every rank returns alike.)
+  if (team_->shares_whole() || local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
+  if (results_written_ && !current_) return false;   // (the parts hold results the whole model has not)
+  const int ranks = team_->size(), me = team_->rank();
+  Balls& b = part_.balls;
+  const Space& space = full.space;
+  const double reach = 2 * max_radius_ + skin;   // the farthest any pair's balls may be apart
+
+  // Every rank's box: the least and the largest coordinates of its own balls.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> box{kInf, kInf, kInf, -kInf, -kInf, -kInf}, boxes;
+  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  for (std::uint32_t k : owned_)
+    for (int a = 0; a < 3; ++a) {
+      const double x = (*pos[a])[k];
+      if (!std::isfinite(x)) continue;   // (a ball at NaN touches nothing, in the serial search too)
+      box[a] = std::min(box[a], x);
+      box[3 + a] = std::max(box[3 + a], x);
+    }
+  team_->allgather(box, boxes);
+
+  // Where a ball may be seen from: itself first, then its images across the periodic faces.
+  std::vector<std::array<double, 3>> shifts{{0, 0, 0}};
+  if (space.periodic) {
+    const CellFrame f = cell_frame(space);
+    for (int iz = -1; iz <= 1; ++iz)
+      for (int iy = -1; iy <= 1; ++iy)
+        for (int ix = -1; ix <= 1; ++ix) {
+          if ((ix == 0 && iy == 0 && iz == 0) || (ix && !space.wraps(0)) || (iy && !space.wraps(1)) ||
+              (iz && !space.wraps(2)))
+            continue;
+          double ox, oy, oz;
+          image_offset(f, static_cast<std::int8_t>(ix), static_cast<std::int8_t>(iy), static_cast<std::int8_t>(iz), ox, oy, oz);
+          shifts.push_back({ox, oy, oz});
+        }
+  }
+
+  // To each rank, this rank's balls that some image puts within reach of its box (a pair's balls
+  // are closer than `reach`, so every partner of that rank's balls is among them).
+  const std::size_t words = ball_words();
+  std::vector<std::vector<std::uint32_t>> shell(ranks);
+  std::vector<std::vector<double>> out(ranks), in(ranks);
+  comm::together([&] {
+    for (int r = 0; r < ranks; ++r) {
+      const double* near = &boxes[6 * static_cast<std::size_t>(r)];
+      if (r == me || !(near[0] <= near[3])) continue;   // (a rank without balls needs none)
+      for (std::uint32_t k : owned_)
+        for (const auto& sh : shifts) {
+          const double p[3] = {b.x[k] + sh[0], b.y[k] + sh[1], b.z[k] + sh[2]};
+          bool within = true;
+          for (int a = 0; a < 3 && within; ++a) within = p[a] >= near[a] - reach && p[a] <= near[3 + a] + reach;
+          if (within) {
+            shell[r].push_back(k);
+            break;
+          }
+        }
+    }
+    for (int r = 0; r < ranks; ++r) {
+      out[r].assign(1, static_cast<double>(shell[r].size()));
+      in[r].assign(1, 0.0);
+    }
+  }, "finding the balls its neighbours need for a new pair list");
+  team_->exchange(out, in);
+  double received = 0;
+  for (int r = 0; r < ranks; ++r) received += in[r][0];
+  // The balls have spread where the largest shell has grown past twice what it was at the first
+  // rebuild after the split: the parts are made afresh (and balanced) from the whole model.
+  std::vector<double> most{received};
+  team_->max_all(most);
+  if (shell_base_ == 0) shell_base_ = std::max(most[0], 1.0);
+  else if (most[0] > 2 * shell_base_) return false;
+
+  // The balls themselves, every array (a record of `words` words each, the whole model's index first).
+  std::vector<const void*> source;
+  b.for_each_array([&](auto& v) { source.push_back(&v); });
+  comm::together([&] {
+    for (int r = 0; r < ranks; ++r) {
+      const std::size_t count = shell[r].size();
+      out[r].assign(words * count, 0.0);
+      for (std::size_t q = 0; q < count; ++q) out[r][q * words] = global_ball_[shell[r][q]];
+      std::size_t word = 1;
+      b.for_each_array([&](auto& v) {
+        for (std::size_t q = 0; q < count; ++q) out[r][q * words + word] = to_word(v[shell[r][q]]);
+        ++word;
+      });
+      in[r].assign(words * static_cast<std::size_t>(in[r][0]), 0.0);
+    }
+  }, "sending the balls its neighbours need for a new pair list");
+  team_->exchange(out, in);
+
+  // The new part, made beside the old one (which stays whole for a sync where this fails).
+  Balls next_balls;
+  ContactTable next_table;
+  std::vector<std::uint32_t> next_global, next_owned, next_owned_pairs;
+  std::vector<std::vector<std::uint32_t>> next_send(ranks), next_recv(ranks);
+  std::vector<std::uint8_t> next_ghost;
+  std::size_t next_ghosts = 0;
+  VerletReference next_ref;
+  comm::together([&] {
+    // This rank's balls and those received, in the whole model's order.
+    struct Entry { std::uint32_t global; int from; std::uint32_t at; };   // from: -1 this rank's (at: part index)
+    std::vector<Entry> entries;
+    entries.reserve(owned_.size() + static_cast<std::size_t>(received));
+    for (std::uint32_t k : owned_) entries.push_back({global_ball_[k], -1, k});
+    for (int r = 0; r < ranks; ++r)
+      for (std::size_t q = 0; q < in[r].size() / words; ++q)
+        entries.push_back({static_cast<std::uint32_t>(in[r][q * words]), r, static_cast<std::uint32_t>(q)});
+    std::sort(entries.begin(), entries.end(), [](const Entry& p, const Entry& q) { return p.global < q.global; });
+    const std::size_t count = entries.size();
+    Model scan;
+    scan.space = space;
+    {
+      std::size_t word = 1, array = 0;
+      scan.balls.for_each_array([&](auto& v) {
+        using V = std::decay_t<decltype(v)>;
+        using T = typename V::value_type;
+        const V& mine = *static_cast<const V*>(source[array++]);
+        v.resize(count);
+        for (std::size_t q = 0; q < count; ++q) {
+          const Entry& e = entries[q];
+          v[q] = e.from < 0 ? mine[e.at] : from_word<T>(in[e.from][e.at * words + word]);
+        }
+        ++word;
+      });
+    }
+    for (auto& v : in) std::vector<double>().swap(v);
+
+    // The search: the serial test on these balls (a pair's result depends on its two balls alone),
+    // keeping the pairs of this rank's balls; their partners from elsewhere are the ghosts.
+    PairCandidates found;
+    search.find_part_pairs(scan, skin, found);
+    std::vector<std::uint8_t> kind(count, 0);   // 1 this rank's, 2 a ghost
+    for (std::size_t q = 0; q < count; ++q)
+      if (entries[q].from < 0) kind[q] = 1;
+    std::vector<std::uint32_t> pairs;
+    for (std::size_t p = 0; p < found.i.size(); ++p) {
+      const std::uint32_t i = found.i[p], j = found.j[p];
+      if (kind[i] != 1 && kind[j] != 1) continue;
+      pairs.push_back(static_cast<std::uint32_t>(p));
+      if (kind[i] != 1) kind[i] = 2;
+      if (kind[j] != 1) kind[j] = 2;
+    }
+    std::vector<std::uint32_t> keep, local(count, kAbsent);
+    for (std::size_t q = 0; q < count; ++q)
+      if (kind[q]) {
+        local[q] = static_cast<std::uint32_t>(keep.size());
+        keep.push_back(static_cast<std::uint32_t>(q));
+      }
+    const std::size_t m = keep.size();
+
+    // The history carried over by the pair (the old list holds every pair of this rank's balls),
+    // matched in the whole model's numbers.
+    next_table = part_.contacts;
+    ContactTable& c = next_table;
+    for (std::size_t p = 0; p < c.size(); ++p) {
+      c.i[p] = global_ball_[c.i[p]];
+      c.j[p] = global_ball_[c.j[p]];
+    }
+    PairCandidates next;
+    for (std::uint32_t p : pairs) {
+      next.i.push_back(entries[found.i[p]].global);
+      next.j.push_back(entries[found.j[p]].global);
+      next.image_x.push_back(found.image_x[p]);
+      next.image_y.push_back(found.image_y[p]);
+      next.image_z.push_back(found.image_z[p]);
+    }
+    install_pairs(c, next);
+    for (std::size_t q = 0; q < pairs.size(); ++q) {
+      c.i[q] = local[found.i[pairs[q]]];
+      c.j[q] = local[found.j[pairs[q]]];
+    }
+    c.list_version = next_part_version();
+
+    // The part's balls, and what it sends and receives each step.
+    gather(visit_balls, &scan.balls, &next_balls, keep);
+    next_ref.x = next_balls.x;
+    next_ref.y = next_balls.y;
+    next_ref.z = next_balls.z;
+    next_global.resize(m);
+    next_ghost.assign(m, 0);
+    std::vector<int> owner(m, me);
+    for (std::size_t q = 0; q < m; ++q) {
+      const Entry& e = entries[keep[q]];
+      next_global[q] = e.global;
+      if (e.from < 0) {
+        next_owned.push_back(static_cast<std::uint32_t>(q));
+        continue;
+      }
+      owner[q] = e.from;
+      next_ghost[q] = 1;
+      next_recv[e.from].push_back(static_cast<std::uint32_t>(q));
+      ++next_ghosts;
+    }
+    for (std::size_t q = 0; q < c.size(); ++q) {
+      const std::uint32_t i = c.i[q], j = c.j[q];
+      if (!next_ghost[i]) next_owned_pairs.push_back(static_cast<std::uint32_t>(q));
+      if (next_ghost[i] != next_ghost[j]) {
+        if (next_ghost[j]) next_send[owner[j]].push_back(i);
+        else next_send[owner[i]].push_back(j);
+      }
+    }
+    for (auto& v : next_send) {
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end()), v.end());
+    }
+  }, "making a new pair list for its part");
+
+  // (Nothing below fails but the index and the laws, which a sync does not read.)
+  const std::size_t m = next_balls.size();
+  std::swap(part_.balls, next_balls);
+  std::swap(part_.contacts, next_table);
+  global_ball_.swap(next_global);
+  owned_.swap(next_owned);
+  owned_pairs_.swap(next_owned_pairs);
+  send_.swap(next_send);
+  recv_.swap(next_recv);
+  scratch_.ghost.swap(next_ghost);
+  ghosts_ = next_ghosts;
+  ref_.x.swap(next_ref.x);
+  ref_.y.swap(next_ref.y);
+  ref_.z.swap(next_ref.z);
+  ++local_rebuilds_;
+  list_local_ = true;
+  current_ = false;
+  moved2_ = 0;
+  outside_box_ = false;
+  comm::together([&] {
+    send_buf_.assign(ranks, {});
+    recv_buf_.assign(ranks, {});
+    for (int r = 0; r < ranks; ++r) {
+      send_buf_[r].resize(kHalo * send_[r].size());
+      recv_buf_[r].resize(kHalo * recv_[r].size());
+    }
+    scratch_.index(part_.contacts, m);
+    scratch_.index_walls(part_.wall_contacts, m);
+    kernels_.laws = make_pair_laws(part_);
+  }, "indexing its new pair list");
+  if (!full.walls.empty() || part_.wall_contacts.size() > 0) {
+    // The walls' contacts of this rank's balls, their history carried by (ball id, wall id) from
+    // the part's old ones (which hold every contact of these balls).
+    comm::together([&] {
+      part_.walls = full.walls;
+      find_wall_contacts(part_, skin, pool);
+      WallContacts& w = part_.wall_contacts;
+      std::vector<std::uint32_t> mine;
+      for (std::size_t q = 0; q < w.size(); ++q)
+        if (!scratch_.ghost[w.ball[q]]) mine.push_back(static_cast<std::uint32_t>(q));
+      if (mine.size() != w.size()) {
+        WallContacts kept;
+        gather(visit_walls, &w, &kept, mine);
+        kept.list_version = w.list_version;
+        w = std::move(kept);
+      }
+      owned_walls_.resize(w.size());
+      std::iota(owned_walls_.begin(), owned_walls_.end(), 0u);
+      scratch_.index_walls(w, m);
+    }, "finding the wall contacts of its part");
+  }
+  return true;
 }
 
 void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, StepSums& sums, PhaseTimes& times) {
@@ -485,9 +770,138 @@ void gather_set(Team& team, Each&& each, S& part, S& whole, const std::vector<st
 
 }  // namespace
 
-void BrickStep::sync(Model& full) {
+void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
+  // The whole model's list is every rank's pairs whose ball i it owns, in the serial order (by i,
+  // j, image): each rank's are in that order already, so they are merged by a sort of positions.
+  // One record per pair: i, j (the whole model's), then j's image.
+  constexpr std::size_t kPair = 2 * sizeof(std::uint32_t) + 3;
+  const int ranks = team_->size();
+  const ContactTable& c = part_.contacts;
+  std::vector<std::uint8_t> mine, all;
+  comm::together([&] {
+    mine.resize(owned_pairs_.size() * kPair);
+    std::uint8_t* r = mine.data();
+    for (std::uint32_t q : owned_pairs_) {
+      const std::uint32_t i = global_ball_[c.i[q]], j = global_ball_[c.j[q]];
+      std::memcpy(r, &i, 4);
+      std::memcpy(r + 4, &j, 4);
+      std::memcpy(r + 8, &c.image_x[q], 1);
+      std::memcpy(r + 9, &c.image_y[q], 1);
+      std::memcpy(r + 10, &c.image_z[q], 1);
+      r += kPair;
+    }
+  }, "gathering the pair list of its part");
+  // Every rank's count, to know whose records are whose.
+  std::vector<double> count{static_cast<double>(owned_pairs_.size())}, counts;
+  team_->allgather(count, counts);
+  comm::allgather(mine, all);
+  comm::together([&] {
+    std::vector<std::uint8_t>().swap(mine);
+    const std::size_t total = all.size() / kPair;
+    PairCandidates list;
+    list.i.resize(total); list.j.resize(total);
+    list.image_x.resize(total); list.image_y.resize(total); list.image_z.resize(total);
+    for (std::size_t p = 0; p < total; ++p) {
+      const std::uint8_t* r = all.data() + p * kPair;
+      std::memcpy(&list.i[p], r, 4);
+      std::memcpy(&list.j[p], r + 4, 4);
+      std::memcpy(&list.image_x[p], r + 8, 1);
+      std::memcpy(&list.image_y[p], r + 9, 1);
+      std::memcpy(&list.image_z[p], r + 10, 1);
+    }
+    std::vector<std::uint8_t>().swap(all);
+    std::vector<std::uint32_t> order(total);
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+      if (list.i[p] != list.i[q]) return list.i[p] < list.i[q];
+      if (list.j[p] != list.j[q]) return list.j[p] < list.j[q];
+      if (list.image_x[p] != list.image_x[q]) return list.image_x[p] < list.image_x[q];
+      if (list.image_y[p] != list.image_y[q]) return list.image_y[p] < list.image_y[q];
+      return list.image_z[p] < list.image_z[q];
+    });
+    PairCandidates sorted;
+    gather([](void* p, auto&& f) {
+      PairCandidates& l = *static_cast<PairCandidates*>(p);
+      f(l.i); f(l.j); f(l.image_x); f(l.image_y); f(l.image_z);
+    }, &list, &sorted, order);
+    list = PairCandidates{};
+    // Each rank's pairs' places in the whole list (sync's gathers write there).
+    std::size_t first = 0;
+    for (int r = 0; r < ranks; ++r) {
+      rank_pairs_[r].resize(static_cast<std::size_t>(counts[r]));
+      first += rank_pairs_[r].size();
+    }
+    std::vector<std::uint32_t> at(total);
+    for (std::size_t q = 0; q < total; ++q) at[order[q]] = static_cast<std::uint32_t>(q);
+    first = 0;
+    for (int r = 0; r < ranks; ++r) {
+      for (std::size_t t = 0; t < rank_pairs_[r].size(); ++t) rank_pairs_[r][t] = at[first + t];
+      first += rank_pairs_[r].size();
+    }
+    // The results go: a sync that has them (results_written_) makes them again, of the new list.
+    full.contacts.drop_results();
+    install_pairs(full.contacts, sorted);   // (its history is then every rank's, gathered by sync)
+  }, "installing the whole model's pair list");
+  list_version_ = full.contacts.list_version;
+  if (!full.walls.empty() || full.wall_contacts.size() > 0) install_local_walls(full);
+  if (whole_ref && whole_ref->x.size() == full.balls.size()) {
+    std::vector<double> out, in;
+    gather_array(*team_, ref_.x, whole_ref->x, owned_, rank_balls_, out, in);
+    gather_array(*team_, ref_.y, whole_ref->y, owned_, rank_balls_, out, in);
+    gather_array(*team_, ref_.z, whole_ref->z, owned_, rank_balls_, out, in);
+  }
+  list_local_ = false;
+}
+
+void BrickStep::install_local_walls(Model& full) {
+  // As the pairs: every rank's walls' contacts (of its own balls, by ball then wall), merged into
+  // the whole model's order; sync's gathers then write their state where each went.
+  const int ranks = team_->size();
+  const WallContacts& w = part_.wall_contacts;
+  std::vector<double> mine, all;
+  comm::together([&] {
+    for (std::size_t q = 0; q < w.size(); ++q) {
+      mine.push_back(global_ball_[w.ball[q]]);
+      mine.push_back(w.wall[q]);
+    }
+  }, "gathering the wall contacts of its part");
+  std::vector<double> count{static_cast<double>(w.size())}, counts;
+  team_->allgather(count, counts);
+  team_->allgather(mine, all);
+  comm::together([&] {
+    const std::size_t total = all.size() / 2;
+    std::vector<std::uint32_t> order(total);
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+      return all[2 * p] < all[2 * q] || (all[2 * p] == all[2 * q] && all[2 * p + 1] < all[2 * q + 1]);
+    });
+    WallContacts next;
+    for (std::uint32_t p : order) {
+      const auto ball = static_cast<std::uint32_t>(all[2 * p]), wall = static_cast<std::uint32_t>(all[2 * p + 1]);
+      next.ball.push_back(ball);
+      next.wall.push_back(wall);
+      next.ball_id.push_back(full.balls.id[ball]);
+      next.wall_id.push_back(full.walls[wall].id);
+    }
+    each_moving_wall_array(next, [&](auto& v) { v.assign(total, {}); });
+    std::vector<std::uint32_t> at(total);
+    for (std::size_t q = 0; q < total; ++q) at[order[q]] = static_cast<std::uint32_t>(q);
+    std::size_t first = 0;
+    for (int r = 0; r < ranks; ++r) {
+      rank_walls_[r].resize(static_cast<std::size_t>(counts[r]));
+      for (std::size_t t = 0; t < rank_walls_[r].size(); ++t) rank_walls_[r][t] = at[first + t];
+      first += rank_walls_[r].size();
+    }
+    next.list_version = next_part_version();
+    full.wall_contacts = std::move(next);
+  }, "installing the whole model's wall contacts");
+  wall_version_ = full.wall_contacts.list_version;
+}
+
+void BrickStep::sync(Model& full, VerletReference* whole_ref) {
   if (!live_ || current_ || model_ != &full) return;
   std::vector<double> out, in;
+  if (list_local_) install_local_list(full, whole_ref);
   gather_set(*team_, [](Balls& b, auto&& f) { each_moving_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
              out, in);
   gather_set(*team_, [](ContactTable& c, auto&& f) { each_history_array(c, f); }, part_.contacts, full.contacts, owned_pairs_,
@@ -547,6 +961,9 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   for (double share : shares_) fmt::format_to(std::back_inserter(shares), "{}{:.2f}", shares.empty() ? "" : " ", share);
   lines.emplace_back("shares of the balls", shares + " (by " + member + ", in proportion to the speed each stepped its own balls at)");
   lines.emplace_back("decompositions made", std::to_string(splits_));
+  if (!team_->shares_whole())
+    lines.emplace_back("pair lists rebuilt on the parts",
+                       std::to_string(local_rebuilds_) + " (each rank searching its own balls and those within reach of them)");
   return lines;
 }
 

@@ -13,10 +13,14 @@
 //   same inputs, and both keep the same history.
 // - The motion loop moves owned balls only (StepScratch::ghost); the global sums are exact sums of
 //   each owned ball's part, merged over the ranks (kernels.hpp).
-// - Anything the step cannot do on its own part (a ball leaving the periodic cell, a stale list, a
-//   ball outside a START box, an edit between steps) goes through the whole model: sync() gathers
-//   every rank's balls, pairs and wall contacts into it, the serial rules act on it, and the parts
-//   are made afresh from it.
+// - A stale pair list is rebuilt on the parts where it can be (rebuild_local: the ranks of a run
+//   by the decomposition): each rank keeps its balls, receives from the others the balls within reach of
+//   its own, searches them with the serial search's test and carries its pairs' history over; the
+//   whole model's list is made from the ranks' lists at the next sync.
+// - Anything else the step cannot do on its own part (a ball leaving the periodic cell, a ball
+//   outside a START box, an edit between steps, a decomposition whose balls have spread) goes
+//   through the whole model: sync() gathers every rank's balls, pairs and wall contacts into it,
+//   the serial rules act on it, and the parts are made afresh from it.
 #pragma once
 
 #include <atomic>
@@ -33,6 +37,7 @@
 #include "cycle/step_scratch.hpp"
 #include "cycle/team.hpp"
 #include "cycle/verlet.hpp"
+#include "backends/backend.hpp"
 #include "model/model.hpp"
 #include "support/thread_pool.hpp"
 
@@ -73,8 +78,20 @@ class BrickStep {
   // The tilts of the cell were reduced (reduce_cell_tilt) from `before`: the part's pair images
   // are renumbered alike.
   void reduce_tilt(const Space& before);
-  // Brings `full` up to date with every rank's part (a collective call; the parts stay live).
-  void sync(Model& full);
+  // A new pair list on the parts alone, for the positions now (a collective call, on every rank):
+  // each rank keeps its own balls, receives the others' balls within reach of them (the largest
+  // reach plus `skin`, through the periodic faces too), searches its pairs as the serial search
+  // does and carries their history over. Returns false, changing nothing, where the parts are to be
+  // made afresh from the whole model instead (the same answer on every rank): threads, a
+  // decomposition whose balls have spread (the shell of balls received grew past twice its size at
+  // the first such rebuild), results not yet gathered. The walls' contacts of the rank's own balls
+  // are found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
+  // threads of the walls' search).
+  bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
+  // Brings `full` up to date with every rank's part (a collective call; the parts stay live). Where
+  // the parts rebuilt their list, full's list is made from theirs, and the positions it was built
+  // at go into `whole_ref` (the pipeline's reference for the whole model).
+  void sync(Model& full, VerletReference* whole_ref = nullptr);
   // The applied loads of `full`'s balls changed (a following membrane's, between steps, on every
   // rank alike): the part's copies take them.
   void loads_changed(const Model& full);
@@ -84,7 +101,11 @@ class BrickStep {
   void release();
 
   std::vector<std::pair<std::string, std::string>> info() const;
+  std::size_t local_rebuilds() const { return local_rebuilds_; }
 
+  // Tests: 0 rebuilds stale lists on the parts where it can (the default), -1 never does (every
+  // rebuild through the whole model, as before 2026-12-03); for every BrickStep of the process.
+  static inline std::atomic<int> local_rule{0};
   // Tests: the member (team rank) whose own work is counted three times slower at each split, as a
   // busy core would make it, to see the shares follow; -1: none.
   static inline std::atomic<int> slow_member_for_test{-1};
@@ -94,6 +115,10 @@ class BrickStep {
  private:
   // split()'s work: the owners, and this member's part.
   void make_part(const Model& full, const VerletReference& ref);
+  // sync()'s first work after rebuild_local: full's list from every rank's (a collective call).
+  void install_local_list(Model& full, VerletReference* whole_ref);
+  // Its part for the walls' contacts.
+  void install_local_walls(Model& full);
   // The shares of the next split, from every member's speed since the last (a collective call).
   void update_shares();
 
@@ -124,6 +149,10 @@ class BrickStep {
   bool outside_box_ = false;
   std::size_t ghosts_ = 0, most_balls_ = 0, least_balls_ = 0, most_ghosts_ = 0;
   std::size_t splits_ = 0;
+  std::size_t local_rebuilds_ = 0;           // lists rebuilt on the parts (rebuild_local)
+  bool list_local_ = false;                  // the parts' list is newer than full's
+  double max_radius_ = 0;                    // the whole model's largest ball (at the split)
+  double shell_base_ = 0;                    // the largest shell received at the first local rebuild
   // Each member's share of the balls at the next split (the same on every member), and this
   // member's own stepping since the last split: seconds in its forces and motion, ball-steps.
   std::vector<double> shares_;

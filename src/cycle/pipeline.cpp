@@ -176,7 +176,7 @@ void Pipeline::rebuild(Model& model) {
 }
 
 void Pipeline::sync(Model& model) {
-  if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.sync(model); });
+  if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.sync(model, &ref_); });
 }
 
 void Pipeline::apply_field(Model& model, const FieldChange& change) {
@@ -230,6 +230,17 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
     });
     const double limit2 = ref_.displacement_limit2(model);
     whole = outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
+    // A stale list alone: the ranks rebuild it on their parts where they can.
+    if (whole && !outside && distributed_) {
+      double skin = VerletReference::skin_for(model.balls);
+      if (model.space.periodic) skin = periodic_skin(model, skin);
+      check_periodic_cell(model);
+      if (bricks().rebuild_local(model, skin, *backend_, pool_)) {
+        ref_.record_cell(model, skin);
+        wall_travel_ = 0;
+        whole = false;
+      }
+    }
   }
   times_.detect += seconds_since(t0);
   if (whole) {

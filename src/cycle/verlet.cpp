@@ -53,6 +53,13 @@ void VerletReference::record(const Model& model, double skin) {
   ++rebuilds_;
 }
 
+void VerletReference::record_cell(const Model& model, double skin) {
+  cell_ = model.space.length();
+  tilt_ = model.space.tilt;
+  skin_ = skin;
+  ++rebuilds_;
+}
+
 double periodic_skin(const Model& model, double skin) {
   const auto w = cell_widths(model.space);
   const double reach = 2 * model.balls.max_radius();

@@ -30,6 +30,9 @@ class VerletReference {
   static double skin_for(const Balls& balls);
   // Remembers the state the new list was built from.
   void record(const Model& model, double skin);
+  // A rebuild made on a distributed run's parts (BrickStep::rebuild_local), whose positions stay
+  // there until a sync gathers them into x, y, z: the cell and the skin of the new list.
+  void record_cell(const Model& model, double skin);
   void invalidate() { valid_ = false; }
   double skin() const { return skin_; }
   std::size_t rebuilds() const { return rebuilds_; }

@@ -100,9 +100,9 @@ cycle 1500
     INFO(ranks << " ranks\n" << out);
     CHECK_THAT(out, Catch::Contains("last step shared by: the spatial decomposition"));
     CHECK_THAT(out, Catch::Contains("balls per rank: "));
-    // Each rank searched its own range of balls and the lists were joined: the files below are
-    // serial's only if the joined list is the serial list.
-    CHECK_THAT(out, Catch::Contains("pair search: shared"));
+    // Each rank searched its own range of balls and the lists were joined, or searched its own part:
+    // the files below are serial's only if the joined lists are the serial list.
+    CHECK_THAT(out, Catch::Contains("pair search: a stale list on each rank's part"));
     // Each CYCLE left its last step's results to be made when read, as serial does (SAVE after the
     // first, PRINT balls after the second): the ranks held no result arrays while they ran.
     CHECK_THAT(out, Catch::Contains("contact results made when read: 2 "));
@@ -172,6 +172,21 @@ cycle 10000
   REQUIRE(run_deck(two, 2) == 0);
   INFO(slurp(two.path() / "out.txt"));
   CHECK_THAT(slurp(two.path() / "out.txt"), Catch::Contains("balls per rank: "));
+  // Most of its lists are rebuilt on the ranks' parts, the balls carrying no history between
+  // ranks (each rank keeps its balls until a wrap makes the parts afresh): checked by the bits.
+  {
+    const std::string out = slurp(two.path() / "out.txt"), key = "pair lists rebuilt on the parts: ";
+    const auto at = out.find(key);
+    REQUIRE(at != std::string::npos);
+    CHECK(std::stol(out.substr(at + key.size())) >= 100);
+  }
+  // And with every list rebuilt through the whole model (TRUBAL_REBUILD_WHOLE): none on the parts,
+  // the same bits.
+  TempDir whole;
+  whole.write("deck.dat", "backend mpi\n" + deck + "print info\n");
+  REQUIRE(run_deck(whole, 2, "TRUBAL_REBUILD_WHOLE=1") == 0);
+  CHECK_THAT(slurp(whole.path() / "out.txt"), Catch::Contains("pair lists rebuilt on the parts: 0 "));
+  CHECK(slurp(whole.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
   const std::string contacts = slurp(serial.path() / "contacts.csv");
   CHECK(lines_of(contacts).size() > 2);   // collisions under way at the end (a header and at least two)
   CHECK(slurp(two.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));

@@ -73,18 +73,24 @@ class MpiBackend final : public Backend {
     }
   }
   bool distributed() const override { return true; }
+  void find_part_pairs(const Model& part, double skin, PairCandidates& out) override {
+    // The serial search: its test of a pair reads the two balls alone (and the cell).
+    find_serial_pairs(part, skin, part_grid_, out);
+  }
   std::vector<std::pair<std::string, std::string>> info() const override {
     auto lines = box_info(grid_.dims(), grid_.cell_size(), periodic_bins_);
-    lines.emplace_back("pair search", "shared: each rank searches the pairs of its range of ball indices, and every "
-                                      "rank joins the ranks' lists in order (the serial list)");
+    lines.emplace_back("pair search", "a stale list on each rank's part (its own balls and the others' within reach "
+                                      "of them); through the whole model, shared: each rank searches the pairs of its "
+                                      "range of ball indices, and every rank joins the ranks' lists in order (the serial list)");
     lines.emplace_back("decomposition",
-                       "recursive bisection of the balls, each rank's share in proportion to its speed, made again at every pair-list rebuild; each rank "
-                       "steps its own balls with ghost copies of their partners");
+                       "recursive bisection of the balls, each rank's share in proportion to its speed; each rank steps "
+                       "its own balls with ghost copies of their partners, and keeps them until the whole model is "
+                       "stepped through (a ball crossing a periodic face, walls, balls spread far from their part)");
     return lines;
   }
 
  private:
-  BoxGrid grid_;
+  BoxGrid grid_, part_grid_;
   std::array<int, 3> periodic_bins_{};   // of the last search, where it was the periodic one
   PairCandidates mine_;
   std::vector<std::uint8_t> send_, recv_;
