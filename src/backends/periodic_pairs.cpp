@@ -13,7 +13,7 @@ constexpr std::size_t kParallelSearch = 4096;
 }  // namespace
 
 void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool, std::size_t i_begin,
-                         std::size_t i_end) {
+                         std::size_t i_end, std::size_t bins_balls) {
   out.clear();
   const Balls& b = model.balls;
   const Space& s = model.space;
@@ -30,7 +30,8 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
     dims[a] = static_cast<int>(std::clamp(d, 1.0, 1000.0));
     if (s.boxes[a] > 0) dims[a] = std::min(dims[a], s.boxes[a]);   // START x y z nbx nby nbz: at most these
   }
-  while (static_cast<double>(dims[0]) * dims[1] * dims[2] > 2.0 * static_cast<double>(n) + 27)
+  const double sized_for = static_cast<double>(bins_balls > 0 ? bins_balls : n);
+  while (static_cast<double>(dims[0]) * dims[1] * dims[2] > 2.0 * sized_for + 27)
     for (int a = 0; a < 3; ++a) dims[a] = std::max(1, dims[a] / 2);
   const std::size_t cells = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
   std::vector<std::uint32_t> cell(n), start(cells + 1, 0), order(n);

@@ -35,7 +35,7 @@ const Entry& entry(std::string_view name) {
 
 }  // namespace
 
-void Backend::find_part_pairs(const Model&, double, PairCandidates&) {
+void Backend::find_part_pairs(const Model&, double, std::size_t, PairCandidates&) {
   throw std::logic_error("internal error: backend " + name() + " is not a distributed one and searches no rank's part");
 }
 

@@ -1,6 +1,7 @@
 #include "cycle/brick_step.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <atomic>
 #include <chrono>
@@ -134,6 +135,83 @@ std::size_t ball_words() {
   Balls().for_each_array([&](auto&) { ++n; });
   return n;
 }
+
+// The bins rebuild_local finds each rank's neighbours by: at least `reach` wide across, so the balls
+// of a pair lie in the same or neighbouring bins (through the periodic faces where the space wraps).
+// A periodic space: the periodic search's bins (backends/periodic_pairs.cpp), in the cell's
+// fractional coordinates; a box: over `box` (the least and largest coordinates of every ball). At
+// most about two bins per ball of the whole model, as the periodic search.
+class ShellBins {
+ public:
+  static constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  void fit(const Space& s, const std::vector<double>& box, double reach, std::size_t balls) {
+    s_ = &s;
+    periodic_ = s.periodic;
+    const double across = reach * (1 + 1e-9) + 1e-300;   // (a margin against rounding at a bin's edge)
+    for (int a = 0; a < 3; ++a) {
+      wraps_[a] = s.wraps(a);
+      double width;
+      if (periodic_) {
+        width = cell_widths(s)[a];
+        lo_[a] = s.lo[a];
+        extent_[a] = s.length()[a];
+      } else {
+        lo_[a] = box[a];
+        width = extent_[a] = box[3 + a] > box[a] ? box[3 + a] - box[a] : 0.0;
+      }
+      const double d = std::floor(width / across);
+      dims_[a] = static_cast<int>(std::clamp(std::isfinite(d) ? d : 1.0, 1.0, 1000.0));
+    }
+    while (static_cast<double>(dims_[0]) * dims_[1] * dims_[2] > 2.0 * static_cast<double>(balls) + 27)
+      for (int& d : dims_) d = std::max(1, d / 2);
+    if (periodic_) frame_ = cell_frame(s);
+  }
+  std::size_t count() const { return static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2]; }
+  // kNone for a ball not at a finite place (it touches nothing).
+  std::uint32_t bin_of(double x, double y, double z) const {
+    if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z))) return kNone;
+    double t[3] = {x, y, z};
+    if (periodic_) {   // the coordinates less their tilt terms, as the periodic search takes them
+      const Space& s = *s_;
+      const double sz = (z - s.lo[2]) / frame_.lz;
+      const double ty = y - frame_.yz * sz;
+      t[0] = x - frame_.xy * ((ty - s.lo[1]) / frame_.ly) - frame_.xz * sz;
+      t[1] = ty;
+    }
+    int w[3];
+    for (int a = 0; a < 3; ++a) {
+      const double q = extent_[a] > 0 ? std::floor((t[a] - lo_[a]) / extent_[a] * dims_[a]) : 0.0;
+      w[a] = !(q >= 0) ? 0 : (q >= dims_[a] ? dims_[a] - 1 : static_cast<int>(q));
+    }
+    return static_cast<std::uint32_t>((w[2] * dims_[1] + w[1]) * dims_[0] + w[0]);
+  }
+  // The bin and those around it (wrapped across the periodic faces; fewer at a bounded edge).
+  void neighbours(std::uint32_t bin, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    const int w[3] = {static_cast<int>(bin % dims_[0]), static_cast<int>((bin / dims_[0]) % dims_[1]),
+                      static_cast<int>(bin / (static_cast<std::uint32_t>(dims_[0]) * dims_[1]))};
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          int c[3] = {w[0] + dx, w[1] + dy, w[2] + dz};
+          bool inside = true;
+          for (int a = 0; a < 3; ++a) {
+            if (c[a] >= 0 && c[a] < dims_[a]) continue;
+            if (wraps_[a]) c[a] = (c[a] + dims_[a]) % dims_[a];
+            else inside = false;
+          }
+          if (inside) out.push_back(static_cast<std::uint32_t>((c[2] * dims_[1] + c[1]) * dims_[0] + c[0]));
+        }
+  }
+
+ private:
+  const Space* s_ = nullptr;
+  bool periodic_ = false;
+  std::array<bool, 3> wraps_{};
+  std::array<double, 3> lo_{}, extent_{};
+  std::array<int, 3> dims_{1, 1, 1};
+  CellFrame frame_;
+};
 
 std::uint64_t next_part_version() {
   // Far above the versions install_pairs and the wall list hand out, so a part's never equals one.
@@ -376,54 +454,58 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   const Space& space = full.space;
   const double reach = 2 * max_radius_ + skin;   // the farthest any pair's balls may be apart
 
-  // Every rank's box: the least and the largest coordinates of its own balls.
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  std::vector<double> box{kInf, kInf, kInf, -kInf, -kInf, -kInf}, boxes;
-  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
-  for (std::uint32_t k : owned_)
-    for (int a = 0; a < 3; ++a) {
-      const double x = (*pos[a])[k];
-      if (!std::isfinite(x)) continue;   // (a ball at NaN touches nothing, in the serial search too)
-      box[a] = std::min(box[a], x);
-      box[3 + a] = std::max(box[3 + a], x);
-    }
-  team_->allgather(box, boxes);
-
-  // Where a ball may be seen from: itself first, then its images across the periodic faces.
-  std::vector<std::array<double, 3>> shifts{{0, 0, 0}};
-  if (space.periodic) {
-    const CellFrame f = cell_frame(space);
-    for (int iz = -1; iz <= 1; ++iz)
-      for (int iy = -1; iy <= 1; ++iy)
-        for (int ix = -1; ix <= 1; ++ix) {
-          if ((ix == 0 && iy == 0 && iz == 0) || (ix && !space.wraps(0)) || (iy && !space.wraps(1)) ||
-              (iz && !space.wraps(2)))
-            continue;
-          double ox, oy, oz;
-          image_offset(f, static_cast<std::int8_t>(ix), static_cast<std::int8_t>(iy), static_cast<std::int8_t>(iz), ox, oy, oz);
-          shifts.push_back({ox, oy, oz});
-        }
-  }
-
-  // To each rank, this rank's balls that some image puts within reach of its box (a pair's balls
-  // are closer than `reach`, so every partner of that rank's balls is among them).
+  // Bins at least `reach` wide across (the periodic search's, in the cell's fractional coordinates;
+  // in a box, over the extent of every rank's balls): a pair's balls lie in neighbouring bins. Each
+  // rank marks the bins its balls are in, and sends a rank its balls next to a bin that rank marked.
   const std::size_t words = ball_words();
   std::vector<std::vector<std::uint32_t>> shell(ranks);
   std::vector<std::vector<double>> out(ranks), in(ranks);
-  comm::together([&] {
-    for (int r = 0; r < ranks; ++r) {
-      const double* near = &boxes[6 * static_cast<std::size_t>(r)];
-      if (r == me || !(near[0] <= near[3])) continue;   // (a rank without balls needs none)
-      for (std::uint32_t k : owned_)
-        for (const auto& sh : shifts) {
-          const double p[3] = {b.x[k] + sh[0], b.y[k] + sh[1], b.z[k] + sh[2]};
-          bool within = true;
-          for (int a = 0; a < 3 && within; ++a) within = p[a] >= near[a] - reach && p[a] <= near[3 + a] + reach;
-          if (within) {
-            shell[r].push_back(k);
-            break;
-          }
+  ShellBins bins;
+  {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    std::vector<double> box{kInf, kInf, kInf, -kInf, -kInf, -kInf}, boxes;
+    if (!space.periodic)
+      for (std::uint32_t k : owned_) {
+        const double p[3] = {b.x[k], b.y[k], b.z[k]};
+        for (int a = 0; a < 3; ++a) {
+          if (!std::isfinite(p[a])) continue;   // (a ball at NaN touches nothing, in the serial search too)
+          box[a] = std::min(box[a], p[a]);
+          box[3 + a] = std::max(box[3 + a], p[a]);
         }
+      }
+    team_->allgather(box, boxes);   // (a collective call either way)
+    for (int r = 0; r < ranks; ++r)
+      for (int a = 0; a < 3; ++a) {
+        box[a] = std::min(box[a], boxes[6 * r + a]);
+        box[3 + a] = std::max(box[3 + a], boxes[6 * r + 3 + a]);
+      }
+    bins.fit(space, box, reach, full_balls_);
+  }
+  std::vector<std::uint8_t> marks, all_marks;
+  std::vector<std::uint32_t> bin_of;
+  comm::together([&] {
+    marks.assign((bins.count() + 7) / 8, 0);
+    bin_of.resize(owned_.size());
+    for (std::size_t q = 0; q < owned_.size(); ++q) {
+      const std::uint32_t k = owned_[q];
+      bin_of[q] = bins.bin_of(b.x[k], b.y[k], b.z[k]);
+      if (bin_of[q] != ShellBins::kNone) marks[bin_of[q] / 8] |= static_cast<std::uint8_t>(1u << (bin_of[q] % 8));
+    }
+  }, "finding the balls its neighbours need for a new pair list");
+  comm::allgather(marks, all_marks);
+  comm::together([&] {
+    const std::size_t stride = marks.size();
+    std::vector<std::uint32_t> near;
+    std::vector<std::uint8_t> to(ranks);
+    for (std::size_t q = 0; q < owned_.size(); ++q) {
+      if (bin_of[q] == ShellBins::kNone) continue;
+      bins.neighbours(bin_of[q], near);
+      std::fill(to.begin(), to.end(), 0);
+      for (std::uint32_t c : near)
+        for (int r = 0; r < ranks; ++r)
+          if (all_marks[r * stride + c / 8] & (1u << (c % 8))) to[r] = 1;
+      for (int r = 0; r < ranks; ++r)
+        if (to[r] && r != me) shell[r].push_back(owned_[q]);
     }
     for (int r = 0; r < ranks; ++r) {
       out[r].assign(1, static_cast<double>(shell[r].size()));
@@ -498,7 +580,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     // The search: the serial test on these balls (a pair's result depends on its two balls alone),
     // keeping the pairs of this rank's balls; their partners from elsewhere are the ghosts.
     PairCandidates found;
-    search.find_part_pairs(scan, skin, found);
+    search.find_part_pairs(scan, skin, full_balls_, found);
     std::vector<std::uint8_t> kind(count, 0);   // 1 this rank's, 2 a ghost
     for (std::size_t q = 0; q < count; ++q)
       if (entries[q].from < 0) kind[q] = 1;
@@ -706,6 +788,34 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   }
   outside_box_ = outside_any != 0;
   if (wall_count && adds) set_wall_loads(full.walls, totals);
+}
+
+bool BrickStep::wrap(Model& full) {
+  if (team_->shares_whole() || local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
+  if (results_written_ && !current_) return false;
+  part_.space = full.space;
+  std::vector<WrapTerm> terms;
+  // (A ball a million cells away fails the wrap on each rank that holds a copy of it, not on all.)
+  comm::together([&] { wrap_into_cell(part_, &ref_.x, &ref_.y, &ref_.z, &terms); },
+                 "wrapping its balls into the periodic cell");
+  // Every rank's own balls' terms, in the whole model's order (a ball's own terms stay in theirs).
+  std::vector<double> mine, all;
+  for (const WrapTerm& t : terms)
+    if (!scratch_.ghost[t.ball]) {
+      mine.push_back(static_cast<double>(global_ball_[t.ball]));
+      mine.push_back(t.work);
+      mine.push_back(t.gross);
+    }
+  team_->allgather(mine, all);
+  std::vector<WrapTerm> merged(all.size() / 3);
+  for (std::size_t q = 0; q < merged.size(); ++q)
+    merged[q] = {static_cast<std::size_t>(all[3 * q]), all[3 * q + 1], all[3 * q + 2]};
+  std::stable_sort(merged.begin(), merged.end(), [](const WrapTerm& p, const WrapTerm& q) { return p.ball < q.ball; });
+  add_wrap_terms(full, merged);
+  ++local_wraps_;
+  list_local_ = true;   // (the images of the parts' pairs changed: the whole list is made from theirs)
+  current_ = false;
+  return true;
 }
 
 bool BrickStep::outside_cell(const Model& full) {
@@ -961,9 +1071,11 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   for (double share : shares_) fmt::format_to(std::back_inserter(shares), "{}{:.2f}", shares.empty() ? "" : " ", share);
   lines.emplace_back("shares of the balls", shares + " (by " + member + ", in proportion to the speed each stepped its own balls at)");
   lines.emplace_back("decompositions made", std::to_string(splits_));
-  if (!team_->shares_whole())
+  if (!team_->shares_whole()) {
     lines.emplace_back("pair lists rebuilt on the parts",
                        std::to_string(local_rebuilds_) + " (each rank searching its own balls and those within reach of them)");
+    lines.emplace_back("wraps on the parts", std::to_string(local_wraps_) + " (balls moved across the periodic faces by their ranks)");
+  }
   return lines;
 }
 

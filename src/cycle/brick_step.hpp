@@ -14,11 +14,12 @@
 // - The motion loop moves owned balls only (StepScratch::ghost); the global sums are exact sums of
 //   each owned ball's part, merged over the ranks (kernels.hpp).
 // - A stale pair list is rebuilt on the parts where it can be (rebuild_local: the ranks of a run
-//   by the decomposition): each rank keeps its balls, receives from the others the balls within reach of
-//   its own, searches them with the serial search's test and carries its pairs' history over; the
-//   whole model's list is made from the ranks' lists at the next sync.
-// - Anything else the step cannot do on its own part (a ball leaving the periodic cell, a ball
-//   outside a START box, an edit between steps, a decomposition whose balls have spread) goes
+//   by the decomposition): each rank keeps its balls, receives from the others the balls in the
+//   bins next to its own balls' bins, searches them with the serial search's test and carries its
+//   pairs' history over; a ball leaving the periodic cell is wrapped on every part that holds it
+//   (wrap); the whole model's list is made from the ranks' lists at the next sync.
+// - Anything else the step cannot do on its own part (a ball outside a START box, an edit between
+//   steps, a decomposition whose balls have spread) goes
 //   through the whole model: sync() gathers every rank's balls, pairs and wall contacts into it,
 //   the serial rules act on it, and the parts are made afresh from it.
 #pragma once
@@ -79,8 +80,9 @@ class BrickStep {
   // are renumbered alike.
   void reduce_tilt(const Space& before);
   // A new pair list on the parts alone, for the positions now (a collective call, on every rank):
-  // each rank keeps its own balls, receives the others' balls within reach of them (the largest
-  // reach plus `skin`, through the periodic faces too), searches its pairs as the serial search
+  // each rank keeps its own balls, receives the others' balls that may be within reach of them
+  // (those in the bins around its balls' bins, the bins as wide as the largest reach with `skin`,
+  // through the periodic faces too; each rank marks the bins of its balls), searches its pairs as the serial search
   // does and carries their history over. Returns false, changing nothing, where the parts are to be
   // made afresh from the whole model instead (the same answer on every rank): threads, a
   // decomposition whose balls have spread (the shell of balls received grew past twice its size at
@@ -88,6 +90,13 @@ class BrickStep {
   // are found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
+  // Wraps the parts' balls into the periodic cell as the whole model's wrap would (a collective
+  // call, where outside_cell said some ball is out): every copy of a ball moves alike, so each part
+  // renumbers its pairs' images as the whole list would be; the energy the wrap adds (a straining
+  // cell's velocity change) goes to full's, summed in the whole model's order. The whole model's
+  // list is then made from the parts' at the next sync. Returns false, changing nothing, where the
+  // ranks are to step through the whole model instead (as rebuild_local).
+  bool wrap(Model& full);
   // Brings `full` up to date with every rank's part (a collective call; the parts stay live). Where
   // the parts rebuilt their list, full's list is made from theirs, and the positions it was built
   // at go into `whole_ref` (the pipeline's reference for the whole model).
@@ -150,6 +159,7 @@ class BrickStep {
   std::size_t ghosts_ = 0, most_balls_ = 0, least_balls_ = 0, most_ghosts_ = 0;
   std::size_t splits_ = 0;
   std::size_t local_rebuilds_ = 0;           // lists rebuilt on the parts (rebuild_local)
+  std::size_t local_wraps_ = 0;              // wraps on the parts (wrap)
   bool list_local_ = false;                  // the parts' list is newer than full's
   double max_radius_ = 0;                    // the whole model's largest ball (at the split)
   double shell_base_ = 0;                    // the largest shell received at the first local rebuild

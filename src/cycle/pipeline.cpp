@@ -228,6 +228,8 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
       const bool mine = part.outside_cell(model);
       if (t == 0) outside = mine;
     });
+    // A ball across a periodic face: the ranks wrap their parts' balls where they can.
+    if (outside && distributed_ && bricks().wrap(model)) outside = false;
     const double limit2 = ref_.displacement_limit2(model);
     whole = outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
     // A stale list alone: the ranks rebuild it on their parts where they can.

@@ -85,7 +85,17 @@ bool outside_cell(const Model& model, std::size_t begin, std::size_t end) {
   return false;
 }
 
-bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z) {
+void add_wrap_terms(Model& model, const std::vector<WrapTerm>& terms) {
+  double work = 0;
+  for (const WrapTerm& t : terms) {
+    work += t.work;
+    model.space.gross_work += t.gross;
+  }
+  model.energy.boundary_work += work;
+}
+
+bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z,
+                    std::vector<WrapTerm>* terms) {
   const Space& s = model.space;
   if (!s.periodic) return false;
   Balls& b = model.balls;
@@ -139,15 +149,20 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
         double& v = (*vel[e])[k];
         const double v_old = v;
         v -= shift * edge_velocity[a][e];
-        work += 0.5 * b.mass[k] * (v * v - v_old * v_old);
-        model.space.gross_work += 0.5 * b.mass[k] * std::abs(v * v - v_old * v_old);
+        const double gain = 0.5 * b.mass[k] * (v * v - v_old * v_old), size = 0.5 * b.mass[k] * std::abs(v * v - v_old * v_old);
+        if (terms) {
+          terms->push_back({k, gain, size});
+          continue;
+        }
+        work += gain;
+        model.space.gross_work += size;
       }
       if (moved.empty()) moved.assign(n, {0, 0, 0});
       moved[k][a] += step;
       any = true;
     }
   }
-  model.energy.boundary_work += work;
+  if (!terms) model.energy.boundary_work += work;
   // Image of j seen from i: x_j + H img - x_i. Moving j by -shift along edge a adds shift to img_a;
   // moving i takes it off. (A table that does not fit the balls has nothing to keep.)
   const bool table_fits = c.image_x.size() == c.size() && c.image_y.size() == c.size() && c.image_z.size() == c.size();

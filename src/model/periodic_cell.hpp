@@ -105,7 +105,18 @@ bool outside_cell(const Model& model, std::size_t begin, std::size_t end);
 // keeps the same partner image (and its history); ref (the pair list's reference positions, if the
 // same size) moves with the ball. The kinetic energy that the velocity change adds is counted as
 // boundary work. Returns whether any ball moved.
-bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z);
+// terms: where given, each ball's velocity changes are listed there instead (in the order the
+// energy adds them), and the model's energy is left alone (add_wrap_terms adds them, for a model
+// whose balls were wrapped in parts: a distributed run's ranks).
+struct WrapTerm {
+  std::size_t ball;
+  double work, gross;   // the kinetic energy the change adds, and its magnitude
+};
+bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double>* ref_y, std::vector<double>* ref_z,
+                    std::vector<WrapTerm>* terms = nullptr);
+// The energy of a wrap's terms (by ball, then in each ball's order) into the model's, with the
+// additions of a wrap_into_cell without terms, to the bit.
+void add_wrap_terms(Model& model, const std::vector<WrapTerm>& terms);
 
 // Keeps the tilts within half an edge (|yz| <= ly/2, then |xz|, |xy| <= lx/2) by replacing an edge
 // vector with itself less another (c - b, c - a, b - a): the same lattice of images, so nothing

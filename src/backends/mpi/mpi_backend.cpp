@@ -73,9 +73,9 @@ class MpiBackend final : public Backend {
     }
   }
   bool distributed() const override { return true; }
-  void find_part_pairs(const Model& part, double skin, PairCandidates& out) override {
+  void find_part_pairs(const Model& part, double skin, std::size_t whole_balls, PairCandidates& out) override {
     // The serial search: its test of a pair reads the two balls alone (and the cell).
-    find_serial_pairs(part, skin, part_grid_, out);
+    find_serial_pairs(part, skin, part_grid_, out, 0, ~std::size_t{0}, whole_balls);
   }
   std::vector<std::pair<std::string, std::string>> info() const override {
     auto lines = box_info(grid_.dims(), grid_.cell_size(), periodic_bins_);
