@@ -32,10 +32,11 @@ class Backend {
   virtual bool keeps_list() const { return true; }
   // Whether the step is shared among the ranks of a distributed run (BACKEND mpi), not threads.
   virtual bool distributed() const { return false; }
-  // A distributed backend's search of one rank's part (cycle/brick_step.hpp: its own balls and the
-  // others' within reach of them), on this rank alone: every pair of `part` as find_pairs gives
-  // them, the same test on each pair, so a pair of two given balls is found, with the same image,
-  // in any model that holds both.
+  // The search of one part of the spatial decomposition (cycle/brick_step.hpp: a rank's or a
+  // thread's own balls and the others' within reach of them), on the calling thread alone, safe
+  // to call from several threads at once: every pair of `part` as find_pairs gives them, the same
+  // test on each pair, so a pair of two given balls is found, with the same image, in any model
+  // that holds both. The default is the serial search.
   // whole_balls: the whole model's ball count (the search's bins are sized as for it).
   virtual void find_part_pairs(const Model& part, double skin, std::size_t whole_balls, PairCandidates& out);
   // Extra lines for PRINT info ("name: value").

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <new>
@@ -265,7 +266,7 @@ bool BrickStep::live_for(const Model& full) const {
          full.wall_contacts.list_version == wall_version_;
 }
 
-void BrickStep::update_shares() {
+std::vector<double> BrickStep::proposed_shares() {
   // Every member's speed since the last split (its own balls' forces and motion, not the waits):
   // the next shares are halfway between the last ones and the speeds' proportions, each clamped
   // between half and twice an equal share (then normalised), so that one noisy interval moves
@@ -273,24 +274,35 @@ void BrickStep::update_shares() {
   // balls.
   const int ranks = team_->size();
   if (shares_.size() != static_cast<std::size_t>(ranks)) shares_.assign(ranks, 1.0 / ranks);
-  if (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed)) work_seconds_ *= 3;
-  std::vector<double> mine{work_seconds_, work_ball_steps_}, all;
-  team_->allgather(mine, all);   // (a collective call: every member splits at once)
-  work_seconds_ = work_ball_steps_ = 0;
-  std::vector<double> speed(ranks, 0.0);
+  const double seconds = work_seconds_ * (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed) ? 3 : 1);
+  std::vector<double> mine{seconds, work_ball_steps_}, all;
+  team_->allgather(mine, all);   // (a collective call: every member asks at once)
+  std::vector<double> speed(ranks, 0.0), next(ranks, 0.0);
   double total = 0;
   for (int r = 0; r < ranks; ++r) {
-    const double seconds = all[2 * r], ball_steps = all[2 * r + 1];
-    if (!(seconds > 1e-4 && ball_steps > 0)) return;   // too little to go by: the shares stay
-    speed[r] = ball_steps / seconds;
+    const double member_seconds = all[2 * r], ball_steps = all[2 * r + 1];
+    if (!(member_seconds > 1e-4 && ball_steps > 0)) return {};   // too little to go by: the shares stay
+    speed[r] = ball_steps / member_seconds;
     total += speed[r];
   }
   double sum = 0;
   for (int r = 0; r < ranks; ++r) {
-    shares_[r] = std::clamp(0.5 * shares_[r] + 0.5 * speed[r] / total, 0.5 / ranks, 2.0 / ranks);
-    sum += shares_[r];
+    next[r] = std::clamp(0.5 * shares_[r] + 0.5 * speed[r] / total, 0.5 / ranks, 2.0 / ranks);
+    sum += next[r];
   }
-  for (double& s : shares_) s /= sum;
+  for (double& v : next) v /= sum;
+  return next;
+}
+
+void BrickStep::update_shares() {
+  std::vector<double> next = proposed_shares();   // (a collective call)
+  work_seconds_ = work_ball_steps_ = 0;
+  if (!next.empty()) shares_ = std::move(next);
+}
+
+void BrickStep::together(const std::function<void()>& work, const std::string& doing) {
+  if (team_->shares_whole()) work();   // (threads: Pipeline::each_part's abort releases the others)
+  else comm::together(work, doing);
 }
 
 void BrickStep::split(const Model& full, const VerletReference& ref) {
@@ -447,8 +459,15 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
 
 bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool) {
   // (Every test below reads what is the same on every rank, or is agreed on: every rank returns alike.)
-  if (team_->shares_whole() || local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
+  if (local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
   if (results_written_ && !current_) return false;   // (the parts hold results the whole model has not)
+  // The members' speeds have moved the shares by a tenth since the split (a core slowed, contacts
+  // crowding in a part): the parts are made afresh, balanced by them.
+  {
+    const std::vector<double> next = proposed_shares();   // (a collective call; the same on every member)
+    for (std::size_t r = 0; r < next.size(); ++r)
+      if (std::abs(next[r] - shares_[r]) > 0.1 * shares_[r]) return false;
+  }
   const int ranks = team_->size(), me = team_->rank();
   Balls& b = part_.balls;
   const Space& space = full.space;
@@ -483,7 +502,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   }
   std::vector<std::uint8_t> marks, all_marks;
   std::vector<std::uint32_t> bin_of;
-  comm::together([&] {
+  together([&] {
     marks.assign((bins.count() + 7) / 8, 0);
     bin_of.resize(owned_.size());
     for (std::size_t q = 0; q < owned_.size(); ++q) {
@@ -492,8 +511,8 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
       if (bin_of[q] != ShellBins::kNone) marks[bin_of[q] / 8] |= static_cast<std::uint8_t>(1u << (bin_of[q] % 8));
     }
   }, "finding the balls its neighbours need for a new pair list");
-  comm::allgather(marks, all_marks);
-  comm::together([&] {
+  team_->allgather(marks, all_marks);
+  together([&] {
     const std::size_t stride = marks.size();
     std::vector<std::uint32_t> near;
     std::vector<std::uint8_t> to(ranks);
@@ -525,7 +544,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   // The balls themselves, every array (a record of `words` words each, the whole model's index first).
   std::vector<const void*> source;
   b.for_each_array([&](auto& v) { source.push_back(&v); });
-  comm::together([&] {
+  together([&] {
     for (int r = 0; r < ranks; ++r) {
       const std::size_t count = shell[r].size();
       out[r].assign(words * count, 0.0);
@@ -548,7 +567,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   std::vector<std::uint8_t> next_ghost;
   std::size_t next_ghosts = 0;
   VerletReference next_ref;
-  comm::together([&] {
+  together([&] {
     // This rank's balls and those received, in the whole model's order.
     struct Entry { std::uint32_t global; int from; std::uint32_t at; };   // from: -1 this rank's (at: part index)
     std::vector<Entry> entries;
@@ -657,6 +676,8 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     }
   }, "making a new pair list for its part");
 
+  // (Threads: no member commits where another failed; ranks agreed in together.)
+  if (team_->shares_whole()) team_->barrier();
   // (Nothing below fails but the index and the laws, which a sync does not read.)
   const std::size_t m = next_balls.size();
   std::swap(part_.balls, next_balls);
@@ -676,7 +697,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   current_ = false;
   moved2_ = 0;
   outside_box_ = false;
-  comm::together([&] {
+  together([&] {
     send_buf_.assign(ranks, {});
     recv_buf_.assign(ranks, {});
     for (int r = 0; r < ranks; ++r) {
@@ -690,7 +711,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   if (!full.walls.empty() || part_.wall_contacts.size() > 0) {
     // The walls' contacts of this rank's balls, their history carried by (ball id, wall id) from
     // the part's old ones (which hold every contact of these balls).
-    comm::together([&] {
+    together([&] {
       part_.walls = full.walls;
       find_wall_contacts(part_, skin, pool);
       WallContacts& w = part_.wall_contacts;
@@ -791,12 +812,16 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
 }
 
 bool BrickStep::wrap(Model& full) {
-  if (team_->shares_whole() || local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
+  if (local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
   if (results_written_ && !current_) return false;
   part_.space = full.space;
+  // (Set first: where a member fails below, the others' parts may be wrapped, and every member
+  // must then make the whole list from the parts alike.)
+  list_local_ = true;
+  current_ = false;
   std::vector<WrapTerm> terms;
   // (A ball a million cells away fails the wrap on each rank that holds a copy of it, not on all.)
-  comm::together([&] { wrap_into_cell(part_, &ref_.x, &ref_.y, &ref_.z, &terms); },
+  together([&] { wrap_into_cell(part_, &ref_.x, &ref_.y, &ref_.z, &terms); },
                  "wrapping its balls into the periodic cell");
   // Every rank's own balls' terms, in the whole model's order (a ball's own terms stay in theirs).
   std::vector<double> mine, all;
@@ -811,10 +836,8 @@ bool BrickStep::wrap(Model& full) {
   for (std::size_t q = 0; q < merged.size(); ++q)
     merged[q] = {static_cast<std::size_t>(all[3 * q]), all[3 * q + 1], all[3 * q + 2]};
   std::stable_sort(merged.begin(), merged.end(), [](const WrapTerm& p, const WrapTerm& q) { return p.ball < q.ball; });
-  add_wrap_terms(full, merged);
+  if (!team_->shares_whole() || team_->rank() == 0) add_wrap_terms(full, merged);   // (once to the one whole model)
   ++local_wraps_;
-  list_local_ = true;   // (the images of the parts' pairs changed: the whole list is made from theirs)
-  current_ = false;
   return true;
 }
 
@@ -888,7 +911,7 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
   const int ranks = team_->size();
   const ContactTable& c = part_.contacts;
   std::vector<std::uint8_t> mine, all;
-  comm::together([&] {
+  together([&] {
     mine.resize(owned_pairs_.size() * kPair);
     std::uint8_t* r = mine.data();
     for (std::uint32_t q : owned_pairs_) {
@@ -904,8 +927,8 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
   // Every rank's count, to know whose records are whose.
   std::vector<double> count{static_cast<double>(owned_pairs_.size())}, counts;
   team_->allgather(count, counts);
-  comm::allgather(mine, all);
-  comm::together([&] {
+  team_->allgather(mine, all);
+  together([&] {
     std::vector<std::uint8_t>().swap(mine);
     const std::size_t total = all.size() / kPair;
     PairCandidates list;
@@ -949,9 +972,12 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
       first += rank_pairs_[r].size();
     }
     // The results go: a sync that has them (results_written_) makes them again, of the new list.
+    // (Threads: member 0 installs it in the one whole model; every member made the same list.)
+    if (team_->shares_whole() && team_->rank() != 0) return;
     full.contacts.drop_results();
     install_pairs(full.contacts, sorted);   // (its history is then every rank's, gathered by sync)
   }, "installing the whole model's pair list");
+  if (team_->shares_whole()) team_->barrier();
   list_version_ = full.contacts.list_version;
   if (!full.walls.empty() || full.wall_contacts.size() > 0) install_local_walls(full);
   if (whole_ref && whole_ref->x.size() == full.balls.size()) {
@@ -969,7 +995,7 @@ void BrickStep::install_local_walls(Model& full) {
   const int ranks = team_->size();
   const WallContacts& w = part_.wall_contacts;
   std::vector<double> mine, all;
-  comm::together([&] {
+  together([&] {
     for (std::size_t q = 0; q < w.size(); ++q) {
       mine.push_back(global_ball_[w.ball[q]]);
       mine.push_back(w.wall[q]);
@@ -978,7 +1004,7 @@ void BrickStep::install_local_walls(Model& full) {
   std::vector<double> count{static_cast<double>(w.size())}, counts;
   team_->allgather(count, counts);
   team_->allgather(mine, all);
-  comm::together([&] {
+  together([&] {
     const std::size_t total = all.size() / 2;
     std::vector<std::uint32_t> order(total);
     std::iota(order.begin(), order.end(), 0u);
@@ -1003,8 +1029,9 @@ void BrickStep::install_local_walls(Model& full) {
       first += rank_walls_[r].size();
     }
     next.list_version = next_part_version();
-    full.wall_contacts = std::move(next);
+    if (!team_->shares_whole() || team_->rank() == 0) full.wall_contacts = std::move(next);
   }, "installing the whole model's wall contacts");
+  if (team_->shares_whole()) team_->barrier();
   wall_version_ = full.wall_contacts.list_version;
 }
 
@@ -1071,7 +1098,7 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   for (double share : shares_) fmt::format_to(std::back_inserter(shares), "{}{:.2f}", shares.empty() ? "" : " ", share);
   lines.emplace_back("shares of the balls", shares + " (by " + member + ", in proportion to the speed each stepped its own balls at)");
   lines.emplace_back("decompositions made", std::to_string(splits_));
-  if (!team_->shares_whole()) {
+  {
     lines.emplace_back("pair lists rebuilt on the parts",
                        std::to_string(local_rebuilds_) + " (each rank searching its own balls and those within reach of them)");
     lines.emplace_back("wraps on the parts", std::to_string(local_wraps_) + " (balls moved across the periodic faces by their ranks)");

@@ -26,6 +26,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -86,7 +87,8 @@ class BrickStep {
   // does and carries their history over. Returns false, changing nothing, where the parts are to be
   // made afresh from the whole model instead (the same answer on every rank): threads, a
   // decomposition whose balls have spread (the shell of balls received grew past twice its size at
-  // the first such rebuild), results not yet gathered. The walls' contacts of the rank's own balls
+  // the first such rebuild), members whose speeds would move their shares by a tenth, results not
+  // yet gathered. The walls' contacts of the rank's own balls
   // are found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
@@ -128,7 +130,12 @@ class BrickStep {
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.
   void install_local_walls(Model& full);
-  // The shares of the next split, from every member's speed since the last (a collective call).
+  // Runs `work` so that a member's failure is every member's (ranks: comm::together; threads: the
+  // team's abort, through Pipeline::each_part).
+  void together(const std::function<void()>& work, const std::string& doing);
+  // The shares every member's speed since the last split gives (a collective call; the same on
+  // every member; empty where too little was measured), and those of the next split, made from them.
+  std::vector<double> proposed_shares();
   void update_shares();
 
   Team* team_ = &rank_team();

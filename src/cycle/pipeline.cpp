@@ -228,16 +228,28 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
       const bool mine = part.outside_cell(model);
       if (t == 0) outside = mine;
     });
-    // A ball across a periodic face: the ranks wrap their parts' balls where they can.
-    if (outside && distributed_ && bricks().wrap(model)) outside = false;
+    // A ball across a periodic face: the members wrap their parts' balls where they can.
+    if (outside) {
+      bool wrapped = false;
+      each_part([&](BrickStep& part, int t) {
+        const bool done = part.wrap(model);   // (the same answer on every member)
+        if (t == 0) wrapped = done;
+      });
+      outside = !wrapped;
+    }
     const double limit2 = ref_.displacement_limit2(model);
     whole = outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
-    // A stale list alone: the ranks rebuild it on their parts where they can.
-    if (whole && !outside && distributed_) {
+    // A stale list alone: the members rebuild it on their parts where they can.
+    if (whole && !outside) {
       double skin = VerletReference::skin_for(model.balls);
       if (model.space.periodic) skin = periodic_skin(model, skin);
       check_periodic_cell(model);
-      if (bricks().rebuild_local(model, skin, *backend_, pool_)) {
+      bool rebuilt = false;
+      each_part([&](BrickStep& part, int t) {
+        const bool done = part.rebuild_local(model, skin, *backend_, distributed_ ? pool_ : *solo_pools_[t]);
+        if (t == 0) rebuilt = done;
+      });
+      if (rebuilt) {
         ref_.record_cell(model, skin);
         wall_travel_ = 0;
         whole = false;

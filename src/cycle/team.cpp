@@ -15,6 +15,9 @@ class RankTeam final : public Team {
   int rank() const override { return comm::rank(); }
   bool shares_whole() const override { return false; }
   void allgather(const std::vector<double>& mine, std::vector<double>& all) override { comm::allgather(mine, all); }
+  void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) override {
+    comm::allgather(mine, all);
+  }
   void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv) override {
     comm::exchange(send, recv);
   }
@@ -65,6 +68,14 @@ void ThreadTeam::allgather(const std::vector<double>& mine, std::vector<double>&
   barrier();
   all.clear();
   for (const auto* part : shared_->parts) all.insert(all.end(), part->begin(), part->end());
+  barrier();
+}
+
+void ThreadTeam::allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) {
+  shared_->byte_parts[rank_] = &mine;
+  barrier();
+  all.clear();
+  for (const auto* part : shared_->byte_parts) all.insert(all.end(), part->begin(), part->end());
   barrier();
 }
 

@@ -27,6 +27,7 @@ class Team {
   virtual bool shares_whole() const = 0;
   // Every member's part in member order, concatenated into `all` (part sizes may differ).
   virtual void allgather(const std::vector<double>& mine, std::vector<double>& all) = 0;
+  virtual void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) = 0;
   // send[r] goes to member r, and recv[r] (already sized to what member r sends this one) is filled from it.
   virtual void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv) = 0;
   // The largest of each member's values, element by element, on every member.
@@ -76,10 +77,11 @@ class ThreadTeam final : public Team {
  public:
   struct Shared {
     explicit Shared(int members)
-        : size(members), sync(members), parts(members), sends(members) {}
+        : size(members), sync(members), parts(members), byte_parts(members), sends(members) {}
     int size;
     SpinBarrier sync;
     std::vector<const std::vector<double>*> parts;               // per member: its allgather part, max_all values
+    std::vector<const std::vector<std::uint8_t>*> byte_parts;    // per member: its allgather part of bytes
     std::vector<const std::vector<std::vector<double>>*> sends;  // per member: its exchange buffers
   };
   ThreadTeam(Shared& shared, int rank) : shared_(&shared), rank_(rank) {}
@@ -88,6 +90,7 @@ class ThreadTeam final : public Team {
   int rank() const override { return rank_; }
   bool shares_whole() const override { return true; }
   void allgather(const std::vector<double>& mine, std::vector<double>& all) override;
+  void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) override;
   void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv) override;
   void max_all(std::vector<double>& values) override;
   void barrier() override { shared_->sync.arrive_and_wait(); }

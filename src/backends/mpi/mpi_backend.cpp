@@ -73,10 +73,6 @@ class MpiBackend final : public Backend {
     }
   }
   bool distributed() const override { return true; }
-  void find_part_pairs(const Model& part, double skin, std::size_t whole_balls, PairCandidates& out) override {
-    // The serial search: its test of a pair reads the two balls alone (and the cell).
-    find_serial_pairs(part, skin, part_grid_, out, 0, ~std::size_t{0}, whole_balls);
-  }
   std::vector<std::pair<std::string, std::string>> info() const override {
     auto lines = box_info(grid_.dims(), grid_.cell_size(), periodic_bins_);
     lines.emplace_back("pair search", "a stale list on each rank's part (its own balls and the others' within reach "
@@ -90,7 +86,7 @@ class MpiBackend final : public Backend {
   }
 
  private:
-  BoxGrid grid_, part_grid_;
+  BoxGrid grid_;
   std::array<int, 3> periodic_bins_{};   // of the last search, where it was the periodic one
   PairCandidates mine_;
   std::vector<std::uint8_t> send_, recv_;
