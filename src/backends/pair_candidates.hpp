@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace trubal {
@@ -27,5 +28,31 @@ struct PairCandidates {
     image_z.insert(image_z.end(), o.image_z.begin(), o.image_z.end());
   }
 };
+
+// A pair as the ranks of a distributed run send it: 11 bytes, i, j, then j's image.
+inline constexpr std::size_t kPairRecord = 2 * sizeof(std::uint32_t) + 3;
+inline void write_pair_record(std::uint8_t* r, std::uint32_t i, std::uint32_t j, std::int8_t ix, std::int8_t iy,
+                              std::int8_t iz) {
+  std::memcpy(r, &i, 4);
+  std::memcpy(r + 4, &j, 4);
+  std::memcpy(r + 8, &ix, 1);
+  std::memcpy(r + 9, &iy, 1);
+  std::memcpy(r + 10, &iz, 1);
+}
+// The pairs of `records` (whole records, in order) into `out`, replacing its list.
+inline void read_pair_records(const std::vector<std::uint8_t>& records, PairCandidates& out) {
+  const std::size_t total = records.size() / kPairRecord;
+  out.clear();
+  out.i.resize(total); out.j.resize(total);
+  out.image_x.resize(total); out.image_y.resize(total); out.image_z.resize(total);
+  for (std::size_t p = 0; p < total; ++p) {
+    const std::uint8_t* r = records.data() + p * kPairRecord;
+    std::memcpy(&out.i[p], r, 4);
+    std::memcpy(&out.j[p], r + 4, 4);
+    std::memcpy(&out.image_x[p], r + 8, 1);
+    std::memcpy(&out.image_y[p], r + 9, 1);
+    std::memcpy(&out.image_z[p], r + 10, 1);
+  }
+}
 
 }  // namespace trubal

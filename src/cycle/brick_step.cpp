@@ -907,21 +907,15 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
   // The whole model's list is every rank's pairs whose ball i it owns, in the serial order (by i,
   // j, image): each rank's are in that order already, so they are merged by a sort of positions.
   // One record per pair: i, j (the whole model's), then j's image.
-  constexpr std::size_t kPair = 2 * sizeof(std::uint32_t) + 3;
   const int ranks = team_->size();
   const ContactTable& c = part_.contacts;
   std::vector<std::uint8_t> mine, all;
   together([&] {
-    mine.resize(owned_pairs_.size() * kPair);
+    mine.resize(owned_pairs_.size() * kPairRecord);
     std::uint8_t* r = mine.data();
     for (std::uint32_t q : owned_pairs_) {
-      const std::uint32_t i = global_ball_[c.i[q]], j = global_ball_[c.j[q]];
-      std::memcpy(r, &i, 4);
-      std::memcpy(r + 4, &j, 4);
-      std::memcpy(r + 8, &c.image_x[q], 1);
-      std::memcpy(r + 9, &c.image_y[q], 1);
-      std::memcpy(r + 10, &c.image_z[q], 1);
-      r += kPair;
+      write_pair_record(r, global_ball_[c.i[q]], global_ball_[c.j[q]], c.image_x[q], c.image_y[q], c.image_z[q]);
+      r += kPairRecord;
     }
   }, "gathering the pair list of its part");
   // Every rank's count, to know whose records are whose.
@@ -930,18 +924,9 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
   team_->allgather(mine, all);
   together([&] {
     std::vector<std::uint8_t>().swap(mine);
-    const std::size_t total = all.size() / kPair;
     PairCandidates list;
-    list.i.resize(total); list.j.resize(total);
-    list.image_x.resize(total); list.image_y.resize(total); list.image_z.resize(total);
-    for (std::size_t p = 0; p < total; ++p) {
-      const std::uint8_t* r = all.data() + p * kPair;
-      std::memcpy(&list.i[p], r, 4);
-      std::memcpy(&list.j[p], r + 4, 4);
-      std::memcpy(&list.image_x[p], r + 8, 1);
-      std::memcpy(&list.image_y[p], r + 9, 1);
-      std::memcpy(&list.image_z[p], r + 10, 1);
-    }
+    read_pair_records(all, list);
+    const std::size_t total = list.i.size();
     std::vector<std::uint8_t>().swap(all);
     std::vector<std::uint32_t> order(total);
     std::iota(order.begin(), order.end(), 0u);

@@ -12,9 +12,6 @@
 namespace trubal {
 namespace {
 
-// One candidate pair as the ranks send it: i, j, then j's image.
-constexpr std::size_t kRecord = 2 * sizeof(std::uint32_t) + 3;
-
 // The distributed backend (issue 17): every rank holds the whole model between steps that need it;
 // the step itself is shared by a spatial decomposition (cycle/brick_step.hpp). The search is the
 // serial one, shared: each rank searches the pairs whose lower ball i is in its range of indices
@@ -44,33 +41,16 @@ class MpiBackend final : public Backend {
     // (A rank that fails its share alone must not leave the others waiting in the gather below.)
     comm::together([&] {
       search();
-      send_.resize(mine.i.size() * kRecord);
+      send_.resize(mine.i.size() * kPairRecord);
     }, "searching its share of the pairs");
     periodic_bins_ = mine.periodic_bins;
     // Every rank's pairs, as records, in rank order.
     const std::size_t m = mine.i.size();
-    for (std::size_t p = 0; p < m; ++p) {
-      std::uint8_t* r = send_.data() + p * kRecord;
-      std::memcpy(r, &mine.i[p], 4);
-      std::memcpy(r + 4, &mine.j[p], 4);
-      std::memcpy(r + 8, &mine.image_x[p], 1);
-      std::memcpy(r + 9, &mine.image_y[p], 1);
-      std::memcpy(r + 10, &mine.image_z[p], 1);
-    }
+    for (std::size_t p = 0; p < m; ++p)
+      write_pair_record(send_.data() + p * kPairRecord, mine.i[p], mine.j[p], mine.image_x[p], mine.image_y[p], mine.image_z[p]);
     mine.clear();
     comm::allgather(send_, recv_);
-    const std::size_t total = recv_.size() / kRecord;
-    out.clear();
-    out.i.resize(total); out.j.resize(total);
-    out.image_x.resize(total); out.image_y.resize(total); out.image_z.resize(total);
-    for (std::size_t p = 0; p < total; ++p) {
-      const std::uint8_t* r = recv_.data() + p * kRecord;
-      std::memcpy(&out.i[p], r, 4);
-      std::memcpy(&out.j[p], r + 4, 4);
-      std::memcpy(&out.image_x[p], r + 8, 1);
-      std::memcpy(&out.image_y[p], r + 9, 1);
-      std::memcpy(&out.image_z[p], r + 10, 1);
-    }
+    read_pair_records(recv_, out);
   }
   bool distributed() const override { return true; }
   std::vector<std::pair<std::string, std::string>> info() const override {
