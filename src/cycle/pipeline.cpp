@@ -168,8 +168,13 @@ void Pipeline::rebuild(Model& model) {
     if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
   };
   // (Ranks: one that fails alone, out of memory, must not leave the others in the next collective call.)
-  if (distributed_) comm::together(install, "installing the new pair list");
-  else install();
+  if (distributed_) {
+    comm::together(install, "installing the new pair list");
+    // The parts rebuild their own lists from here on: the whole search's list goes back.
+    pairs_ = PairCandidates{};
+  } else {
+    install();
+  }
   wall_travel_ = 0;
   if (backend_->keeps_list()) ref_.record(model, skin);
   model_ = &model;

@@ -13,8 +13,8 @@ namespace trubal {
 namespace {
 
 // The distributed backend (issue 17): every rank holds the whole model between steps that need it;
-// the step itself is shared by a spatial decomposition (cycle/brick_step.hpp). The search is the
-// serial one, shared: each rank searches the pairs whose lower ball i is in its range of indices
+// the step itself is shared by a spatial decomposition (cycle/brick_step.hpp), whose parts rebuild
+// their own lists (Backend::find_part_pairs). A search through the whole model is the serial one, shared: each rank searches the pairs whose lower ball i is in its range of indices
 // (consecutive ranges, ascending by rank), and every rank joins the ranks' lists in rank order,
 // which is the serial list, pair for pair, as the threads' lists are joined in the threaded search.
 // The answer is the serial one, bit for bit, for any rank count.
@@ -51,6 +51,10 @@ class MpiBackend final : public Backend {
     mine.clear();
     comm::allgather(send_, recv_);
     read_pair_records(recv_, out);
+    // (Searches through the whole model are rare where the parts rebuild their lists: the
+    // buffers' memory goes back rather than stand beside the parts.)
+    for (auto* v : {&send_, &recv_}) std::vector<std::uint8_t>().swap(*v);
+    mine_ = PairCandidates{};
   }
   bool distributed() const override { return true; }
   std::vector<std::pair<std::string, std::string>> info() const override {
@@ -61,7 +65,8 @@ class MpiBackend final : public Backend {
     lines.emplace_back("decomposition",
                        "recursive bisection of the balls, each rank's share in proportion to its speed; each rank steps "
                        "its own balls with ghost copies of their partners, and keeps them until the whole model is "
-                       "stepped through (a ball crossing a periodic face, walls, balls spread far from their part)");
+                       "stepped through (an edit, a START box's escape, balls spread far from their parts, the ranks' "
+                       "speeds drifting from their shares)");
     return lines;
   }
 
