@@ -307,11 +307,10 @@ void BrickStep::together(const std::function<void()>& work, const std::string& d
 
 void BrickStep::split(const Model& full, const VerletReference& ref) {
   update_shares();   // (a collective call)
-  if (team_->shares_whole()) return make_part(full, ref);   // (threads: Pipeline::each_part's abort)
   // A rank that cannot make its part (out of memory) must not leave the others stepping theirs and
   // waiting for its ghosts: the ranks agree here, and every one stops with that rank's message.
-  comm::together([&] {
-    if (team_->rank() == fail_split_for_test.load()) {
+  together([&] {
+    if (!team_->shares_whole() && team_->rank() == fail_split_for_test.load()) {   // (a rank's test hook)
       fail_split_for_test = -1;
       throw std::bad_alloc();
     }

@@ -85,11 +85,11 @@ class BrickStep {
   // (those in the bins around its balls' bins, the bins as wide as the largest reach with `skin`,
   // through the periodic faces too; each rank marks the bins of its balls), searches its pairs as the serial search
   // does and carries their history over. Returns false, changing nothing, where the parts are to be
-  // made afresh from the whole model instead (the same answer on every rank): threads, a
-  // decomposition whose balls have spread (the shell of balls received grew past twice its size at
-  // the first such rebuild), members whose speeds would move their shares by a tenth, results not
-  // yet gathered. The walls' contacts of the rank's own balls
-  // are found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
+  // made afresh from the whole model instead (the same answer on every member): a decomposition
+  // whose balls have spread (the shell of balls received grew past twice its size at the first
+  // such rebuild), members whose speeds would move their shares by a tenth, results not yet
+  // gathered, TRUBAL_REBUILD_WHOLE (local_rule). The walls' contacts of the member's own balls are
+  // found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
   // Wraps the parts' balls into the periodic cell as the whole model's wrap would (a collective
