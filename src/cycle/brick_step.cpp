@@ -27,15 +27,22 @@ namespace {
 
 constexpr std::uint32_t kAbsent = ~std::uint32_t{0};
 constexpr std::size_t kHalo = 9;   // a ghost's state each step: position, velocity, spin
+constexpr std::size_t kPairWords = 8;   // a moving ball's pair: i, j (whole model's), image, shear history
 
 // Owners by recursive coordinate bisection: the balls of a box are cut across its longest extent
 // at the count that gives each side the sum of its ranks' shares. Ties and non-finite coordinates
 // are ordered by index, so every rank computes the same owners (from the same shares).
-void bisect(const Balls& b, std::vector<std::uint32_t>& order, std::size_t lo, std::size_t hi, int parts, int first,
-            const std::vector<double>& shares, std::vector<int>& owner) {
+// `cuts` records the planes (BrickStep::Cut), so that a ball that moved finds the rank whose brick
+// holds it now (BrickStep::owner_at); returns the node made.
+std::int32_t bisect(const Balls& b, std::vector<std::uint32_t>& order, std::size_t lo, std::size_t hi, int parts,
+                    int first, const std::vector<double>& shares, std::vector<int>& owner,
+                    std::vector<BrickStep::Cut>& cuts) {
+  const auto node = static_cast<std::int32_t>(cuts.size());
+  cuts.push_back({});
+  cuts[node].owner = first;
   if (parts <= 1 || hi - lo <= 1) {
     for (std::size_t q = lo; q < hi; ++q) owner[order[q]] = first;
-    return;
+    return node;
   }
   const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
   double extent[3];
@@ -62,8 +69,15 @@ void bisect(const Balls& b, std::vector<std::uint32_t>& order, std::size_t lo, s
     const double kp = key(p), kq = key(q);
     return kp < kq || (kp == kq && p < q);
   });
-  bisect(b, order, lo, cut, left, first, shares, owner);
-  bisect(b, order, cut, hi, parts - left, first + left, shares, owner);
+  // The plane: the first ball of the right side, by (coordinate, index) as the cut orders them.
+  cuts[node].axis = axis;
+  cuts[node].at = key(order[cut]);
+  cuts[node].at_ball = order[cut];
+  const std::int32_t l = bisect(b, order, lo, cut, left, first, shares, owner, cuts);
+  const std::int32_t r = bisect(b, order, cut, hi, parts - left, first + left, shares, owner, cuts);
+  cuts[node].left = l;
+  cuts[node].right = r;
+  return node;
 }
 
 // `to`'s arrays are `from`'s at the picked indices (the visitor lists a struct's arrays in one order).
@@ -328,7 +342,8 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   {
     std::vector<std::uint32_t> order(n);
     std::iota(order.begin(), order.end(), 0u);
-    bisect(b, order, 0, n, ranks, 0, shares_, owner_);
+    cuts_.clear();
+    bisect(b, order, 0, n, ranks, 0, shares_, owner_, cuts_);
   }
   // The part: owned balls (1) and their partners owned elsewhere (2, ghosts); the pairs touching
   // an owned ball; for each other rank, the owned balls that are its ghosts.
@@ -456,6 +471,17 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   current_ = true;
 }
 
+int BrickStep::owner_at(double x, double y, double z, std::uint32_t k) const {
+  const double p[3] = {x, y, z};
+  std::int32_t node = 0;
+  while (cuts_[node].left >= 0) {
+    const Cut& c = cuts_[node];
+    const double v = std::isfinite(p[c.axis]) ? p[c.axis] : std::numeric_limits<double>::infinity();
+    node = v < c.at || (v == c.at && k < c.at_ball) ? c.left : c.right;
+  }
+  return cuts_[node].owner;
+}
+
 bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool) {
   // (Every test below reads what is the same on every rank, or is agreed on: every rank returns alike.)
   if (local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
@@ -475,9 +501,10 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   // Bins at least `reach` wide across (the periodic search's, in the cell's fractional coordinates;
   // in a box, over the extent of every rank's balls): a pair's balls lie in neighbouring bins. Each
   // rank marks the bins its balls are in, and sends a rank its balls next to a bin that rank marked.
-  const std::size_t words = ball_words();
+  const std::size_t words = ball_words() + 1;   // a ball's record: whole-model index, owner, its arrays
+  const std::size_t wall_words = [] { std::size_t n = 0; WallContacts().for_each_array([&](auto&) { ++n; }); return n; }();
   std::vector<std::vector<std::uint32_t>> shell(ranks);
-  std::vector<std::vector<double>> out(ranks), in(ranks);
+  std::vector<std::vector<double>> out(ranks), in(ranks), pair_out(ranks), wall_out(ranks);
   ShellBins bins;
   {
     constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -499,16 +526,51 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
       }
     bins.fit(space, box, reach, full_balls_);
   }
-  std::vector<std::uint8_t> marks, all_marks;
-  std::vector<std::uint32_t> bin_of;
+  // The owners follow the balls: a ball of this rank's now in another rank's brick of the split goes
+  // to that rank, with the history of its pairs and wall contacts. Every rank learns every move (its
+  // ball, new owner and bin), so every rank knows every ball's owner and marks the bins of the balls
+  // it will own.
+  std::vector<int> dest(owned_.size(), me);
+  std::vector<std::uint32_t> bin_of(owned_.size());
+  std::vector<double> moves, all_moves;   // per ball changing owner: whole-model index, new owner, bin
   together([&] {
-    marks.assign((bins.count() + 7) / 8, 0);
-    bin_of.resize(owned_.size());
     for (std::size_t q = 0; q < owned_.size(); ++q) {
       const std::uint32_t k = owned_[q];
       bin_of[q] = bins.bin_of(b.x[k], b.y[k], b.z[k]);
-      if (bin_of[q] != ShellBins::kNone) marks[bin_of[q] / 8] |= static_cast<std::uint8_t>(1u << (bin_of[q] % 8));
+      if (bin_of[q] == ShellBins::kNone) continue;   // (a ball at no finite place stays where it is)
+      dest[q] = owner_at(b.x[k], b.y[k], b.z[k], global_ball_[k]);
+      if (dest[q] == me) continue;
+      moves.push_back(global_ball_[k]);
+      moves.push_back(dest[q]);
+      moves.push_back(bin_of[q]);
     }
+  }, "finding the balls that change owner");
+  team_->allgather(moves, all_moves);
+  const std::size_t moved = all_moves.size() / 3;
+  // The counts after the moves, against the shares: a tenth off (and two balls), and the parts are
+  // made afresh from the whole model, balanced again.
+  std::vector<std::size_t> count(ranks);
+  for (int r = 0; r < ranks; ++r) count[r] = rank_balls_[r].size();
+  for (std::size_t t = 0; t < moved; ++t) {
+    --count[owner_[static_cast<std::size_t>(all_moves[3 * t])]];
+    ++count[static_cast<std::size_t>(all_moves[3 * t + 1])];
+  }
+  {
+    const double total = std::accumulate(shares_.begin(), shares_.end(), 0.0);
+    for (int r = 0; r < ranks; ++r) {
+      const double want = shares_[r] / total * static_cast<double>(full_balls_);
+      if (std::abs(static_cast<double>(count[r]) - want) > 0.1 * want + 2) return false;
+    }
+  }
+  std::vector<int> part_dest;   // per ball of the part: the rank it moves to (-1: none; empty: no moves)
+  std::vector<std::uint8_t> marks, all_marks;
+  together([&] {
+    marks.assign((bins.count() + 7) / 8, 0);
+    auto mark = [&](std::uint32_t bin) { marks[bin / 8] |= static_cast<std::uint8_t>(1u << (bin % 8)); };
+    for (std::size_t q = 0; q < owned_.size(); ++q)
+      if (dest[q] == me && bin_of[q] != ShellBins::kNone) mark(bin_of[q]);
+    for (std::size_t t = 0; t < moved; ++t)
+      if (static_cast<int>(all_moves[3 * t + 1]) == me) mark(static_cast<std::uint32_t>(all_moves[3 * t + 2]));
   }, "finding the balls its neighbours need for a new pair list");
   team_->allgather(marks, all_marks);
   together([&] {
@@ -522,17 +584,53 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
       for (std::uint32_t c : near)
         for (int r = 0; r < ranks; ++r)
           if (all_marks[r * stride + c / 8] & (1u << (c % 8))) to[r] = 1;
+      to[dest[q]] = 1;   // (its new owner marked its bin; said again for clarity)
       for (int r = 0; r < ranks; ++r)
         if (to[r] && r != me) shell[r].push_back(owned_[q]);
     }
+    // A moving ball's pairs and wall contacts (this rank's part holds all of them), to its new owner.
+    if (moved > 0) {
+      part_dest.assign(b.size(), -1);
+      for (std::size_t q = 0; q < owned_.size(); ++q)
+        if (dest[q] != me) part_dest[owned_[q]] = dest[q];
+      const ContactTable& c = part_.contacts;
+      for (std::size_t p = 0; p < c.size(); ++p) {
+        const int di = part_dest[c.i[p]], dj = part_dest[c.j[p]];
+        for (int d : {di, dj != di ? dj : -1}) {
+          if (d < 0) continue;
+          auto& o = pair_out[d];
+          for (double v : {static_cast<double>(global_ball_[c.i[p]]), static_cast<double>(global_ball_[c.j[p]]),
+                           static_cast<double>(c.image_x[p]), static_cast<double>(c.image_y[p]),
+                           static_cast<double>(c.image_z[p]), c.fsx[p], c.fsy[p], c.fsz[p]})
+            o.push_back(v);
+        }
+      }
+      WallContacts& w = part_.wall_contacts;
+      for (std::size_t q = 0; q < w.size(); ++q) {
+        const int d = part_dest[w.ball[q]];
+        if (d < 0) continue;
+        std::size_t word = 0;
+        w.for_each_array([&](auto& v) {
+          wall_out[d].push_back(word++ == 0 ? static_cast<double>(global_ball_[w.ball[q]])
+                                            : (q < v.size() ? to_word(v[q]) : 0.0));
+        });
+      }
+    }
     for (int r = 0; r < ranks; ++r) {
-      out[r].assign(1, static_cast<double>(shell[r].size()));
-      in[r].assign(1, 0.0);
+      out[r] = {static_cast<double>(shell[r].size()), static_cast<double>(pair_out[r].size() / kPairWords),
+                static_cast<double>(wall_out[r].size() / wall_words)};
+      in[r].assign(3, 0.0);
     }
   }, "finding the balls its neighbours need for a new pair list");
   team_->exchange(out, in);
   double received = 0;
-  for (int r = 0; r < ranks; ++r) received += in[r][0];
+  std::vector<std::size_t> shell_in(ranks), in_pairs(ranks), in_walls(ranks);
+  for (int r = 0; r < ranks; ++r) {
+    received += in[r][0];
+    shell_in[r] = static_cast<std::size_t>(in[r][0]);
+    in_pairs[r] = static_cast<std::size_t>(in[r][1]);
+    in_walls[r] = static_cast<std::size_t>(in[r][2]);
+  }
   // The balls have spread where the largest shell has grown past twice what it was at the first
   // rebuild after the split: the parts are made afresh (and balanced) from the whole model.
   std::vector<double> most{received};
@@ -547,13 +645,21 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     for (int r = 0; r < ranks; ++r) {
       const std::size_t count = shell[r].size();
       out[r].assign(words * count, 0.0);
-      for (std::size_t q = 0; q < count; ++q) out[r][q * words] = global_ball_[shell[r][q]];
-      std::size_t word = 1;
+      for (std::size_t q = 0; q < count; ++q) {
+        const std::uint32_t k = shell[r][q];
+        out[r][q * words] = global_ball_[k];
+        out[r][q * words + 1] = part_dest.empty() || part_dest[k] < 0 ? me : part_dest[k];
+      }
+      std::size_t word = 2;
       b.for_each_array([&](auto& v) {
         for (std::size_t q = 0; q < count; ++q) out[r][q * words + word] = to_word(v[shell[r][q]]);
         ++word;
       });
-      in[r].assign(words * static_cast<std::size_t>(in[r][0]), 0.0);
+      out[r].insert(out[r].end(), pair_out[r].begin(), pair_out[r].end());
+      out[r].insert(out[r].end(), wall_out[r].begin(), wall_out[r].end());
+      std::vector<double>().swap(pair_out[r]);
+      std::vector<double>().swap(wall_out[r]);
+      in[r].assign(words * shell_in[r] + kPairWords * in_pairs[r] + wall_words * in_walls[r], 0.0);
     }
   }, "sending the balls its neighbours need for a new pair list");
   team_->exchange(out, in);
@@ -566,21 +672,25 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   std::vector<std::uint8_t> next_ghost;
   std::size_t next_ghosts = 0;
   VerletReference next_ref;
+  ContactTable arrived_pairs;   // the pairs of the balls that move to this rank, with their history
+  WallContacts arrived_walls;   // and their wall contacts
   together([&] {
     // This rank's balls and those received, in the whole model's order.
-    struct Entry { std::uint32_t global; int from; std::uint32_t at; };   // from: -1 this rank's (at: part index)
+    // from: -1 this rank's (at: part index); owner: the rank that owns it from now on.
+    struct Entry { std::uint32_t global; int from; std::uint32_t at; int owner; };
     std::vector<Entry> entries;
     entries.reserve(owned_.size() + static_cast<std::size_t>(received));
-    for (std::uint32_t k : owned_) entries.push_back({global_ball_[k], -1, k});
+    for (std::size_t q = 0; q < owned_.size(); ++q) entries.push_back({global_ball_[owned_[q]], -1, owned_[q], dest[q]});
     for (int r = 0; r < ranks; ++r)
-      for (std::size_t q = 0; q < in[r].size() / words; ++q)
-        entries.push_back({static_cast<std::uint32_t>(in[r][q * words]), r, static_cast<std::uint32_t>(q)});
+      for (std::size_t q = 0; q < shell_in[r]; ++q)
+        entries.push_back({static_cast<std::uint32_t>(in[r][q * words]), r, static_cast<std::uint32_t>(q),
+                           static_cast<int>(in[r][q * words + 1])});
     std::sort(entries.begin(), entries.end(), [](const Entry& p, const Entry& q) { return p.global < q.global; });
     const std::size_t count = entries.size();
     Model scan;
     scan.space = space;
     {
-      std::size_t word = 1, array = 0;
+      std::size_t word = 2, array = 0;
       scan.balls.for_each_array([&](auto& v) {
         using V = std::decay_t<decltype(v)>;
         using T = typename V::value_type;
@@ -593,6 +703,28 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
         ++word;
       });
     }
+    // The history records of the balls that move to this rank: their pairs (in the whole model's
+    // numbers) and their wall contacts.
+    for (int r = 0; r < ranks; ++r) {
+      const double* rec = in[r].data() + words * shell_in[r];
+      for (std::size_t t = 0; t < in_pairs[r]; ++t, rec += kPairWords) {
+        arrived_pairs.i.push_back(static_cast<std::uint32_t>(rec[0]));
+        arrived_pairs.j.push_back(static_cast<std::uint32_t>(rec[1]));
+        arrived_pairs.image_x.push_back(static_cast<std::int8_t>(rec[2]));
+        arrived_pairs.image_y.push_back(static_cast<std::int8_t>(rec[3]));
+        arrived_pairs.image_z.push_back(static_cast<std::int8_t>(rec[4]));
+        arrived_pairs.fsx.push_back(rec[5]);
+        arrived_pairs.fsy.push_back(rec[6]);
+        arrived_pairs.fsz.push_back(rec[7]);
+      }
+      for (std::size_t t = 0; t < in_walls[r]; ++t, rec += wall_words) {
+        std::size_t word = 0;
+        arrived_walls.for_each_array([&](auto& v) {
+          using T = typename std::decay_t<decltype(v)>::value_type;
+          v.push_back(from_word<T>(rec[word++]));
+        });
+      }
+    }
     for (auto& v : in) std::vector<double>().swap(v);
 
     // The search: the serial test on these balls (a pair's result depends on its two balls alone),
@@ -601,7 +733,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     search.find_part_pairs(scan, skin, full_balls_, found);
     std::vector<std::uint8_t> kind(count, 0);   // 1 this rank's, 2 a ghost
     for (std::size_t q = 0; q < count; ++q)
-      if (entries[q].from < 0) kind[q] = 1;
+      if (entries[q].owner == me) kind[q] = 1;
     std::vector<std::uint32_t> pairs;
     for (std::size_t p = 0; p < found.i.size(); ++p) {
       const std::uint32_t i = found.i[p], j = found.j[p];
@@ -625,6 +757,25 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     for (std::size_t p = 0; p < c.size(); ++p) {
       c.i[p] = global_ball_[c.i[p]];
       c.j[p] = global_ball_[c.j[p]];
+    }
+    // With the pairs of the balls that moved here, in the list's order (a pair this rank held too
+    // has the same history in both: either serves).
+    if (arrived_pairs.size() > 0) {
+      c.drop_results();
+      std::size_t a = 0;
+      std::vector<const void*> from;
+      visit_pairs(&arrived_pairs, [&](auto& v) { from.push_back(&v); });
+      visit_pairs(&c, [&](auto& v) {
+        const auto& add = *static_cast<const std::decay_t<decltype(v)>*>(from[a++]);
+        v.insert(v.end(), add.begin(), add.end());
+      });
+      arrived_pairs = ContactTable{};
+      std::vector<std::uint32_t> order(c.size());
+      std::iota(order.begin(), order.end(), 0u);
+      std::stable_sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) { return pair_before(c, p, c, q); });
+      ContactTable sorted;
+      gather(visit_pairs, &c, &sorted, order);
+      c = std::move(sorted);
     }
     PairCandidates next;
     for (std::uint32_t p : pairs) {
@@ -652,13 +803,13 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     for (std::size_t q = 0; q < m; ++q) {
       const Entry& e = entries[keep[q]];
       next_global[q] = e.global;
-      if (e.from < 0) {
+      if (e.owner == me) {
         next_owned.push_back(static_cast<std::uint32_t>(q));
         continue;
       }
-      owner[q] = e.from;
+      owner[q] = e.owner;
       next_ghost[q] = 1;
-      next_recv[e.from].push_back(static_cast<std::uint32_t>(q));
+      next_recv[e.owner].push_back(static_cast<std::uint32_t>(q));
       ++next_ghosts;
     }
     for (std::size_t q = 0; q < c.size(); ++q) {
@@ -691,6 +842,15 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   ref_.x.swap(next_ref.x);
   ref_.y.swap(next_ref.y);
   ref_.z.swap(next_ref.z);
+  if (moved > 0) {   // every rank's record of the owners (sync gathers each rank's balls by it)
+    for (std::size_t t = 0; t < moved; ++t)
+      owner_[static_cast<std::size_t>(all_moves[3 * t])] = static_cast<int>(all_moves[3 * t + 1]);
+    for (auto& v : rank_balls_) v.clear();
+    for (std::size_t k = 0; k < owner_.size(); ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
+    most_balls_ = *std::max_element(count.begin(), count.end());
+    least_balls_ = *std::min_element(count.begin(), count.end());
+    migrations_ += moved;
+  }
   ++local_rebuilds_;
   list_local_ = true;
   current_ = false;
@@ -712,6 +872,28 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     // the part's old ones (which hold every contact of these balls).
     together([&] {
       part_.walls = full.walls;
+      if (arrived_walls.size() > 0) {
+        // The part's old contacts (the history find_wall_contacts carries over, by ball id and
+        // wall id) with those of the balls that moved here, in that order.
+        WallContacts& w = part_.wall_contacts;
+        const std::size_t old = w.size();
+        std::vector<const void*> from;
+        arrived_walls.for_each_array([&](auto& v) { from.push_back(&v); });
+        std::size_t a = 0;
+        w.for_each_array([&](auto& v) {
+          const auto& add = *static_cast<const std::decay_t<decltype(v)>*>(from[a++]);
+          v.resize(old);
+          v.insert(v.end(), add.begin(), add.end());
+        });
+        std::vector<std::uint32_t> order(w.size());
+        std::iota(order.begin(), order.end(), 0u);
+        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+          return w.ball_id[p] < w.ball_id[q] || (w.ball_id[p] == w.ball_id[q] && w.wall_id[p] < w.wall_id[q]);
+        });
+        WallContacts sorted;
+        gather(visit_walls, &w, &sorted, order);
+        w = std::move(sorted);
+      }
       find_wall_contacts(part_, skin, pool);
       WallContacts& w = part_.wall_contacts;
       std::vector<std::uint32_t> mine;
@@ -929,13 +1111,7 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
     std::vector<std::uint8_t>().swap(all);
     std::vector<std::uint32_t> order(total);
     std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
-      if (list.i[p] != list.i[q]) return list.i[p] < list.i[q];
-      if (list.j[p] != list.j[q]) return list.j[p] < list.j[q];
-      if (list.image_x[p] != list.image_x[q]) return list.image_x[p] < list.image_x[q];
-      if (list.image_y[p] != list.image_y[q]) return list.image_y[p] < list.image_y[q];
-      return list.image_z[p] < list.image_z[q];
-    });
+    std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) { return pair_before(list, p, list, q); });
     PairCandidates sorted;
     gather([](void* p, auto&& f) {
       PairCandidates& l = *static_cast<PairCandidates*>(p);
@@ -1086,6 +1262,9 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
     lines.emplace_back("pair lists rebuilt on the parts",
                        std::to_string(local_rebuilds_) + " (each rank searching its own balls and those within reach of them)");
     lines.emplace_back("wraps on the parts", std::to_string(local_wraps_) + " (balls moved across the periodic faces by their ranks)");
+    lines.emplace_back("balls that changed rank", std::to_string(migrations_) +
+                                                      " (at the rebuilds on the parts: a ball goes to the " + member +
+                                                      " whose brick of the split holds it now, with its history)");
   }
   return lines;
 }

@@ -14,7 +14,8 @@
 // - The motion loop moves owned balls only (StepScratch::ghost); the global sums are exact sums of
 //   each owned ball's part, merged over the ranks (kernels.hpp).
 // - A stale pair list is rebuilt on the parts where it can be (rebuild_local: the ranks of a run
-//   by the decomposition): each rank keeps its balls, receives from the others the balls in the
+//   by the decomposition): a ball now in another rank's brick of the split's bisection moves there
+//   with its pairs' and wall contacts' history, each rank keeps its other balls, receives from the others the balls in the
 //   bins next to its own balls' bins, searches them with the serial search's test and carries its
 //   pairs' history over; a ball leaving the periodic cell is wrapped on every part that holds it
 //   (wrap); the whole model's list is made from the ranks' lists at the next sync.
@@ -81,7 +82,9 @@ class BrickStep {
   // are renumbered alike.
   void reduce_tilt(const Space& before);
   // A new pair list on the parts alone, for the positions now (a collective call, on every rank):
-  // each rank keeps its own balls, receives the others' balls that may be within reach of them
+  // a ball in another rank's brick of the split now (owner_at) moves to that rank with the history of
+  // its pairs and wall contacts (unless a rank's count would then be a tenth off its share: false);
+  // each rank keeps its other balls, receives the others' balls that may be within reach of them
   // (those in the bins around its balls' bins, the bins as wide as the largest reach with `skin`,
   // through the periodic faces too; each rank marks the bins of its balls), searches its pairs as the serial search
   // does and carries their history over. Returns false, changing nothing, where the parts are to be
@@ -110,6 +113,19 @@ class BrickStep {
   void drop() { live_ = false; }
   // Dropped, and their memory given back (the next split makes them afresh).
   void release();
+
+  // A node of the split's recursive bisection: the balls before (coordinate, whole-model index)
+  // (at, at_ball) along `axis` go to `left`, the others to `right`; a leaf (left < 0) is rank `owner`'s
+  // brick. A ball that has moved belongs to the brick that holds it now (owner_at).
+  struct Cut {
+    int axis = 0;
+    double at = 0;
+    std::uint32_t at_ball = 0;
+    std::int32_t left = -1, right = -1;
+    int owner = 0;
+  };
+  // The rank whose brick of the last split holds a ball at (x, y, z) with whole-model index k.
+  int owner_at(double x, double y, double z, std::uint32_t k) const;
 
   std::vector<std::pair<std::string, std::string>> info() const;
   std::size_t local_rebuilds() const { return local_rebuilds_; }
@@ -153,6 +169,7 @@ class BrickStep {
   std::uint64_t list_version_ = 0, wall_version_ = 0;
   std::size_t full_balls_ = 0;
   std::vector<int> owner_;                  // per ball of the whole model
+  std::vector<Cut> cuts_;                   // the last split's bisection (node 0 the root)
   std::vector<std::uint32_t> global_ball_;  // part ball -> whole model's ball
   std::vector<std::uint32_t> owned_, owned_pairs_, owned_walls_;   // part indices this rank reports
   // Per rank: the whole model's balls it owns, pairs whose ball i it owns, its balls' wall contacts.
@@ -167,6 +184,7 @@ class BrickStep {
   std::size_t splits_ = 0;
   std::size_t local_rebuilds_ = 0;           // lists rebuilt on the parts (rebuild_local)
   std::size_t local_wraps_ = 0;              // wraps on the parts (wrap)
+  std::size_t migrations_ = 0;               // balls that changed owner at a rebuild on the parts
   bool list_local_ = false;                  // the parts' list is newer than full's
   double max_radius_ = 0;                    // the whole model's largest ball (at the split)
   double shell_base_ = 0;                    // the largest shell received at the first local rebuild

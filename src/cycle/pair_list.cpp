@@ -8,16 +8,6 @@
 namespace trubal {
 namespace {
 
-// Order of pairs in a list: by i, then j, then image (the same two balls may touch across
-// several periodic faces in a small cell).
-bool before(const ContactTable& t, std::size_t p, const PairCandidates& c, std::size_t q) {
-  if (t.i[p] != c.i[q]) return t.i[p] < c.i[q];
-  if (t.j[p] != c.j[q]) return t.j[p] < c.j[q];
-  if (t.image_x[p] != c.image_x[q]) return t.image_x[p] < c.image_x[q];
-  if (t.image_y[p] != c.image_y[q]) return t.image_y[p] < c.image_y[q];
-  return t.image_z[p] < c.image_z[q];
-}
-
 bool same(const ContactTable& t, std::size_t p, const PairCandidates& c, std::size_t q) {
   return t.i[p] == c.i[q] && t.j[p] == c.j[q] && t.image_x[p] == c.image_x[q] && t.image_y[p] == c.image_y[q] &&
          t.image_z[p] == c.image_z[q];
@@ -44,7 +34,7 @@ void install_pairs(ContactTable& table, const PairCandidates& pairs) {
   if (consistent) {
     std::size_t p = 0;
     for (std::size_t q = 0; q < new_size; ++q) {
-      while (p < old_size && before(table, p, pairs, q)) ++p;
+      while (p < old_size && pair_before(table, p, pairs, q)) ++p;
       if (p < old_size && same(table, p, pairs, q)) source[q] = static_cast<std::uint32_t>(p);
     }
   }

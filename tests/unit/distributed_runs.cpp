@@ -172,14 +172,17 @@ cycle 10000
   REQUIRE(run_deck(two, 2) == 0);
   INFO(slurp(two.path() / "out.txt"));
   CHECK_THAT(slurp(two.path() / "out.txt"), Catch::Contains("balls per rank: "));
-  // Most of its lists are rebuilt on the ranks' parts, the balls carrying no history between
-  // ranks (each rank keeps its balls until a wrap makes the parts afresh): checked by the bits.
-  {
-    const std::string out = slurp(two.path() / "out.txt"), key = "pair lists rebuilt on the parts: ";
+  // Most of its lists are rebuilt on the ranks' parts, and at those rebuilds the balls change rank
+  // as they cross the split's planes, taking their pairs' history along (841 moves on 2026-12-03;
+  // the count follows the shares, which follow the ranks' speeds): checked by the bits.
+  auto count = [&](const std::string& key) {
+    const std::string out = slurp(two.path() / "out.txt");
     const auto at = out.find(key);
     REQUIRE(at != std::string::npos);
-    CHECK(std::stol(out.substr(at + key.size())) >= 100);
-  }
+    return std::stol(out.substr(at + key.size()));
+  };
+  CHECK(count("pair lists rebuilt on the parts: ") >= 100);
+  CHECK(count("balls that changed rank: ") >= 100);
   // And with every list rebuilt through the whole model (TRUBAL_REBUILD_WHOLE): none on the parts,
   // the same bits.
   TempDir whole;
