@@ -344,6 +344,8 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
       if (histories) history_->sample(m, moving_cell ? L[0] * L[1] * L[2] : vol);
       if (dumps && dumps->due(m.cycle)) dumps->write(m);
     };
+  if (histories && comm::size() > 1)
+    control.share_output = [this, marks = history_->recorded()]() mutable { history_->share_rows(marks); };
   control.reads_contacts = [this, histories, dumps](std::int64_t cycle) {
     return (histories && history_->due(cycle)) || (dumps && dumps->due(cycle));
   };

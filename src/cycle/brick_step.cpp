@@ -252,6 +252,7 @@ void BrickStep::apply_field(Model& full, const FieldChange& change) {
   ExactSum work, gross;
   apply_field_change(part_.balls, change, 0, part_.balls.size(), scratch_.ghost.data(), work, gross);
   current_ = false;   // the parts' velocities are newer than full's now
+  shared_ = false;
   std::vector<double> out, in;
   pack(work, out);
   pack(gross, out);
@@ -467,8 +468,10 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   full_balls_ = n;
   list_version_ = c.list_version;
   wall_version_ = wc.list_version;
+  walls_any_ = !full.walls.empty() || wc.size() > 0;
   live_ = true;
   current_ = true;
+  shared_ = true;
 }
 
 int BrickStep::owner_at(double x, double y, double z, std::uint32_t k) const {
@@ -854,6 +857,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   ++local_rebuilds_;
   list_local_ = true;
   current_ = false;
+  shared_ = false;
   moved2_ = 0;
   outside_box_ = false;
   together([&] {
@@ -930,6 +934,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   work_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   work_ball_steps_ += static_cast<double>(owned_.size());
   current_ = false;
+  shared_ = false;
   results_written_ = kernels.writes_results();
 
   // The ghosts' new state, from their owners.
@@ -1000,6 +1005,7 @@ bool BrickStep::wrap(Model& full) {
   // must then make the whole list from the parts alike.)
   list_local_ = true;
   current_ = false;
+  shared_ = false;
   std::vector<WrapTerm> terms;
   // (A ball a million cells away fails the wrap on each rank that holds a copy of it, not on all.)
   together([&] { wrap_into_cell(part_, &ref_.x, &ref_.y, &ref_.z, &terms); },
@@ -1047,9 +1053,11 @@ void gather_array(Team& team, const std::vector<T>& part, std::vector<T>& whole,
     for (std::size_t q = 0; q < mine.size(); ++q) whole[at[q]] = part[mine[q]];
     return;
   }
+  // Ranks: to rank 0's whole model alone (BrickStep::share hands it to the others where they need it).
   out.clear();
   for (std::uint32_t q : mine) out.push_back(static_cast<double>(part[q]));
-  team.allgather(out, in);
+  comm::gather_to_root(out, in);
+  if (!comm::root()) return;
   const double* p = in.data();
   for (const auto& ranks_own : by_rank)
     for (std::uint32_t k : ranks_own) whole[k] = static_cast<T>(*p++);
@@ -1099,12 +1107,14 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
       r += kPairRecord;
     }
   }, "gathering the pair list of its part");
-  // Every rank's count, to know whose records are whose.
+  // Every rank's count, to know whose records are whose (to every thread; to rank 0 of the ranks,
+  // whose whole model alone is made current: share hands it on).
   std::vector<double> count{static_cast<double>(owned_pairs_.size())}, counts;
-  team_->allgather(count, counts);
-  team_->allgather(mine, all);
+  gather_whole(count, counts);
+  gather_whole(mine, all);
   together([&] {
     std::vector<std::uint8_t>().swap(mine);
+    if (!team_->shares_whole() && !comm::root()) return;
     PairCandidates list;
     read_pair_records(all, list);
     const std::size_t total = list.i.size();
@@ -1138,8 +1148,8 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
     install_pairs(full.contacts, sorted);   // (its history is then every rank's, gathered by sync)
   }, "installing the whole model's pair list");
   if (team_->shares_whole()) team_->barrier();
-  list_version_ = full.contacts.list_version;
-  if (!full.walls.empty() || full.wall_contacts.size() > 0) install_local_walls(full);
+  list_version_ = full.contacts.list_version;   // (ranks other than 0: unchanged, until share)
+  if (walls_any_) install_local_walls(full);
   if (whole_ref && whole_ref->x.size() == full.balls.size()) {
     std::vector<double> out, in;
     gather_array(*team_, ref_.x, whole_ref->x, owned_, rank_balls_, out, in);
@@ -1162,9 +1172,10 @@ void BrickStep::install_local_walls(Model& full) {
     }
   }, "gathering the wall contacts of its part");
   std::vector<double> count{static_cast<double>(w.size())}, counts;
-  team_->allgather(count, counts);
-  team_->allgather(mine, all);
+  gather_whole(count, counts);
+  gather_whole(mine, all);
   together([&] {
+    if (!team_->shares_whole() && !comm::root()) return;
     const std::size_t total = all.size() / 2;
     std::vector<std::uint32_t> order(total);
     std::iota(order.begin(), order.end(), 0u);
@@ -1212,7 +1223,7 @@ void BrickStep::sync(Model& full, VerletReference* whole_ref) {
     // (Ranks: the results are the largest arrays a sync makes; a rank out of memory here alone
     // must not leave the others in the gathers below.)
     if (!team_->shares_whole()) {
-      comm::together([&] { full.contacts.keep_results(); }, "keeping the contact results");
+      comm::together([&] { if (comm::root()) full.contacts.keep_results(); }, "keeping the contact results");
     } else {
       if (team_->rank() == 0) full.contacts.keep_results();
       team_->barrier();
@@ -1224,6 +1235,38 @@ void BrickStep::sync(Model& full, VerletReference* whole_ref) {
   gather_set(*team_, [](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
              full.wall_contacts, owned_walls_, rank_walls_, out, in);
   current_ = true;
+}
+
+template <class T> void BrickStep::gather_whole(const std::vector<T>& mine, std::vector<T>& all) {
+  if (team_->shares_whole()) team_->allgather(mine, all);
+  else comm::gather_to_root(mine, all);
+}
+
+void BrickStep::share(Model& full, VerletReference* whole_ref) {
+  if (!live_ || model_ != &full) return;
+  sync(full, whole_ref);
+  if (shared_ || team_->shares_whole() || team_->size() < 2) {
+    shared_ = true;
+    return;
+  }
+  // Rank 0's whole model, current, to the others: every array of the balls, the pairs (their results
+  // where rank 0 keeps them) and the wall contacts, and the list's reference positions.
+  full.balls.for_each_array([](auto& v) { comm::broadcast(v); });
+  full.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
+  comm::broadcast(full.contacts.results_cycle);
+  full.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
+  if (whole_ref && whole_ref->x.size() == full.balls.size()) {
+    comm::broadcast(whole_ref->x);
+    comm::broadcast(whole_ref->y);
+    comm::broadcast(whole_ref->z);
+  }
+  // What came from rank 0 is new here: new versions, so that no index of the old arrays passes for
+  // one of these (Pipeline::prepare has rank 0 decide whether to search).
+  if (!comm::root()) {
+    list_version_ = full.contacts.list_version = fresh_list_version();
+    wall_version_ = full.wall_contacts.list_version = fresh_list_version();
+  }
+  shared_ = true;
 }
 
 void BrickStep::loads_changed(const Model& full) {

@@ -106,6 +106,12 @@ class BrickStep {
   // the parts rebuilt their list, full's list is made from theirs, and the positions it was built
   // at go into `whole_ref` (the pipeline's reference for the whole model).
   void sync(Model& full, VerletReference* whole_ref = nullptr);
+  // Brings `full` up to date on every rank (a collective call): sync() makes rank 0's whole model
+  // current (the ranks' syncs gather to rank 0 alone: the rescue copies and the output read it
+  // there), and this hands it to the others, for what every rank does on the whole model (a
+  // wrap or a rebuild through it, START's escapes, a membrane's forces, the CYCLE's end). Threads
+  // share one whole model: sync() is all they need.
+  void share(Model& full, VerletReference* whole_ref = nullptr);
   // The applied loads of `full`'s balls changed (a following membrane's, between steps, on every
   // rank alike): the part's copies take them.
   void loads_changed(const Model& full);
@@ -146,6 +152,8 @@ class BrickStep {
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.
   void install_local_walls(Model& full);
+  // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
+  template <class T> void gather_whole(const std::vector<T>& mine, std::vector<T>& all);
   // Runs `work` so that a member's failure is every member's (ranks: comm::together; threads: the
   // team's abort, through Pipeline::each_part).
   void together(const std::function<void()>& work, const std::string& doing);
@@ -161,7 +169,9 @@ class BrickStep {
   VerletReference ref_;                     // the reference positions of the part's balls
   StepKernels kernels_;                     // the cycle's, with the part's pair laws
   bool live_ = false;
-  bool current_ = true;                     // `full` holds the parts' state
+  bool current_ = true;                     // `full` holds the parts' state (ranks: rank 0's)
+  bool shared_ = true;                      // and every rank's `full` does (share)
+  bool walls_any_ = false;                  // the whole model had walls or wall contacts at the split
   // The parts' last step wrote the pairs' results, not yet gathered (the same on every rank, which
   // a part's own results_kept() is not: an empty part's table counts as kept).
   bool results_written_ = false;

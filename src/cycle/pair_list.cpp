@@ -54,8 +54,12 @@ void install_pairs(ContactTable& table, const PairCandidates& pairs) {
   table.image_x = pairs.image_x;
   table.image_y = pairs.image_y;
   table.image_z = pairs.image_z;
+  table.list_version = fresh_list_version();
+}
+
+std::uint64_t fresh_list_version() {
   static std::atomic<std::uint64_t> versions{0};   // unique across tables (a restored copy keeps its own)
-  table.list_version = ++versions;
+  return ++versions;
 }
 
 bool holds_pairs(const ContactTable& table, const PairCandidates& pairs) {

@@ -24,6 +24,10 @@ template <class A, class B> bool pair_before(const A& a, std::size_t p, const B&
 // gets a new list_version.
 void install_pairs(ContactTable& table, const PairCandidates& pairs);
 
+// A list version no table of this process has had (install_pairs' counter): for a list whose
+// arrays were replaced wholesale (a distributed run's copy from rank 0).
+std::uint64_t fresh_list_version();
+
 // Whether the table already holds exactly these pairs (then nothing needs carrying over).
 bool holds_pairs(const ContactTable& table, const PairCandidates& pairs);
 

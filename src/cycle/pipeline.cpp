@@ -184,6 +184,42 @@ void Pipeline::sync(Model& model) {
   if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.sync(model, &ref_); });
 }
 
+void Pipeline::sync_all(Model& model) {
+  if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.share(model, &ref_); });
+}
+
+namespace {
+// Whether this process keeps only the light rescue copy (a distributed run's ranks other than 0).
+bool light_rescue(bool distributed) { return distributed && comm::size() > 1 && !comm::root(); }
+}  // namespace
+
+void Pipeline::take_rescue(const Model& model) {
+  if (light_rescue(distributed_)) rescue_.take_light(model);
+  else rescue_.take(model);
+}
+
+bool Pipeline::restore_rescue(Model& model) {
+  if (!distributed_ || comm::size() < 2) return rescue_.restore(model);
+  // Rank 0 puts its copy back and hands the arrays to the others, which put the rest back from theirs.
+  bool current = false;
+  if (comm::root()) current = rescue_.restore(model);
+  else rescue_.restore_light(model);
+  model.balls.for_each_array([](auto& v) { comm::broadcast(v); });
+  model.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
+  comm::broadcast(model.contacts.results_cycle);
+  model.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
+  std::int64_t flag = current ? 1 : 0;
+  comm::broadcast(flag);
+  // The others' list and wall contacts are new to them (their versions say so; rank 0 decides
+  // whether the next step searches, prepare), and the parts are of another state.
+  if (!comm::root()) {
+    model.contacts.list_version = fresh_list_version();
+    model.wall_contacts.list_version = fresh_list_version();
+  }
+  for (auto& part : bricks_) part->drop();
+  return flag != 0;
+}
+
 void Pipeline::apply_field(Model& model, const FieldChange& change) {
   if (!change.any) return;
   if (bricks().live_for(model)) return each_part([&](BrickStep& part, int) { part.apply_field(model, change); });
@@ -210,14 +246,27 @@ bool Pipeline::may_be_outside_box(const Model& model) const {
 void Pipeline::prepare(Model& model) {
   // The whole model is about to be read and changed: the ranks' parts first, then dropped.
   if (bricks().live()) {
-    sync(model);
+    sync_all(model);
     for (auto& part : bricks_) part->drop();
     moved_known_ = false;
   }
   const auto t0 = std::chrono::steady_clock::now();
   // The rare wrap itself is serial; the test for it is shared out.
   if (model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
-  if (!backend_->keeps_list() || needs_rebuild(model)) rebuild(model);
+  bool search = !backend_->keeps_list() || needs_rebuild(model);
+  if (distributed_ && comm::size() > 1) {
+    // Rank 0 decides: the others' lists take new versions whenever rank 0 hands them over
+    // (BrickStep::share, restore_rescue), so their own index would search where rank 0's need not.
+    std::int64_t flag = search ? 1 : 0;
+    comm::broadcast(flag);
+    search = flag != 0;
+    if (!search) {   // (the list is rank 0's, bit for bit: only its index may be of an older version)
+      const std::size_t n = model.balls.size();
+      if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
+      if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
+    }
+  }
+  if (search) rebuild(model);
   fresh_ = true;
   times_.detect += seconds_since(t0);
 }

@@ -52,7 +52,10 @@ class Pipeline {
   void rewind_step();
   // Makes the model current where a distributed run's ranks step their parts of it (BACKEND mpi,
   // cycle/brick_step.hpp): a collective call, made by every rank at the same step. Else nothing.
+  // sync: rank 0's model alone (what rank 0 alone reads: the output, the rescue copy); sync_all:
+  // every rank's (what every rank acts on: the whole model stepped through, the CYCLE's end).
   void sync(Model& model);
+  void sync_all(Model& model);
   // Between steps: the velocity field change of new strain rates (cell_before_step's, deferred), on
   // the balls wherever they are stepped; the tilts of the cell kept within half an edge
   // (reduce_cell_tilt) on every copy of the pair list.
@@ -77,8 +80,14 @@ class Pipeline {
   const PhaseTimes& times() const { return times_; }
   PhaseTimes& times() { return times_; }
 
-  // run_cycles' rescue copy of the state, kept between CYCLEs (cycle/snapshot.hpp).
-  Snapshot& rescue() { return rescue_; }
+  // run_cycles' rescue copy of the state, kept between CYCLEs (cycle/snapshot.hpp). In a distributed
+  // run only rank 0 holds its balls and pairs (the others, the rest: Snapshot::take_light); taking it
+  // follows sync(), and putting it back is a collective call, rank 0 handing the state to the others.
+  const Snapshot& rescue() const { return rescue_; }
+  Snapshot& rescue_for_test() { return rescue_; }
+  void take_rescue(const Model& model);
+  // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
+  bool restore_rescue(Model& model);
   bool distributed() const { return distributed_; }
 
   // A CYCLE that left its last step's results to be made when read (CycleControl::defer_results):

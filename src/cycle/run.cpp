@@ -130,12 +130,15 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   const bool servo_reads_table =
       cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
   if (servo_reads_table) make_results(model, pipeline);
-  Snapshot& snapshot = pipeline.rescue();
-  // The rescue copy of the state now (a distributed run's gathered from the ranks' parts first).
+  const Snapshot& snapshot = pipeline.rescue();
+  // The rescue copy of the state now (a distributed run's gathered from the ranks' parts to rank 0
+  // first, which alone keeps its balls and pairs).
   auto take_copy = [&] {
     pipeline.sync(model);
-    snapshot.take(model);
+    pipeline.take_rescue(model);
   };
+  // A distributed run's output steps gather to rank 0 alone, which alone runs the observers.
+  const bool output_on_root = pipeline.distributed() && comm::size() > 1;
   // A CYCLE right after one that deferred its last step's results: the rescue copy, of the step
   // before, is kept as this run's copy (the rescue takes that step again).
   if (!pipeline.results_deferred(model)) take_copy();
@@ -155,7 +158,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   timing = PhaseTimes{};
   // Copies the timings into the result whichever way the loop ends.
   auto finish = [&]() -> CycleResult& {
-    pipeline.sync(model);   // a distributed run's last step (already current where it wrote details)
+    pipeline.sync_all(model);   // a distributed run's last step, on every rank
     result.seconds = std::chrono::duration<double>(Clock::now() - loop_start).count();
     result.times = timing;
     if (!result.unstable) result.energy_warning = balance_warning(model, result, energy_floor);
@@ -182,7 +185,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
     // (the same steps however the run is cut).
     if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) {
-      pipeline.sync(model);
+      pipeline.sync_all(model);
       follow_membrane(model);
       pipeline.loads_changed(model);
     }
@@ -231,7 +234,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   auto escapes = [&](bool replay) -> bool {
     if (!(model.started && (!model.space.periodic || model.space.mixed()) && pipeline.may_be_outside_box(model)))
       return false;
-    pipeline.sync(model);
+    pipeline.sync_all(model);
     Escapes escaped = find_escapes(model);
     if (escaped.destroy_count > 0) {
       // What the leaving balls carry out is boundary work, so the balance stays closed.
@@ -276,7 +279,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // results are those of the state it is left in (false only where a step after the copy
   // overwrote them: Snapshot::restore).
   auto rescue = [&](std::int64_t bad_cycle) -> bool {
-    bool current = snapshot.restore(model);
+    bool current = pipeline.restore_rescue(model);
     pipeline.invalidate();
     kernels.laws = make_pair_laws(model);   // the balls destroyed since the copy are back
     if (model.cycle != start_cycle && model.cycle + 1 < bad_cycle) {
@@ -284,7 +287,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       escapes(true);
       current = true;
     }
-    pipeline.sync(model);
+    pipeline.sync_all(model);
     return current;
   };
 
@@ -358,8 +361,10 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       // Rank 0 alone writes what an observer records (a history's rows, a dump's files): its failure
       // (a full disk) is every rank's, agreed before the next step, so that no rank goes on alone
       // into the next step's collective calls and waits there for ever.
-      if (comm::size() > 1 && observed) comm::together([&] { control.after_step(model); }, "recording the output");
-      else control.after_step(model);
+      if (comm::size() > 1 && observed)
+        comm::together([&] { if (!output_on_root || comm::root()) control.after_step(model); }, "recording the output");
+      else if (!output_on_root || comm::root()) control.after_step(model);
+      if (output_on_root && observed && control.share_output) control.share_output();
       timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
     }
     if ((s + 1) % kSnapshotEvery == 0) take_copy();   // the rescue steps on to cycles on kSnapshotEvery
@@ -380,7 +385,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     }
   }
   } catch (...) {
-    pipeline.sync(model);
+    pipeline.sync_all(model);
     throw;
   }
   return finish();
@@ -391,7 +396,7 @@ void make_results(Model& model, Pipeline& pipeline) {
     const Pipeline::Deferred left = pipeline.deferred();
     pipeline.clear_deferred();
     // The list as that step had it: the same search, or none (the SAVE that follows writes it).
-    pipeline.rescue().restore(model);
+    pipeline.restore_rescue(model);
     pipeline.rewind_step();
     const CycleResult r = run_cycles(model, pipeline, 1, {});   // its one step writes the results
     pipeline.count_results_made();

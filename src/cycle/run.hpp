@@ -21,6 +21,9 @@ struct CycleControl {
   // Whether after_step will read the contacts' results (normal, overlap, forces, state) after the
   // step that ends at this cycle; steps nobody reads skip writing them. Unset: every step.
   std::function<bool(std::int64_t cycle)> reads_contacts;
+  // A distributed run's output steps: after_step runs on rank 0 alone (the others' whole model is
+  // not current there), then this on every rank, to hand on what it recorded (History::share_rows).
+  std::function<void()> share_output;
   // Called now and then for progress reports.
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the

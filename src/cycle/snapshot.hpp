@@ -53,6 +53,28 @@ struct Snapshot {
     cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
   }
 
+  // All but the balls, the pairs and the wall contacts (a distributed run's ranks other than 0:
+  // rank 0 hands those over where the copy is put back, Pipeline::restore_rescue). Their memory goes.
+  void take_light(const Model& m) {
+    auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+    balls = Balls{};
+    pairs = PairCandidates{};
+    free(fsx); free(fsy); free(fsz); free(state);
+    wall_contacts = WallContacts{};
+    results_cycle = m.contacts.results_cycle;
+    walls = m.walls; space = m.space;
+    energy = m.energy; energy_at_step = m.energy_at_step;
+    membrane = m.membrane; groups = m.groups;
+    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
+  }
+  // What take_light kept, back into the model.
+  void restore_light(Model& m) const {
+    m.walls = walls; m.space = space;
+    m.energy = energy; m.energy_at_step = energy_at_step;
+    m.membrane = membrane; m.groups = groups;
+    m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
+  }
+
   // Puts the copy back. Returns whether the table's results are those of the copy's state: true
   // where they were of its cycle when it was taken, no step since wrote results and the balls are
   // the same. The results then still stand in

@@ -1,5 +1,7 @@
 #include "cycle/wall_list.hpp"
 
+#include "cycle/pair_list.hpp"
+
 #include <atomic>
 #include <type_traits>
 
@@ -70,8 +72,7 @@ void find_wall_contacts(Model& model, double reach, ThreadPool& pool) {
       }
     }
   }
-  static std::atomic<std::uint64_t> versions{0};
-  next.list_version = ++versions;
+  next.list_version = fresh_list_version();   // (one counter with the pair lists': never one of theirs)
   table = std::move(next);
 }
 

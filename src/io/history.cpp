@@ -361,6 +361,47 @@ void History::sample_all(const Model& model, double volume) {
   for (auto& t : tables_) record(*t, model, volume);
 }
 
+std::vector<std::size_t> History::recorded() const {
+  std::vector<std::size_t> counts;
+  for (const auto& t : tables_) counts.push_back(t->recorded);
+  return counts;
+}
+
+void History::share_rows(std::vector<std::size_t>& marks) {
+  marks.resize(tables_.size(), 0);
+  // Per table: the number of new rows, then each row's length and values.
+  std::vector<double> packed;
+  if (comm::root())
+    for (std::size_t k = 0; k < tables_.size(); ++k) {
+      const HistoryTable& t = *tables_[k];
+      const std::size_t fresh = std::min(t.recorded - std::min(marks[k], t.recorded), t.rows.size());
+      packed.push_back(static_cast<double>(fresh));
+      for (std::size_t r = t.rows.size() - fresh; r < t.rows.size(); ++r) {
+        packed.push_back(static_cast<double>(t.rows[r].size()));
+        packed.insert(packed.end(), t.rows[r].begin(), t.rows[r].end());
+      }
+    }
+  comm::broadcast(packed);
+  if (!comm::root()) {
+    std::size_t at = 0;
+    for (auto& table : tables_) {
+      HistoryTable& t = *table;
+      if (at >= packed.size()) break;
+      const auto fresh = static_cast<std::size_t>(packed[at++]);
+      for (std::size_t r = 0; r < fresh; ++r) {
+        const auto length = static_cast<std::size_t>(packed[at++]);
+        t.rows.emplace_back(packed.begin() + static_cast<std::ptrdiff_t>(at),
+                            packed.begin() + static_cast<std::ptrdiff_t>(at + length));
+        at += length;
+        ++t.recorded;
+        if (!t.file.empty() && t.rows.size() >= 2 * HistoryTable::kWindow)
+          t.rows.erase(t.rows.begin(), t.rows.begin() + static_cast<std::ptrdiff_t>(t.rows.size() - HistoryTable::kWindow));
+      }
+    }
+  }
+  marks = recorded();
+}
+
 void History::clear() { tables_.clear(); }
 
 std::pair<const HistoryTable*, std::size_t> History::find_column(const std::string& name) const {

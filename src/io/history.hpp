@@ -80,6 +80,13 @@ class History {
   }
   // Records a row in every table now, whatever the cycle.
   void sample_all(const Model& model, double volume);
+  // Each table's count of rows recorded (the marks share_rows takes).
+  std::vector<std::size_t> recorded() const;
+  // A distributed run whose ranks other than 0 do not hold the whole model current at an output step
+  // (cycle/run.cpp): rank 0 samples, and this hands its rows recorded since `marks` to the others,
+  // which record them as their own (no file: rank 0 writes those); `marks` then holds the counts.
+  // A collective call.
+  void share_rows(std::vector<std::size_t>& marks);
   void clear();
   // Takes a table made elsewhere (read_history_csv).
   void adopt(std::unique_ptr<HistoryTable> table) { tables_.push_back(std::move(table)); }

@@ -28,8 +28,33 @@ bool launched_by_mpirun() {
 
 template <class T> MPI_Datatype type_of();
 template <> MPI_Datatype type_of<double>() { return MPI_DOUBLE; }
+template <> MPI_Datatype type_of<float>() { return MPI_FLOAT; }
 template <> MPI_Datatype type_of<std::uint8_t>() { return MPI_UINT8_T; }
+template <> MPI_Datatype type_of<std::int8_t>() { return MPI_INT8_T; }
+template <> MPI_Datatype type_of<int>() { return MPI_INT; }
+template <> MPI_Datatype type_of<std::uint32_t>() { return MPI_UINT32_T; }
+template <> MPI_Datatype type_of<std::int64_t>() { return MPI_INT64_T; }
 #endif
+
+template <class T> void gather_root_parts(const std::vector<T>& mine, std::vector<T>& all) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    int count = static_cast<int>(mine.size());
+    std::vector<int> counts(g_size), starts(g_size);
+    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+    long total = 0;
+    for (int r = 0; r < g_size; ++r) {
+      starts[r] = static_cast<int>(total);
+      total += counts[r];
+    }
+    all.resize(g_rank == 0 ? static_cast<std::size_t>(total) : 0);
+    MPI_Gatherv(mine.data(), count, type_of<T>(), all.data(), counts.data(), starts.data(), type_of<T>(), 0,
+                MPI_COMM_WORLD);
+    return;
+  }
+#endif
+  all = mine;
+}
 
 template <class T> void gather_parts(const std::vector<T>& mine, std::vector<T>& all) {
 #ifdef TRUBAL_HAVE_MPI
@@ -127,6 +152,30 @@ int first_failure(bool failed, [[maybe_unused]] std::string& message, [[maybe_un
 }
 
 void allgather(const std::vector<double>& mine, std::vector<double>& all) { gather_parts(mine, all); }
+void gather_to_root(const std::vector<double>& mine, std::vector<double>& all) { gather_root_parts(mine, all); }
+void gather_to_root(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all) { gather_root_parts(mine, all); }
+
+template <class T> void broadcast(std::vector<T>& values) {
+#ifdef TRUBAL_HAVE_MPI
+  if (!g_started || g_size == 1) return;
+  std::int64_t n = static_cast<std::int64_t>(values.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  values.resize(static_cast<std::size_t>(n));
+  // (In pieces below 2^31 elements: MPI counts are ints.)
+  constexpr std::int64_t kPiece = std::int64_t{1} << 30;
+  for (std::int64_t at = 0; at < n; at += kPiece)
+    MPI_Bcast(values.data() + at, static_cast<int>(std::min(kPiece, n - at)), type_of<T>(), 0, MPI_COMM_WORLD);
+#else
+  (void)values;
+#endif
+}
+template void broadcast(std::vector<double>&);
+template void broadcast(std::vector<float>&);
+template void broadcast(std::vector<std::int64_t>&);
+template void broadcast(std::vector<int>&);
+template void broadcast(std::vector<std::uint32_t>&);
+template void broadcast(std::vector<std::uint8_t>&);
+template void broadcast(std::vector<std::int8_t>&);
 
 void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv) {
 #ifdef TRUBAL_HAVE_MPI

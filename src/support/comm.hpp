@@ -34,6 +34,14 @@ void broadcast(std::int64_t& value);
 // rank failed (its count of commands run; 0 to 2^40), for ranks that may meet at different commands.
 int first_failure(bool failed, std::string& message, std::int64_t order = 0);
 
+// Rank 0's vector (its size and values) to every rank. Instantiated for the element types of the
+// model's arrays: double, float, std::int64_t, int, std::uint32_t, std::uint8_t, std::int8_t.
+template <class T> void broadcast(std::vector<T>& values);
+
+// Every rank's part in rank order, concatenated into rank 0's `all` (left empty on the others).
+void gather_to_root(const std::vector<double>& mine, std::vector<double>& all);
+void gather_to_root(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all);
+
 // Every rank's part in rank order, concatenated into `all` (part sizes may differ).
 void allgather(const std::vector<double>& mine, std::vector<double>& all);
 void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>& all);
