@@ -58,7 +58,7 @@ const Command backend_command = {
     "shares by a tenth, a ball outside a START box or an edit goes through the whole model (there the parts are made afresh, the bisection balanced again, "
     "and each rank searches the pairs of its range of ball numbers, the ranks' lists joined, in order, "
     "into the serial list), which every rank "
-    "holds (memory per rank is that of one run plus its part; rank 0 alone gathers the state for the output and keeps the rescue copy's balls and pairs, handing on what it recorded); a periodic servo's or a shearing cell's new "
+    "holds (between CYCLEs; in a CYCLE the ranks other than 0 hold their part and the balls' ids and radii, while rank 0 alone gathers the state for the output and keeps the rescue copy's balls and pairs, handing on what it recorded; PRINT info shows the arrays each rank held); a periodic servo's or a shearing cell's new "
     "rates change every copy of a ball's velocity, a following membrane's new forces every copy of its "
     "loads. PRINT info shows the balls per rank. The answer is the serial one bit for bit for any P (tests/unit/cycle_cuts.cpp and "
     "distributed_runs.cpp run the scenes on 2, 3 and 4 ranks). On one rank it is the serial backend. Under "

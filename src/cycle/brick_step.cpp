@@ -1291,6 +1291,17 @@ void BrickStep::release() {
   free(sums_out_); free(sums_in_);
 }
 
+std::size_t array_bytes(const Model& m) {
+  std::size_t bytes = 0;
+  auto add = [&](const auto& v) { bytes += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+  m.balls.for_each_array(add);
+  m.contacts.for_each_pair_array(add);
+  const_cast<WallContacts&>(m.wall_contacts).for_each_array(add);   // (it has no const visitor; it only reads)
+  return bytes;
+}
+
+std::size_t BrickStep::part_bytes() const { return array_bytes(part_); }
+
 std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   std::vector<std::pair<std::string, std::string>> lines;
   if (splits_ == 0) return lines;

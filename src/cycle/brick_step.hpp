@@ -51,6 +51,9 @@ namespace trubal {
 void apply_field_change(Balls& balls, const FieldChange& change, std::size_t begin, std::size_t end,
                         const std::uint8_t* skip, ExactSum& work, ExactSum& gross);
 
+// The bytes of a model's arrays of balls, pairs and wall contacts (their capacity).
+std::size_t array_bytes(const Model& m);
+
 class BrickStep {
  public:
   // The members sharing the step: the ranks of the MPI run (the default), or the threads of one
@@ -135,6 +138,8 @@ class BrickStep {
 
   std::vector<std::pair<std::string, std::string>> info() const;
   std::size_t local_rebuilds() const { return local_rebuilds_; }
+  // The bytes of the part's arrays of balls, pairs and wall contacts.
+  std::size_t part_bytes() const;
 
   // Tests: 0 rebuilds stale lists on the parts where it can (the default), -1 never does (every
   // rebuild through the whole model, as before 2026-12-03); for every BrickStep of the process.

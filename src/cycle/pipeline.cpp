@@ -8,6 +8,8 @@
 #include <mutex>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "cycle/pair_list.hpp"
 #include "cycle/wall_list.hpp"
 #include "support/comm.hpp"
@@ -324,11 +326,32 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
     times_.detect += seconds_since(t1);
   }
   fresh_ = false;
+  // The ranks other than 0 step their parts alone from here: their copy of the whole model's arrays
+  // goes until sync_all hands it over again (rank 0 keeps its own, for the output and the rescue).
+  if (distributed_ && comm::size() > 1 && !comm::root() && bricks().live_for(model)) hollow(model);
+  if (distributed_) {   // (PRINT info: what each rank held in its last step)
+    held_whole_ = array_bytes(model);
+    held_part_ = bricks().part_bytes();
+  }
   each_part([&](BrickStep& part, int t) {
     if (distributed_) part.step(pool_, model, kernels, sums, times_);
     else part.step(*solo_pools_[t], model, kernels, sums, t == 0 ? times_ : member_times_[t]);
   });
   moved_known_ = false;
+}
+
+void Pipeline::hollow(Model& model) {
+  Balls& b = model.balls;
+  if (b.x.empty() && model.contacts.i.empty() && b.size() > 0) return;   // (hollow already)
+  auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  // What stays: the ids (the count of balls: BrickStep::live_for) and the radii (the skin and the
+  // displacement test read them; they do not change in a CYCLE).
+  b.for_each_array([&](auto& v) {
+    if (static_cast<const void*>(&v) != &b.id && static_cast<const void*>(&v) != &b.rad) free(v);
+  });
+  model.contacts.for_each_pair_array(free);              // (its list_version stays: live_for)
+  model.wall_contacts.for_each_array(free);
+  scratch_ = StepScratch{};                               // (an index of the arrays that went)
 }
 
 void Pipeline::rewind_step() {
@@ -418,6 +441,19 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   if (!shared_by_.empty()) lines.emplace_back("last step shared by", shared_by_);
   if (shared_by_.starts_with("the spatial decomposition"))
     for (auto& line : bricks().info()) lines.push_back(std::move(line));
+  if (distributed_ && comm::size() > 1) {   // (a collective call: every rank runs PRINT info)
+    std::vector<double> mine{static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20)}, all;
+    comm::allgather(mine, all);
+    std::string whole, part;
+    for (std::size_t r = 0; r + 1 < all.size(); r += 2) {
+      whole += fmt::format("{}{:.3g}", whole.empty() ? "" : " ", all[r]);
+      part += fmt::format("{}{:.3g}", part.empty() ? "" : " ", all[r + 1]);
+    }
+    lines.emplace_back("arrays held in the last step",
+                       "whole model " + whole + " MiB, part " + part +
+                           " MiB (per rank: rank 0 keeps the whole model for the output and the rescue copy; the others "
+                           "hold their part, and the whole model's ids and radii)");
+  }
   if (backend_->keeps_list()) {
     lines.emplace_back("pair list skin", format_number(ref_.skin()));
     lines.emplace_back("pair list rebuilds", std::to_string(ref_.rebuilds()));

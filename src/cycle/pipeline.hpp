@@ -123,6 +123,11 @@ class Pipeline {
   // A step on the whole model, its contacts and motion shared among the threads by ball numbers.
   // (On this thread alone where one_thread_ says so: the split in space's timed fallback.)
   void whole_step(Model& model, const StepKernels& kernels, StepSums& sums);
+  // A rank other than 0 of a distributed run, its part live: frees the whole model's arrays but the
+  // balls' ids and radii (BrickStep::share and restore_rescue hand them over again).
+  void hollow(Model& model);
+  std::size_t held_whole_ = 0, held_part_ = 0;   // bytes of arrays in the last distributed step (PRINT info)
+
   // Whether the threads of this process share the step in space (the decomposition, one part per
   // thread) rather than by ball numbers: decided for each pair list (split_rule, kSpaceBalls).
   bool threads_in_space(const Model& model);

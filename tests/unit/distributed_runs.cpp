@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 #include "interp_support.hpp"
@@ -183,6 +184,19 @@ cycle 10000
   };
   CHECK(count("pair lists rebuilt on the parts: ") >= 100);
   CHECK(count("balls that changed rank: ") >= 100);
+  // Rank 1 stepped its part without the whole model's arrays (Pipeline::hollow): it kept their ids
+  // and radii, 16 of a ball's 180-odd bytes, where rank 0 kept them all.
+  {
+    const std::string out = slurp(two.path() / "out.txt"), key = "arrays held in the last step: whole model ";
+    const auto at = out.find(key);
+    REQUIRE(at != std::string::npos);
+    std::istringstream held(out.substr(at + key.size()));
+    double rank0 = 0, rank1 = 0;
+    held >> rank0 >> rank1;
+    INFO("whole model's arrays held: rank 0 " << rank0 << " MiB, rank 1 " << rank1 << " MiB");
+    CHECK(rank0 > 0);
+    CHECK(rank1 < 0.2 * rank0);
+  }
   // And with every list rebuilt through the whole model (TRUBAL_REBUILD_WHOLE): none on the parts,
   // the same bits.
   TempDir whole;
