@@ -8,12 +8,15 @@
 // the physics; say why in the commit).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 
 #include <optional>
 #include <tuple>
+#include <vector>
 
 #include "interp_support.hpp"
 #include "scene_decks.hpp"
@@ -107,7 +110,21 @@ wall id 2 velocity 0.05 0 0
 struct Result {
   std::string balls, contacts, history, walls;
   std::string info = {};   // PRINT info at the end
+  std::string dumps = {};  // every file of DUMP vtk d, by name (a scene's `during` may dump)
 };
+
+// The files of the scene's dumps (d.pvd, d_*.vtp) in `dir`, each named, in the order of their names.
+std::string dump_files(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name == "d.pvd" || name.rfind("d_", 0) == 0) names.push_back(name);
+  }
+  std::sort(names.begin(), names.end());
+  std::string all;
+  for (const auto& name : names) all += name + "\n" + slurp(dir / name);
+  return all;
+}
 
 // A count PRINT info gives after `key` (-1: no such line).
 long info_count(const std::string& info, const std::string& key) {
@@ -132,7 +149,7 @@ Result run(const Scene& scene, const std::string& backend, const std::string& cy
   INFO(h.err.str());
   REQUIRE(ok);
   return {slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
-          slurp(dir.path() / "walls.csv"), h.out.str()};
+          slurp(dir.path() / "walls.csv"), h.out.str(), dump_files(dir.path())};
 }
 
 // The cuts of a run of n cycles. `keeps_history`: the history file is the unbroken one's (every cut
@@ -279,7 +296,7 @@ std::optional<Result> run_mpi(const Scene& scene, int ranks, const std::string& 
   CHECK_THAT(out, Catch::Contains("ranks: " + std::to_string(ranks) + "\n"));
   CHECK(out.find("trubal> print info") == out.rfind("trubal> print info"));
   return Result{slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
-                slurp(dir.path() / "walls.csv"), out};
+                slurp(dir.path() / "walls.csv"), out, dump_files(dir.path())};
 }
 
 // Every scene on 2 and 3 ranks, unbroken and cut (a switch from serial to mpi, SAVE and RESTART),
@@ -302,6 +319,9 @@ void check_scene_mpi(const Scene& scene) {
     CHECK(other->contacts == serial.contacts);
     CHECK(other->walls == serial.walls);
     if (keeps_history) CHECK(other->history == serial.history);
+    // The dumps, which rank 0 alone writes from the state gathered to it at their steps.
+    if (keeps_history && cycling == unbroken) CHECK(other->dumps == serial.dumps);
+    if (std::string(scene.name) == "servo_shear") CHECK(serial.dumps.find("d_contacts_") != std::string::npos);
     // The scene without walls whose balls fall through many lists rebuilds them on the ranks'
     // parts (BrickStep::rebuild_local), so the files above check that path too.
     if (std::string(scene.name) == "hertz_drop") CHECK(local_rebuilds(other->info) >= 20);
