@@ -21,8 +21,10 @@
 //   (wrap); the whole model's list is made from the ranks' lists at the next sync.
 // - Anything else the step cannot do on its own part (a ball outside a START box, an edit between
 //   steps, a decomposition whose balls have spread) goes
-//   through the whole model: sync() gathers every rank's balls, pairs and wall contacts into it,
-//   the serial rules act on it, and the parts are made afresh from it.
+//   through the whole model: sync() gathers every rank's balls, pairs and wall contacts into rank
+//   0's, share() hands that to the others, the serial rules act on it, and the parts are made
+//   afresh from it. What rank 0 alone reads (the output, the rescue copy) needs only sync(); the
+//   other ranks step without the whole model's arrays meanwhile (Pipeline::hollow).
 #pragma once
 
 #include <atomic>
@@ -105,7 +107,8 @@ class BrickStep {
   // list is then made from the parts' at the next sync. Returns false, changing nothing, where the
   // ranks are to step through the whole model instead (as rebuild_local).
   bool wrap(Model& full);
-  // Brings `full` up to date with every rank's part (a collective call; the parts stay live). Where
+  // Brings `full` up to date with every rank's part (a collective call; the parts stay live): rank
+  // 0's `full` for the ranks of a run (share() then the others'), the one whole model for threads. Where
   // the parts rebuilt their list, full's list is made from theirs, and the positions it was built
   // at go into `whole_ref` (the pipeline's reference for the whole model).
   void sync(Model& full, VerletReference* whole_ref = nullptr);
