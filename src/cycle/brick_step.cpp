@@ -102,6 +102,26 @@ const auto visit_pairs = [](void* p, auto&& f) {
 };
 const auto visit_walls = [](void* p, auto&& f) { static_cast<WallContacts*>(p)->for_each_array(f); };
 
+// `to`'s first `size` entries (each array cut or padded to that) and `add`'s after them, put in the
+// order `before` gives (stable: of entries that compare equal, `to`'s first), every array alike.
+template <class Visit, class T, class Less>
+void merge_in_order(Visit&& visit, T& to, std::size_t size, T& add, Less&& before) {
+  std::vector<const void*> from;
+  visit(&add, [&](auto& v) { from.push_back(&v); });
+  std::size_t a = 0;
+  visit(&to, [&](auto& v) {
+    const auto& more = *static_cast<const std::decay_t<decltype(v)>*>(from[a++]);
+    v.resize(size);
+    v.insert(v.end(), more.begin(), more.end());
+  });
+  std::vector<std::uint32_t> order(to.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), before);
+  T sorted;
+  gather(visit, &to, &sorted, order);
+  to = std::move(sorted);
+}
+
 // What a step changes, the arrays sync() gathers: the balls' motion and unbalanced forces, every
 // pair's and wall contact's history, and the pairs' results where the last step wrote them (not
 // their structure: balls, images).
@@ -765,20 +785,9 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     // has the same history in both: either serves).
     if (arrived_pairs.size() > 0) {
       c.drop_results();
-      std::size_t a = 0;
-      std::vector<const void*> from;
-      visit_pairs(&arrived_pairs, [&](auto& v) { from.push_back(&v); });
-      visit_pairs(&c, [&](auto& v) {
-        const auto& add = *static_cast<const std::decay_t<decltype(v)>*>(from[a++]);
-        v.insert(v.end(), add.begin(), add.end());
-      });
+      merge_in_order(visit_pairs, c, c.size(), arrived_pairs,
+                     [&](std::uint32_t p, std::uint32_t q) { return pair_before(c, p, c, q); });
       arrived_pairs = ContactTable{};
-      std::vector<std::uint32_t> order(c.size());
-      std::iota(order.begin(), order.end(), 0u);
-      std::stable_sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) { return pair_before(c, p, c, q); });
-      ContactTable sorted;
-      gather(visit_pairs, &c, &sorted, order);
-      c = std::move(sorted);
     }
     PairCandidates next;
     for (std::uint32_t p : pairs) {
@@ -880,23 +889,9 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
         // The part's old contacts (the history find_wall_contacts carries over, by ball id and
         // wall id) with those of the balls that moved here, in that order.
         WallContacts& w = part_.wall_contacts;
-        const std::size_t old = w.size();
-        std::vector<const void*> from;
-        arrived_walls.for_each_array([&](auto& v) { from.push_back(&v); });
-        std::size_t a = 0;
-        w.for_each_array([&](auto& v) {
-          const auto& add = *static_cast<const std::decay_t<decltype(v)>*>(from[a++]);
-          v.resize(old);
-          v.insert(v.end(), add.begin(), add.end());
-        });
-        std::vector<std::uint32_t> order(w.size());
-        std::iota(order.begin(), order.end(), 0u);
-        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+        merge_in_order(visit_walls, w, w.size(), arrived_walls, [&](std::uint32_t p, std::uint32_t q) {
           return w.ball_id[p] < w.ball_id[q] || (w.ball_id[p] == w.ball_id[q] && w.wall_id[p] < w.wall_id[q]);
         });
-        WallContacts sorted;
-        gather(visit_walls, &w, &sorted, order);
-        w = std::move(sorted);
       }
       find_wall_contacts(part_, skin, pool);
       WallContacts& w = part_.wall_contacts;
@@ -1249,24 +1244,29 @@ void BrickStep::share(Model& full, VerletReference* whole_ref) {
     shared_ = true;
     return;
   }
-  // Rank 0's whole model, current, to the others: every array of the balls, the pairs (their results
-  // where rank 0 keeps them) and the wall contacts, and the list's reference positions.
-  full.balls.for_each_array([](auto& v) { comm::broadcast(v); });
-  full.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
-  comm::broadcast(full.contacts.results_cycle);
-  full.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
+  // Rank 0's whole model, current, to the others, and the list's reference positions.
+  broadcast_arrays(full);
   if (whole_ref && whole_ref->x.size() == full.balls.size()) {
     comm::broadcast(whole_ref->x);
     comm::broadcast(whole_ref->y);
     comm::broadcast(whole_ref->z);
   }
+  list_version_ = full.contacts.list_version;
+  wall_version_ = full.wall_contacts.list_version;
+  shared_ = true;
+}
+
+void broadcast_arrays(Model& m) {
+  m.balls.for_each_array([](auto& v) { comm::broadcast(v); });
+  m.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
+  comm::broadcast(m.contacts.results_cycle);
+  m.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
   // What came from rank 0 is new here: new versions, so that no index of the old arrays passes for
   // one of these (Pipeline::prepare has rank 0 decide whether to search).
   if (!comm::root()) {
-    list_version_ = full.contacts.list_version = fresh_list_version();
-    wall_version_ = full.wall_contacts.list_version = fresh_list_version();
+    m.contacts.list_version = fresh_list_version();
+    m.wall_contacts.list_version = fresh_list_version();
   }
-  shared_ = true;
 }
 
 void BrickStep::loads_changed(const Model& full) {

@@ -55,6 +55,9 @@ void apply_field_change(Balls& balls, const FieldChange& change, std::size_t beg
 
 // The bytes of a model's arrays of balls, pairs and wall contacts (their capacity).
 std::size_t array_bytes(const Model& m);
+// Rank 0's arrays of balls, pairs (their results where kept) and wall contacts, to every rank (a
+// collective call); the others' pair and wall lists take fresh versions.
+void broadcast_arrays(Model& m);
 
 class BrickStep {
  public:

@@ -206,19 +206,10 @@ bool Pipeline::restore_rescue(Model& model) {
   bool current = false;
   if (comm::root()) current = rescue_.restore(model);
   else rescue_.restore_light(model);
-  model.balls.for_each_array([](auto& v) { comm::broadcast(v); });
-  model.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
-  comm::broadcast(model.contacts.results_cycle);
-  model.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
+  broadcast_arrays(model);   // (rank 0 decides whether the next step searches: prepare)
   std::int64_t flag = current ? 1 : 0;
   comm::broadcast(flag);
-  // The others' list and wall contacts are new to them (their versions say so; rank 0 decides
-  // whether the next step searches, prepare), and the parts are of another state.
-  if (!comm::root()) {
-    model.contacts.list_version = fresh_list_version();
-    model.wall_contacts.list_version = fresh_list_version();
-  }
-  for (auto& part : bricks_) part->drop();
+  for (auto& part : bricks_) part->drop();   // (they are of another state)
   return flag != 0;
 }
 

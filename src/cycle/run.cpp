@@ -139,6 +139,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   };
   // A distributed run's output steps gather to rank 0 alone, which alone runs the observers.
   const bool output_on_root = pipeline.distributed() && comm::size() > 1;
+  const bool observes = !output_on_root || comm::root();
   // A CYCLE right after one that deferred its last step's results: the rescue copy, of the step
   // before, is kept as this run's copy (the rescue takes that step again).
   if (!pipeline.results_deferred(model)) take_copy();
@@ -362,8 +363,8 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       // (a full disk) is every rank's, agreed before the next step, so that no rank goes on alone
       // into the next step's collective calls and waits there for ever.
       if (comm::size() > 1 && observed)
-        comm::together([&] { if (!output_on_root || comm::root()) control.after_step(model); }, "recording the output");
-      else if (!output_on_root || comm::root()) control.after_step(model);
+        comm::together([&] { if (observes) control.after_step(model); }, "recording the output");
+      else if (observes) control.after_step(model);
       if (output_on_root && observed && control.share_output) control.share_output();
       timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
     }

@@ -46,11 +46,8 @@ struct Snapshot {
     pairs.i = c.i; pairs.j = c.j; pairs.image_x = c.image_x; pairs.image_y = c.image_y; pairs.image_z = c.image_z;
     fsx = c.fsx; fsy = c.fsy; fsz = c.fsz;
     state = c.state;
-    results_cycle = c.results_cycle;
-    walls = m.walls; wall_contacts = m.wall_contacts; space = m.space;
-    energy = m.energy; energy_at_step = m.energy_at_step;
-    membrane = m.membrane; groups = m.groups;
-    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
+    wall_contacts = m.wall_contacts;
+    take_rest(m);
   }
 
   // All but the balls, the pairs and the wall contacts (a distributed run's ranks other than 0:
@@ -61,11 +58,7 @@ struct Snapshot {
     pairs = PairCandidates{};
     free(fsx); free(fsy); free(fsz); free(state);
     wall_contacts = WallContacts{};
-    results_cycle = m.contacts.results_cycle;
-    walls = m.walls; space = m.space;
-    energy = m.energy; energy_at_step = m.energy_at_step;
-    membrane = m.membrane; groups = m.groups;
-    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
+    take_rest(m);
   }
   // What take_light kept, back into the model.
   void restore_light(Model& m) const {
@@ -95,14 +88,20 @@ struct Snapshot {
     // The unbalanced forces are results too: the model's stand where the results do.
     for (auto* v : unbalanced(m.balls))
       if (!current || v->size() != m.balls.size()) v->assign(m.balls.size(), 0.0);
-    m.walls = walls; m.wall_contacts = wall_contacts; m.space = space;
-    m.energy = energy; m.energy_at_step = energy_at_step;
-    m.membrane = membrane; m.groups = groups;
-    m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
+    m.wall_contacts = wall_contacts;
+    restore_light(m);
     return current;
   }
 
  private:
+  // Everything but the balls, the pairs and the wall contacts (restore_light puts it back).
+  void take_rest(const Model& m) {
+    results_cycle = m.contacts.results_cycle;
+    walls = m.walls; space = m.space;
+    energy = m.energy; energy_at_step = m.energy_at_step;
+    membrane = m.membrane; groups = m.groups;
+    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
+  }
   static std::array<std::vector<double>*, 6> unbalanced(Balls& b) { return {&b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz}; }
   // Every per-ball array but the unbalanced forces and moments (48 bytes a ball the copy need not hold).
   static void copy_balls(Balls& to, const Balls& from) {

@@ -344,6 +344,10 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
                                            "not in it", t.file, errno ? std::strerror(errno) : "write failed",
                                            model.cycle));
   }
+  keep_row(t, std::move(row));
+}
+
+void History::keep_row(HistoryTable& t, std::vector<double> row) {
   t.rows.push_back(std::move(row));
   ++t.recorded;
   // A file holds every row: keep a window of the last ones (dropped a window at a time, so that a
@@ -390,12 +394,9 @@ void History::share_rows(std::vector<std::size_t>& marks) {
       const auto fresh = static_cast<std::size_t>(packed[at++]);
       for (std::size_t r = 0; r < fresh; ++r) {
         const auto length = static_cast<std::size_t>(packed[at++]);
-        t.rows.emplace_back(packed.begin() + static_cast<std::ptrdiff_t>(at),
-                            packed.begin() + static_cast<std::ptrdiff_t>(at + length));
+        keep_row(t, std::vector<double>(packed.begin() + static_cast<std::ptrdiff_t>(at),
+                                        packed.begin() + static_cast<std::ptrdiff_t>(at + length)));
         at += length;
-        ++t.recorded;
-        if (!t.file.empty() && t.rows.size() >= 2 * HistoryTable::kWindow)
-          t.rows.erase(t.rows.begin(), t.rows.begin() + static_cast<std::ptrdiff_t>(t.rows.size() - HistoryTable::kWindow));
       }
     }
   }

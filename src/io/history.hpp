@@ -96,6 +96,8 @@ class History {
 
  private:
   void record(HistoryTable& table, const Model& model, double volume);
+  // Adds a recorded row to the table (its window of rows kept).
+  static void keep_row(HistoryTable& table, std::vector<double> row);
   // Opens t.file for appending after keeping its rows up to `cycle`; "" or a note.
   static std::string append_to_file(HistoryTable& t, std::int64_t cycle, bool resumed);
   std::vector<std::unique_ptr<HistoryTable>> tables_;
