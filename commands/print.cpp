@@ -400,7 +400,7 @@ const Command print_command = {
     "physics; the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
     "uses fewer threads than it has, and why; under mpirun the ranks; how many times a CYCLE's last step "
     "was taken again to make the contact results a command read (CYCLE); the peak resident memory so far, "
-    "of each rank). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
+    "of each rank, and under mpirun also by the end of the last CYCLE stepped in parts). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
     "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "

@@ -90,8 +90,8 @@ int run(int argc, char** argv) {
   trubal::install_interrupt_handler();
 
   // Tests: "R L" makes rank R's command at line L of the deck fail there alone, "R split" rank R's
-  // first split of the spatial decomposition, "R search" its first share of a pair search
-  // (distributed_runs.cpp).
+  // first split of the spatial decomposition, "R search" its first share of a pair search through
+  // the whole model, "R part" its first search on its part (distributed_runs.cpp).
   if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
     int rank = -1, line = 0;
     char word[8] = {};
@@ -100,6 +100,7 @@ int run(int argc, char** argv) {
     } else if (std::sscanf(at, "%d %7s", &rank, word) == 2) {
       if (std::strcmp(word, "split") == 0) trubal::BrickStep::fail_split_for_test = rank;
       if (std::strcmp(word, "search") == 0) trubal::fail_search_for_test = rank;
+      if (std::strcmp(word, "part") == 0) trubal::BrickStep::fail_part_search_for_test = rank;
     }
   }
   // Measurements: every stale pair list rebuilt through the whole model, as before the ranks

@@ -1,5 +1,7 @@
 #include "cycle/brick_step.hpp"
 
+#include "physics/timestep.hpp"
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -698,6 +700,10 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   ContactTable arrived_pairs;   // the pairs of the balls that move to this rank, with their history
   WallContacts arrived_walls;   // and their wall contacts
   together([&] {
+    if (!team_->shares_whole() && team_->rank() == fail_part_search_for_test.load()) {   // (a rank's test hook)
+      fail_part_search_for_test = -1;
+      throw std::bad_alloc();
+    }
     // This rank's balls and those received, in the whole model's order.
     // from: -1 this rank's (at: part index); owner: the rank that owns it from now on.
     struct Entry { std::uint32_t global; int from; std::uint32_t at; int owner; };
@@ -710,22 +716,30 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
                            static_cast<int>(in[r][q * words + 1])});
     std::sort(entries.begin(), entries.end(), [](const Entry& p, const Entry& q) { return p.global < q.global; });
     const std::size_t count = entries.size();
-    Model scan;
-    scan.space = space;
-    {
+    // Ball arrays of the entries `pick` (all where null) from this rank's part and the records
+    // received; `only` says which arrays (by the Balls they belong to), the others stay empty.
+    auto fill = [&](Balls& to, const std::vector<std::uint32_t>* pick, auto&& only) {
       std::size_t word = 2, array = 0;
-      scan.balls.for_each_array([&](auto& v) {
+      to.for_each_array([&](auto& v) {
         using V = std::decay_t<decltype(v)>;
         using T = typename V::value_type;
         const V& mine = *static_cast<const V*>(source[array++]);
-        v.resize(count);
-        for (std::size_t q = 0; q < count; ++q) {
-          const Entry& e = entries[q];
-          v[q] = e.from < 0 ? mine[e.at] : from_word<T>(in[e.from][e.at * words + word]);
+        const std::size_t at = word++;
+        if (!only(to, static_cast<const void*>(&v))) return;
+        const std::size_t size = pick ? pick->size() : count;
+        v.resize(size);
+        for (std::size_t q = 0; q < size; ++q) {
+          const Entry& e = entries[pick ? (*pick)[q] : q];
+          v[q] = e.from < 0 ? mine[e.at] : from_word<T>(in[e.from][e.at * words + at]);
         }
-        ++word;
       });
-    }
+    };
+    // What the search reads of them: the count (ids), the places and the radii.
+    Model scan;
+    scan.space = space;
+    fill(scan.balls, nullptr, [](const Balls& to, const void* v) {
+      return v == &to.id || v == &to.x || v == &to.y || v == &to.z || v == &to.rad;
+    });
     // The history records of the balls that move to this rank: their pairs (in the whole model's
     // numbers) and their wall contacts.
     for (int r = 0; r < ranks; ++r) {
@@ -748,7 +762,6 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
         });
       }
     }
-    for (auto& v : in) std::vector<double>().swap(v);
 
     // The search: the serial test on these balls (a pair's result depends on its two balls alone),
     // keeping the pairs of this rank's balls; their partners from elsewhere are the ghosts.
@@ -802,10 +815,14 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
       c.i[q] = local[found.i[pairs[q]]];
       c.j[q] = local[found.j[pairs[q]]];
     }
+    found = PairCandidates{};   // (what follows is the part's largest: its balls)
+    next = PairCandidates{};
     c.list_version = next_part_version();
 
     // The part's balls, and what it sends and receives each step.
-    gather(visit_balls, &scan.balls, &next_balls, keep);
+    scan = Model{};
+    fill(next_balls, &keep, [](const Balls&, const void*) { return true; });
+    for (auto& v : in) std::vector<double>().swap(v);
     next_ref.x = next_balls.x;
     next_ref.y = next_balls.y;
     next_ref.z = next_balls.z;
@@ -1237,13 +1254,13 @@ template <class T> void BrickStep::gather_whole(const std::vector<T>& mine, std:
   else comm::gather_to_root(mine, all);
 }
 
-void BrickStep::share(Model& full, VerletReference* whole_ref) {
+void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_parts) {
   if (!live_ || model_ != &full) return;
   sync(full, whole_ref);
-  if (shared_ || team_->shares_whole() || team_->size() < 2) {
-    shared_ = true;
-    return;
-  }
+  const bool done = shared_ || team_->shares_whole() || team_->size() < 2;
+  shared_ = true;
+  if (release_parts) release();   // (before the whole model comes: the two are never held together)
+  if (done) return;
   // Rank 0's whole model, current, to the others, and the list's reference positions.
   broadcast_arrays(full);
   if (whole_ref && whole_ref->x.size() == full.balls.size()) {
@@ -1267,6 +1284,15 @@ void broadcast_arrays(Model& m) {
     m.contacts.list_version = fresh_list_version();
     m.wall_contacts.list_version = fresh_list_version();
   }
+}
+
+double BrickStep::critical_step(const Features& features) {
+  const std::uint8_t* ghost = scratch_.ghost.size() == part_.balls.size() ? scratch_.ghost.data() : nullptr;
+  std::vector<double> any{any_ball_free(part_, features.rotation, ghost) ? 1.0 : 0.0};
+  team_->max_all(any);
+  std::vector<double> least{-balls_critical_step(part_, features, any[0] != 0, ghost)};
+  team_->max_all(least);   // (the smallest step: a max of the negatives, exact)
+  return -least[0];
 }
 
 void BrickStep::loads_changed(const Model& full) {

@@ -119,8 +119,13 @@ class BrickStep {
   // current (the ranks' syncs gather to rank 0 alone: the rescue copies and the output read it
   // there), and this hands it to the others, for what every rank does on the whole model (a
   // wrap or a rebuild through it, START's escapes, a membrane's forces, the CYCLE's end). Threads
-  // share one whole model: sync() is all they need.
-  void share(Model& full, VerletReference* whole_ref = nullptr);
+  // share one whole model: sync() is all they need. release_parts: the parts are released first
+  // (the CYCLE's end: the next CYCLE makes them afresh), so that no rank holds a part and the whole
+  // model at once.
+  void share(Model& full, VerletReference* whole_ref = nullptr, bool release_parts = false);
+  // The whole model's critical step, without the Hertz cap (physics/timestep.hpp), from each rank's
+  // own balls on its part: the smallest over the ranks (a collective call).
+  double critical_step(const Features& features);
   // The applied loads of `full`'s balls changed (a following membrane's, between steps, on every
   // rank alike): the part's copies take them.
   void loads_changed(const Model& full);
@@ -155,6 +160,8 @@ class BrickStep {
   static inline std::atomic<int> slow_member_for_test{-1};
   // Tests (TRUBAL_TEST_FAIL_AT "R split"): rank R's next split fails as if out of memory; -1: none.
   static inline std::atomic<int> fail_split_for_test{-1};
+  // Tests (TRUBAL_TEST_FAIL_AT "R part"): rank R's next search on its part fails so; -1: none.
+  static inline std::atomic<int> fail_part_search_for_test{-1};
 
  private:
   // split()'s work: the owners, and this member's part.

@@ -8,6 +8,8 @@
 #include <mutex>
 #include <utility>
 
+#include <sys/resource.h>
+
 #include <fmt/format.h>
 
 #include "cycle/pair_list.hpp"
@@ -15,6 +17,7 @@
 #include "support/comm.hpp"
 #include "model/wall_shape.hpp"
 #include "model/periodic_cell.hpp"
+#include "physics/timestep.hpp"
 #include "support/format_number.hpp"
 
 namespace trubal {
@@ -115,6 +118,7 @@ void Pipeline::invalidate() {
   ref_.invalidate();
   moved_known_ = false;
   fresh_ = false;
+  search_parts_ = false;
   model_ = nullptr;
 }
 
@@ -161,6 +165,7 @@ void Pipeline::rebuild(Model& model) {
     if (model.space.periodic) skin = periodic_skin(model, skin);
   }
   check_periodic_cell(model);
+  search_parts_ = false;
   backend_->find_pairs(model, skin, pool_now(), pairs_);
   auto install = [&] {
     // A backend asked every step mostly finds the list it found before: nothing to carry over then.
@@ -188,6 +193,17 @@ void Pipeline::sync(Model& model) {
 
 void Pipeline::sync_all(Model& model) {
   if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.share(model, &ref_); });
+}
+
+void Pipeline::end_cycle(Model& model) {
+  if (!bricks().live_for(model)) return;
+  if (distributed_) {   // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    std::vector<double> mine{static_cast<double>(usage.ru_maxrss) / 1024.0};   // (KiB on Linux)
+    comm::allgather(mine, cycle_peaks_);
+  }
+  each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed_); });
 }
 
 namespace {
@@ -236,7 +252,7 @@ bool Pipeline::may_be_outside_box(const Model& model) const {
   return !bricks().live_for(model) || bricks().outside_box();
 }
 
-void Pipeline::prepare(Model& model) {
+void Pipeline::prepare(Model& model, bool parts_may_search) {
   // The whole model is about to be read and changed: the ranks' parts first, then dropped.
   if (bricks().live()) {
     sync_all(model);
@@ -259,7 +275,14 @@ void Pipeline::prepare(Model& model) {
       if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
     }
   }
-  if (search) rebuild(model);
+  if (search && distributed_ && parts_may_search && BrickStep::local_rule.load(std::memory_order_relaxed) >= 0) {
+    // The ranks search on their parts at the split (brick_step), not through the whole model: no
+    // rank but 0 then ever holds the whole model's list in a CYCLE. A whole step searches first.
+    search_parts_ = true;
+    model_ = &model;
+  } else if (search) {
+    rebuild(model);
+  }
   fresh_ = true;
   times_.detect += seconds_since(t0);
 }
@@ -313,7 +336,7 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
       return;
     }
     const auto t1 = std::chrono::steady_clock::now();
-    each_part([&](BrickStep& part, int) { part.split(model, ref_); });
+    split_parts(model);
     times_.detect += seconds_since(t1);
   }
   fresh_ = false;
@@ -329,6 +352,42 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
     else part.step(*solo_pools_[t], model, kernels, sums, t == 0 ? times_ : member_times_[t]);
   });
   moved_known_ = false;
+}
+
+void Pipeline::split_parts(Model& model) {
+  each_part([&](BrickStep& part, int) { part.split(model, ref_); });
+  if (!search_parts_) return;
+  // The list prepare() left stale is searched on the parts just made (they carry its history): the
+  // ranks other than 0 need the whole model no further.
+  double skin = VerletReference::skin_for(model.balls);
+  if (model.space.periodic) skin = periodic_skin(model, skin);
+  check_periodic_cell(model);
+  ref_.record(model, skin);   // (the positions the parts search at)
+  wall_travel_ = 0;
+  const bool hollowed = distributed_ && !comm::root();
+  if (hollowed) hollow(model);
+  bool rebuilt = false;
+  each_part([&](BrickStep& part, int t) {
+    const bool done = part.rebuild_local(model, skin, *backend_, pool_);
+    if (t == 0) rebuilt = done;
+  });
+  search_parts_ = false;
+  if (rebuilt) return;
+  // They could not (the same answer on every rank; not after a split but in tests): through the
+  // whole model, which rank 0 hands back to the others.
+  for (auto& part : bricks_) part->drop();
+  if (distributed_) broadcast_arrays(model);
+  rebuild(model);
+  each_part([&](BrickStep& part, int) { part.split(model, ref_); });
+}
+
+double Pipeline::critical_timestep(Model& model, const Features& features, double cap) {
+  if (!search_parts_ || !distributed_) return trubal::critical_timestep(model);
+  // The parts search the stale list now, and each rank's own balls give their steps.
+  const auto t0 = std::chrono::steady_clock::now();
+  split_parts(model);
+  times_.detect += seconds_since(t0);
+  return std::min(bricks().critical_step(features), cap);
 }
 
 void Pipeline::hollow(Model& model) {
@@ -403,6 +462,7 @@ void Pipeline::whole_step(Model& model, const StepKernels& kernels, StepSums& su
   if (bricks().live()) prepare(model);   // the parts' state into the whole model, the parts dropped
   // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
   if (!fresh_ || model_ != &model) prepare(model);
+  if (search_parts_) rebuild(model);   // (a whole step needs the whole list)
   fresh_ = false;
   const bool measure = backend_->keeps_list() && ref_.x.size() == model.balls.size();
   if (kernels.moments) scratch_.ball_moments.resize(model.balls.size());   // the contact loops zero their balls'
@@ -444,6 +504,13 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
                        "whole model " + whole + " MiB, part " + part +
                            " MiB (per rank: rank 0 keeps the whole model for the output and the rescue copy; the others "
                            "hold their part, and the whole model's ids and radii)");
+  }
+  if (!cycle_peaks_.empty()) {
+    std::string peaks;
+    for (double mib : cycle_peaks_) peaks += fmt::format("{}{:.0f}", peaks.empty() ? "" : " ", mib);
+    lines.emplace_back("peak memory by the last CYCLE's end",
+                       peaks + " MiB (per rank; the whole model's list is searched on the parts, so that in a CYCLE "
+                               "no rank but 0 holds it)");
   }
   if (backend_->keeps_list()) {
     lines.emplace_back("pair list skin", format_number(ref_.skin()));

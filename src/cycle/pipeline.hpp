@@ -41,8 +41,10 @@ class Pipeline {
   int threads() const { return pool_.size(); }
 
   // Brings the pair list and its index up to date for the current positions (wrapping balls into
-  // a periodic cell first), without computing forces.
-  void prepare(Model& model);
+  // a periodic cell first), without computing forces. A distributed run's ranks search a stale list
+  // on their parts when they are made (parts_may_search: nothing reads the whole model's list before
+  // the next step), so that the ranks other than 0 never hold the whole model's list in a CYCLE.
+  void prepare(Model& model, bool parts_may_search = true);
   // One step: prepare, contact forces and each ball's sums, motion.
   void step(Model& model, const StepKernels& kernels, StepSums& sums);
   // The balls or the table were changed outside cycling: the next step searches afresh.
@@ -56,6 +58,9 @@ class Pipeline {
   // every rank's (what every rank acts on: the whole model stepped through, the CYCLE's end).
   void sync(Model& model);
   void sync_all(Model& model);
+  // sync_all at the CYCLE's end: a distributed run's parts are released before rank 0 hands the
+  // whole model to the others (the next CYCLE's prepare would drop them in any case).
+  void end_cycle(Model& model);
   // Between steps: the velocity field change of new strain rates (cell_before_step's, deferred), on
   // the balls wherever they are stepped; the tilts of the cell kept within half an edge
   // (reduce_cell_tilt) on every copy of the pair list.
@@ -89,6 +94,11 @@ class Pipeline {
   // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
   bool restore_rescue(Model& model);
   bool distributed() const { return distributed_; }
+  // The critical step of the model's state (physics/timestep.hpp, `cap` the Hertz cap), before the
+  // CYCLE's first step: where a distributed run's list is to be searched on the parts, they are made
+  // and searched now and each rank's own balls give their steps (a collective call), so that no rank
+  // but 0 holds the whole list; the ranks other than 0 then hold their part alone.
+  double critical_timestep(Model& model, const Features& features, double cap);
 
   // A CYCLE that left its last step's results to be made when read (CycleControl::defer_results):
   // the rescue copy is then of the step before, and taking that step again makes them
@@ -126,7 +136,11 @@ class Pipeline {
   // A rank other than 0 of a distributed run, its part live: frees the whole model's arrays but the
   // balls' ids and radii (BrickStep::share and restore_rescue hand them over again).
   void hollow(Model& model);
+  // The parts made from the whole model (split), and where prepare() left the list stale, searched
+  // on them (rebuild_local), the ranks other than 0 hollow first.
+  void split_parts(Model& model);
   std::size_t held_whole_ = 0, held_part_ = 0;   // bytes of arrays in the last distributed step (PRINT info)
+  std::vector<double> cycle_peaks_;              // per rank: peak MiB by the end of the last distributed CYCLE
 
   // Whether the threads of this process share the step in space (the decomposition, one part per
   // thread) rather than by ball numbers: decided for each pair list (split_rule, kSpaceBalls).
@@ -167,6 +181,8 @@ class Pipeline {
   const Model* model_ = nullptr;    // the model the list and index were made for
   bool moved_known_ = false;        // step_.moved2() holds the displacements of the current positions
   bool fresh_ = false;              // searched at the current positions (nothing moved since)
+  // A distributed run's stale list, left for the parts to search at the split (prepare).
+  bool search_parts_ = false;
   double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
   double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)
   Snapshot rescue_;

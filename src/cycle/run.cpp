@@ -107,8 +107,16 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
           "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
   StepKernels kernels = make_kernels(model);
   const double cap = hertz_step_cap(model);
-  pipeline.prepare(model);
-  if (!(model.critical_dt > 0)) model.critical_dt = critical_timestep(model);
+  // A servo not yet run reads its first stress from the contact table (cell_before_step): the whole
+  // model's list is then searched before the first step, where a distributed run's parts would
+  // search it at their split.
+  const Space& cell = model.space;
+  const bool servo_reads_table =
+      cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
+  pipeline.prepare(model, !servo_reads_table);
+  // (Before the critical step, which may leave the ranks other than 0 with their parts alone.)
+  const double energy_floor = resting_energy_floor(model);
+  if (!(model.critical_dt > 0)) model.critical_dt = pipeline.critical_timestep(model, kernels.features, cap);
   // The guard: energy in must balance energy out. A step beyond the stability limit creates
   // energy from nothing; when that is half of all the energy in play, the run stops. The balance
   // alone cannot see an instability of the linear springs: central differences keep
@@ -124,11 +132,6 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // A scene at rest has almost no energy, and rounding alone then looks like a large relative
   // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
   // an unstable step grows exponentially and passes this within a few steps.
-  const double energy_floor = resting_energy_floor(model);
-  // A servo not yet run reads its first stress from the contact table (cell_before_step).
-  const Space& cell = model.space;
-  const bool servo_reads_table =
-      cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
   if (servo_reads_table) make_results(model, pipeline);
   const Snapshot& snapshot = pipeline.rescue();
   // The rescue copy of the state now (a distributed run's gathered from the ranks' parts to rank 0
@@ -159,7 +162,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   timing = PhaseTimes{};
   // Copies the timings into the result whichever way the loop ends.
   auto finish = [&]() -> CycleResult& {
-    pipeline.sync_all(model);   // a distributed run's last step, on every rank
+    pipeline.end_cycle(model);   // a distributed run's last step, on every rank
     result.seconds = std::chrono::duration<double>(Clock::now() - loop_start).count();
     result.times = timing;
     if (!result.unstable) result.energy_warning = balance_warning(model, result, energy_floor);

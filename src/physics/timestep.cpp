@@ -44,9 +44,21 @@ double next_critical_step(double held, double estimate, double frac, double cap,
   return held;
 }
 
+bool any_ball_free(const Model& model, bool rotation, const std::uint8_t* skip) {
+  const Balls& b = model.balls;
+  for (std::size_t i = 0; i < b.size(); ++i)
+    if (!(skip && skip[i]) && !ball_held(b.fixed[i], rotation)) return true;
+  return false;
+}
+
 double critical_timestep(const Model& model) {
-  const PairLaws laws = make_pair_laws(model);
   const Features features = scene_features(model);
+  const bool any_free = any_ball_free(model, features.rotation, nullptr);
+  return std::min(balls_critical_step(model, features, any_free, nullptr), hertz_step_cap(model));
+}
+
+double balls_critical_step(const Model& model, const Features& features, bool any_free, const std::uint8_t* skip) {
+  const PairLaws laws = make_pair_laws(model);
   const Damping& damping = model.settings.damping;
   const double beta = damping.kind == DampKind::Rayleigh ? damping.beta : 0;
   const Balls& b = model.balls;
@@ -98,12 +110,9 @@ double critical_timestep(const Model& model) {
   const bool rotation = features.rotation;
   // Held balls set no step of their own; where every ball is held (the balls may still move at their
   // fixed velocities), the step is that of the balls as if free.
-  bool any_free = false;
-  for (std::size_t i = 0; i < n && !any_free; ++i)
-    any_free = !ball_held(b.fixed[i], rotation);
   double step = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n; ++i) {
-    if (any_free && ball_held(b.fixed[i], rotation)) continue;
+    if ((skip && skip[i]) || (any_free && ball_held(b.fixed[i], rotation))) continue;
     double sum_kmax = sums[i].kmax, sum_ks = sums[i].ks, sum_cn = sums[i].cn;
     if (sum_kmax == 0) alone_sums(laws, i, b.mass[i], sum_kmax, sum_ks, &sum_cn);
     const double omega2 = ball_omega2(b.mass[i], sum_kmax, sum_ks, rotation);
@@ -111,7 +120,7 @@ double critical_timestep(const Model& model) {
     const double omega = std::sqrt(omega2);
     step = std::min(step, damped_critical_step(omega, 0.5 * beta * omega + sum_cn / (b.mass[i] * omega)));
   }
-  return std::min(step, hertz_step_cap(model));
+  return step;
 }
 
 }  // namespace trubal

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "model/model.hpp"
+#include "physics/scene.hpp"
 
 namespace trubal {
 
@@ -19,6 +20,12 @@ inline bool ball_held(std::uint8_t fixed, bool rotation) {
 
 // Critical time step of the current state (before FRAC), see doc/physics.md "Time step".
 double critical_timestep(const Model& model);
+// Its pieces, for a model stepped in parts (BACKEND mpi: each rank's own balls, the ghosts skipped):
+// whether a ball not skipped is free in what the step moves; the smallest critical step of the
+// balls not skipped, without the Hertz cap, with the whole model's features and whether any of its
+// balls is free. The smallest over the parts is the whole model's (a min is exact in any order).
+bool any_ball_free(const Model& model, bool rotation, const std::uint8_t* skip);
+double balls_critical_step(const Model& model, const Features& features, bool any_free, const std::uint8_t* skip);
 // The critical step the next cycle uses (its step is FRAC times this), from the one held now and the
 // estimate of the state just computed (both capped by the Rayleigh step of the Hertz balls, `cap`).
 // Linear law: the estimate, every cycle. Hertz: the tangent stiffness, and so the estimate, changes
