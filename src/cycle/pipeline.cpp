@@ -275,7 +275,7 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
       if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
     }
   }
-  if (search && distributed_ && parts_may_search && BrickStep::local_rule.load(std::memory_order_relaxed) >= 0) {
+  if (search && distributed_ && parts_may_search && !whole_next_ && BrickStep::local_rule.load(std::memory_order_relaxed) >= 0) {
     // The ranks search on their parts at the split (brick_step), not through the whole model: no
     // rank but 0 then ever holds the whole model's list in a CYCLE. A whole step searches first.
     search_parts_ = true;
