@@ -119,6 +119,7 @@ void Pipeline::invalidate() {
   moved_known_ = false;
   fresh_ = false;
   search_parts_ = false;
+  list_from_parts_ = false;
   model_ = nullptr;
 }
 
@@ -136,8 +137,11 @@ bool Pipeline::any_outside(const Model& model) {
 bool Pipeline::needs_rebuild(const Model& model) {
   const bool known = moved_known_;   // the last step measured the displacements as it moved the balls
   moved_known_ = false;
-  if (model_ != &model || !scratch_.fits(model.contacts, model.balls.size()) ||
-      !scratch_.fits_walls(model.wall_contacts, model.balls.size()))
+  if (model_ != &model) return true;
+  // A list made from the ranks' parts (a sync), or handed over by rank 0, is current: only the index
+  // is of an older one (prepare indexes it). Anything else not indexed here was changed outside.
+  if ((!scratch_.fits(model.contacts, model.balls.size()) || !scratch_.fits_walls(model.wall_contacts, model.balls.size())) &&
+      !(distributed_ && list_from_parts_))
     return true;
   // A ball and a wall each moving half the skin can just close the gap of a candidate.
   if (!(wall_travel_ <= 0.5 * ref_.skin())) return true;
@@ -166,6 +170,7 @@ void Pipeline::rebuild(Model& model) {
   }
   check_periodic_cell(model);
   search_parts_ = false;
+  list_from_parts_ = false;
   backend_->find_pairs(model, skin, pool_now(), pairs_);
   auto install = [&] {
     // A backend asked every step mostly finds the list it found before: nothing to carry over then.
@@ -188,15 +193,20 @@ void Pipeline::rebuild(Model& model) {
 }
 
 void Pipeline::sync(Model& model) {
-  if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.sync(model, &ref_); });
+  if (!bricks().live_for(model)) return;
+  list_from_parts_ = true;
+  each_part([&](BrickStep& part, int) { part.sync(model, &ref_); });
 }
 
 void Pipeline::sync_all(Model& model) {
-  if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.share(model, &ref_); });
+  if (!bricks().live_for(model)) return;
+  list_from_parts_ = true;
+  each_part([&](BrickStep& part, int) { part.share(model, &ref_); });
 }
 
 void Pipeline::end_cycle(Model& model) {
   if (!bricks().live_for(model)) return;
+  list_from_parts_ = true;
   if (distributed_) {   // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);

@@ -183,6 +183,9 @@ class Pipeline {
   bool fresh_ = false;              // searched at the current positions (nothing moved since)
   // A distributed run's stale list, left for the parts to search at the split (prepare).
   bool search_parts_ = false;
+  // The model's list may have been made from the parts' since the last search (a sync): current,
+  // its index older.
+  bool list_from_parts_ = false;
   double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
   double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)
   Snapshot rescue_;
