@@ -227,6 +227,7 @@ void Pipeline::take_rescue(const Model& model) {
 }
 
 bool Pipeline::restore_rescue(Model& model) {
+  list_from_parts_ = false;   // (the list put back is the copy's, older than the reference: searched afresh)
   if (!distributed_ || comm::size() < 2) return rescue_.restore(model);
   // Rank 0 puts its copy back and hands the arrays to the others, which put the rest back from theirs.
   bool current = false;
