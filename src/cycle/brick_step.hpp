@@ -131,6 +131,9 @@ class BrickStep {
   void loads_changed(const Model& full);
   // The parts are dropped (the whole model was changed, or is to be stepped another way).
   void drop() { live_ = false; }
+  // The ranks other than 0 freed their whole model's arrays (Pipeline::hollow; said on every rank
+  // alike): the next share() hands rank 0's over again, whether or not a step has followed.
+  void whole_freed() { shared_ = false; }
   // Dropped, and their memory given back (the next split makes them afresh).
   void release();
 

@@ -375,8 +375,10 @@ void Pipeline::split_parts(Model& model) {
   check_periodic_cell(model);
   ref_.record(model, skin);   // (the positions the parts search at)
   wall_travel_ = 0;
-  const bool hollowed = distributed_ && !comm::root();
-  if (hollowed) hollow(model);
+  if (distributed_) {
+    if (!comm::root()) hollow(model);
+    for (auto& part : bricks_) part->whole_freed();   // (on every rank: share() is collective)
+  }
   bool rebuilt = false;
   each_part([&](BrickStep& part, int t) {
     const bool done = part.rebuild_local(model, skin, *backend_, pool_);

@@ -116,7 +116,14 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   pipeline.prepare(model, !servo_reads_table);
   // (Before the critical step, which may leave the ranks other than 0 with their parts alone.)
   const double energy_floor = resting_energy_floor(model);
-  if (!(model.critical_dt > 0)) model.critical_dt = pipeline.critical_timestep(model, kernels.features, cap);
+  if (!(model.critical_dt > 0)) {
+    try {
+      model.critical_dt = pipeline.critical_timestep(model, kernels.features, cap);
+    } catch (...) {   // (its search on the parts failed on a rank: the others' whole models come back)
+      pipeline.sync_all(model);
+      throw;
+    }
+  }
   // The guard: energy in must balance energy out. A step beyond the stability limit creates
   // energy from nothing; when that is half of all the energy in play, the run stops. The balance
   // alone cannot see an instability of the linear springs: central differences keep

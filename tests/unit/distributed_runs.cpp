@@ -353,6 +353,26 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
       CHECK(out.find("cycle: ") == std::string::npos);
     }
   }
+  SECTION("after a rank ran out of memory in its first search on its part, the shell goes on with the whole model") {
+    // The ranks other than 0 freed their whole model before that search (Pipeline::split_parts):
+    // the failure hands it back, so the next CYCLE and the files are serial's (they crashed or hung).
+    TempDir dir, serial;
+    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    dir.write("deck.dat", setup);
+    dir.write("more.txt", "cycle 30\ncycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+    const int status = shell("cd " + quote(dir.str()) +
+                             " && env TRUBAL_TEST_FAIL_AT='1 part' OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                             "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np 3 " +
+                             quote(TRUBAL_EXE) + " -i deck.dat <more.txt >out.txt 2>&1");
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(status != 124);
+    CHECK_THAT(out, Catch::Contains("rank 1 ran out of memory making a new pair list for its part"));
+    serial.write("deck.dat", setup + "cycle 30\n" + kOutputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+    CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+  }
   SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
     // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks
     // alone made their CYCLE record, and wait for rank 0, on steps rank 0 did not (it hung).
