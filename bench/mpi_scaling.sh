@@ -3,7 +3,8 @@
 # N, trubal serial, threaded on P threads and BACKEND mpi on P ranks, interleaved REPS times; prints
 # the median cycling time, ball-steps/s, the speedup Sp = T*/Tp and efficiency Ep = Sp/p as the seed
 # paper's Table 2 defines them (T*: serial), and the largest peak resident memory of a rank (PRINT
-# INFO's "peak memory"). With
+# INFO's "peak memory"), then rank 0's and the largest of the others' apart, of the whole process
+# and by the timed CYCLE's end (PRINT INFO's "peak memory by the last CYCLE's end"). With
 # LAMMPS installed, LAMMPS on P ranks too (the ratio the target names), compared two ways,
 # each like with like: trubal's cycling time against LAMMPS's "Loop time" (the steps alone), and
 # whole process against whole process (reading the deck or the data file, the first search, MPI's
@@ -57,7 +58,8 @@ PY
     whole=$(echo "$(date +%s.%N) - $s" | bc)
     secs=$(grep -o "($STEPS cycles in [0-9.e+-]* s" "$W/$name.out" | tail -1 | awk '{print $4}')
     rss=$(sed -n 's/^peak memory: \([0-9 ]*\) MiB.*/\1/p' "$W/$name.out" | tail -1)
-    echo "$name ${secs:--} $whole $rss" >>"$W/times"   # (-: no stepping time found)
+    cyc=$(sed -n "s/^peak memory by the last CYCLE's end: \([0-9 ]*\) MiB.*/\1/p" "$W/$name.out" | tail -1)
+    echo "$name ${secs:--} $whole $rss | $cyc" >>"$W/times"   # (-: no stepping time found)
   }
   for r in $(seq "$REPS"); do
     one serial "$TRUBAL" serial.dat
@@ -77,21 +79,31 @@ import statistics, sys
 w, n, steps = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 runs = {}
 for line in open(f"{w}/times"):
+    line, _, cycle = line.partition("|")
     parts = line.split()
     if len(parts) < 3 or parts[1] == "-": continue   # (a run whose stepping time was not found)
     # name, stepping time (trubal's cycling, LAMMPS's loop), whole process, peak RSS of each rank
-    runs.setdefault(parts[0], []).append((float(parts[1]), float(parts[2]), [int(x) for x in parts[3:]]))
-med = {k: statistics.median(t for t, _, _ in v) for k, v in runs.items()}
-whole = {k: statistics.median(w for _, w, _ in v) for k, v in runs.items()}
-rss = {k: max((max(r) if r else 0) for _, _, r in v) for k, v in runs.items()}
+    # (the process's; after "|", by the end of the timed CYCLE, under mpirun)
+    runs.setdefault(parts[0], []).append((float(parts[1]), float(parts[2]), [int(x) for x in parts[3:]],
+                                          [int(x) for x in cycle.split()]))
+med = {k: statistics.median(t for t, _, _, _ in v) for k, v in runs.items()}
+whole = {k: statistics.median(w for _, w, _, _ in v) for k, v in runs.items()}
+rss = {k: max((max(r) if r else 0) for _, _, r, _ in v) for k, v in runs.items()}
+# Rank 0's peak and the largest of the other ranks' (rank 0 alone keeps the whole model in a CYCLE).
+def split_peak(k, pick):
+    peaks = [pick(v) for v in runs[k] if pick(v)]
+    if not peaks: return "-"
+    return f"{max(p[0] for p in peaks)}" + (f"/{max(max(p[1:]) for p in peaks)}" if len(peaks[0]) > 1 else "")
 base = med["serial"]
 print(f"dense FCC, N = {n}: stepping time (trubal: the timed CYCLE; LAMMPS: its loop time) and whole process")
-print(f"  {'run':12s} {'seconds':>8s} {'M ball-steps/s':>15s} {'Sp':>6s} {'Ep':>6s} {'whole s':>8s} {'peak RSS/rank':>14s}")
+print(f"  {'run':12s} {'seconds':>8s} {'M ball-steps/s':>15s} {'Sp':>6s} {'Ep':>6s} {'whole s':>8s} {'peak RSS/rank':>14s}"
+      f" {'0/rest MiB':>11s} {'in CYCLE':>9s}")
 for k in sorted(med, key=lambda k: (k.split('_')[-1], k)):
     p = int(k.split("_")[1]) if "_" in k else 1
     sp = base / med[k]
     mem = f"{rss[k]} MiB" if rss[k] else "-"
-    print(f"  {k:12s} {med[k]:8.3f} {n * steps / med[k] / 1e6:15.2f} {sp:6.2f} {sp / p:6.2f} {whole[k]:8.3f} {mem:>14s}")
+    print(f"  {k:12s} {med[k]:8.3f} {n * steps / med[k] / 1e6:15.2f} {sp:6.2f} {sp / p:6.2f} {whole[k]:8.3f} {mem:>14s}"
+          f" {split_peak(k, lambda v: v[2]):>11s} {split_peak(k, lambda v: v[3]):>9s}")
 for k in med:
     if k.startswith("mpi_") and k != "mpi_1":
         p = k.split("_")[1]
