@@ -36,6 +36,15 @@ int run_deck(const TempDir& dir, int ranks, const std::string& env = "") {
   return shell("cd " + quote(dir.str()) + " && " + launcher + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1");
 }
 
+// deck.dat, then the shell's lines in more.txt (trubal -i), on `ranks` ranks under a time limit,
+// output to out.txt; the exit status (124: the limit).
+int run_shell(const TempDir& dir, int ranks, const std::string& env = "") {
+  return shell("cd " + quote(dir.str()) + " && env " + env +
+               " OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+               "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np " + std::to_string(ranks) + " " + quote(TRUBAL_EXE) +
+               " -i deck.dat <more.txt >out.txt 2>&1");
+}
+
 
 const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts.csv\n";
 
@@ -360,10 +369,7 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
     dir.write("deck.dat", setup);
     dir.write("more.txt", "cycle 30\ncycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
-    const int status = shell("cd " + quote(dir.str()) +
-                             " && env TRUBAL_TEST_FAIL_AT='1 part' OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                             "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np 3 " +
-                             quote(TRUBAL_EXE) + " -i deck.dat <more.txt >out.txt 2>&1");
+    const int status = run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='1 part'");
     const std::string out = slurp(dir.path() / "out.txt");
     INFO(out);
     CHECK(status != 124);
@@ -381,10 +387,7 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 200 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
                           "hist stress every 10 file afile/h.csv\n");
     dir.write("more.txt", "cycle 30\nprint info\nquit\n");
-    const int status = shell("cd " + quote(dir.str()) +
-                             " && env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                             "OMPI_MCA_rmaps_base_oversubscribe=1 ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np 3 " +
-                             quote(TRUBAL_EXE) + " -i deck.dat <more.txt >out.txt 2>&1");
+    const int status = run_shell(dir, 3);
     const std::string out = slurp(dir.path() / "out.txt");
     INFO(out);
     CHECK(status != 124);
