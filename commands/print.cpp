@@ -1,5 +1,3 @@
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -10,6 +8,7 @@
 
 #include "commands/common.hpp"
 #include "support/comm.hpp"
+#include "support/peak_memory.hpp"
 #include "model/wall_shape.hpp"
 #include "physics/walls.hpp"
 #include "io/atomic_file.hpp"
@@ -82,15 +81,8 @@ static void print_info(Context& ctx) {
   o << fmt::format("backend: {}\n", s.pipeline().backend().name());
   o << fmt::format("threads: {}\n", s.pipeline().threads());
   if (comm::size() > 1) o << fmt::format("ranks: {}\n", comm::size());
-  {   // the process's peak resident memory so far (every rank's, gathered: every rank runs PRINT)
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    std::vector<double> mine{static_cast<double>(usage.ru_maxrss) / 1024.0}, all;   // KiB on Linux
-    comm::allgather(mine, all);
-    std::string line;
-    for (double mib : all) line += fmt::format("{}{:.0f}", line.empty() ? "" : " ", mib);
-    o << fmt::format("peak memory: {} MiB{}\n", line, comm::size() > 1 ? " (per rank)" : "");
-  }
+  // The process's peak resident memory so far (every rank's, gathered: every rank runs PRINT).
+  o << fmt::format("peak memory: {} MiB{}\n", mib_list(peak_memory_per_rank()), comm::size() > 1 ? " (per rank)" : "");
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);
   o << fmt::format("physics: {}\n", f.describe());

@@ -1270,7 +1270,6 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
   }
   list_version_ = full.contacts.list_version;
   wall_version_ = full.wall_contacts.list_version;
-  shared_ = true;
 }
 
 void broadcast_arrays(Model& m) {

@@ -8,8 +8,6 @@
 #include <mutex>
 #include <utility>
 
-#include <sys/resource.h>
-
 #include <fmt/format.h>
 
 #include "cycle/pair_list.hpp"
@@ -19,6 +17,7 @@
 #include "model/periodic_cell.hpp"
 #include "physics/timestep.hpp"
 #include "support/format_number.hpp"
+#include "support/peak_memory.hpp"
 
 namespace trubal {
 namespace {
@@ -161,14 +160,10 @@ bool Pipeline::needs_rebuild(const Model& model) {
 }
 
 void Pipeline::rebuild(Model& model) {
-  const Balls& b = model.balls;
-  const std::size_t n = b.size();
-  double skin = 0;
-  if (backend_->keeps_list()) {
-    skin = VerletReference::skin_for(b);
-    if (model.space.periodic) skin = periodic_skin(model, skin);
-  }
-  check_periodic_cell(model);
+  const std::size_t n = model.balls.size();
+  double skin = 0;   // (none for a backend that keeps no list)
+  if (backend_->keeps_list()) skin = list_skin(model);
+  else check_periodic_cell(model);
   search_parts_ = false;
   list_from_parts_ = false;
   backend_->find_pairs(model, skin, pool_now(), pairs_);
@@ -207,12 +202,8 @@ void Pipeline::sync_all(Model& model) {
 void Pipeline::end_cycle(Model& model) {
   if (!bricks().live_for(model)) return;
   list_from_parts_ = true;
-  if (distributed_) {   // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    std::vector<double> mine{static_cast<double>(usage.ru_maxrss) / 1024.0};   // (KiB on Linux)
-    comm::allgather(mine, cycle_peaks_);
-  }
+  // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
+  if (distributed_) cycle_peaks_ = peak_memory_per_rank();
   each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed_); });
 }
 
@@ -322,15 +313,8 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
     whole = outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
     // A stale list alone: the members rebuild it on their parts where they can.
     if (whole && !outside) {
-      double skin = VerletReference::skin_for(model.balls);
-      if (model.space.periodic) skin = periodic_skin(model, skin);
-      check_periodic_cell(model);
-      bool rebuilt = false;
-      each_part([&](BrickStep& part, int t) {
-        const bool done = part.rebuild_local(model, skin, *backend_, distributed_ ? pool_ : *solo_pools_[t]);
-        if (t == 0) rebuilt = done;
-      });
-      if (rebuilt) {
+      const double skin = list_skin(model);
+      if (rebuild_parts(model, skin)) {
         ref_.record_cell(model, skin);
         wall_travel_ = 0;
         whole = false;
@@ -370,20 +354,14 @@ void Pipeline::split_parts(Model& model) {
   if (!search_parts_) return;
   // The list prepare() left stale is searched on the parts just made (they carry its history): the
   // ranks other than 0 need the whole model no further.
-  double skin = VerletReference::skin_for(model.balls);
-  if (model.space.periodic) skin = periodic_skin(model, skin);
-  check_periodic_cell(model);
+  const double skin = list_skin(model);
   ref_.record(model, skin);   // (the positions the parts search at)
   wall_travel_ = 0;
   if (distributed_) {
     if (!comm::root()) hollow(model);
     for (auto& part : bricks_) part->whole_freed();   // (on every rank: share() is collective)
   }
-  bool rebuilt = false;
-  each_part([&](BrickStep& part, int t) {
-    const bool done = part.rebuild_local(model, skin, *backend_, pool_);
-    if (t == 0) rebuilt = done;
-  });
+  const bool rebuilt = rebuild_parts(model, skin);
   search_parts_ = false;
   if (rebuilt) return;
   // They could not (the same answer on every rank; not after a split but in tests): through the
@@ -394,8 +372,24 @@ void Pipeline::split_parts(Model& model) {
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
 }
 
+double Pipeline::list_skin(const Model& model) const {
+  double skin = VerletReference::skin_for(model.balls);
+  if (model.space.periodic) skin = periodic_skin(model, skin);
+  check_periodic_cell(model);
+  return skin;
+}
+
+bool Pipeline::rebuild_parts(const Model& model, double skin) {
+  bool rebuilt = false;
+  each_part([&](BrickStep& part, int t) {
+    const bool done = part.rebuild_local(model, skin, *backend_, distributed_ ? pool_ : *solo_pools_[t]);
+    if (t == 0) rebuilt = done;   // (the same answer on every member)
+  });
+  return rebuilt;
+}
+
 double Pipeline::critical_timestep(Model& model, const Features& features, double cap) {
-  if (!search_parts_ || !distributed_) return trubal::critical_timestep(model);
+  if (!search_parts_) return trubal::critical_timestep(model);   // (search_parts_: a distributed run's alone)
   // The parts search the stale list now, and each rank's own balls give their steps.
   const auto t0 = std::chrono::steady_clock::now();
   split_parts(model);
@@ -519,10 +513,8 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
                            "hold their part, and the whole model's ids and radii)");
   }
   if (!cycle_peaks_.empty()) {
-    std::string peaks;
-    for (double mib : cycle_peaks_) peaks += fmt::format("{}{:.0f}", peaks.empty() ? "" : " ", mib);
     lines.emplace_back("peak memory by the last CYCLE's end",
-                       peaks + " MiB (per rank; the whole model's list is searched on the parts, so that in a CYCLE "
+                       mib_list(cycle_peaks_) + " MiB (per rank; the whole model's list is searched on the parts, so that in a CYCLE "
                                "no rank but 0 holds it)");
   }
   if (backend_->keeps_list()) {

@@ -139,6 +139,11 @@ class Pipeline {
   // The parts made from the whole model (split), and where prepare() left the list stale, searched
   // on them (rebuild_local), the ranks other than 0 hollow first.
   void split_parts(Model& model);
+  // The skin of a new pair list for the model now (the periodic cell checked first); a list made
+  // by every part (BrickStep::rebuild_local) with it: whether they could (the same on every member;
+  // where not, nothing changed).
+  double list_skin(const Model& model) const;
+  bool rebuild_parts(const Model& model, double skin);
   std::size_t held_whole_ = 0, held_part_ = 0;   // bytes of arrays in the last distributed step (PRINT info)
   std::vector<double> cycle_peaks_;              // per rank: peak MiB by the end of the last distributed CYCLE
 

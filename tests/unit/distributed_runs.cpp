@@ -25,26 +25,26 @@ bool have_mpi() {
   return false;
 }
 
-// Runs deck.dat in `dir` on `ranks` ranks (0: a plain trubal, no mpirun), with a time limit so that
-// a hang fails the test instead of stalling it; returns the exit status, output in out.txt.
-// `env`: more variables for every rank ("NAME=value ...").
-int run_deck(const TempDir& dir, int ranks, const std::string& env = "") {
+// Runs trubal in `dir` with `args` (the file to run and the redirections) on `ranks` ranks (0: a
+// plain trubal, no mpirun), with a time limit so that a hang fails the test instead of stalling it;
+// returns the exit status (124: the limit). `env`: more variables for every rank ("NAME=value ...").
+int run_in(const TempDir& dir, int ranks, const std::string& env, const std::string& args) {
   const std::string launcher =
       ranks == 0 ? std::string("timeout 120 ")
                  : "env " + env + " OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
                    "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np " + std::to_string(ranks) + " ";
-  return shell("cd " + quote(dir.str()) + " && " + launcher + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1");
+  return shell("cd " + quote(dir.str()) + " && " + launcher + quote(TRUBAL_EXE) + args);
 }
 
-// deck.dat, then the shell's lines in more.txt (trubal -i), on `ranks` ranks under a time limit,
-// output to out.txt; the exit status (124: the limit).
+// deck.dat, output in out.txt.
+int run_deck(const TempDir& dir, int ranks, const std::string& env = "") {
+  return run_in(dir, ranks, env, " deck.dat >out.txt 2>&1");
+}
+
+// deck.dat, then the shell's lines in more.txt (trubal -i), output in out.txt.
 int run_shell(const TempDir& dir, int ranks, const std::string& env = "") {
-  return shell("cd " + quote(dir.str()) + " && env " + env +
-               " OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-               "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np " + std::to_string(ranks) + " " + quote(TRUBAL_EXE) +
-               " -i deck.dat <more.txt >out.txt 2>&1");
+  return run_in(dir, ranks, env, " -i deck.dat <more.txt >out.txt 2>&1");
 }
-
 
 const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts.csv\n";
 

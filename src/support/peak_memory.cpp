@@ -1,0 +1,25 @@
+#include "support/peak_memory.hpp"
+
+#include <sys/resource.h>
+
+#include <fmt/format.h>
+
+#include "support/comm.hpp"
+
+namespace trubal {
+
+std::vector<double> peak_memory_per_rank() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  std::vector<double> mine{static_cast<double>(usage.ru_maxrss) / 1024.0}, all;   // (KiB on Linux)
+  comm::allgather(mine, all);
+  return all;
+}
+
+std::string mib_list(const std::vector<double>& mib) {
+  std::string line;
+  for (double v : mib) line += fmt::format("{}{:.0f}", line.empty() ? "" : " ", v);
+  return line;
+}
+
+}  // namespace trubal
