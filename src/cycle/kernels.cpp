@@ -360,6 +360,26 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
       boundary_sum(sums.boundary_work), potential_sum(sums.potential), damping_sum(sums.damping_work),
       friction_sum(sums.friction_work), strain_sum(sums.strain), image_sum(sums.image_power),
       boundary_ahead_sum(sums.boundary_ahead), damping_ahead_sum(sums.damping_ahead);
+  // Each ball's terms wait in a block, one array per sum, and go to the streams a block at a time
+  // (ExactSum::Stream::add_block: vector arithmetic where the block fits the window). The sums are
+  // exact, so when a term goes in changes no bit.
+  enum Term { kFriction, kStrain, kImage, kKinetic, kSpin, kBoundary, kPotential, kDamping, kBoundaryAhead, kDampingAhead, kTerms };
+  constexpr std::size_t kTermBlock = 128;
+  alignas(64) double terms[kTerms][kTermBlock] = {};   // (zeroed: the compiler cannot see every drained term written)
+  std::size_t held = 0;
+  auto drain = [&] {
+    friction_sum.add_block(terms[kFriction], held);
+    strain_sum.add_block(terms[kStrain], held);
+    if (model.space.periodic) image_sum.add_block(terms[kImage], held);
+    kinetic_sum.add_block(terms[kKinetic], held);
+    if constexpr (kRot) spin_sum.add_block(terms[kSpin], held);
+    boundary_sum.add_block(terms[kBoundary], held);
+    if constexpr (kLoads) potential_sum.add_block(terms[kPotential], held);
+    damping_sum.add_block(terms[kDamping], held);
+    boundary_ahead_sum.add_block(terms[kBoundaryAhead], held);
+    damping_ahead_sum.add_block(terms[kDampingAhead], held);
+    held = 0;
+  };
   const bool periodic = model.space.periodic;
   const std::uint8_t* ghost = scratch.ghost.empty() ? nullptr : scratch.ghost.data();
   for (std::size_t ball = begin; ball < end; ++ball) {
@@ -372,9 +392,9 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     boundary_ahead = part.boundary_ahead;
     damping_ahead = part.damping_ahead;
     kinetic = potential = 0;
-    friction_sum.add(part.friction);
-    strain_sum.add(part.strain);
-    if (periodic) image_sum.add(part.image);
+    terms[kFriction][held] = part.friction;
+    terms[kStrain][held] = part.strain;
+    if (periodic) terms[kImage][held] = part.image;
     if (k.moments) [[unlikely]] add_moments(sums, scratch.ball_moments[ball]);
     double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
@@ -399,7 +419,7 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     advance(fy, kLoads ? b.ay[ball] : 0.0, b.vy[ball], inv_m, m, fixed & kYVel);
     advance(fz, kLoads ? b.az[ball] : 0.0, b.vz[ball], inv_m, m, fixed & kZVel);
     if constexpr (kWriteForces) { b.fx[ball] = fx; b.fy[ball] = fy; b.fz[ball] = fz; }
-    kinetic_sum.add(kinetic);
+    terms[kKinetic][held] = kinetic;
     kinetic = 0;
     const double vx = b.vx[ball], vy = b.vy[ball], vz = b.vz[ball];
     b.x[ball] += vx * dt; b.y[ball] += vy * dt; b.z[ball] += vz * dt;
@@ -415,7 +435,7 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
       const double wx = b.wx[ball], wy = b.wy[ball], wz = b.wz[ball];
       const double spin2 = wx * wx + wy * wy + wz * wz;
       speed2 += r * r * spin2;
-      spin_sum.add(kinetic);
+      terms[kSpin][held] = kinetic;
     }
     if (speed2 > fastest2 || (std::isnan(speed2) && !std::isnan(fastest2))) { fastest2 = speed2; fastest = ball; }
     if constexpr (kEstimate != StepEstimate::None) {
@@ -433,12 +453,14 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
         }
       }
     }
-    boundary_sum.add(boundary_work);
-    if constexpr (kLoads) potential_sum.add(potential);
-    damping_sum.add(damping_work);
-    boundary_ahead_sum.add(boundary_ahead);
-    damping_ahead_sum.add(damping_ahead);
+    terms[kBoundary][held] = boundary_work;
+    if constexpr (kLoads) terms[kPotential][held] = potential;
+    terms[kDamping][held] = damping_work;
+    terms[kBoundaryAhead][held] = boundary_ahead;
+    terms[kDampingAhead][held] = damping_ahead;
+    if (++held == kTermBlock) drain();
   }
+  drain();
   if constexpr (kEstimate == StepEstimate::Undamped)
     if (omega2_max > 0) step_min = 2 / std::sqrt(omega2_max);
   sums.take_step(step_min);
