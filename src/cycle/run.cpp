@@ -54,6 +54,16 @@ Escapes find_escapes(const Model& model) {
   const Space& s = model.space;
   const Balls& b = model.balls;
   const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  // Every step: first whether any ball is out at all, axis by axis as a loop the compiler
+  // vectorises (a NaN is out of neither side, as below).
+  unsigned any = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (s.wraps(a)) continue;
+    const double* x = pos[a]->data();
+    const double lo = s.lo[a], hi = s.hi[a];
+    for (std::size_t k = 0; k < b.size(); ++k) any |= static_cast<unsigned>((x[k] < lo) | (x[k] > hi));
+  }
+  if (any == 0) return e;
   for (std::size_t k = 0; k < b.size(); ++k)
     for (int a = 0; a < 3; ++a) {
       if (s.wraps(a)) continue;   // a periodic axis wraps the ball instead
