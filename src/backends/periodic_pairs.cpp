@@ -1,6 +1,7 @@
 #include "backends/periodic_pairs.hpp"
 
 #include <algorithm>
+#include <span>
 
 #include "model/periodic_cell.hpp"
 
@@ -53,12 +54,19 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
     std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
     for (std::size_t k = 0; k < n; ++k) order[next[cell[k]]++] = static_cast<std::uint32_t>(k);
   }
+  // The places and radii in bin order, so that a bin's candidates are read from one run of memory.
+  std::vector<double> bin_x(n), bin_y(n), bin_z(n), bin_r(n);
+  for (std::size_t e = 0; e < n; ++e) {
+    const std::uint32_t k = order[e];
+    bin_x[e] = b.x[k]; bin_y[e] = b.y[k]; bin_z[e] = b.z[k]; bin_r[e] = b.rad[k];
+  }
+  const double *bx = bin_x.data(), *by = bin_y.data(), *bz = bin_z.data(), *br = bin_r.data();
   struct Hit { std::uint32_t j; std::int8_t ix, iy, iz; };
   const bool few_cells = dims[0] < 3 || dims[1] < 3 || dims[2] < 3;
   // Ball i's pairs, in ascending j.
-  auto emit = [](std::size_t i, std::vector<Hit>& near, PairCandidates& mine) {
-    std::sort(near.begin(), near.end(), [](const Hit& p, const Hit& q) { return p.j < q.j; });
-    for (const Hit& h : near) {
+  auto emit = [](std::size_t i, Hit* near, std::size_t count, PairCandidates& mine) {
+    std::sort(near, near + count, [](const Hit& p, const Hit& q) { return p.j < q.j; });
+    for (const Hit& h : std::span<const Hit>(near, count)) {
       mine.i.push_back(static_cast<std::uint32_t>(i));
       mine.j.push_back(h.j);
       mine.image_x.push_back(h.ix);
@@ -88,7 +96,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
           std::int8_t ix, iy, iz;
           if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + skin, ix, iy, iz)) near.push_back({j, ix, iy, iz});
         }
-      emit(i, near, mine);
+      emit(i, near.data(), near.size(), mine);
     }
   };
   // With 3 or more bins on every axis, the 27 bins around a ball's are distinct, and the image of
@@ -99,9 +107,12 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
   // A bounded axis of a mixed space has no image: its bins do not wrap.
   const std::array<bool, 3> wraps{s.periodic_axis[0], s.periodic_axis[1], s.periodic_axis[2]};
   auto search_bins = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
-    std::vector<Hit> near;
+    // Each candidate is written to the next slot, which counts only where it is a pair: no branch
+    // on the test, whose outcome (about one candidate in ten) a branch would mispredict.
+    std::vector<Hit> near(64);
     for (std::size_t i = begin; i < end; ++i) {
-      near.clear();
+      std::size_t hits = 0;
+      const double xi = b.x[i], yi = b.y[i], zi = b.z[i], ri = b.rad[i];
       for (int dz = -1; dz <= 1; ++dz) {
         int cz = where[i][2] + dz;
         if (!wraps[2] && (cz < 0 || cz >= dims[2])) continue;
@@ -112,26 +123,37 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
           if (!wraps[1] && (cy < 0 || cy >= dims[1])) continue;
           const std::int8_t iy = cy < 0 ? std::int8_t{-1} : (cy >= dims[1] ? std::int8_t{1} : std::int8_t{0});
           cy -= iy * dims[1];
+          const std::size_t row = (static_cast<std::size_t>(cz) * dims[1] + cy) * dims[0];
+          // The candidates of bins [q0, q1] of this row, all with image (ix, iy, iz).
+          auto scan = [&](std::size_t q0, std::size_t q1, std::int8_t ix) {
+            double ox, oy, oz;
+            image_offset(f, ix, iy, iz, ox, oy, oz);
+            const std::uint32_t e0 = start[q0], e1 = start[q1 + 1];
+            if (near.size() < hits + (e1 - e0)) near.resize(2 * (hits + (e1 - e0)));
+            for (std::uint32_t e = e0; e < e1; ++e) {
+              const std::uint32_t j = order[e];
+              const double ddx = image_delta(bx[e], xi, ox), ddy = image_delta(by[e], yi, oy),
+                           ddz = image_delta(bz[e], zi, oz);
+              const double reach = ri + br[e] + skin;
+              near[hits] = {j, ix, iy, iz};
+              hits += static_cast<std::size_t>((j > i) & (ddx * ddx + ddy * ddy + ddz * ddz < reach * reach));
+            }
+          };
+          const int cx0 = where[i][0];
+          if (cx0 >= 1 && cx0 + 1 < dims[0]) {   // the three bins along x are one run of the bin order
+            scan(row + static_cast<std::size_t>(cx0 - 1), row + static_cast<std::size_t>(cx0 + 1), 0);
+            continue;
+          }
           for (int dx = -1; dx <= 1; ++dx) {
-            int cx = where[i][0] + dx;
+            int cx = cx0 + dx;
             if (!wraps[0] && (cx < 0 || cx >= dims[0])) continue;
             const std::int8_t ix = cx < 0 ? std::int8_t{-1} : (cx >= dims[0] ? std::int8_t{1} : std::int8_t{0});
             cx -= ix * dims[0];
-            double ox, oy, oz;
-            image_offset(f, ix, iy, iz, ox, oy, oz);
-            const std::size_t q = (static_cast<std::size_t>(cz) * dims[1] + cy) * dims[0] + cx;
-            for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
-              const std::uint32_t j = order[e];
-              if (j <= i) continue;
-              const double ddx = image_delta(b.x[j], b.x[i], ox), ddy = image_delta(b.y[j], b.y[i], oy),
-                           ddz = image_delta(b.z[j], b.z[i], oz);
-              const double reach = b.rad[i] + b.rad[j] + skin;
-              if (ddx * ddx + ddy * ddy + ddz * ddz < reach * reach) near.push_back({j, ix, iy, iz});
-            }
+            scan(row + static_cast<std::size_t>(cx), row + static_cast<std::size_t>(cx), ix);
           }
         }
       }
-      emit(i, near, mine);
+      emit(i, near.data(), hits, mine);
     }
   };
   auto search_any = [&](std::size_t begin, std::size_t end, PairCandidates& mine) {
