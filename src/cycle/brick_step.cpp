@@ -240,6 +240,25 @@ class ShellBins {
           if (inside) out.push_back(static_cast<std::uint32_t>((c[2] * dims_[1] + c[1]) * dims_[0] + c[0]));
         }
   }
+  // The OR of `mask` over the bin and those around it (as neighbours() lists them).
+  std::uint64_t around(std::uint32_t bin, const std::uint64_t* mask, std::vector<std::uint32_t>& scratch) const {
+    const int w[3] = {static_cast<int>(bin % dims_[0]), static_cast<int>((bin / dims_[0]) % dims_[1]),
+                      static_cast<int>(bin / (static_cast<std::uint32_t>(dims_[0]) * dims_[1]))};
+    std::uint64_t m = 0;
+    if (w[0] >= 1 && w[0] + 1 < dims_[0] && w[1] >= 1 && w[1] + 1 < dims_[1] && w[2] >= 1 && w[2] + 1 < dims_[2]) {
+      const std::size_t row = static_cast<std::size_t>(dims_[0]), plane = row * static_cast<std::size_t>(dims_[1]);
+      const std::uint64_t* centre = mask + bin;
+      for (std::size_t z = 0; z < 3; ++z)   // (the bin is inside: all 27 are distinct and in range)
+        for (std::size_t y = 0; y < 3; ++y) {
+          const std::uint64_t* r = centre + z * plane + y * row - plane - row;
+          m |= r[-1] | r[0] | r[1];
+        }
+      return m;
+    }
+    neighbours(bin, scratch);
+    for (std::uint32_t c : scratch) m |= mask[c];
+    return m;
+  }
 
  private:
   const Space* s_ = nullptr;
@@ -602,7 +621,25 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     const std::size_t stride = marks.size();
     std::vector<std::uint32_t> near;
     std::vector<std::uint8_t> to(ranks);
-    for (std::size_t q = 0; q < owned_.size(); ++q) {
+    if (ranks <= 64) {
+      // Each bin's other ranks as the bits of a word; a ball's are the OR over its bins around.
+      std::vector<std::uint64_t> others(bins.count(), 0);
+      for (int r = 0; r < ranks; ++r) {
+        if (r == me) continue;
+        const std::uint8_t* row = all_marks.data() + static_cast<std::size_t>(r) * stride;
+        for (std::size_t byte = 0; byte < stride; ++byte)
+          if (row[byte] != 0)
+            for (unsigned bit = 0; bit < 8; ++bit)
+              if ((row[byte] >> bit) & 1u) others[8 * byte + bit] |= std::uint64_t{1} << r;
+      }
+      for (std::size_t q = 0; q < owned_.size(); ++q) {
+        if (bin_of[q] == ShellBins::kNone) continue;
+        std::uint64_t m = bins.around(bin_of[q], others.data(), near) | (std::uint64_t{1} << dest[q]);
+        m &= ~(std::uint64_t{1} << me);
+        for (; m != 0; m &= m - 1) shell[static_cast<std::size_t>(std::countr_zero(m))].push_back(owned_[q]);
+      }
+    }
+    for (std::size_t q = 0; q < owned_.size() && ranks > 64; ++q) {
       if (bin_of[q] == ShellBins::kNone) continue;
       bins.neighbours(bin_of[q], near);
       std::fill(to.begin(), to.end(), 0);
