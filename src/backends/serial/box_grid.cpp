@@ -9,38 +9,52 @@ namespace trubal {
 void BoxGrid::fill(const Balls& balls, double min_size, const std::array<int, 3>& asked) {
   const std::size_t n = balls.size();
   shape_.fit(balls, min_size, asked);
-  head_.assign(shape_.count(), -1);
-  next_.assign(n, -1);
-  cell_.assign(n, 0);
-  // Hang balls in descending order so each list runs in ascending index order.
-  for (std::size_t k = n; k-- > 0;) {
-    const int c = shape_.box_of(balls, k);
-    cell_[k] = c;
-    next_[k] = head_[c];
-    head_[c] = static_cast<int>(k);
+  const std::size_t boxes = shape_.count();
+  cell_.resize(n);
+  start_.assign(boxes + 1, 0);
+  for (std::size_t k = 0; k < n; ++k) {
+    cell_[k] = shape_.box_of(balls, k);
+    ++start_[static_cast<std::size_t>(cell_[k]) + 1];
+  }
+  for (std::size_t b = 0; b < boxes; ++b) start_[b + 1] += start_[b];
+  order_.resize(n);
+  x_.resize(n); y_.resize(n); z_.resize(n); r_.resize(n);
+  std::vector<std::uint32_t> next(start_.begin(), start_.end() - 1);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t e = next[static_cast<std::size_t>(cell_[k])]++;
+    order_[e] = static_cast<std::uint32_t>(k);
+    x_[e] = balls.x[k]; y_[e] = balls.y[k]; z_[e] = balls.z[k]; r_[e] = balls.rad[k];
   }
 }
 
 void BoxGrid::find_pairs(const Balls& balls, double skin, PairCandidates& out, std::size_t i_begin,
                          std::size_t i_end) const {
   out.clear();
-  std::vector<std::uint32_t> near;
+  // Each candidate goes to the next slot, which counts only where it is a pair (no branch on the
+  // test); then the pairs of ball i in ascending j.
+  std::vector<std::uint32_t> near(64);
+  const auto& dims = shape_.dims;
   for (std::size_t i = i_begin; i < std::min(i_end, balls.size()); ++i) {
-    const auto& dims = shape_.dims;
     const int c = cell_[i];
     const int cx = c % dims[0], cy = (c / dims[0]) % dims[1], cz = c / (dims[0] * dims[1]);
-    near.clear();
+    const double xi = balls.x[i], yi = balls.y[i], zi = balls.z[i], ri = balls.rad[i];
+    const int x0 = std::max(0, cx - 1), x1 = std::min(dims[0] - 1, cx + 1);
+    std::size_t hits = 0;
     for (int z = std::max(0, cz - 1); z <= std::min(dims[2] - 1, cz + 1); ++z)
-      for (int y = std::max(0, cy - 1); y <= std::min(dims[1] - 1, cy + 1); ++y)
-        for (int x = std::max(0, cx - 1); x <= std::min(dims[0] - 1, cx + 1); ++x)
-          for (int j = head_[(z * dims[1] + y) * dims[0] + x]; j >= 0; j = next_[j]) {
-            if (static_cast<std::size_t>(j) <= i) continue;
-            const double dx = balls.x[j] - balls.x[i], dy = balls.y[j] - balls.y[i], dz = balls.z[j] - balls.z[i];
-            const double reach = balls.rad[i] + balls.rad[j] + skin;
-            if (dx * dx + dy * dy + dz * dz < reach * reach) near.push_back(static_cast<std::uint32_t>(j));
-          }
-    std::sort(near.begin(), near.end());
-    for (std::uint32_t j : near) out.push(static_cast<std::uint32_t>(i), j);
+      for (int y = std::max(0, cy - 1); y <= std::min(dims[1] - 1, cy + 1); ++y) {
+        const std::size_t row = (static_cast<std::size_t>(z) * dims[1] + y) * dims[0];
+        const std::uint32_t e0 = start_[row + x0], e1 = start_[row + x1 + 1];
+        if (near.size() < hits + (e1 - e0)) near.resize(2 * (hits + (e1 - e0)));
+        for (std::uint32_t e = e0; e < e1; ++e) {
+          const std::uint32_t j = order_[e];
+          const double dx = x_[e] - xi, dy = y_[e] - yi, dz = z_[e] - zi;
+          const double reach = ri + r_[e] + skin;
+          near[hits] = j;
+          hits += static_cast<std::size_t>((j > i) & (dx * dx + dy * dy + dz * dz < reach * reach));
+        }
+      }
+    std::sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(hits));
+    for (std::size_t h = 0; h < hits; ++h) out.push(static_cast<std::uint32_t>(i), near[h]);
   }
 }
 

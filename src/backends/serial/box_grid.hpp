@@ -1,8 +1,11 @@
-// Boxes (cells) over the balls' bounding box, with a linked list of balls per box (head/next, as
-// TRUBAL kept them), and the candidate pairs they give.
+// Boxes (cells) over the balls' bounding box, and the candidate pairs they give. TRUBAL hung the
+// balls of a box on a linked list (head/next); here they are sorted by box (a counting sort, each
+// box's balls in ascending index), so that the three boxes along x around a ball are one run of
+// that order, read in one loop.
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "backends/grid_shape.hpp"
@@ -26,7 +29,10 @@ class BoxGrid {
 
  private:
   GridShape shape_;
-  std::vector<int> head_, next_, cell_;   // first ball of each box; next ball in the same box
+  std::vector<int> cell_;                 // each ball's box
+  std::vector<std::uint32_t> start_;      // box b's balls are order_[start_[b], start_[b + 1])
+  std::vector<std::uint32_t> order_;      // the balls by box
+  std::vector<double> x_, y_, z_, r_;     // their places and radii in that order
 };
 
 }  // namespace trubal
