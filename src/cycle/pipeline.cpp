@@ -36,6 +36,14 @@ constexpr std::size_t kParallelBalls = 8192;
 // half its pairs across: in space 1.6x one thread, by numbers no faster than one).
 constexpr std::size_t kSpaceBalls = 4096;
 constexpr double kSpaceCross = 0.25;
+// From kSpaceLarge balls on, the threads share in space however well the balls are numbered: each
+// part's balls, pairs and sums are then compact arrays of its own. Measured at two sizes only
+// (Intel(R) Xeon(R) Processor, 2 threads, the peers' dense FCC block numbered in lattice order,
+// 2026-12-04): 13,500 balls, the same time either way (1.89-2.00 s against 1.91-2.02 s for 2000
+// steps); 108,000 balls, 2.33-2.41 s in space against 2.70-2.84 s by numbers for 300 steps, at
+// 256 MiB peak against 216 MiB (the parts are copies). Such steps are not timed against one
+// thread (below, in step()).
+constexpr std::size_t kSpaceLarge = 50000;
 
 // PRINT info's "last step shared by" where such a scene's steps are timed faster on one thread.
 constexpr const char* kOneThread = "one thread (sharing the steps in space was timed slower)";
@@ -102,6 +110,7 @@ bool Pipeline::threads_in_space(const Model& model) {
   const std::size_t n = model.balls.size();
   space_verdict_ = false;
   if (n < kSpaceBalls || c.size() == 0) return false;
+  if (n >= kSpaceLarge) return space_verdict_ = true;
   const int parts = static_cast<int>(bricks_.size());
   std::vector<std::uint16_t> range(n);   // (BACKEND allows up to 4096 threads)
   for (int t = 0; t < parts; ++t)
@@ -439,8 +448,12 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
     if (!bricks().live_for(model) && (!fresh_ || model_ != &model)) prepare(model);
     if (bricks().live_for(model) || threads_in_space(model)) {
       // In space, or on one thread where sharing it was timed slower (cycle/timed_choice.hpp).
+      // (Not timed from kSpaceLarge balls on: each switch between one thread and the parts makes
+      // the parts afresh, 0.2 s at 108,000 balls, four times in a trial; and a shared step where
+      // one thread would have been faster costs only a few percent, timed_choice.hpp.)
       const bool timed = split_rule.load(std::memory_order_relaxed) == 0 &&
-                         ParallelStep::share_rule.load(std::memory_order_relaxed) == 0;
+                         ParallelStep::share_rule.load(std::memory_order_relaxed) == 0 &&
+                         model.balls.size() < kSpaceLarge;
       const bool in_space = !timed || space_choice_.shared_now(model.balls.size(), pool_.size());
       one_thread_ = !in_space;
       if (in_space) {

@@ -196,6 +196,31 @@ TEST_CASE("backends: the split in space falls back to one thread where the trial
   }
 }
 
+TEST_CASE("backends: a large scene shares the step in space however it is numbered and untimed with the serial bits",
+          "[backends]") {
+  // 50,784 balls numbered layer by layer (few pairs across a split by numbers): from kSpaceLarge
+  // (50,000) balls the threads share in space anyway, each part compact, and without the timed
+  // trial against one thread (each switch would make the parts afresh). The in-space steps counted
+  // 1000 times slower: a trial would give the steps to one thread, so the verdict shows none ran.
+  const Scene scene = fcc_compression(24, 23, 23, false);
+  REQUIRE(scene.model.balls.size() >= 50000);
+  constexpr int kCycles = 12;
+  const Model serial_model = run(scene, "serial", 1, kCycles);
+  const ShareRule share(0);
+  const SplitRule split(0);
+  Pipeline::space_time_scale_for_test = 1000.0;
+  Model model = scene.model;
+  auto threaded = make_pipeline("threaded", 2);
+  const bool done = run_cycles(model, *threaded, kCycles, {}).done == kCycles;
+  Pipeline::space_time_scale_for_test = 1.0;
+  REQUIRE(done);
+  CHECK(difference(picture(serial_model), picture(model)) == "");
+  std::map<std::string, std::string> info;
+  for (const auto& [name, value] : threaded->info()) info[name] = value;
+  CHECK(info["last step shared by"] == "the spatial decomposition, a part per thread");
+  CHECK(threaded->counters().threads_used == 2);
+}
+
 TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewer balls), same answer", "[backends]") {
   // Member 1's work counted three times slower (BrickStep::slow_member_for_test, as a core the
   // machine slows would be): from the second decomposition on, its share of the balls falls below
