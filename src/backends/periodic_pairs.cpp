@@ -54,13 +54,6 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
     std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
     for (std::size_t k = 0; k < n; ++k) order[next[cell[k]]++] = static_cast<std::uint32_t>(k);
   }
-  // The places and radii in bin order, so that a bin's candidates are read from one run of memory.
-  std::vector<double> bin_x(n), bin_y(n), bin_z(n), bin_r(n);
-  for (std::size_t e = 0; e < n; ++e) {
-    const std::uint32_t k = order[e];
-    bin_x[e] = b.x[k]; bin_y[e] = b.y[k]; bin_z[e] = b.z[k]; bin_r[e] = b.rad[k];
-  }
-  const double *bx = bin_x.data(), *by = bin_y.data(), *bz = bin_z.data(), *br = bin_r.data();
   struct Hit { std::uint32_t j; std::int8_t ix, iy, iz; };
   const bool few_cells = dims[0] < 3 || dims[1] < 3 || dims[2] < 3;
   // Ball i's pairs, in ascending j.
@@ -132,9 +125,9 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
             if (near.size() < hits + (e1 - e0)) near.resize(2 * (hits + (e1 - e0)));
             for (std::uint32_t e = e0; e < e1; ++e) {
               const std::uint32_t j = order[e];
-              const double ddx = image_delta(bx[e], xi, ox), ddy = image_delta(by[e], yi, oy),
-                           ddz = image_delta(bz[e], zi, oz);
-              const double reach = ri + br[e] + skin;
+              const double ddx = image_delta(b.x[j], xi, ox), ddy = image_delta(b.y[j], yi, oy),
+                           ddz = image_delta(b.z[j], zi, oz);
+              const double reach = ri + b.rad[j] + skin;
               near[hits] = {j, ix, iy, iz};
               hits += static_cast<std::size_t>((j > i) & (ddx * ddx + ddy * ddy + ddz * ddz < reach * reach));
             }

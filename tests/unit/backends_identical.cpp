@@ -75,6 +75,34 @@ void check_scene(const Scene& scene, bool all_variants = true) {
   }
 }
 
+// `scene` on the threaded backend (2 threads) for `cycles` steps with a test hook set for the run
+// (`set` sets it, `reset` puts it back whatever happens): the bits must be serial_model's. Returns
+// PRINT info's lines and the threads the last step used.
+struct ThreadedRun {
+  std::map<std::string, std::string> info;
+  int threads_used = 0;
+};
+template <class Set, class Reset>
+ThreadedRun run_threaded(const Scene& scene, const Model& serial_model, int cycles, Set&& set, Reset&& reset) {
+  Model model = scene.model;
+  auto threaded = make_pipeline("threaded", 2);
+  set();
+  bool done = false;
+  try {
+    done = run_cycles(model, *threaded, cycles, {}).done == cycles;
+  } catch (...) {
+    reset();
+    throw;
+  }
+  reset();
+  REQUIRE(done);
+  CHECK(difference(picture(serial_model), picture(model)) == "");
+  ThreadedRun r;
+  for (const auto& [name, value] : threaded->info()) r.info[name] = value;
+  r.threads_used = threaded->counters().threads_used;
+  return r;
+}
+
 }  // namespace
 
 TEST_CASE("backends: dense FCC under compression with friction, bitwise on every backend", "[backends]") {
@@ -177,21 +205,14 @@ TEST_CASE("backends: the split in space falls back to one thread where the trial
   const SplitRule split(0);
   for (double scale : {1000.0, 0.001}) {
     INFO("in-space trial steps counted " << scale << " times their time");
-    Pipeline::space_time_scale_for_test = scale;
-    Model model = scene.model;
-    auto threaded = make_pipeline("threaded", 2);
-    const bool done = run_cycles(model, *threaded, kCycles, {}).done == kCycles;
-    Pipeline::space_time_scale_for_test = 1.0;
-    REQUIRE(done);
-    CHECK(difference(picture(serial_model), picture(model)) == "");
-    std::map<std::string, std::string> info;
-    for (const auto& [name, value] : threaded->info()) info[name] = value;
+    ThreadedRun r = run_threaded(scene, serial_model, kCycles, [&] { Pipeline::space_time_scale_for_test = scale; },
+                                 [] { Pipeline::space_time_scale_for_test = 1.0; });
     if (scale > 1) {
-      CHECK(info["last step shared by"] == "one thread (sharing the steps in space was timed slower)");
-      CHECK(threaded->counters().threads_used == 1);
+      CHECK(r.info["last step shared by"] == "one thread (sharing the steps in space was timed slower)");
+      CHECK(r.threads_used == 1);
     } else {
-      CHECK(info["last step shared by"] == "the spatial decomposition, a part per thread");
-      CHECK(threaded->counters().threads_used == 2);
+      CHECK(r.info["last step shared by"] == "the spatial decomposition, a part per thread");
+      CHECK(r.threads_used == 2);
     }
   }
 }
@@ -208,17 +229,10 @@ TEST_CASE("backends: a large scene shares the step in space however it is number
   const Model serial_model = run(scene, "serial", 1, kCycles);
   const ShareRule share(0);
   const SplitRule split(0);
-  Pipeline::space_time_scale_for_test = 1000.0;
-  Model model = scene.model;
-  auto threaded = make_pipeline("threaded", 2);
-  const bool done = run_cycles(model, *threaded, kCycles, {}).done == kCycles;
-  Pipeline::space_time_scale_for_test = 1.0;
-  REQUIRE(done);
-  CHECK(difference(picture(serial_model), picture(model)) == "");
-  std::map<std::string, std::string> info;
-  for (const auto& [name, value] : threaded->info()) info[name] = value;
-  CHECK(info["last step shared by"] == "the spatial decomposition, a part per thread");
-  CHECK(threaded->counters().threads_used == 2);
+  ThreadedRun r = run_threaded(scene, serial_model, kCycles, [] { Pipeline::space_time_scale_for_test = 1000.0; },
+                               [] { Pipeline::space_time_scale_for_test = 1.0; });
+  CHECK(r.info["last step shared by"] == "the spatial decomposition, a part per thread");
+  CHECK(r.threads_used == 2);
 }
 
 TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewer balls), same answer", "[backends]") {
@@ -230,15 +244,9 @@ TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewe
   const Model serial_model = run(scene, "serial", 1, kCycles);
   const ShareRule share(1);
   const SplitRule split(1);
-  BrickStep::slow_member_for_test = 1;
-  Model model = scene.model;
-  auto threaded = make_pipeline("threaded", 2);
-  const bool done = run_cycles(model, *threaded, kCycles, {}).done == kCycles;
-  BrickStep::slow_member_for_test = -1;
-  REQUIRE(done);
-  CHECK(difference(picture(serial_model), picture(model)) == "");
-  std::map<std::string, std::string> info;
-  for (const auto& [name, value] : threaded->info()) info[name] = value;
+  ThreadedRun r = run_threaded(scene, serial_model, kCycles, [] { BrickStep::slow_member_for_test = 1; },
+                               [] { BrickStep::slow_member_for_test = -1; });
+  std::map<std::string, std::string>& info = r.info;
   INFO("decompositions made: " << info["decompositions made"] << "; shares: " << info["shares of the balls"]
                                << "; balls per thread: " << info["balls per thread"]);
   REQUIRE(std::stoi(info["decompositions made"]) >= 3);

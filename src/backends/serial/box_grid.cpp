@@ -18,13 +18,8 @@ void BoxGrid::fill(const Balls& balls, double min_size, const std::array<int, 3>
   }
   for (std::size_t b = 0; b < boxes; ++b) start_[b + 1] += start_[b];
   order_.resize(n);
-  x_.resize(n); y_.resize(n); z_.resize(n); r_.resize(n);
   std::vector<std::uint32_t> next(start_.begin(), start_.end() - 1);
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::uint32_t e = next[static_cast<std::size_t>(cell_[k])]++;
-    order_[e] = static_cast<std::uint32_t>(k);
-    x_[e] = balls.x[k]; y_[e] = balls.y[k]; z_[e] = balls.z[k]; r_[e] = balls.rad[k];
-  }
+  for (std::size_t k = 0; k < n; ++k) order_[next[static_cast<std::size_t>(cell_[k])]++] = static_cast<std::uint32_t>(k);
 }
 
 void BoxGrid::find_pairs(const Balls& balls, double skin, PairCandidates& out, std::size_t i_begin,
@@ -47,8 +42,8 @@ void BoxGrid::find_pairs(const Balls& balls, double skin, PairCandidates& out, s
         if (near.size() < hits + (e1 - e0)) near.resize(2 * (hits + (e1 - e0)));
         for (std::uint32_t e = e0; e < e1; ++e) {
           const std::uint32_t j = order_[e];
-          const double dx = x_[e] - xi, dy = y_[e] - yi, dz = z_[e] - zi;
-          const double reach = ri + r_[e] + skin;
+          const double dx = balls.x[j] - xi, dy = balls.y[j] - yi, dz = balls.z[j] - zi;
+          const double reach = ri + balls.rad[j] + skin;
           near[hits] = j;
           hits += static_cast<std::size_t>((j > i) & (dx * dx + dy * dy + dz * dz < reach * reach));
         }
