@@ -620,35 +620,26 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   together([&] {
     const std::size_t stride = marks.size();
     std::vector<std::uint32_t> near;
-    std::vector<std::uint8_t> to(ranks);
-    if (ranks <= 64) {
-      // Each bin's other ranks as the bits of a word; a ball's are the OR over its bins around.
-      std::vector<std::uint64_t> others(bins.count(), 0);
-      for (int r = 0; r < ranks; ++r) {
+    // The ranks 64 at a time (one chunk up to 64 ranks): each bin's other ranks of the chunk as the
+    // bits of a word, and a ball's as the OR of the words of its bins around, with its new owner's
+    // (which marked its bin). Each rank's shell lists its balls in this rank's order.
+    std::vector<std::uint64_t> others(bins.count());
+    for (int first = 0; first < ranks; first += 64) {
+      const int last = std::min(ranks, first + 64);
+      auto bit = [first](int r) { return std::uint64_t{1} << (r - first); };
+      std::fill(others.begin(), others.end(), 0);
+      for (int r = first; r < last; ++r) {
         if (r == me) continue;
         const std::uint8_t* row = all_marks.data() + static_cast<std::size_t>(r) * stride;
         for (std::size_t byte = 0; byte < stride; ++byte)
-          if (row[byte] != 0)
-            for (unsigned bit = 0; bit < 8; ++bit)
-              if ((row[byte] >> bit) & 1u) others[8 * byte + bit] |= std::uint64_t{1} << r;
+          for (unsigned set = row[byte]; set != 0; set &= set - 1) others[8 * byte + std::countr_zero(set)] |= bit(r);
       }
       for (std::size_t q = 0; q < owned_.size(); ++q) {
         if (bin_of[q] == ShellBins::kNone) continue;
-        std::uint64_t m = bins.around(bin_of[q], others.data(), near) | (std::uint64_t{1} << dest[q]);
-        m &= ~(std::uint64_t{1} << me);
-        for (; m != 0; m &= m - 1) shell[static_cast<std::size_t>(std::countr_zero(m))].push_back(owned_[q]);
+        std::uint64_t m = bins.around(bin_of[q], others.data(), near);
+        if (dest[q] >= first && dest[q] < last && dest[q] != me) m |= bit(dest[q]);
+        for (; m != 0; m &= m - 1) shell[static_cast<std::size_t>(first + std::countr_zero(m))].push_back(owned_[q]);
       }
-    }
-    for (std::size_t q = 0; q < owned_.size() && ranks > 64; ++q) {
-      if (bin_of[q] == ShellBins::kNone) continue;
-      bins.neighbours(bin_of[q], near);
-      std::fill(to.begin(), to.end(), 0);
-      for (std::uint32_t c : near)
-        for (int r = 0; r < ranks; ++r)
-          if (all_marks[r * stride + c / 8] & (1u << (c % 8))) to[r] = 1;
-      to[dest[q]] = 1;   // (its new owner marked its bin; said again for clarity)
-      for (int r = 0; r < ranks; ++r)
-        if (to[r] && r != me) shell[r].push_back(owned_[q]);
     }
     // A moving ball's pairs and wall contacts (this rank's part holds all of them), to its new owner.
     if (moved > 0) {

@@ -43,10 +43,11 @@ constexpr double kSpaceCross = 0.25;
 // steps); 108,000 balls, 2.33-2.41 s in space against 2.70-2.84 s by numbers for 300 steps, at
 // 256 MiB peak against 216 MiB (the parts are copies). Such steps are not timed against one
 // thread (below, in step()).
-// Up to kSpaceLargeMax balls: beyond, the parts' copies (about 0.9 KB a ball more: 1876 against
-// 1015 MiB at 1,000,188 balls of the dense block) are the larger cost, and a million balls should
-// fit in 1 GiB on the threads as in serial (issue 22).
+// Up to kSpaceLargeMax balls: beyond, the parts' copies (about 0.8 KB a ball more: 1876 against
+// 1051 MiB by numbers at 1,000,188 balls of the dense block, trubal_bench --backend threaded) are
+// the larger cost, and a million balls should stay at about 1 GiB on the threads (issue 22).
 constexpr std::size_t kSpaceLarge = 50000, kSpaceLargeMax = 500000;
+bool large_in_space(std::size_t balls) { return balls >= kSpaceLarge && balls < kSpaceLargeMax; }
 
 // PRINT info's "last step shared by" where such a scene's steps are timed faster on one thread.
 constexpr const char* kOneThread = "one thread (sharing the steps in space was timed slower)";
@@ -113,7 +114,7 @@ bool Pipeline::threads_in_space(const Model& model) {
   const std::size_t n = model.balls.size();
   space_verdict_ = false;
   if (n < kSpaceBalls || c.size() == 0) return false;
-  if (n >= kSpaceLarge && n < kSpaceLargeMax) return space_verdict_ = true;
+  if (large_in_space(n)) return space_verdict_ = true;
   const int parts = static_cast<int>(bricks_.size());
   std::vector<std::uint16_t> range(n);   // (BACKEND allows up to 4096 threads)
   for (int t = 0; t < parts; ++t)
@@ -456,7 +457,7 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
       // one thread would have been faster costs only a few percent, timed_choice.hpp.)
       const bool timed = split_rule.load(std::memory_order_relaxed) == 0 &&
                          ParallelStep::share_rule.load(std::memory_order_relaxed) == 0 &&
-                         !(model.balls.size() >= kSpaceLarge && model.balls.size() < kSpaceLargeMax);
+                         !large_in_space(model.balls.size());
       const bool in_space = !timed || space_choice_.shared_now(model.balls.size(), pool_.size());
       one_thread_ = !in_space;
       if (in_space) {
