@@ -12,7 +12,8 @@
 #
 #   bench/settle_vs_lammps.sh build/trubal [N] [STEPS]   N: 10000 (default), 100000 (the peers'
 #                                                        sizes) or another (box edge 1200 sqrt(N/1e4))
-#   env: REPS (default 3)
+#   env: REPS (default 3); RENUMBER=1 renumbers trubal's balls in space order after reading them
+#        (the peers' balls are numbered at random; LAMMPS sorts its atoms in space every 1000 steps)
 #
 # Needs LAMMPS and MPI from Debian (lammps, openmpi-bin; .ci/deps installs them) and
 # ../shared/peers. Writes only under a temporary folder.
@@ -31,7 +32,7 @@ case $N in 10000) L=1200 ;; 100000) L=3795 ;; *) L=$(python3 -c "import math; pr
 (cd "$W" && SCENES_OUT=$W python3 -c "import sys; sys.path.insert(0, sys.argv[1]); import gen_scenes; gen_scenes.settle(int(sys.argv[2]), float(sys.argv[3]))" "$PEERS" "$N" "$L") >/dev/null
 python3 "$HERE/../tests/peers/lammps_to_trubal.py" "$W/settle_$N.data" --balls "$W/balls.dat" >"$W/box.txt"
 python3 - "$W" "$STEPS" "$HERE/../tests/peers" <<'PY'
-import sys
+import os, sys
 w, steps, peers_tests = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 sys.path.insert(0, peers_tests)
 import settle_vs_lammps as s   # the peer check's dashpot match (restitutions) and scene constants
@@ -43,14 +44,16 @@ e = s.restitutions("dashpot")
 body = [f"start box 0 {x1!r} 0 {y1!r} {z0!r} {ztop!r} x periodic y periodic",
         f"prop type 1 kn 1.5e9 ks 1.5e9 mu 0.12278 dens 2000 rest {e['e_pp']!r}",
         f"prop type 2 kn 1.5e9 ks 1.5e9 mu 0.12278 rest {e['e_wall']!r}",
-        "wall id 1 plane 0 0 0 0 0 1 type 2", f"call {w}/balls.dat", "grav 0 0 -0.03", "tstep 0.04"]
+        "wall id 1 plane 0 0 0 0 0 1 type 2", f"call {w}/balls.dat"]
+body += ["renumber"] if os.environ.get("RENUMBER") == "1" else []
+body += ["grav 0 0 -0.03", "tstep 0.04"]
 for name, backend in (("serial", "backend serial"), ("threaded2", "backend threaded threads 2")):
     open(f"{w}/{name}.dat", "w").write("\n".join(body + [backend, f"cycle {steps}", "print coordination",
                                                         "print info"]) + "\n")
 PY
 LMP="lmp -in $PEERS/lammps_settle.in -var data $W/settle_$N.data -var nsteps $STEPS"
 t() { local s; s=$(date +%s.%N); "$@" >"$W/last.out" 2>&1 || { cat "$W/last.out" >&2; exit 1; }; echo "$(date +%s.%N) - $s" | bc; }
-echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; settle N=$N, $STEPS steps, $REPS interleaved runs"
+echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; settle N=$N, $STEPS steps, $REPS interleaved runs$([ "${RENUMBER:-}" = 1 ] && echo ", trubal's balls renumbered in space order")"
 "$HERE/core_speeds.sh"   # a lopsided machine shows beside its figures
 for r in $(seq "$REPS"); do
   echo "lammps_1 $(cd "$W" && t $LMP)" >>"$W/times"; cp "$W/last.out" "$W/lammps_1.out"

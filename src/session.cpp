@@ -307,6 +307,21 @@ std::size_t Session::delete_balls(const Range& range) {
   return remove_balls(edit(), remove);
 }
 
+Renumbering Session::renumber(RenumberOrder order) {
+  require_started();
+  const EnergyAtStep energy = model_.energy_at_step;
+  const double critical_dt = model_.critical_dt;
+  Renumbering r = renumber_balls(edit(), order);
+  model_.energy_at_step = energy;   // the same balls, in the same state
+  model_.critical_dt = critical_dt;
+  for (const auto& t : history_->tables()) {
+    for (auto& id : t->platen_ids) id = r.map(id);
+    std::sort(t->platen_ids.begin(), t->platen_ids.end());
+  }
+  for (auto& id : last_generated_) id = r.map(id);
+  return r;
+}
+
 std::size_t Session::define_group(const std::string& name, const Range& range) {
   make_results(model_, *pipeline_);   // groups are state the step taken again puts back: before the change
   require_started();

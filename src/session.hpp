@@ -18,6 +18,7 @@
 #include "cycle/run.hpp"
 #include "io/history.hpp"
 #include "io/vtk.hpp"
+#include "model/edit.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
 
@@ -90,6 +91,10 @@ class Session {
   std::size_t lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
                           const Range& range, Layers layers = Layers::All);
   std::size_t delete_balls(const Range& range);
+  // RENUMBER (model/edit.hpp renumber_balls): the balls get ids 1..N in space order or their present
+  // order; groups, the membrane, the histories' platens and GEN's last balls follow them. The balls
+  // themselves do not change: the last step's energies and step estimate stay the state's.
+  Renumbering renumber(RenumberOrder order);
   std::size_t define_group(const std::string& name, const Range& range);
 
   // Selected balls (ascending index), and a check that the range selects some (warning text).

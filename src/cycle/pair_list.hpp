@@ -7,17 +7,6 @@
 
 namespace trubal {
 
-// The order of a pair list (a ContactTable's or PairCandidates'): by i, then j, then image (the
-// same two balls may touch across several periodic faces in a small cell). Pair p of `a` before
-// pair q of `b`.
-template <class A, class B> bool pair_before(const A& a, std::size_t p, const B& b, std::size_t q) {
-  if (a.i[p] != b.i[q]) return a.i[p] < b.i[q];
-  if (a.j[p] != b.j[q]) return a.j[p] < b.j[q];
-  if (a.image_x[p] != b.image_x[q]) return a.image_x[p] < b.image_x[q];
-  if (a.image_y[p] != b.image_y[q]) return a.image_y[p] < b.image_y[q];
-  return a.image_z[p] < b.image_z[q];
-}
-
 // Makes `pairs` the contact table's pair list. Everything the old table knew about a pair (shear
 // history above all) follows the pair: both lists are sorted by ball index, which is id order, so
 // one merge matches them by the pair of ids (and image). New pairs start with zeros. The table

@@ -1,6 +1,8 @@
 #include "model/edit.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -106,6 +108,132 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   for (auto& [name, ids] : model.groups)
     std::erase_if(ids, [&](std::int64_t id) { return find_ball(model, id) < 0; });
   return removed;
+}
+
+namespace {
+
+// Spreads the low 21 bits of v to every third bit (bit b to bit 3b): one axis of a Morton code.
+std::uint64_t spread3(std::uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffull;
+  v = (v | v << 16) & 0x1f0000ff0000ffull;
+  v = (v | v << 8) & 0x100f00f00f00f00full;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+  v = (v | v << 2) & 0x1249249249249249ull;
+  return v;
+}
+
+// The order of the balls in space: Morton order of cells `cell` wide from the lowest centre, ties
+// (one cell) by index; a ball with a centre not finite goes last.
+std::vector<std::size_t> space_order(const Balls& b, double cell) {
+  const std::size_t n = b.size();
+  std::array<double, 3> lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::infinity()};
+  const std::vector<double>* axes[3] = {&b.x, &b.y, &b.z};
+  for (int a = 0; a < 3; ++a)
+    for (double v : *axes[a])
+      if (std::isfinite(v)) lo[a] = std::min(lo[a], v);
+  constexpr double kTop = 0x1fffff;   // 21 bits an axis
+  std::vector<std::uint64_t> key(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    std::uint64_t code = 0;
+    bool finite = true;
+    for (int a = 0; a < 3; ++a) {
+      const double v = (*axes[a])[k];
+      if (!std::isfinite(v)) { finite = false; break; }
+      const double c = std::min(std::floor((v - lo[a]) / cell), kTop);
+      code |= spread3(static_cast<std::uint64_t>(c)) << a;
+    }
+    key[k] = finite ? code : ~std::uint64_t{0};
+  }
+  std::vector<std::size_t> order(n);
+  for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return key[p] < key[q]; });
+  return order;
+}
+
+// Puts every array of `f`'s visitor in the order `order` (new position k holds old element
+// order[k]); arrays of another length (results not kept) are left alone.
+template <class Visit>
+void permute_arrays(Visit&& visit, const std::vector<std::size_t>& order) {
+  visit([&](auto& v) {
+    if (v.size() != order.size()) return;
+    std::decay_t<decltype(v)> out(v.size());
+    for (std::size_t k = 0; k < order.size(); ++k) out[k] = v[order[k]];
+    v.swap(out);
+  });
+}
+
+}  // namespace
+
+std::int64_t Renumbering::map(std::int64_t old) const {
+  const auto it = std::lower_bound(old_ids.begin(), old_ids.end(), old);
+  return it != old_ids.end() && *it == old ? new_ids[it - old_ids.begin()] : 0;
+}
+
+Renumbering renumber_balls(Model& model, RenumberOrder how) {
+  Balls& b = model.balls;
+  const std::size_t n = b.size();
+  Renumbering r;
+  r.old_ids = b.id;
+  std::vector<std::size_t> order(n);
+  if (how == RenumberOrder::Space) {
+    const double diameter = 2 * b.max_radius();
+    r.cell = std::isfinite(diameter) && diameter > 0 ? diameter : 1.0;
+    order = space_order(b, r.cell);
+  } else {
+    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  }
+  std::vector<std::uint32_t> new_index(n);
+  for (std::size_t k = 0; k < n; ++k) new_index[order[k]] = static_cast<std::uint32_t>(k);
+  r.new_ids.resize(n);
+  for (std::size_t k = 0; k < n; ++k) r.new_ids[k] = static_cast<std::int64_t>(new_index[k]) + 1;
+
+  permute_arrays([&](auto&& f) { b.for_each_array(f); }, order);
+  for (std::size_t k = 0; k < n; ++k) b.id[k] = static_cast<std::int64_t>(k) + 1;
+
+  // The pair list: each pair in the new indices, turned round where its balls changed order (the
+  // shear force on j, the normal from i to j, the force on j and j's image all change sign; the
+  // moment term n x shear force does not), then sorted as a list is (pair_before's order).
+  ContactTable& c = model.contacts;
+  const bool results = c.results_kept();
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    std::uint32_t i = new_index[c.i[p]], j = new_index[c.j[p]];
+    if (i > j) {
+      std::swap(i, j);
+      for (auto* v : {&c.image_x, &c.image_y, &c.image_z}) (*v)[p] = static_cast<std::int8_t>(-(*v)[p]);
+      for (auto* v : {&c.fsx, &c.fsy, &c.fsz}) (*v)[p] = -(*v)[p];
+      if (results)
+        for (auto* v : {&c.nx, &c.ny, &c.nz, &c.fx, &c.fy, &c.fz}) (*v)[p] = -(*v)[p];
+    }
+    c.i[p] = i;
+    c.j[p] = j;
+  }
+  std::vector<std::size_t> pairs(c.size());
+  for (std::size_t p = 0; p < pairs.size(); ++p) pairs[p] = p;
+  std::stable_sort(pairs.begin(), pairs.end(), [&](std::size_t p, std::size_t q) { return pair_before(c, p, c, q); });
+  permute_arrays([&](auto&& f) { c.for_each_pair_array(f); }, pairs);
+  c.list_version = 0;   // a list nobody has indexed
+
+  WallContacts& w = model.wall_contacts;
+  for (std::size_t p = 0; p < w.size(); ++p) {
+    w.ball[p] = new_index[w.ball[p]];
+    w.ball_id[p] = static_cast<std::int64_t>(w.ball[p]) + 1;
+  }
+  std::vector<std::size_t> walls(w.size());
+  for (std::size_t p = 0; p < walls.size(); ++p) walls[p] = p;
+  std::stable_sort(walls.begin(), walls.end(), [&](std::size_t p, std::size_t q) {
+    return w.ball[p] != w.ball[q] ? w.ball[p] < w.ball[q] : w.wall[p] < w.wall[q];
+  });
+  permute_arrays([&](auto&& f) { w.for_each_array(f); }, walls);
+  w.list_version = 0;
+
+  for (auto& [name, ids] : model.groups) {
+    for (auto& id : ids) id = r.map(id);
+    std::sort(ids.begin(), ids.end());
+  }
+  for (auto& id : model.membrane.ids) id = r.map(id);
+  return r;
 }
 
 }  // namespace trubal

@@ -24,4 +24,23 @@ void reindex_wall_contacts(Model& model);
 // Index of the ball with this id, or -1.
 std::int64_t find_ball(const Model& model, std::int64_t id);
 
+
+// RENUMBER: the balls get the ids 1..N, in space order (the Morton order of cells one largest
+// diameter wide, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins) or in their present
+// order. Storage order is id order, so the balls' arrays are permuted with them: neighbours in space
+// become neighbours in memory, which the contact loop reads faster. Everything the model keeps by
+// index or by id follows its ball: the pair list (a pair whose balls change order is turned round:
+// its shear history, normal, force and image change sign, so the physics is the same), the wall
+// contacts, groups and the membrane's balls. The caller renumbers what it keeps of its own (Session:
+// histories' platens, GEN's last balls) through the returned map.
+enum class RenumberOrder { Space, Present };
+struct Renumbering {
+  std::vector<std::int64_t> old_ids;   // the ids before, ascending (by old index)
+  std::vector<std::int64_t> new_ids;   // the new id of the ball at each old index
+  double cell = 0;                     // the cells' width (space order)
+  // The new id of the ball that had id `old`, or 0 where no ball had it.
+  std::int64_t map(std::int64_t old) const;
+};
+Renumbering renumber_balls(Model& model, RenumberOrder order);
+
 }  // namespace trubal

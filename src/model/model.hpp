@@ -124,6 +124,17 @@ struct ContactTable {
   }
 };
 
+// The order of a pair list (a ContactTable's or PairCandidates'): by i, then j, then image (the
+// same two balls may touch across several periodic faces in a small cell). Pair p of `a` before
+// pair q of `b`.
+template <class A, class B> bool pair_before(const A& a, std::size_t p, const B& b, std::size_t q) {
+  if (a.i[p] != b.i[q]) return a.i[p] < b.i[q];
+  if (a.j[p] != b.j[q]) return a.j[p] < b.j[q];
+  if (a.image_x[p] != b.image_x[q]) return a.image_x[p] < b.image_x[q];
+  if (a.image_y[p] != b.image_y[q]) return a.image_y[p] < b.image_y[q];
+  return a.image_z[p] < b.image_z[q];
+}
+
 // What the servo reads of a force pass, summed by the contact loops: sum of F (x) l (symmetric part,
 // xx yy zz xy xz yz) and of k_n l_a^2 over the touching pairs, l the branch vector i -> j.
 struct ContactMoments {

@@ -163,6 +163,29 @@ print info
   }
 }
 
+TEST_CASE("distributed: RENUMBER mid-run gives the serial bits on 2 and 3 ranks", "[mpi]") {
+  // Every rank renumbers its whole model alike (model/edit.hpp renumber_balls), and the next CYCLE
+  // makes the parts from the new numbers: contacts turned round keep their history on every copy.
+  if (!have_mpi()) return;
+  const std::string deck = scrambled_settle_deck() + "cycle 150\nrenumber\ncycle 150\n" + kOutputs;
+  TempDir serial;
+  serial.write("deck.dat", deck);
+  REQUIRE(run_deck(serial, 0) == 0);
+  const std::string contacts = slurp(serial.path() / "contacts.csv");
+  REQUIRE(lines_of(contacts).size() > 500);
+  for (int ranks : {2, 3}) {
+    TempDir dir;
+    dir.write("deck.dat", "backend mpi\n" + deck + "print info\n");
+    REQUIRE(run_deck(dir, ranks) == 0);
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(ranks << " ranks\n" << out);
+    CHECK_THAT(out, Catch::Contains("384 balls renumbered 1 to 384 in space order"));
+    CHECK_THAT(out, Catch::Contains("last step shared by: the spatial decomposition"));
+    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+    CHECK(slurp(dir.path() / "contacts.csv") == contacts);
+  }
+}
+
 TEST_CASE("distributed: a fast gas crossing the periodic faces for 10,000 steps keeps the serial bits", "[mpi]") {
   // Balls at 3 to 7 m/s, about ten of their radii per thousand steps, in a cell a few diameters wide: every
   // ball crosses the faces (and, in a decomposition, the ranks' boundaries) many times, and the

@@ -1,6 +1,10 @@
 // Decks that more than one test file runs.
 #pragma once
 
+#include <fmt/format.h>
+
+#include <string>
+
 namespace trubal::test {
 
 // A loose periodic assembly compressed by the servo, then loaded under the mixed servo (xx, yy held)
@@ -15,5 +19,26 @@ cycle 3000
 servo xx 1e5 yy 1e5
 strain zz 2 xy 1
 )";
+
+// 384 balls on a jittered 8 x 8 x 6 grid, overlapping a little, numbered at random (id 7919 k mod
+// 384, plus one, for the k-th place), in a box periodic in x and y over a floor wall: gravity,
+// friction and local damping, contacts across the periodic faces. For RENUMBER (renumber.cpp).
+inline std::string scrambled_settle_deck() {
+  std::string deck = R"(start box 0 316 0 316 -25 400 x periodic y periodic
+prop kn 1.5e9 ks 1.5e9 fric 20 dens 2000
+prop type 2 kn 1.5e9 ks 1.5e9 fric 15
+wall id 1 plane 0 0 -1 0 0 1 type 2
+)";
+  const int n = 8 * 8 * 6;
+  int k = 0;
+  for (int c = 0; c < 6; ++c)
+    for (int b = 0; b < 8; ++b)
+      for (int a = 0; a < 8; ++a, ++k) {
+        const double jitter = 0.3 * ((k * 37 % 11) - 5) / 5.0;
+        deck += fmt::format("ball {} {} {} 20 id {}\n", 19.75 + 39.5 * a + jitter, 19.75 + 39.5 * b - 0.7 * jitter,
+                            19.2 + 39.2 * c + 0.5 * jitter, static_cast<long>(k) * 7919 % n + 1);
+      }
+  return deck + "grav 0 0 -1\ndamp local 0.2\n";
+}
 
 }  // namespace trubal::test
