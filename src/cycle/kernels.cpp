@@ -77,7 +77,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const PairInputs in(model);
   const bool periodic = in.periodic;
   const double dt = k.dt, beta = k.beta;
-  const PairLaw& one_law = k.laws.table[0];
+  const PairLaw& one_law = k.laws.table[std::max(k.laws.ball_pair_law, 0)];
   // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
   // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
@@ -172,7 +172,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
 template <ContactFeatures F>
 void contact_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
                   std::size_t own_end) {
-  if (k.laws.type_count == 1) contact_range<F, true>(model, scratch, k, begin, end, own_end);
+  if (k.laws.one_ball_law()) contact_range<F, true>(model, scratch, k, begin, end, own_end);
   else contact_range<F, false>(model, scratch, k, begin, end, own_end);
 }
 
@@ -191,7 +191,8 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   if (pair_count == 0) return;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
   const PairInputs in(model);
-  const bool one_law = k.laws.type_count == 1;
+  const bool one_law = k.laws.one_ball_law();
+  const PairLaw& law = k.laws.table[std::max(k.laws.ball_pair_law, 0)];
   ContactBatch B;
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
   for (std::size_t q0 = 0; q0 < pair_count; q0 += kBatch) {
@@ -205,8 +206,8 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       }
     }
     // The new history is the owner's to write: here it goes to a scratch copy, unread.
-    if (one_law) contact_forces<F, true>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
-    else contact_forces<F, false>(B, count, k.laws.table[0], k.dt, k.beta, hx, hy, hz, ox, oy, oz);
+    if (one_law) contact_forces<F, true>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz);
+    else contact_forces<F, false>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];
       PairForce& fj = scratch.ball_force[j];

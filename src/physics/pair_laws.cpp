@@ -79,6 +79,12 @@ PairLaws make_pair_laws(const Model& model) {
     k.alone_ks.push_back(m.hertz() ? 0 : m.ks);
     k.alone_xi.push_back(k.table[k.alone_xi.size() * (types.size() + 1)].rest_xi);
   }
+  if (k.type_count == 1) {
+    k.ball_pair_law = 0;
+  } else if (!k.ball_type.empty() &&
+             std::all_of(k.ball_type.begin(), k.ball_type.end(), [&](std::uint16_t t) { return t == k.ball_type[0]; })) {
+    k.ball_pair_law = k.ball_type[0] * (k.type_count + 1);
+  }
   return k;
 }
 

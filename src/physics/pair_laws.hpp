@@ -18,6 +18,10 @@ struct PairLaws {
   std::vector<PairLaw> table;               // by pair of compact indices (type_count^2 entries)
   // A ball without contacts counts as touching one ball of its own kind (per compact type).
   std::vector<double> alone_kn, alone_ks, alone_xi;
+  // Where every ball is of one type (walls may be of others): the index in `table` of the law of
+  // every ball pair, which the contact loops then take once instead of per pair; -1 otherwise.
+  int ball_pair_law = -1;
+  bool one_ball_law() const { return ball_pair_law >= 0; }
 
   const PairLaw& law(std::size_t i, std::size_t j) const {
     return type_count == 1 ? table[0] : table[ball_type[i] * type_count + ball_type[j]];

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "interp_support.hpp"
+#include "scene_decks.hpp"
 #include "model/wall_shape.hpp"
 #include "physics/measure.hpp"
 #include "physics/walls.hpp"
@@ -270,4 +271,29 @@ TEST_CASE("walls: adding or deleting a wall keeps the wall contacts consistent, 
   CHECK(c.fsx[0] != 0);   // the sliding ball's shear history came through
   REQUIRE(h.deck("cycle 5\nwall id 1 delete\nsave b.sav\nrestart b.sav\nwall id 5 delete\nsave c.sav\nrestart c.sav\n"));
   CHECK(h.session.model().wall_contacts.size() == 0);
+}
+
+TEST_CASE("walls: balls of one type beside walls of another take the one-law kernel with the same bits", "[walls]") {
+  // Where every ball is of one type the contact loops take the ball pairs' law once
+  // (PairLaws::ball_pair_law) rather than per pair; a second type among the balls (one held ball far
+  // from the rest, touching nothing) sends the same pairs through the per-pair lookup. The two must
+  // agree to the bit: the same law, the same arithmetic.
+  auto run = [](const std::string& extra) {
+    TempDir dir;
+    WorkingDir cd(dir.path());
+    Harness h;
+    // The balls of type 3 (the third law of the table's row and column), of their own friction.
+    std::string deck = test::scrambled_settle_deck();
+    for (std::size_t at = 0; (at = deck.find(" 20 id ", at)) != std::string::npos; at += 10) deck.replace(at, 7, " 20 type 3 id ");
+    const bool ok = h.deck(deck + "prop type 3 kn 1.5e9 ks 1.2e9 fric 25 dens 2000\ntstep 0.02\n" + extra +
+                           "cycle 400\nprint balls file balls.csv range id 1 384\nprint contacts file contacts.csv\n");
+    INFO(h.err.str());
+    REQUIRE(ok);
+    return std::pair{slurp("balls.csv"), slurp("contacts.csv")};
+  };
+  const auto one = run("");
+  const auto two = run("ball 150 150 390 5 id 1000 type 1\nfix vel spin range id 1000\n");
+  REQUIRE(lines_of(one.second).size() > 500);
+  CHECK(one.first == two.first);
+  CHECK(one.second == two.second);
 }
