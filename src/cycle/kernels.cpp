@@ -7,6 +7,7 @@
 #include "physics/timestep.hpp"
 #include "physics/walls.hpp"
 
+#include <bit>
 #include <utility>
 
 namespace trubal {
@@ -298,151 +299,215 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
   for (int a = 0; a < 3; ++a) sums.stiffness_moment[a].add(m[6 + a]);
 }
 
+// `a` where `take`, else `b`, as bits: both are made, so g++ cannot sink either's arithmetic into a
+// branch (which it did with ?:, and which keeps the loop below from vectorising).
+[[gnu::always_inline]] inline double pick(bool take, double a, double b) {
+  const std::uint64_t mask = take ? ~std::uint64_t{0} : std::uint64_t{0};
+  return std::bit_cast<double>((std::bit_cast<std::uint64_t>(a) & mask) | (std::bit_cast<std::uint64_t>(b) & ~mask));
+}
+// One ball's sums of the law of motion, over its components.
+struct MotionSums {
+  double boundary, boundary_ahead, damping, damping_ahead, kinetic;
+};
+// The step's constants a lane reads, copied out of StepKernels (read through a reference, they were
+// loaded again after every store of the loop, which kept it from vectorising).
+struct LaneConstants {
+  double dt, half_dt, local, alpha;
+  double keep, shrink;   // mass-proportional damping, factor form: v' = (v keep + F/m dt) shrink
+};
+// One velocity component by the law of motion, for a block of balls at once: written with selects
+// rather than branches, so that the compiler vectorises the block's loop; each lane does the
+// arithmetic the ball always had (a fixed component keeps its velocity and charges the boundary with
+// its force's work; a free one moves, damped as the scene says). `fixed` selects per lane.
+// Kinetic energy at t as m v(t - dt/2) v(t + dt/2) / 2: with the spring energy and the potential at
+// t this is the quantity central differences conserve exactly for a linear spring (and free fall),
+// so the guard sees no false imbalance from a stable step however coarse it is. Its change over a
+// step is (F(t - dt) + F(t)) / 2 . v(t - dt/2) dt, so a force F(t) other than the springs' does the
+// work F(t) . v(t) dt, v(t) = (v(t - dt/2) + v(t + dt/2)) / 2, of which the part F(t) . v(t + dt/2)
+// dt/2 lies after t (the aheads).
+template <MotionFeatures M>
+[[gnu::always_inline]] inline double advance_lane(double force, double applied, double v, double inv_m, double m,
+                                                  bool fixed, const LaneConstants c, MotionSums& s) {
+  constexpr DampKind kDamp = M.damping;
+  const double dt = c.dt, half_dt = c.half_dt, keep = c.keep, shrink = c.shrink;
+  double f = force;
+  if constexpr (kDamp == DampKind::Local) {
+    const double reduce = c.local * std::abs(force);
+    const double less = force - reduce, more = force + reduce;   // (both made: selects, no branches)
+    f = pick(v > 0, less, pick(v < 0, more, force));
+  }
+  const double v_free = kDamp == DampKind::Rayleigh ? (v * keep + f * inv_m * dt) * shrink : v + f * inv_m * dt;
+  const double v_mid = 0.5 * (v + v_free);
+  // Fixed: the force's work (less the applied load's) is the boundary's, the velocity kept.
+  const double work = -(force - applied) * v * dt;
+  double boundary = s.boundary, boundary_ahead = s.boundary_ahead;
+  if constexpr (M.loads) {
+    boundary += applied * v_mid * dt;
+    boundary_ahead += applied * v_free * half_dt;
+  }
+  const double boundary_fixed = s.boundary + work, boundary_ahead_fixed = s.boundary_ahead + 0.5 * work;
+  s.boundary = pick(fixed, boundary_fixed, boundary);
+  s.boundary_ahead = pick(fixed, boundary_ahead_fixed, boundary_ahead);
+  if constexpr (kDamp != DampKind::None) {
+    const double drag = kDamp == DampKind::Local ? force - f : c.alpha * m * v_mid;
+    const double damping = s.damping + drag * v_mid * dt, damping_ahead = s.damping_ahead + drag * v_free * half_dt;
+    s.damping = pick(fixed, s.damping, damping);
+    s.damping_ahead = pick(fixed, s.damping_ahead, damping_ahead);
+  }
+  const double v_new = pick(fixed, v, v_free);
+  s.kinetic += 0.5 * m * v * v_new;
+  return v_new;
+}
+
+// Balls [b0, b0 + n) of a motion loop: moves them and writes each one's terms of the global sums
+// (terms[t][q], Term order) and its speed^2 (|v|^2 + |R w|^2) for the fastest ball. A ghost (a
+// ball another rank or thread moves, kGhosts) is left as it is, its terms 0 and its speed -1.
+enum MotionTerm { kFriction, kStrain, kImage, kKinetic, kSpin, kBoundary, kPotential, kDamping, kBoundaryAhead,
+                  kDampingAhead, kTerms };
+inline constexpr std::size_t kTermBlock = 128;
+template <MotionFeatures M, bool kGhosts>
+void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, std::size_t b0, std::size_t n,
+                  double (*__restrict terms)[kTermBlock], double* __restrict speed2) {
+  constexpr bool kRot = M.rotation, kLoads = M.loads, kWriteForces = M.write_forces;
+  const double dt = k.dt;
+  // Mass-proportional damping, factor form: v' = (v (1 - a dt/2) + F/m dt) / (1 + a dt/2).
+  const LaneConstants c{dt, 0.5 * dt, k.local, k.alpha, 1 - 0.5 * k.alpha * dt, 1 / (1 + 0.5 * k.alpha * dt)};
+  const double gx = k.gravity[0], gy = k.gravity[1], gz = k.gravity[2];
+  // The block's contact sums and parts, one array each (the structs' fields apart, so that the
+  // loop below reads contiguous lanes).
+  alignas(64) double cf[6][kTermBlock], pt[7][kTermBlock];
+  // The fixities and ghost flags as 64-bit lanes, the width of the doubles they select between (a
+  // byte beside doubles keeps g++ 12 from vectorising the loop).
+  alignas(64) std::int64_t fixed[kTermBlock], ghost[kTermBlock];
+  const std::uint8_t* __restrict fixed_bytes = b.fixed.data() + b0;
+  const std::uint8_t* __restrict ghost_bytes = kGhosts ? scratch.ghost.data() + b0 : nullptr;
+  const PairForce* __restrict force = scratch.ball_force.data() + b0;
+  const BallParts* __restrict part = scratch.ball_parts.data() + b0;
+  for (std::size_t q = 0; q < n; ++q) {
+    cf[0][q] = force[q].fx; cf[1][q] = force[q].fy; cf[2][q] = force[q].fz;
+    cf[3][q] = force[q].tx; cf[4][q] = force[q].ty; cf[5][q] = force[q].tz;
+    pt[0][q] = part[q].friction; pt[1][q] = part[q].damping; pt[2][q] = part[q].strain; pt[3][q] = part[q].image;
+    pt[4][q] = part[q].boundary; pt[5][q] = part[q].damping_ahead; pt[6][q] = part[q].boundary_ahead;
+    fixed[q] = fixed_bytes[q];
+    if constexpr (kGhosts) ghost[q] = ghost_bytes[q];
+  }
+  auto* __restrict x = b.x.data() + b0; auto* __restrict y = b.y.data() + b0; auto* __restrict z = b.z.data() + b0;
+  auto* __restrict vx = b.vx.data() + b0; auto* __restrict vy = b.vy.data() + b0; auto* __restrict vz = b.vz.data() + b0;
+  auto* __restrict wx = b.wx.data() + b0; auto* __restrict wy = b.wy.data() + b0; auto* __restrict wz = b.wz.data() + b0;
+  const double* __restrict mass = b.mass.data() + b0;
+  const double* __restrict inertia = b.inertia.data() + b0;
+  const double* __restrict rad = b.rad.data() + b0;
+  const double* __restrict ax = b.ax.data() + b0; const double* __restrict ay = b.ay.data() + b0;
+  const double* __restrict az = b.az.data() + b0;
+  const double* __restrict amx = b.amx.data() + b0; const double* __restrict amy = b.amy.data() + b0;
+  const double* __restrict amz = b.amz.data() + b0;
+  auto* __restrict ofx = b.fx.data() + b0; auto* __restrict ofy = b.fy.data() + b0; auto* __restrict ofz = b.fz.data() + b0;
+  auto* __restrict omx = b.mx.data() + b0; auto* __restrict omy = b.my.data() + b0; auto* __restrict omz = b.mz.data() + b0;
+  // (g++ takes no restrict from local pointers: without ivdep it would test every pair of arrays
+  // for overlap at run time, more tests than it makes, and not vectorise.)
+#pragma GCC ivdep
+  for (std::size_t q = 0; q < n; ++q) {
+    const bool g = kGhosts && ghost[q] != 0;
+    double fx = cf[0][q], fy = cf[1][q], fz = cf[2][q];
+    const double m = mass[q], inv_m = 1 / m;
+    const std::int64_t fix = fixed[q];
+    MotionSums s{pt[4][q], pt[6][q], pt[1][q], pt[5][q], 0};
+    double potential = 0;
+    if constexpr (kLoads) {
+      fx += ax[q] + m * gx; fy += ay[q] + m * gy; fz += az[q] + m * gz;
+      potential -= m * (gx * x[q] + gy * y[q] + gz * z[q]);   // at t, where the forces were computed
+    }
+    const double nvx = advance_lane<M>(fx, kLoads ? ax[q] : 0.0, vx[q], inv_m, m, (fix & kXVel) != 0, c, s);
+    const double nvy = advance_lane<M>(fy, kLoads ? ay[q] : 0.0, vy[q], inv_m, m, (fix & kYVel) != 0, c, s);
+    const double nvz = advance_lane<M>(fz, kLoads ? az[q] : 0.0, vz[q], inv_m, m, (fix & kZVel) != 0, c, s);
+    const double kinetic = s.kinetic;
+    s.kinetic = 0;
+    double sp2 = nvx * nvx + nvy * nvy + nvz * nvz;
+    if constexpr (kWriteForces) {
+      ofx[q] = pick(g, ofx[q], fx); ofy[q] = pick(g, ofy[q], fy); ofz[q] = pick(g, ofz[q], fz);
+    }
+    const double nx = x[q] + nvx * dt, ny = y[q] + nvy * dt, nz = z[q] + nvz * dt;
+    x[q] = pick(g, x[q], nx); y[q] = pick(g, y[q], ny); z[q] = pick(g, z[q], nz);
+    vx[q] = pick(g, vx[q], nvx); vy[q] = pick(g, vy[q], nvy); vz[q] = pick(g, vz[q], nvz);
+    double spin = 0;
+    if constexpr (kRot) {
+      const double r = rad[q], in = inertia[q], inv_i = 1 / in;
+      double mx = -r * cf[3][q], my = -r * cf[4][q], mz = -r * cf[5][q];
+      if constexpr (kLoads) { mx += amx[q]; my += amy[q]; mz += amz[q]; }
+      const double nwx = advance_lane<M>(mx, kLoads ? amx[q] : 0.0, wx[q], inv_i, in, (fix & kXSpin) != 0, c, s);
+      const double nwy = advance_lane<M>(my, kLoads ? amy[q] : 0.0, wy[q], inv_i, in, (fix & kYSpin) != 0, c, s);
+      const double nwz = advance_lane<M>(mz, kLoads ? amz[q] : 0.0, wz[q], inv_i, in, (fix & kZSpin) != 0, c, s);
+      if constexpr (kWriteForces) {
+        omx[q] = pick(g, omx[q], mx); omy[q] = pick(g, omy[q], my); omz[q] = pick(g, omz[q], mz);
+      }
+      wx[q] = pick(g, wx[q], nwx); wy[q] = pick(g, wy[q], nwy); wz[q] = pick(g, wz[q], nwz);
+      sp2 += r * r * (nwx * nwx + nwy * nwy + nwz * nwz);
+      spin = s.kinetic;
+    }
+    speed2[q] = pick(g, -1.0, sp2);
+    terms[kFriction][q] = pick(g, 0.0, pt[0][q]);
+    terms[kStrain][q] = pick(g, 0.0, pt[2][q]);
+    terms[kImage][q] = pick(g, 0.0, pt[3][q]);
+    terms[kKinetic][q] = pick(g, 0.0, kinetic);
+    terms[kSpin][q] = pick(g, 0.0, spin);
+    terms[kBoundary][q] = pick(g, 0.0, s.boundary);
+    terms[kPotential][q] = pick(g, 0.0, potential);
+    terms[kDamping][q] = pick(g, 0.0, s.damping);
+    terms[kBoundaryAhead][q] = pick(g, 0.0, s.boundary_ahead);
+    terms[kDampingAhead][q] = pick(g, 0.0, s.damping_ahead);
+  }
+}
+
 template <MotionFeatures M>
 void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
                  StepSums& sums) {
   constexpr bool kRot = M.rotation;
   constexpr bool kLoads = M.loads;
-  constexpr DampKind kDamp = M.damping;
   constexpr StepEstimate kEstimate = M.estimate;
-  constexpr bool kWriteForces = M.write_forces;
   Balls& b = model.balls;
-  const double dt = k.dt;
-  // Mass-proportional damping, factor form: v' = (v (1 - a dt/2) + F/m dt) / (1 + a dt/2).
-  const double keep = 1 - 0.5 * k.alpha * dt, shrink = 1 / (1 + 0.5 * k.alpha * dt);
-  const auto [gx, gy, gz] = k.gravity;
-  const double half_dt = 0.5 * dt;
-  double boundary_work = 0, damping_work = 0, kinetic = 0, potential = 0, boundary_ahead = 0, damping_ahead = 0;
   double omega2_max = 0, step_min = std::numeric_limits<double>::infinity();
   double fastest2 = -1;
   std::size_t fastest = begin;
-
-  // One velocity component: fixed ones keep their velocity (the force is their reaction).
-  // Kinetic energy at t as m v(t - dt/2) v(t + dt/2) / 2: with the spring energy and the potential at
-  // t this is the quantity central differences conserve exactly for a linear spring (and free
-  // fall), so the guard sees no false imbalance from a stable step however coarse it is. Its change
-  // over a step is (F(t - dt) + F(t)) / 2 . v(t - dt/2) dt, so a force F(t) other than the springs'
-  // does the work F(t) . v(t) dt, v(t) = (v(t - dt/2) + v(t + dt/2)) / 2, of which the part
-  // F(t) . v(t + dt/2) dt/2 lies after t (the aheads).
-  auto advance = [&](double force, double applied, double& v, double inv_m, double m, bool fixed) {
-    if (fixed) {
-      const double work = -(force - applied) * v * dt;
-      boundary_work += work;
-      boundary_ahead += 0.5 * work;
-      kinetic += 0.5 * m * v * v;
-      return;
-    }
-    double f = force;
-    if constexpr (kDamp == DampKind::Local) {
-      const double reduce = k.local * std::abs(force);
-      f = v > 0 ? force - reduce : (v < 0 ? force + reduce : force);
-    }
-    const double v_old = v;
-    const double v_new = kDamp == DampKind::Rayleigh ? (v_old * keep + f * inv_m * dt) * shrink : v_old + f * inv_m * dt;
-    const double v_mid = 0.5 * (v_old + v_new);
-    if constexpr (kLoads) {
-      boundary_work += applied * v_mid * dt;
-      boundary_ahead += applied * v_new * half_dt;
-    }
-    if constexpr (kDamp == DampKind::Local) {
-      damping_work += (force - f) * v_mid * dt;
-      damping_ahead += (force - f) * v_new * half_dt;
-    }
-    if constexpr (kDamp == DampKind::Rayleigh) {
-      const double drag = k.alpha * m * v_mid;
-      damping_work += drag * v_mid * dt;
-      damping_ahead += drag * v_new * half_dt;
-    }
-    kinetic += 0.5 * m * v_old * v_new;
-    v = v_new;
-  };
-
   ExactSum::Stream kinetic_sum(sums.kinetic_translation), spin_sum(sums.kinetic_rotation),
       boundary_sum(sums.boundary_work), potential_sum(sums.potential), damping_sum(sums.damping_work),
       friction_sum(sums.friction_work), strain_sum(sums.strain), image_sum(sums.image_power),
       boundary_ahead_sum(sums.boundary_ahead), damping_ahead_sum(sums.damping_ahead);
-  // Each ball's terms wait in a block, one array per sum, and go to the streams a block at a time
-  // (ExactSum::Stream::add_block: vector arithmetic where the block fits the window). The sums are
-  // exact, so when a term goes in changes no bit.
-  enum Term { kFriction, kStrain, kImage, kKinetic, kSpin, kBoundary, kPotential, kDamping, kBoundaryAhead, kDampingAhead, kTerms };
-  constexpr std::size_t kTermBlock = 128;
-  alignas(64) double terms[kTerms][kTermBlock] = {};   // (zeroed: the compiler cannot see every drained term written)
-  std::size_t held = 0;
-  auto drain = [&] {
-    friction_sum.add_block(terms[kFriction], held);
-    strain_sum.add_block(terms[kStrain], held);
-    if (model.space.periodic) image_sum.add_block(terms[kImage], held);
-    kinetic_sum.add_block(terms[kKinetic], held);
-    if constexpr (kRot) spin_sum.add_block(terms[kSpin], held);
-    boundary_sum.add_block(terms[kBoundary], held);
-    if constexpr (kLoads) potential_sum.add_block(terms[kPotential], held);
-    damping_sum.add_block(terms[kDamping], held);
-    boundary_ahead_sum.add_block(terms[kBoundaryAhead], held);
-    damping_ahead_sum.add_block(terms[kDampingAhead], held);
-    held = 0;
-  };
+  // Each block's terms go to the streams a block at a time (ExactSum::Stream::add_block: vector
+  // arithmetic where the block fits the window). The sums are exact, so when a term goes in (and
+  // the ghosts' zeros) changes no bit.
+  alignas(64) double terms[kTerms][kTermBlock];
+  alignas(64) double speed2[kTermBlock];
   const bool periodic = model.space.periodic;
-  const std::uint8_t* ghost = scratch.ghost.empty() ? nullptr : scratch.ghost.data();
-  for (std::size_t ball = begin; ball < end; ++ball) {
-    if (ghost && ghost[ball]) continue;   // another rank moves it (cycle/brick_step.hpp)
-    // This ball's parts of the global sums: its contacts' (StepScratch::ball_parts), then its
-    // components in a fixed order; then the exact sums.
-    const BallParts& part = scratch.ball_parts[ball];
-    boundary_work = part.boundary;
-    damping_work = part.damping;
-    boundary_ahead = part.boundary_ahead;
-    damping_ahead = part.damping_ahead;
-    kinetic = potential = 0;
-    terms[kFriction][held] = part.friction;
-    terms[kStrain][held] = part.strain;
-    if (periodic) terms[kImage][held] = part.image;
-    if (k.moments) [[unlikely]] add_moments(sums, scratch.ball_moments[ball]);
-    double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
-    double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
-    {   // the sums the contact loops made (StepScratch::ball_force)
-      const PairForce& pf = scratch.ball_force[ball];
-      fx = pf.fx; fy = pf.fy; fz = pf.fz;
-      if constexpr (kRot) { tx = pf.tx; ty = pf.ty; tz = pf.tz; }
-      if constexpr (kEstimate != StepEstimate::None) {
-        sum_kmax = pf.kmax;
-        sum_ks = pf.ks;
-        if constexpr (kEstimate == StepEstimate::Damped) sum_cn = scratch.ball_cn[ball];
-      }
-    }
-    const double m = b.mass[ball], inv_m = 1 / m;
-    const std::uint8_t fixed = b.fixed[ball];
-    if constexpr (kLoads) {
-      fx += b.ax[ball] + m * gx; fy += b.ay[ball] + m * gy; fz += b.az[ball] + m * gz;
-    }
-    if constexpr (kLoads)   // at t, where the forces were computed
-      potential -= m * (gx * b.x[ball] + gy * b.y[ball] + gz * b.z[ball]);
-    advance(fx, kLoads ? b.ax[ball] : 0.0, b.vx[ball], inv_m, m, fixed & kXVel);
-    advance(fy, kLoads ? b.ay[ball] : 0.0, b.vy[ball], inv_m, m, fixed & kYVel);
-    advance(fz, kLoads ? b.az[ball] : 0.0, b.vz[ball], inv_m, m, fixed & kZVel);
-    if constexpr (kWriteForces) { b.fx[ball] = fx; b.fy[ball] = fy; b.fz[ball] = fz; }
-    terms[kKinetic][held] = kinetic;
-    kinetic = 0;
-    const double vx = b.vx[ball], vy = b.vy[ball], vz = b.vz[ball];
-    b.x[ball] += vx * dt; b.y[ball] += vy * dt; b.z[ball] += vz * dt;
-    double speed2 = vx * vx + vy * vy + vz * vz;
-    if constexpr (kRot) {
-      const double r = b.rad[ball], inertia = b.inertia[ball], inv_i = 1 / inertia;
-      double mx = -r * tx, my = -r * ty, mz = -r * tz;
-      if constexpr (kLoads) { mx += b.amx[ball]; my += b.amy[ball]; mz += b.amz[ball]; }
-      advance(mx, kLoads ? b.amx[ball] : 0.0, b.wx[ball], inv_i, inertia, fixed & kXSpin);
-      advance(my, kLoads ? b.amy[ball] : 0.0, b.wy[ball], inv_i, inertia, fixed & kYSpin);
-      advance(mz, kLoads ? b.amz[ball] : 0.0, b.wz[ball], inv_i, inertia, fixed & kZSpin);
-      if constexpr (kWriteForces) { b.mx[ball] = mx; b.my[ball] = my; b.mz[ball] = mz; }
-      const double wx = b.wx[ball], wy = b.wy[ball], wz = b.wz[ball];
-      const double spin2 = wx * wx + wy * wy + wz * wz;
-      speed2 += r * r * spin2;
-      terms[kSpin][held] = kinetic;
-    }
-    if (speed2 > fastest2 || (std::isnan(speed2) && !std::isnan(fastest2))) { fastest2 = speed2; fastest = ball; }
+  const bool ghosts = !scratch.ghost.empty();
+  for (std::size_t b0 = begin; b0 < end; b0 += kTermBlock) {
+    const std::size_t n = std::min(kTermBlock, end - b0);
+    if (ghosts) motion_block<M, true>(b, scratch, k, b0, n, terms, speed2);
+    else motion_block<M, false>(b, scratch, k, b0, n, terms, speed2);
+    if (k.moments) [[unlikely]]
+      for (std::size_t q = 0; q < n; ++q)
+        if (!ghosts || !scratch.ghost[b0 + q]) add_moments(sums, scratch.ball_moments[b0 + q]);
+    friction_sum.add_block(terms[kFriction], n);
+    strain_sum.add_block(terms[kStrain], n);
+    if (periodic) image_sum.add_block(terms[kImage], n);
+    kinetic_sum.add_block(terms[kKinetic], n);
+    if constexpr (kRot) spin_sum.add_block(terms[kSpin], n);
+    boundary_sum.add_block(terms[kBoundary], n);
+    if constexpr (kLoads) potential_sum.add_block(terms[kPotential], n);
+    damping_sum.add_block(terms[kDamping], n);
+    boundary_ahead_sum.add_block(terms[kBoundaryAhead], n);
+    damping_ahead_sum.add_block(terms[kDampingAhead], n);
+    // The fastest ball: the first of the largest, a NaN before any number.
+    for (std::size_t q = 0; q < n; ++q)
+      if (speed2[q] > fastest2 || (std::isnan(speed2[q]) && !std::isnan(fastest2))) { fastest2 = speed2[q]; fastest = b0 + q; }
     if constexpr (kEstimate != StepEstimate::None) {
-      // A ball held in every component sets no step of its own.
-      const bool held = ball_held(fixed, kRot);
-      if (!held) {
+      for (std::size_t q = 0; q < n; ++q) {
+        const std::size_t ball = b0 + q;
+        if (ghosts && scratch.ghost[ball]) continue;
+        // A ball held in every component sets no step of its own.
+        if (ball_held(b.fixed[ball], kRot)) continue;
+        const PairForce& pf = scratch.ball_force[ball];
+        const double m = b.mass[ball];
+        double sum_kmax = pf.kmax, sum_ks = pf.ks, sum_cn = kEstimate == StepEstimate::Damped ? scratch.ball_cn[ball] : 0;
         if (sum_kmax == 0)   // no contact: as if touching one ball of its own type
           alone_sums(k.laws, ball, m, sum_kmax, sum_ks, kEstimate == StepEstimate::Damped ? &sum_cn : nullptr);
         const double omega2 = ball_omega2(m, sum_kmax, sum_ks, kRot);
@@ -454,14 +519,7 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
         }
       }
     }
-    terms[kBoundary][held] = boundary_work;
-    if constexpr (kLoads) terms[kPotential][held] = potential;
-    terms[kDamping][held] = damping_work;
-    terms[kBoundaryAhead][held] = boundary_ahead;
-    terms[kDampingAhead][held] = damping_ahead;
-    if (++held == kTermBlock) drain();
   }
-  drain();
   if constexpr (kEstimate == StepEstimate::Undamped)
     if (omega2_max > 0) step_min = 2 / std::sqrt(omega2_max);
   sums.take_step(step_min);
