@@ -330,7 +330,7 @@ std::vector<double> BrickStep::proposed_shares() {
   // balls.
   const int ranks = team_->size();
   if (shares_.size() != static_cast<std::size_t>(ranks)) shares_.assign(ranks, 1.0 / ranks);
-  const double seconds = work_seconds_ * (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed) ? 3 : 1);
+  const double seconds = work_seconds_ * (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed) ? kSlowFactorForTest : 1);
   std::vector<double> mine{seconds, work_ball_steps_}, all;
   team_->allgather(mine, all);   // (a collective call: every member asks at once)
   std::vector<double> speed(ranks, 0.0), next(ranks, 0.0);

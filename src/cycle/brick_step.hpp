@@ -158,9 +158,11 @@ class BrickStep {
   // Tests: 0 rebuilds stale lists on the parts where it can (the default), -1 never does (every
   // rebuild through the whole model, as before 2026-12-03); for every BrickStep of the process.
   static inline std::atomic<int> local_rule{0};
-  // Tests: the member (team rank) whose own work is counted three times slower at each split, as a
-  // busy core would make it, to see the shares follow; -1: none.
+  // Tests: the member (team rank) whose own work is counted kSlowFactorForTest times slower at each
+  // split, as a busy core would make it, to see the shares follow; -1: none. Eight times, so that a
+  // machine busy with other work (which slows both members by up to about two) cannot hide it.
   static inline std::atomic<int> slow_member_for_test{-1};
+  static constexpr double kSlowFactorForTest = 8;
   // Tests (TRUBAL_TEST_FAIL_AT "R split"): rank R's next split fails as if out of memory; -1: none.
   static inline std::atomic<int> fail_split_for_test{-1};
   // Tests (TRUBAL_TEST_FAIL_AT "R part"): rank R's next search on its part fails so; -1: none.

@@ -44,7 +44,7 @@ TEST_CASE("mixed periodicity: a ball wraps across a periodic face and stops at a
   CHECK_THAT(h.first_error_line(), Catch::Contains("left the box through x = 1"));
 }
 
-TEST_CASE("mixed periodicity: only periodic axes strain, servo and wrap; walls go across bounded ones", "[periodic][walls]") {
+TEST_CASE("mixed periodicity: only periodic axes strain, servo and wrap, and walls go across bounded ones", "[periodic][walls]") {
   struct Case { const char* lines; const char* expected; };
   const Case cases[] = {
       {"strain zz 1\n", "STRAIN zz needs that axis periodic"},

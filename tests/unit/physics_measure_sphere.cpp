@@ -83,7 +83,7 @@ TEST_CASE("measure sphere: porosity and coordination of an FCC packing against t
   CHECK(a.porosity == Approx(b.porosity).epsilon(1e-12));
 }
 
-TEST_CASE("measure sphere: the stress of a uniform sample is the cell's; coordination 12, no sliding",
+TEST_CASE("measure sphere: the stress of a uniform sample is the cell's with coordination 12 and no sliding",
           "[physics][measure]") {
   Harness h;
   REQUIRE(h.deck(kFccPressed));
@@ -170,7 +170,7 @@ TEST_CASE("measure sphere: bad regions are errors naming the line", "[physics][m
   CHECK_THAT(error_of("hist measure sphere 5 5 5 4.6\n"), Catch::Contains("too large for the periodic cell"));
 }
 
-TEST_CASE("measure: PRINT energy before the first cycle has gravity's potential; HIST energy records it",
+TEST_CASE("measure: PRINT energy before the first cycle has gravity's potential and HIST energy records it",
           "[physics][measure]") {
   TempDir dir;
   WorkingDir cd(dir.path());

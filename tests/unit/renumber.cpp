@@ -180,3 +180,23 @@ TEST_CASE("renumber: present order closes DELETE's gaps, and bad input is refuse
     CHECK(after.balls.x[k] == before.balls.x[k]);
   }
 }
+
+TEST_CASE("renumber: PRINT info says how far apart consecutive ids lie, and suggests RENUMBER", "[commands]") {
+  // The scrambled scene's neighbours in id order are a random pair of its 384 places (the grid's
+  // edge is 8 diameters: about 4 apart at the median); renumbered, about one apart.
+  Harness h;
+  REQUIRE(h.deck(scrambled_settle_deck() + "print info\n"));
+  const auto gap = [](const std::string& out) {
+    const auto at = out.find("ball order: consecutive ids ");
+    REQUIRE(at != std::string::npos);
+    return std::stod(out.substr(at + 28));
+  };
+  const std::string before = h.out.str();
+  CHECK(gap(before) > 3);
+  CHECK_THAT(before, Catch::Contains("RENUMBER numbers them in space order"));
+  h.out.str("");
+  REQUIRE(h.deck("renumber\nprint info\n"));
+  const std::string after = h.out.str();
+  CHECK(gap(after) < 1.6);
+  CHECK_THAT(after, !Catch::Contains("RENUMBER numbers them"));
+}
