@@ -410,7 +410,8 @@ const Command print_command = {
     "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
-    "physics; the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
+    "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
+    "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
     "uses fewer threads than it has, and why; under mpirun the ranks; how many times a CYCLE's last step "
     "was taken again to make the contact results a command read (CYCLE); the peak resident memory so far, "
     "of each rank, and under mpirun also by the end of the last CYCLE stepped in parts). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
