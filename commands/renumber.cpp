@@ -20,7 +20,7 @@ const Command renumber_command = {
     "Gives the balls the ids 1 to N. `space` (the default) numbers them in space order: the Morton "
     "(Z) order of cubic cells one largest diameter wide, from the lowest centre, balls in one cell in "
     "the order of their ids, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins. `present` "
-    "keeps their order and closes the gaps DELETE left.\n\n"
+    "keeps their order and closes the gaps DELETE left. "
     "trubal keeps the balls in memory in id order, and each ball adds its contacts in the order of "
     "its partners' ids, so balls numbered at random (read from another program, say) make every "
     "contact a jump in memory: RENUMBER once after reading them makes the contact loop faster (the "
