@@ -9,7 +9,9 @@ static void run_renumber(Context& ctx, Args& args) {
   args.done();
   const std::size_t n = ctx.session.state().balls.size();
   const Renumbering r = ctx.session.renumber(how == 0 ? RenumberOrder::Space : RenumberOrder::Present);
-  if (how == 0)
+  if (n == 0)
+    ctx.out << "no balls to renumber\n";
+  else if (how == 0)
     ctx.out << fmt::format("{} balls renumbered 1 to {} in space order (cells {:.6g} wide)\n", n, n, r.cell);
   else
     ctx.out << fmt::format("{} balls renumbered 1 to {} in their present order\n", n, n);

@@ -165,6 +165,9 @@ TEST_CASE("renumber: present order closes DELETE's gaps, and bad input is refuse
   CHECK_FALSE(h.deck("renumber\n", "r.dat"));
   CHECK_THAT(h.first_error_line(), Catch::Contains("r.dat:1: error: no model yet"));
   h.err.str("");
+  REQUIRE(h.deck("start 1 1 1\nrenumber\n"));
+  CHECK(h.out.str() == "new model in the periodic space 1 x 1 x 1\nno balls to renumber\n");
+  h.out.str("");
   REQUIRE(h.deck(scrambled_settle_deck() + "delete range id 1 100\n"));
   const Model before = h.session.model();
   CHECK_FALSE(h.deck("renumber sideways\n", "r.dat"));
