@@ -78,7 +78,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const PairInputs in(model);
   const bool periodic = in.periodic;
   const double dt = k.dt, beta = k.beta;
-  const PairLaw& one_law = k.laws.table[std::max(k.laws.ball_pair_law, 0)];
+  const PairLaw& one_law = k.laws.ball_law();
   // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
   // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
@@ -193,7 +193,7 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
   const PairInputs in(model);
   const bool one_law = k.laws.one_ball_law();
-  const PairLaw& law = k.laws.table[std::max(k.laws.ball_pair_law, 0)];
+  const PairLaw& law = k.laws.ball_law();
   ContactBatch B;
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
   for (std::size_t q0 = 0; q0 < pair_count; q0 += kBatch) {
@@ -360,7 +360,7 @@ template <MotionFeatures M>
 }
 
 // Balls [b0, b0 + n) of a motion loop: moves them and writes each one's terms of the global sums
-// (terms[t][q], Term order) and its speed^2 (|v|^2 + |R w|^2) for the fastest ball. A ghost (a
+// (terms[t][q], MotionTerm order) and its speed^2 (|v|^2 + |R w|^2) for the fastest ball. A ghost (a
 // ball another rank or thread moves, kGhosts) is left as it is, its terms 0 and its speed -1.
 enum MotionTerm { kFriction, kStrain, kImage, kKinetic, kSpin, kBoundary, kPotential, kDamping, kBoundaryAhead,
                   kDampingAhead, kTerms };
@@ -374,8 +374,9 @@ void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, st
   const LaneConstants c{dt, 0.5 * dt, k.local, k.alpha, 1 - 0.5 * k.alpha * dt, 1 / (1 + 0.5 * k.alpha * dt)};
   const double gx = k.gravity[0], gy = k.gravity[1], gz = k.gravity[2];
   // The block's contact sums and parts, one array each (the structs' fields apart, so that the
-  // loop below reads contiguous lanes).
-  alignas(64) double cf[6][kTermBlock], pt[7][kTermBlock];
+  // loop below reads contiguous lanes): cf fx fy fz tx ty tz, pt by Part.
+  enum Part { kPFriction, kPDamping, kPStrain, kPImage, kPBoundary, kPDampingAhead, kPBoundaryAhead, kParts };
+  alignas(64) double cf[6][kTermBlock], pt[kParts][kTermBlock];
   // The fixities and ghost flags as 64-bit lanes, the width of the doubles they select between (a
   // byte beside doubles keeps g++ 12 from vectorising the loop).
   alignas(64) std::int64_t fixed[kTermBlock], ghost[kTermBlock];
@@ -386,8 +387,9 @@ void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, st
   for (std::size_t q = 0; q < n; ++q) {
     cf[0][q] = force[q].fx; cf[1][q] = force[q].fy; cf[2][q] = force[q].fz;
     cf[3][q] = force[q].tx; cf[4][q] = force[q].ty; cf[5][q] = force[q].tz;
-    pt[0][q] = part[q].friction; pt[1][q] = part[q].damping; pt[2][q] = part[q].strain; pt[3][q] = part[q].image;
-    pt[4][q] = part[q].boundary; pt[5][q] = part[q].damping_ahead; pt[6][q] = part[q].boundary_ahead;
+    pt[kPFriction][q] = part[q].friction; pt[kPDamping][q] = part[q].damping; pt[kPStrain][q] = part[q].strain;
+    pt[kPImage][q] = part[q].image; pt[kPBoundary][q] = part[q].boundary;
+    pt[kPDampingAhead][q] = part[q].damping_ahead; pt[kPBoundaryAhead][q] = part[q].boundary_ahead;
     fixed[q] = fixed_bytes[q];
     if constexpr (kGhosts) ghost[q] = ghost_bytes[q];
   }
@@ -411,7 +413,7 @@ void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, st
     double fx = cf[0][q], fy = cf[1][q], fz = cf[2][q];
     const double m = mass[q], inv_m = 1 / m;
     const std::int64_t fix = fixed[q];
-    MotionSums s{pt[4][q], pt[6][q], pt[1][q], pt[5][q], 0};
+    MotionSums s{pt[kPBoundary][q], pt[kPBoundaryAhead][q], pt[kPDamping][q], pt[kPDampingAhead][q], 0};
     double potential = 0;
     if constexpr (kLoads) {
       fx += ax[q] + m * gx; fy += ay[q] + m * gy; fz += az[q] + m * gz;
@@ -445,9 +447,9 @@ void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, st
       spin = s.kinetic;
     }
     speed2[q] = pick(g, -1.0, sp2);
-    terms[kFriction][q] = pick(g, 0.0, pt[0][q]);
-    terms[kStrain][q] = pick(g, 0.0, pt[2][q]);
-    terms[kImage][q] = pick(g, 0.0, pt[3][q]);
+    terms[kFriction][q] = pick(g, 0.0, pt[kPFriction][q]);
+    terms[kStrain][q] = pick(g, 0.0, pt[kPStrain][q]);
+    terms[kImage][q] = pick(g, 0.0, pt[kPImage][q]);
     terms[kKinetic][q] = pick(g, 0.0, kinetic);
     terms[kSpin][q] = pick(g, 0.0, spin);
     terms[kBoundary][q] = pick(g, 0.0, s.boundary);

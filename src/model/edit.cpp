@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -147,7 +148,7 @@ std::vector<std::size_t> space_order(const Balls& b, double cell) {
     key[k] = finite ? code : ~std::uint64_t{0};
   }
   std::vector<std::size_t> order(n);
-  for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return key[p] < key[q]; });
   return order;
 }
@@ -182,7 +183,7 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
     r.cell = std::isfinite(diameter) && diameter > 0 ? diameter : 1.0;
     order = space_order(b, r.cell);
   } else {
-    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+    std::iota(order.begin(), order.end(), std::size_t{0});
   }
   std::vector<std::uint32_t> new_index(n);
   for (std::size_t k = 0; k < n; ++k) new_index[order[k]] = static_cast<std::uint32_t>(k);
@@ -210,7 +211,7 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
     c.j[p] = j;
   }
   std::vector<std::size_t> pairs(c.size());
-  for (std::size_t p = 0; p < pairs.size(); ++p) pairs[p] = p;
+  std::iota(pairs.begin(), pairs.end(), std::size_t{0});
   std::stable_sort(pairs.begin(), pairs.end(), [&](std::size_t p, std::size_t q) { return pair_before(c, p, c, q); });
   permute_arrays([&](auto&& f) { c.for_each_pair_array(f); }, pairs);
   c.list_version = 0;   // a list nobody has indexed
@@ -221,7 +222,7 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
     w.ball_id[p] = static_cast<std::int64_t>(w.ball[p]) + 1;
   }
   std::vector<std::size_t> walls(w.size());
-  for (std::size_t p = 0; p < walls.size(); ++p) walls[p] = p;
+  std::iota(walls.begin(), walls.end(), std::size_t{0});
   std::stable_sort(walls.begin(), walls.end(), [&](std::size_t p, std::size_t q) {
     return w.ball[p] != w.ball[q] ? w.ball[p] < w.ball[q] : w.wall[p] < w.wall[q];
   });

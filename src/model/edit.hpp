@@ -24,7 +24,6 @@ void reindex_wall_contacts(Model& model);
 // Index of the ball with this id, or -1.
 std::int64_t find_ball(const Model& model, std::int64_t id);
 
-
 // RENUMBER: the balls get the ids 1..N, in space order (the Morton order of cells one largest
 // diameter wide, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins) or in their present
 // order. Storage order is id order, so the balls' arrays are permuted with them: neighbours in space

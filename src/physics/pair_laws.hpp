@@ -22,6 +22,8 @@ struct PairLaws {
   // every ball pair, which the contact loops then take once instead of per pair; -1 otherwise.
   int ball_pair_law = -1;
   bool one_ball_law() const { return ball_pair_law >= 0; }
+  // That law (with one_ball_law(); else the table's first, which the per-pair loops do not read).
+  const PairLaw& ball_law() const { return table[ball_pair_law >= 0 ? ball_pair_law : 0]; }
 
   const PairLaw& law(std::size_t i, std::size_t j) const {
     return type_count == 1 ? table[0] : table[ball_type[i] * type_count + ball_type[j]];
