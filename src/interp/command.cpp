@@ -97,23 +97,33 @@ void Args::done() const {
 void Context::warn(const std::string& message) const { interp.warn(message); }
 
 const Command& find_command(std::string_view keyword) {
-  const auto& table = command_table();
-  std::vector<std::string_view> names;
-  std::vector<const Command*> owner;
-  for (const Command* c : table) {
-    names.push_back(c->name);
-    owner.push_back(c);
-    for (auto a : c->aliases) names.push_back(a), owner.push_back(c);
-  }
+  // Every keyword in lower case with its command, made once (a deck may hold a million BALL lines).
+  struct Names {
+    std::vector<std::string_view> names;
+    std::vector<std::string> lower;
+    std::vector<const Command*> owner;
+  };
+  static const Names all = [] {
+    Names n;
+    for (const Command* c : command_table()) {
+      n.names.push_back(c->name);
+      n.owner.push_back(c);
+      for (auto a : c->aliases) n.names.push_back(a), n.owner.push_back(c);
+    }
+    for (auto name : n.names) n.lower.push_back(to_lower(name));
+    return n;
+  }();
+  const auto& names = all.names;
+  const auto& owner = all.owner;
   std::string w = to_lower(keyword);
   for (std::size_t k = 0; k < names.size(); ++k)
-    if (to_lower(names[k]) == w) return *owner[k];
+    if (all.lower[k] == w) return *owner[k];
   if (w.size() >= 3) {
     const Command* found = nullptr;
     std::string candidates;
     bool ambiguous = false;
     for (std::size_t k = 0; k < names.size(); ++k) {
-      if (!to_lower(names[k]).starts_with(w)) continue;
+      if (!all.lower[k].starts_with(w)) continue;
       candidates += (candidates.empty() ? "" : ", ") + std::string(names[k]);
       if (found && found != owner[k]) ambiguous = true;
       found = owner[k];
@@ -123,7 +133,7 @@ const Command& find_command(std::string_view keyword) {
   }
   if (w.size() < 3) {
     for (std::size_t k = 0; k < names.size(); ++k)
-      if (!w.empty() && to_lower(names[k]).starts_with(w))
+      if (!w.empty() && all.lower[k].starts_with(w))
         throw InputError(fmt::format("'{}' is too short: abbreviate a command to at least 3 letters ({}?)",
                                      printable(keyword), names[k]));
   }

@@ -1,5 +1,7 @@
 #include "interp/lexer.hpp"
 
+#include <algorithm>
+
 #include <cmath>
 
 #include <cctype>
@@ -23,6 +25,9 @@ std::string to_upper(std::string_view s) {
 }
 
 std::string printable(std::string_view s, std::size_t max_len) {
+  const std::string_view shown = s.substr(0, max_len);
+  if (std::all_of(shown.begin(), shown.end(), [](char c) { return c >= 32 && c < 127; }) && s.size() <= max_len)
+    return std::string(s);   // (the common case, without a character at a time)
   std::string r;
   for (std::size_t k = 0; k < s.size() && k < max_len; ++k) {
     auto c = static_cast<unsigned char>(s[k]);
@@ -106,6 +111,7 @@ static bool is_name_char(char c, bool first) {
 
 std::string expand_variables(std::string_view line,
                              const std::function<std::optional<std::string>(const std::string&)>& lookup) {
+  if (line.find('$') == std::string_view::npos) return std::string(line);
   std::string out;
   for (std::size_t k = 0; k < line.size(); ++k) {
     if (line[k] != '$') { out.push_back(line[k]); continue; }
