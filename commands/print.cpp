@@ -104,6 +104,12 @@ static void print_info(Context& ctx) {
   if (comm::size() > 1) o << fmt::format("ranks: {}\n", comm::size());
   // The process's peak resident memory so far (every rank's, gathered: every rank runs PRINT).
   o << fmt::format("peak memory: {} MiB{}\n", mib_list(peak_memory_per_rank()), comm::size() > 1 ? " (per rank)" : "");
+  if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
+    std::vector<double> mine{static_cast<double>(m.contacts.result_bytes()) / (1 << 20)}, all;
+    comm::allgather(mine, all);
+    o << fmt::format("contact results held: {} MiB (per rank: rank 0 alone makes those a command reads after a "
+                     "CYCLE, for what it prints and writes)\n", mib_list(all));
+  }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);
   o << fmt::format("physics: {}\n", f.describe());

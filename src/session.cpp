@@ -26,7 +26,7 @@ Session::Session()
 Session::~Session() = default;
 
 Model& Session::edit() {
-  make_results(model_, *pipeline_);   // of the state before the change
+  make_results_to_read(model_, *pipeline_);   // of the state before the change
   ++changes_;
   model_.energy_at_step.valid = false;   // the balls may no longer be as the last step left them
   pipeline_->invalidate();
@@ -35,14 +35,14 @@ Model& Session::edit() {
 }
 
 const Model& Session::model_with_masses() {
-  make_results(model_, *pipeline_);
+  make_results_to_read(model_, *pipeline_);
   update_mass(model_);
   return model_;
 }
 
 void Session::set_backend(const std::string& name, int threads, std::uint64_t max_memory) {
   auto pipeline = make_pipeline(name, threads, max_memory);
-  make_results(model_, *pipeline_);   // the old pipeline holds the copy they are made from
+  make_results_to_read(model_, *pipeline_);   // the old pipeline holds the copy they are made from
   pipeline_ = std::move(pipeline);
 }
 
@@ -323,7 +323,7 @@ Renumbering Session::renumber(RenumberOrder order) {
 }
 
 std::size_t Session::define_group(const std::string& name, const Range& range) {
-  make_results(model_, *pipeline_);   // groups are state the step taken again puts back: before the change
+  make_results_to_read(model_, *pipeline_);   // groups are state the step taken again puts back: before the change
   require_started();
   std::vector<std::int64_t> ids;
   for (auto k : select(range)) ids.push_back(model_.balls.id[k]);
@@ -385,7 +385,7 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
     if (ec) throw std::runtime_error(fmt::format("cannot make the folder '{}' for the dumps: {}", folder.string(), ec.message()));
   }, "making the dumps' folder");
   // The same files again continue their collection; other files start a new one.
-  make_results(model_, *pipeline_);
+  make_results_to_read(model_, *pipeline_);
   if (!dumps_ || dumps_->base() != VtkSeries(base).base()) dumps_ = std::make_unique<VtkSeries>(base, every);
   else dumps_->set_every(every);
   dumps_->write(model_);

@@ -32,7 +32,7 @@ class Session {
   // The model, its contact results made first where the last CYCLE left them to be made when read
   // (make_results, cycle/run.hpp: one step taken again).
   const Model& model() const {
-    make_results(model_, *pipeline_);
+    make_results_to_read(model_, *pipeline_);
     return model_;
   }
   // The model as it is, its contact results and the balls' unbalanced forces perhaps not made
@@ -49,7 +49,7 @@ class Session {
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
   // estimated afresh, and PRINT energy takes the state as it is until the next step.
   Settings& settings() {
-    make_results(model_, *pipeline_);   // the step taken again reads the settings
+    make_results_to_read(model_, *pipeline_);   // the step taken again reads the settings
     model_.critical_dt = 0;
     model_.energy_at_step.valid = false;   // gravity's potential, say, is no longer the last step's
     return model_.settings;

@@ -133,6 +133,7 @@ void Pipeline::invalidate() {
   search_parts_ = false;
   list_from_parts_ = false;
   model_ = nullptr;
+  whole_next_ = false;   // (a step rewind_step asked for that never came: every rank decides afresh)
 }
 
 bool Pipeline::any_outside(const Model& model) {

@@ -94,6 +94,19 @@ class Pipeline {
   // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
   bool restore_rescue(Model& model);
   bool distributed() const { return distributed_; }
+  // While one lives, a distributed pipeline steps as a serial one does: the whole model, searched on
+  // this process alone (rank 0's own work under comm::Alone: make_results_to_read).
+  class Alone {
+   public:
+    explicit Alone(Pipeline& p) : p_(p), was_(std::exchange(p.distributed_, false)) {}
+    ~Alone() { p_.distributed_ = was_; }
+    Alone(const Alone&) = delete;
+    Alone& operator=(const Alone&) = delete;
+
+   private:
+    Pipeline& p_;
+    bool was_;
+  };
   // The critical step of the model's state (physics/timestep.hpp, `cap` the Hertz cap), before the
   // CYCLE's first step: where a distributed run's list is to be searched on the parts, they are made
   // and searched now and each rank's own balls give their steps (a collective call), so that no rank

@@ -3,12 +3,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "cycle/kernels.hpp"
+#include "cycle/pair_list.hpp"
 #include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
 #include "physics/cell.hpp"
@@ -427,6 +429,41 @@ void make_results(Model& model, Pipeline& pipeline) {
     return;
   }
   model.contacts.keep_results();
+}
+
+void make_results_to_read(Model& model, Pipeline& pipeline) {
+  if (!pipeline.distributed() || comm::size() < 2) return make_results(model, pipeline);
+  if (!pipeline.results_deferred(model)) {   // (the same answer on every rank)
+    if (comm::root()) model.contacts.keep_results();
+    return;
+  }
+  std::exception_ptr failure;
+  try {
+    comm::together([&] {
+      if (!comm::root()) return;
+      // The list every rank holds (rank 0's, handed over at the CYCLE's end): the step taken again
+      // searches on its own and may keep other candidates beside the same touching pairs.
+      PairCandidates held;
+      const ContactTable& c = model.contacts;
+      held.i = c.i; held.j = c.j; held.image_x = c.image_x; held.image_y = c.image_y; held.image_z = c.image_z;
+      {
+        comm::Alone alone;
+        Pipeline::Alone serial(pipeline);
+        make_results(model, pipeline);
+      }
+      if (!holds_pairs(model.contacts, held)) install_pairs(model.contacts, held);
+    }, "making the contact results");
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  pipeline.clear_deferred();
+  pipeline.invalidate();
+  if (!failure) return;
+  // Rank 0 may have put its model back to the step before, or be part way through it: every rank
+  // goes back to rank 0's rescue copy (a collective call), then the failure is every rank's.
+  pipeline.restore_rescue(model);
+  pipeline.invalidate();
+  std::rethrow_exception(failure);
 }
 
 }  // namespace trubal

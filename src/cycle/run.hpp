@@ -28,9 +28,9 @@ struct CycleControl {
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the
   // result arrays are freed, and make_results takes the last step again from the rescue copy when
-  // they are read (CYCLE's way: their memory is two fifths of the model's). On several ranks the
-  // make_results that follows is a collective call, like every command. One stopped early and one
-  // whose last step an observer reads write them as usual.
+  // they are read (CYCLE's way: their memory is two fifths of the model's). On several ranks rank 0
+  // alone makes them (make_results_to_read), as it alone prints and writes. One stopped early and
+  // one whose last step an observer reads write them as usual.
   bool defer_results = false;
 };
 
@@ -74,5 +74,15 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
 // of the list's length, zero where they were not kept (results_cycle -1). Every reader of the
 // results (the Session's model()) calls it first.
 void make_results(Model& model, Pipeline& pipeline);
+
+// make_results for what a command reads (the Session's model()), called by every rank at the same
+// points. A distributed run's deferred results are made by rank 0 alone, which alone prints and
+// writes what they feed: it takes the step again on its own, searching serially, and puts back the
+// pair list every rank holds; the other ranks leave their results unmade (ContactTable::results_kept
+// false: the measurements read nothing there), so that their memory stays at their share between
+// CYCLEs too. Every rank's next step searches afresh (the same pairs touch either way). Should
+// rank 0 fail (out of memory), every rank goes back to the rescue copy, the step before, and the
+// command fails everywhere with rank 0's message.
+void make_results_to_read(Model& model, Pipeline& pipeline);
 
 }  // namespace trubal

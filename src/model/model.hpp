@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace trubal {
@@ -94,11 +95,21 @@ struct ContactTable {
   std::size_t size() const { return i.size(); }
   // Whether the result arrays are of the list's length (else they are empty: not kept).
   bool results_kept() const { return state.size() == i.size() && nx.size() == i.size(); }
+  // Whether pair p touched in the results' force pass (false where the results are not kept: a
+  // distributed run's ranks other than 0 may leave them unmade, cycle/run.hpp make_results_to_read).
+  bool touching(std::size_t p) const { return p < state.size() && state[p] != 0; }
   // The result arrays of the list's length, zero where they were not kept.
   void keep_results() {
     if (results_kept()) return;
     for_each_result_array([&](auto& v) { v.assign(i.size(), {}); });
     results_cycle = -1;
+  }
+  // The bytes the result arrays hold (their capacity).
+  std::size_t result_bytes() const {
+    std::size_t bytes = 0;
+    const_cast<ContactTable*>(this)->for_each_result_array(
+        [&](const auto& v) { bytes += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); });
+    return bytes;
   }
   // Frees the result arrays (their memory goes back).
   void drop_results() {

@@ -92,7 +92,7 @@ double servo_stiffness(const Model& model, int axis) {
   const std::vector<double>* normal[3] = {&c.nx, &c.ny, &c.nz};
   double m = 0;
   for (std::size_t p = 0; p < c.size(); ++p) {
-    if (c.state[p] == 0) continue;
+    if (!c.touching(p)) continue;
     const double l = (b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p]) * (*normal[axis])[p];
     m += c.kn_eff[p] * l * l;
   }

@@ -12,7 +12,7 @@
 namespace trubal {
 namespace {
 
-bool touching(const ContactTable& c, std::size_t p) { return c.state[p] != 0; }
+bool touching(const ContactTable& c, std::size_t p) { return c.touching(p); }
 
 bool is_hertz(const Model& model, std::size_t ball) {
   const auto it = model.materials.find(model.balls.type[ball]);

@@ -82,7 +82,7 @@ SphereMeasurement measure_sphere(const Model& model, const MeasureSphere& sphere
   std::size_t ball_contacts = 0, sliding = 0;
   const ContactTable& c = model.contacts;
   for (std::size_t p = 0; p < c.size(); ++p) {
-    if (c.state[p] == 0) continue;
+    if (!c.touching(p)) continue;
     const bool in_i = inside[c.i[p]], in_j = inside[c.j[p]];
     if (!in_i && !in_j) continue;
     // n points from i to j, the force f is on j: i's arm (r_i - u/2) n carries -f, j's arm

@@ -287,6 +287,37 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
 #endif
 }
 
+TEST_CASE("distributed: rank 0 alone makes the contact results a command reads after a CYCLE", "[mpi]") {
+  // A CYCLE leaves its last step's contact results to be made when read (make_results_to_read).
+  // On several ranks rank 0 alone takes that step again, for what it prints and writes; the others
+  // leave them unmade, so that their memory stays at their share (129 bytes a pair: 28 MiB for this
+  // block's 226,800 pairs). The files, and the CYCLE after, give the serial bits.
+  if (!have_mpi()) return;
+  const std::string deck = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                           "lattice fcc 1 30 30 42\ninit xvel 0.01 range x 0 10\ncycle 20\n"
+                           "print contacts file first.csv\nprint stress\nprint energy\ncycle 30\n" +
+                           std::string(kOutputs);
+  TempDir serial, two;
+  serial.write("deck.dat", deck);
+  REQUIRE(run_deck(serial, 0) == 0);
+  two.write("deck.dat", "backend mpi\n" + deck + "print info\n");
+  REQUIRE(run_deck(two, 2) == 0);
+  const std::string out = slurp(two.path() / "out.txt");
+  INFO(out);
+  for (const char* file : {"first.csv", "balls.csv", "contacts.csv"}) CHECK(slurp(two.path() / file) == slurp(serial.path() / file));
+  CHECK(lines_of(slurp(serial.path() / "first.csv")).size() > 100000);   // most pairs of the block touch
+  // The results each rank holds at the end (made for the last PRINT: rank 0's, of 226,800 pairs).
+  const std::string key = "contact results held: ";
+  const auto at = out.find(key);
+  REQUIRE(at != std::string::npos);
+  std::istringstream held(out.substr(at + key.size()));
+  double rank0 = -1, rank1 = -1;
+  held >> rank0 >> rank1;
+  CHECK(rank0 >= 20);
+  CHECK(rank1 == 0);
+  CHECK_THAT(out, Catch::Contains("contact results made when read: 2"));
+}
+
 TEST_CASE("distributed: a run that goes unstable is put back to the same rescue copy as serial's", "[mpi]") {
   // A chain held between two fixed balls, stepped a little above its critical step from an overlap
   // of 1e-14: the error grows for some hundred steps, so the copy put back is one taken in the
@@ -398,6 +429,30 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     CHECK(status != 124);
     CHECK_THAT(out, Catch::Contains("rank 1 ran out of memory making a new pair list for its part"));
     serial.write("deck.dat", setup + "cycle 30\n" + kOutputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+    CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+  }
+  SECTION("rank 0 out of memory making the contact results a command reads: every rank goes back a step, and the shell goes on") {
+    // Rank 0 alone takes the CYCLE's last step again for the PRINT (make_results_to_read); its
+    // serial search fails (TRUBAL_TEST_FAIL_AT "0 search"). Every rank goes back to the rescue
+    // copy, cycle 29, and the PRINT fails with one message; the next CYCLE gives the serial bits of
+    // 29 steps and then 30 (a rank left at cycle 30 would split its part from another state).
+    TempDir dir, serial;
+    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    dir.write("deck.dat", setup);
+    dir.write("more.txt", "cycle 30\nprint contacts file first.csv\nprint info\ncycle 30\nprint balls file balls.csv\n"
+                          "print contacts file contacts.csv\nquit\n");
+    const int status = run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='0 search'");
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(status != 124);
+    const std::string message = "rank 0 ran out of memory making the contact results";
+    const auto at = out.find(message);
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find(message, at + 1) == std::string::npos);
+    CHECK_THAT(out, Catch::Contains("cycle: 29\n"));
+    serial.write("deck.dat", setup + "cycle 29\ncycle 30\n" + kOutputs);
     REQUIRE(run_deck(serial, 0) == 0);
     CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
     CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
