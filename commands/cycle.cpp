@@ -50,7 +50,8 @@ const Command cycle_command = {
     "where the time went (contact detection, forces, motion, output). A CYCLE keeps no per-contact results "
     "(forces, normals, overlaps, the balls' unbalanced forces) in memory, two fifths of a dense model's: the "
     "first command after it that reads them takes the last step again from a copy of the step before, to "
-    "the same bits (unless HIST or DUMP recorded that step; on several ranks too).",
+    "the same bits (unless HIST or DUMP recorded that step; on several ranks rank 0 alone takes it, for what it "
+    "prints and writes, and the others leave the results unmade).",
     {}, run_cycle};
 
 static void run_solve(Context& ctx, Args& args) {
