@@ -132,16 +132,17 @@ static void print_balls(Context& ctx, const Range& range, const std::string& fil
   const Model& m = ctx.session.model();
   const Balls& b = m.balls;
   auto sel = ctx.session.select(range);
+  if (!comm::root()) return;   // (the table or file is rank 0's to print or write: the others' would go nowhere)
   if (!file.empty()) {
-    std::ostringstream csv;
-    csv << "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz\n";
-    for (auto k : sel) {
-      csv << b.id[k] << ',' << b.type[k];
-      for (const auto* v : {&b.x, &b.y, &b.z, &b.rad, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz})
-        csv << ',' << csv_real((*v)[k]);
-      csv << '\n';
-    }
-    write_file_atomically(file, csv.str());
+    write_file_atomically(file, [&](std::ostream& csv) {
+      csv << "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz\n";
+      for (auto k : sel) {
+        csv << b.id[k] << ',' << b.type[k];
+        for (const auto* v : {&b.x, &b.y, &b.z, &b.rad, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz})
+          csv << ',' << csv_real((*v)[k]);
+        csv << '\n';
+      }
+    });
     ctx.out << fmt::format("{} balls written to {}\n", sel.size(), file);
     return;
   }
@@ -160,19 +161,20 @@ static void print_contacts(Context& ctx, const Range& range, const std::string& 
   std::vector<bool> in(m.balls.size(), range.empty());
   if (!range.empty())
     for (auto k : ctx.session.select(range)) in[k] = true;
+  if (!comm::root()) return;   // (as print_balls)
   std::vector<std::size_t> rows;
   for (std::size_t p = 0; p < c.size() && p < c.state.size(); ++p)
     if (c.state[p] != 0 && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
   const auto& id = m.balls.id;
   if (!file.empty()) {
-    std::ostringstream csv;
-    csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding\n";
-    for (auto p : rows) {
-      csv << id[c.i[p]] << ',' << id[c.j[p]];
-      for (const auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real((*v)[p]);
-      csv << ',' << (c.state[p] == 2 ? 1 : 0) << '\n';
-    }
-    write_file_atomically(file, csv.str());
+    write_file_atomically(file, [&](std::ostream& csv) {
+      csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding\n";
+      for (auto p : rows) {
+        csv << id[c.i[p]] << ',' << id[c.j[p]];
+        for (const auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real((*v)[p]);
+        csv << ',' << (c.state[p] == 2 ? 1 : 0) << '\n';
+      }
+    });
     ctx.out << fmt::format("{} contacts written to {}\n", rows.size(), file);
     return;
   }

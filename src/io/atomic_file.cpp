@@ -24,13 +24,28 @@ void check_replaceable(const std::string& path) {
 }
 
 void write_file_atomically(const std::string& path, const std::string& text) {
+  write_file_atomically(path, [&](std::ostream& f) { f.write(text.data(), static_cast<std::streamsize>(text.size())); });
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
   if (!comm::root()) return;   // a distributed run's files are rank 0's to write
   check_replaceable(path);
   const std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
   {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
     errno = 0;
-    f.write(text.data(), static_cast<std::streamsize>(text.size()));
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) {   // (its folder missing, or not writable: errno says)
+      const int err = errno;
+      throw std::runtime_error(fmt::format("cannot write '{}': {}", path, err ? std::strerror(err) : "cannot open it"));
+    }
+    errno = 0;
+    try {
+      write(f);
+    } catch (...) {
+      f.close();
+      std::remove(tmp.c_str());
+      throw;
+    }
     f.close();
     if (!f) {
       const int err = errno;

@@ -333,6 +333,20 @@ TEST_CASE("interp errors: outputs never replace a link, and a failed write is re
     CHECK(std::filesystem::is_symlink(link));
     CHECK(trubal::test::slurp(target) == "keep me\n");
   }
+  // PRINT's tables are written row by row into the temporary (a million balls' table is never held
+  // whole in memory): a file that cannot be made, or a disk that fills, is still an error naming it.
+  const std::string missing = (dir.path() / "no_such_folder" / "b.csv").string();
+  for (const std::string item : {"balls", "contacts"}) {
+    INFO(item);
+    auto e = deck_error("start box 0 1 0 1 0 1\nprop kn 1e4 dens 1000\nball 0.5 0.5 0.5 0.1\nball 0.69 0.5 0.5 0.1\n"
+                        "cycle 1\nprint " + item + " file " + missing + "\n");
+    CHECK(e.find("deck.dat:6: error: cannot write '" + missing + "': No such file or directory") != std::string::npos);
+    if (std::filesystem::exists("/dev/full")) {
+      auto full = deck_error("start box 0 1 0 1 0 1\nprop kn 1e4 dens 1000\nball 0.5 0.5 0.5 0.1\n"
+                             "ball 0.69 0.5 0.5 0.1\ncycle 1\nprint " + item + " file /dev/full\n");
+      CHECK(full.find("deck.dat:6: error: ") != std::string::npos);
+    }
+  }
   // A HIST file that cannot take its rows (a full disk: /dev/full) stops the run and says so.
   if (std::filesystem::exists("/dev/full")) {
     auto full = deck_error("start box 0 1 0 1 0 1\nprop kn 1e4 dens 1000\nball 0.5 0.5 0.5 0.1\n"
