@@ -38,23 +38,25 @@ class PolyDataWriter {
     array(section, type, name, components, v.data(), v.size() * sizeof(T));
   }
 
-  std::string finish(std::size_t points, std::size_t verts, std::size_t lines, std::size_t polys = 0) {
-    std::string out =
-        "<?xml version=\"1.0\"?>\n"
-        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-        "  <PolyData>\n";
-    out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" "
-                       "NumberOfStrips=\"0\" NumberOfPolys=\"{}\">\n",
-                       points, verts, lines, polys);
-    for (const char* s : {"PointData", "CellData", "Points", "Verts", "Lines", "Polys"}) {
-      auto it = sections_.find(s);
-      if (it == sections_.end()) continue;
-      out += fmt::format("      <{}>\n{}      </{}>\n", s, it->second, s);
-    }
-    out += "    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
-    out += appended_;
-    out += "\n  </AppendedData>\n</VTKFile>\n";
-    return out;
+  // The piece to `path` (write_file_atomically), the raw bytes streamed from where they were built
+  // (a million balls' arrays are not copied into a second string).
+  void write(const std::string& path, std::size_t points, std::size_t verts, std::size_t lines, std::size_t polys = 0) {
+    write_file_atomically(path, [&](std::ostream& out) {
+      out << "<?xml version=\"1.0\"?>\n"
+             "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+             "  <PolyData>\n";
+      out << fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" "
+                         "NumberOfStrips=\"0\" NumberOfPolys=\"{}\">\n",
+                         points, verts, lines, polys);
+      for (const char* s : {"PointData", "CellData", "Points", "Verts", "Lines", "Polys"}) {
+        auto it = sections_.find(s);
+        if (it == sections_.end()) continue;
+        out << fmt::format("      <{}>\n{}      </{}>\n", s, it->second, s);
+      }
+      out << "    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
+      out.write(appended_.data(), static_cast<std::streamsize>(appended_.size()));
+      out << "\n  </AppendedData>\n</VTKFile>\n";
+    });
   }
 
  private:
@@ -105,7 +107,7 @@ void write_balls_vtp(const Model& model, const std::string& path) {
   w.array("PointData", "Float64", "velocity", interleave(b.vx, b.vy, b.vz), 3);
   w.array("PointData", "Float64", "spin", interleave(b.wx, b.wy, b.wz), 3);
   w.array("PointData", "Float64", "force", interleave(b.fx, b.fy, b.fz), 3);
-  write_file_atomically(path, w.finish(n, n, 0));
+  w.write(path, n, n, 0);
 }
 
 void write_contacts_vtp(const Model& model, const std::string& path) {
@@ -137,7 +139,7 @@ void write_contacts_vtp(const Model& model, const std::string& path) {
   w.array("CellData", "Float64", "force", force, 3);
   w.array("CellData", "Int64", "id_i", id_i);
   w.array("CellData", "Int64", "id_j", id_j);
-  write_file_atomically(path, w.finish(2 * lines, 0, lines));
+  w.write(path, 2 * lines, 0, lines);
 }
 
 void write_walls_vtp(const Model& model, const std::string& path) {
@@ -203,7 +205,7 @@ void write_walls_vtp(const Model& model, const std::string& path) {
   wr.array("Polys", "Int64", "offsets", offsets);
   wr.array("CellData", "Int64", "id", id);
   wr.array("CellData", "Float64", "force", force, 3);
-  write_file_atomically(path, wr.finish(points.size() / 3, 0, 0, polys));
+  wr.write(path, points.size() / 3, 0, 0, polys);
 }
 
 void write_domain_vtp(const Model& model, const std::string& path) {
@@ -235,7 +237,7 @@ void write_domain_vtp(const Model& model, const std::string& path) {
   w.array("Lines", "Int64", "offsets", iota64(axis.size(), 2, 2));
   w.array("CellData", "Int32", "axis", axis);
   w.array("CellData", "Int32", "periodic", periodic);
-  write_file_atomically(path, w.finish(8, 0, axis.size()));
+  w.write(path, 8, 0, axis.size());
 }
 
 VtkSeries::VtkSeries(std::string base, std::int64_t every) : base_(std::move(base)), every_(every) {
