@@ -163,8 +163,8 @@ static void print_contacts(Context& ctx, const Range& range, const std::string& 
     for (auto k : ctx.session.select(range)) in[k] = true;
   if (!comm::root()) return;   // (as print_balls)
   std::vector<std::size_t> rows;
-  for (std::size_t p = 0; p < c.size() && p < c.state.size(); ++p)
-    if (c.state[p] != 0 && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
+  for (std::size_t p = 0; p < c.size(); ++p)
+    if (c.touching(p) && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
   const auto& id = m.balls.id;
   if (!file.empty()) {
     write_file_atomically(file, [&](std::ostream& csv) {

@@ -62,6 +62,13 @@ std::uint64_t fresh_list_version() {
   return ++versions;
 }
 
+PairCandidates pair_list_of(const ContactTable& table) {
+  PairCandidates list;
+  list.i = table.i; list.j = table.j;
+  list.image_x = table.image_x; list.image_y = table.image_y; list.image_z = table.image_z;
+  return list;
+}
+
 bool holds_pairs(const ContactTable& table, const PairCandidates& pairs) {
   const std::size_t size = pairs.i.size();
   bool consistent = true;

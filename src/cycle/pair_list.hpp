@@ -17,6 +17,9 @@ void install_pairs(ContactTable& table, const PairCandidates& pairs);
 // arrays were replaced wholesale (a distributed run's copy from rank 0).
 std::uint64_t fresh_list_version();
 
+// A copy of the table's pair list (its pairs and images alone).
+PairCandidates pair_list_of(const ContactTable& table);
+
 // Whether the table already holds exactly these pairs (then nothing needs carrying over).
 bool holds_pairs(const ContactTable& table, const PairCandidates& pairs);
 

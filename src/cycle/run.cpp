@@ -443,9 +443,7 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
       if (!comm::root()) return;
       // The list every rank holds (rank 0's, handed over at the CYCLE's end): the step taken again
       // searches on its own and may keep other candidates beside the same touching pairs.
-      PairCandidates held;
-      const ContactTable& c = model.contacts;
-      held.i = c.i; held.j = c.j; held.image_x = c.image_x; held.image_y = c.image_y; held.image_z = c.image_z;
+      const PairCandidates held = pair_list_of(model.contacts);
       {
         comm::Alone alone;
         Pipeline::Alone serial(pipeline);

@@ -43,7 +43,7 @@ struct Snapshot {
   void take(const Model& m) {
     copy_balls(balls, m.balls);
     const ContactTable& c = m.contacts;
-    pairs.i = c.i; pairs.j = c.j; pairs.image_x = c.image_x; pairs.image_y = c.image_y; pairs.image_z = c.image_z;
+    pairs = pair_list_of(c);
     fsx = c.fsx; fsy = c.fsy; fsz = c.fsz;
     state = c.state;
     wall_contacts = m.wall_contacts;

@@ -25,8 +25,7 @@ std::string to_upper(std::string_view s) {
 }
 
 std::string printable(std::string_view s, std::size_t max_len) {
-  const std::string_view shown = s.substr(0, max_len);
-  if (std::all_of(shown.begin(), shown.end(), [](char c) { return c >= 32 && c < 127; }) && s.size() <= max_len)
+  if (s.size() <= max_len && std::all_of(s.begin(), s.end(), [](char c) { return c >= 32 && c < 127; }))
     return std::string(s);   // (the common case, without a character at a time)
   std::string r;
   for (std::size_t k = 0; k < s.size() && k < max_len; ++k) {

@@ -12,8 +12,6 @@
 namespace trubal {
 namespace {
 
-bool touching(const ContactTable& c, std::size_t p) { return c.touching(p); }
-
 bool is_hertz(const Model& model, std::size_t ball) {
   const auto it = model.materials.find(model.balls.type[ball]);
   return it != model.materials.end() && it->second.hertz();
@@ -41,7 +39,7 @@ Sym6 average_stress(const Model& model, double volume) {
   const ContactTable& c = model.contacts;
   const Balls& b = model.balls;
   for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!touching(c, p)) continue;
+    if (!c.touching(p)) continue;
     // Force on j times the branch vector i -> j: positive when the pair is pushed apart, so
     // compression comes out positive (soil-mechanics sign).
     const double d = b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p];
@@ -89,7 +87,7 @@ EnergyReport energy(const Model& model) {
   }
   const ContactTable& c = model.contacts;
   for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!touching(c, p)) continue;
+    if (!c.touching(p)) continue;
     add_contact_strain(e.strain, is_hertz(model, c.i[p]), c.kn_eff[p], c.overlap[p], c.fsx[p], c.fsy[p], c.fsz[p],
                        c.ks_eff[p]);
   }
@@ -105,7 +103,7 @@ EnergyReport energy(const Model& model) {
 
 std::size_t contact_count(const Model& model) {
   std::size_t n = 0;
-  for (std::size_t p = 0; p < model.contacts.size(); ++p) n += touching(model.contacts, p);
+  for (std::size_t p = 0; p < model.contacts.size(); ++p) n += model.contacts.touching(p);
   return n;
 }
 
@@ -125,7 +123,7 @@ Sym6 fabric_tensor(const Model& model) {
   Sym6 f{};
   const ContactTable& c = model.contacts;
   for (std::size_t p = 0; p < c.size(); ++p)
-    if (touching(c, p)) add_dyad(f, c.nx[p], c.ny[p], c.nz[p], c.nx[p], c.ny[p], c.nz[p]);
+    if (c.touching(p)) add_dyad(f, c.nx[p], c.ny[p], c.nz[p], c.nx[p], c.ny[p], c.nz[p]);
   const std::size_t n = contact_count(model);
   if (n)
     for (double& v : f) v /= static_cast<double>(n);
@@ -138,7 +136,7 @@ Unbalanced unbalanced_force(const Model& model) {
   double contact_sum = 0;
   std::size_t contacts = 0;
   for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!touching(c, p)) continue;
+    if (!c.touching(p)) continue;
     contact_sum += std::sqrt(c.fx[p] * c.fx[p] + c.fy[p] * c.fy[p] + c.fz[p] * c.fz[p]);
     ++contacts;
   }
