@@ -79,6 +79,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const bool periodic = in.periodic;
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws.ball_law();
+  const bool sum_stiffness = k.estimate != StepEstimate::None;   // (PairForce::kmax)
   // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
   // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
@@ -132,13 +133,13 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
       }
       acc.fx -= B.fx[q]; acc.fy -= B.fy[q]; acc.fz -= B.fz[q];
       if constexpr (kLaw.rotation) { acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q]; }
-      acc.kmax += kmax; acc.ks += B.ks[q];
+      if (sum_stiffness) { acc.kmax += kmax; acc.ks += B.ks[q]; }
       if constexpr (kLaw.dashpot) acc_cn += B.cn[q];
       if (pj[p] < own_end) {
         PairForce& fj = ball_sum[pj[p]];
         fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
         if constexpr (kLaw.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
-        fj.kmax += kmax; fj.ks += B.ks[q];
+        if (sum_stiffness) { fj.kmax += kmax; fj.ks += B.ks[q]; }
         if constexpr (kLaw.dashpot) cn_sum[pj[p]] += B.cn[q];
       }
       if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
@@ -214,7 +215,7 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       PairForce& fj = scratch.ball_force[j];
       fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
       if constexpr (F.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
-      fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q];
+      if (k.estimate != StepEstimate::None) { fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q]; }
       if constexpr (F.dashpot) scratch.ball_cn[j] += B.cn[q];
     }
   }
@@ -259,7 +260,7 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       PairForce& fi = scratch.ball_force[i];
       fi.fx -= B.fx[q]; fi.fy -= B.fy[q]; fi.fz -= B.fz[q];
       if constexpr (kLaw.rotation) { fi.tx += B.tx[q]; fi.ty += B.ty[q]; fi.tz += B.tz[q]; }
-      fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q];
+      if (k.estimate != StepEstimate::None) { fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q]; }
       if constexpr (kLaw.dashpot) scratch.ball_cn[i] += B.cn[q];
       const Wall& w = walls[c.wall[p]];
       WallLoad& load = loads[c.wall[p]];

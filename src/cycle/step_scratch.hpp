@@ -15,7 +15,9 @@ namespace trubal {
 // (the moment is -R t), and the stiffness sums the time-step estimate uses.
 struct alignas(64) PairForce {
   double fx, fy, fz, tx, ty, tz;
-  double kmax, ks;                                      // max(k_n, k_s) and k_s now
+  // max(k_n, k_s) and k_s now, summed only where the next step is estimated (FRAC); under TSTEP
+  // (StepEstimate::None) nothing reads them and they stay 0.
+  double kmax, ks;
 };
 
 // One ball's parts of the step's global sums from its contacts: its run of pairs (those with
