@@ -86,6 +86,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   std::array<double, 9> moments{};   // force_moment (6), then stiffness_moment (3)
   BallParts* __restrict parts = scratch.ball_parts.data();
   ContactBatch B;
+  int clean_run = 0;   // batches in a row without a sliding contact (contact_forces)
   // The new history of a batch is made here, then copied over the old (the cross pairs another
   // thread computes read a copy of it: CrossLoop).
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
@@ -111,7 +112,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
       const std::size_t p = p0 + q;
       in.gather<kLaw, kOneLaw>(B, q, k, p, pi[p], pj[p]);
     }
-    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz);
+    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz, &clean_run);
     if constexpr (kLaw.shear) {   // the batch's new history goes back where it was read
       std::copy(hx, hx + count, fsx + p0);
       std::copy(hy, hy + count, fsy + p0);
@@ -196,6 +197,7 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   const bool one_law = k.laws.one_ball_law();
   const PairLaw& law = k.laws.ball_law();
   ContactBatch B;
+  int clean_run = 0;   // batches in a row without a sliding contact (contact_forces)
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
   for (std::size_t q0 = 0; q0 < pair_count; q0 += kBatch) {
     const std::size_t count = std::min(kBatch, pair_count - q0);
@@ -208,8 +210,8 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       }
     }
     // The new history is the owner's to write: here it goes to a scratch copy, unread.
-    if (one_law) contact_forces<F, true>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz);
-    else contact_forces<F, false>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz);
+    if (one_law) contact_forces<F, true>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
+    else contact_forces<F, false>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];
       PairForce& fj = scratch.ball_force[j];

@@ -69,20 +69,21 @@ struct ContactBatch {
   }
 };
 
-// The forces of lanes [0, count) of a batch, by the law the features compose (contact/models.hpp).
-// one_law: every pair has `law` (a scene of one material, or all pairs of one pair of types); else
-// each lane's law is in the batch. beta: Rayleigh stiffness-proportional coefficient (0 without).
-// dt: this step. (F.shear) h*_in: the lanes' shear force history; h*_out: where the new history goes.
-template <ContactFeatures F, bool kOneLaw>
-inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta,
-                           const double* __restrict hx_in, const double* __restrict hy_in,
-                           const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
-                           double* __restrict hz_out) {
+// The lanes of a batch (contact_forces below): [0, count), or lane `lane` alone (kOne). kCap false
+// makes each shear spring as if it held (CoulombSpring::force): a lane whose spring would slide is
+// then marked state 2 and is to be made again with kCap. (Out of line: inlined into contact_forces
+// twice, g++ 12 lost the restrict of the history pointers and no longer vectorised the loop.)
+template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne>
+[[gnu::noinline]] void contact_lanes(ContactBatch& B, std::size_t lane, std::size_t count, const PairLaw& law, double dt,
+                                     double beta, const double* __restrict hx_in, const double* __restrict hy_in,
+                                     const double* __restrict hz_in, double* __restrict hx_out,
+                                     double* __restrict hy_out, double* __restrict hz_out) {
   using Model = ContactModel<F.law()>;
   using Normal = typename Model::Normal;
   using Tangential = typename Model::Tangential;
   using Damping = typename Model::Damping;
-  for (std::size_t q = 0; q < count; ++q) {
+  const std::size_t first = kOne ? lane : 0, last = kOne ? lane + 1 : count;
+  for (std::size_t q = first; q < last; ++q) {
     const LaneLaw L = kOneLaw ? LaneLaw{law.kn, law.ks, law.friction, law.cohesion, law.hertz_n, law.hertz_s, law.rest_xi}
                               : LaneLaw{B.kn_law[q], B.ks_law[q], B.friction[q], B.cohesion[q], B.hertz_n[q],
                                         B.hertz_s[q], B.rest_xi[q]};
@@ -115,7 +116,8 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     double fsx = 0, fsy = 0, fsz = 0;
     if constexpr (Tangential::kOn) {
       ShearState s;
-      Tangential::force(hx_in[q], hy_in[q], hz_in[q], nx, ny, nz, vx, vy, vz, vn, k.ks, dt, L.friction * k.fn + L.cohesion, s);
+      Tangential::template force<kCap>(hx_in[q], hy_in[q], hz_in[q], nx, ny, nz, vx, vy, vz, vn, k.ks, dt,
+                                       L.friction * k.fn + L.cohesion, s);
       fsx = s.fsx; fsy = s.fsy; fsz = s.fsz;
       work_friction = s.work_friction;
       strain_shear = s.strain;
@@ -142,6 +144,54 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
     B.work_damping[q] = touching ? work_damping : 0.0;
     B.strain[q] = touching ? strain : 0.0;
     B.state[q] = touching ? state : 0.0;
+  }
+}
+
+// How many of lanes [0, count) slide (state 2). (Counted after the lanes' loop: a reduction inside
+// it kept g++ 12 from vectorising the loop where the law has a dashpot.)
+inline std::size_t sliding_lanes(const ContactBatch& B, std::size_t count) {
+  std::size_t n = 0;
+  for (std::size_t q = 0; q < count; ++q) n += B.state[q] > 1.5 ? 1 : 0;
+  return n;
+}
+
+// The forces of lanes [0, count) of a batch, by the law the features compose (contact/models.hpp).
+// one_law: every pair has `law` (a scene of one material, or all pairs of one pair of types); else
+// each lane's law is in the batch. beta: Rayleigh stiffness-proportional coefficient (0 without).
+// dt: this step. (F.shear) h*_in: the lanes' shear force history; h*_out: where the new history goes.
+// clean_run (a loop's, over its batches; null: every batch with the cap): how many batches in a
+// row had no sliding lane. After kCleanRun of them a batch is first made as if every spring held,
+// which skips the cap's square root and two divisions a lane; a lane that would slide is then made
+// again with the cap on its own where it is the only one, else the whole batch is. A dense packing
+// at rest has no sliding contact, so each batch is made once without the cap; in a settled heap
+// most contacts slide and each batch is made once with it. Either way each lane gets the bits of
+// the law with the cap: the arithmetic of a lane does not depend on its neighbours, nor on whether
+// the loop ran as vectors.
+inline constexpr int kCleanRun = 2;
+template <ContactFeatures F, bool kOneLaw>
+inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta,
+                           const double* __restrict hx_in, const double* __restrict hy_in,
+                           const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
+                           double* __restrict hz_out, int* clean_run = nullptr) {
+  auto lanes = [&]<bool kCap, bool kOne>(std::size_t lane) {
+    contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+  };
+  if constexpr (ContactModel<F.law()>::Tangential::kOn) {
+    if (clean_run && *clean_run >= kCleanRun) {
+      lanes.template operator()<false, false>(0);
+      const std::size_t sliding = sliding_lanes(B, count);
+      if (sliding == 0) return;
+      if (sliding == 1) {
+        std::size_t q = 0;
+        while (!(B.state[q] > 1.5)) ++q;
+        lanes.template operator()<true, true>(q);
+        return;
+      }
+    }
+    lanes.template operator()<true, false>(0);
+    if (clean_run) *clean_run = sliding_lanes(B, count) == 0 ? *clean_run + 1 : 0;
+  } else {
+    lanes.template operator()<true, false>(0);
   }
 }
 
