@@ -80,6 +80,10 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws.ball_law();
   const bool sum_stiffness = k.estimate != StepEstimate::None;   // (PairForce::kmax)
+  // A periodic cell that does not move gives every image a velocity of +-0 and the image power
+  // sum stays +0: the products are left out. (Without a dashpot, every work_damping is +0 too.)
+  const bool cell_moving = periodic && (in.cell.vlx != 0 || in.cell.vly != 0 || in.cell.vlz != 0 ||
+                                        in.cell.vxy != 0 || in.cell.vxz != 0 || in.cell.vyz != 0);
   // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
   // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
@@ -143,7 +147,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
         if (sum_stiffness) { fj.kmax += kmax; fj.ks += B.ks[q]; }
         if constexpr (kLaw.dashpot) cn_sum[pj[p]] += B.cn[q];
       }
-      if (periodic) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
+      if (cell_moving) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
       if (k.moments) {   // force on j times the branch vector i -> j (zero where apart)
         const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q], lx = B.dx[q], ly = B.dy[q], lz = B.dz[q];
         moments[0] += fx * lx; moments[1] += fy * ly; moments[2] += fz * lz;
@@ -155,7 +159,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
         moments[8] += B.kn[q] * lz * lz;
       }
       work_friction += B.work_friction[q];
-      work_damping += B.work_damping[q];
+      if constexpr (kLaw.dashpot) work_damping += B.work_damping[q];
       strain += B.strain[q];
     }
     if constexpr (kFull) {
