@@ -23,12 +23,17 @@ struct PairInputs {
   const std::int8_t *img_x, *img_y, *img_z;
   bool periodic;
   CellFrame cell;   // periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image
+  // dH/dt is not 0: the images move. (In a still cell every image velocity is +-0: the gather
+  // leaves it out, and the batch's ivx, ivy, ivz are not written.)
+  bool cell_moving;
   PairInputs(const Model& model)
       : x(model.balls.x.data()), y(model.balls.y.data()), z(model.balls.z.data()), rad(model.balls.rad.data()),
         mass(model.balls.mass.data()), vx(model.balls.vx.data()), vy(model.balls.vy.data()), vz(model.balls.vz.data()),
         wx(model.balls.wx.data()), wy(model.balls.wy.data()), wz(model.balls.wz.data()), fixed(model.balls.fixed.data()),
         img_x(model.contacts.image_x.data()), img_y(model.contacts.image_y.data()), img_z(model.contacts.image_z.data()),
-        periodic(model.space.periodic), cell(cell_frame(model.space)) {}
+        periodic(model.space.periodic), cell(cell_frame(model.space)),
+        cell_moving(periodic && (cell.vlx != 0 || cell.vly != 0 || cell.vlz != 0 || cell.vxy != 0 || cell.vxz != 0 ||
+                                 cell.vyz != 0)) {}
 
   // Lane q of B gets pair p (balls i < j): separation, radii, relative velocity (image included),
   // the spin term, m*, and the pair's law where the scene has several.
@@ -41,11 +46,13 @@ struct PairInputs {
     if (periodic) {
       double ox, oy, oz;
       image_offset(cell, img_x[p], img_y[p], img_z[p], ox, oy, oz);
-      image_velocity(cell, img_x[p], img_y[p], img_z[p], B.ivx[q], B.ivy[q], B.ivz[q]);
       B.dx[q] = image_delta(x[j], x[i], ox);
       B.dy[q] = image_delta(y[j], y[i], oy);
       B.dz[q] = image_delta(z[j], z[i], oz);
-      B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
+      if (cell_moving) {
+        image_velocity(cell, img_x[p], img_y[p], img_z[p], B.ivx[q], B.ivy[q], B.ivz[q]);
+        B.vx[q] += B.ivx[q]; B.vy[q] += B.ivy[q]; B.vz[q] += B.ivz[q];
+      }
     }
     if constexpr (F.rotation) {
       B.sx[q] = rad[i] * wx[i] + rad[j] * wx[j];
@@ -76,14 +83,12 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   TRUBAL_PTR(state, c.state);
   TRUBAL_PTR(ball_sum, scratch.ball_force); TRUBAL_PTR(cn_sum, scratch.ball_cn);
   const PairInputs in(model);
-  const bool periodic = in.periodic;
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws.ball_law();
   const bool sum_stiffness = k.estimate != StepEstimate::None;   // (PairForce::kmax)
   // A periodic cell that does not move gives every image a velocity of +-0 and the image power
   // sum stays +0: the products are left out. (Without a dashpot, every work_damping is +0 too.)
-  const bool cell_moving = periodic && (in.cell.vlx != 0 || in.cell.vly != 0 || in.cell.vlz != 0 ||
-                                        in.cell.vxy != 0 || in.cell.vxz != 0 || in.cell.vyz != 0);
+  const bool cell_moving = in.cell_moving;
   // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
   // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
   double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
