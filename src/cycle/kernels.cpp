@@ -23,8 +23,8 @@ struct PairInputs {
   const std::int8_t *img_x, *img_y, *img_z;
   bool periodic;
   CellFrame cell;   // periodic space: j's image is x_j + H image, moving at v_j + (dH/dt) image
-  // dH/dt is not 0: the images move. (In a still cell every image velocity is +-0: the gather
-  // leaves it out, and the batch's ivx, ivy, ivz are not written.)
+  // CellFrame::moving. (In a still cell every image velocity is +-0: the gather leaves it out, and
+  // the batch's ivx, ivy, ivz are not written.)
   bool cell_moving;
   PairInputs(const Model& model)
       : x(model.balls.x.data()), y(model.balls.y.data()), z(model.balls.z.data()), rad(model.balls.rad.data()),
@@ -32,8 +32,7 @@ struct PairInputs {
         wx(model.balls.wx.data()), wy(model.balls.wy.data()), wz(model.balls.wz.data()), fixed(model.balls.fixed.data()),
         img_x(model.contacts.image_x.data()), img_y(model.contacts.image_y.data()), img_z(model.contacts.image_z.data()),
         periodic(model.space.periodic), cell(cell_frame(model.space)),
-        cell_moving(periodic && (cell.vlx != 0 || cell.vly != 0 || cell.vlz != 0 || cell.vxy != 0 || cell.vxz != 0 ||
-                                 cell.vyz != 0)) {}
+        cell_moving(periodic && cell.moving()) {}
 
   // Lane q of B gets pair p (balls i < j): separation, radii, relative velocity (image included),
   // the spin term, m*, and the pair's law where the scene has several.
@@ -85,7 +84,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const PairInputs in(model);
   const double dt = k.dt, beta = k.beta;
   const PairLaw& one_law = k.laws.ball_law();
-  const bool sum_stiffness = k.estimate != StepEstimate::None;   // (PairForce::kmax)
+  const bool sum_stiffness = k.sums_stiffness();
   // A periodic cell that does not move gives every image a velocity of +-0 and the image power
   // sum stays +0: the products are left out. (Without a dashpot, every work_damping is +0 too.)
   const bool cell_moving = in.cell_moving;
@@ -226,7 +225,7 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       PairForce& fj = scratch.ball_force[j];
       fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
       if constexpr (F.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
-      if (k.estimate != StepEstimate::None) { fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q]; }
+      if (k.sums_stiffness()) { fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q]; }
       if constexpr (F.dashpot) scratch.ball_cn[j] += B.cn[q];
     }
   }
@@ -271,7 +270,7 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       PairForce& fi = scratch.ball_force[i];
       fi.fx -= B.fx[q]; fi.fy -= B.fy[q]; fi.fz -= B.fz[q];
       if constexpr (kLaw.rotation) { fi.tx += B.tx[q]; fi.ty += B.ty[q]; fi.tz += B.tz[q]; }
-      if (k.estimate != StepEstimate::None) { fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q]; }
+      if (k.sums_stiffness()) { fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q]; }
       if constexpr (kLaw.dashpot) scratch.ball_cn[i] += B.cn[q];
       const Wall& w = walls[c.wall[p]];
       WallLoad& load = loads[c.wall[p]];

@@ -191,6 +191,9 @@ struct StepKernels {
   MotionLoop motion = nullptr, motion_full = nullptr, motion_lean = nullptr;   // full: also Balls::fx.. mz
   // Whether this step writes the per-pair results (run_cycles picked contacts_full).
   bool writes_results() const { return contacts == contacts_full; }
+  // Whether the contact loops add the balls' stiffness sums (PairForce::kmax, ks): only the next
+  // step's estimate reads them (FRAC); under TSTEP nothing does.
+  bool sums_stiffness() const { return estimate != StepEstimate::None; }
 };
 
 // The kernels for the model as it is now (materials, damping, fixities, loads).

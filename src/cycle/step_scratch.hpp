@@ -15,8 +15,8 @@ namespace trubal {
 // (the moment is -R t), and the stiffness sums the time-step estimate uses.
 struct alignas(64) PairForce {
   double fx, fy, fz, tx, ty, tz;
-  // max(k_n, k_s) and k_s now, summed only where the next step is estimated (FRAC); under TSTEP
-  // (StepEstimate::None) nothing reads them and they stay 0.
+  // max(k_n, k_s) and k_s now, summed only where the next step is estimated (FRAC:
+  // StepKernels::sums_stiffness); under TSTEP nothing reads them and they stay 0.
   double kmax, ks;
 };
 

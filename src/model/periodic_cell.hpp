@@ -25,6 +25,8 @@ namespace trubal {
 struct CellFrame {
   double lx = 0, ly = 0, lz = 0, xy = 0, xz = 0, yz = 0;         // H
   double vlx = 0, vly = 0, vlz = 0, vxy = 0, vxz = 0, vyz = 0;   // dH/dt
+  // dH/dt is not 0: the images move (else every image velocity is +-0).
+  bool moving() const { return vlx != 0 || vly != 0 || vlz != 0 || vxy != 0 || vxz != 0 || vyz != 0; }
 };
 
 CellFrame cell_frame(const Space& s);

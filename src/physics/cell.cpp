@@ -167,7 +167,7 @@ void cell_after_step(Model& model, double dt, double image_power, bool reduce) {
   Space& s = model.space;
   if (!s.periodic) return;
   const CellFrame f = cell_frame(s);
-  if (f.vlx == 0 && f.vly == 0 && f.vlz == 0 && f.vxy == 0 && f.vxz == 0 && f.vyz == 0) return;
+  if (!f.moving()) return;
   // Energy into the balls through image contacts: the spring energy grows by -F_j . (dH/dt n) dt,
   // summed by the contact loop (image_power).
   const double work = image_power;

@@ -147,11 +147,13 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne>
   }
 }
 
-// How many of lanes [0, count) slide (state 2). (Counted after the lanes' loop: a reduction inside
-// it kept g++ 12 from vectorising the loop where the law has a dashpot.)
+// Whether lane q slides (state 2, kept as a double in the batch).
+inline bool lane_slides(const ContactBatch& B, std::size_t q) { return B.state[q] > 1.5; }
+// How many of lanes [0, count) slide. (Counted after the lanes' loop: a reduction inside it kept
+// g++ 12 from vectorising the loop where the law has a dashpot.)
 inline std::size_t sliding_lanes(const ContactBatch& B, std::size_t count) {
   std::size_t n = 0;
-  for (std::size_t q = 0; q < count; ++q) n += B.state[q] > 1.5 ? 1 : 0;
+  for (std::size_t q = 0; q < count; ++q) n += lane_slides(B, q) ? 1 : 0;
   return n;
 }
 
@@ -183,7 +185,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
       if (sliding == 0) return;
       if (sliding == 1) {
         std::size_t q = 0;
-        while (!(B.state[q] > 1.5)) ++q;
+        while (!lane_slides(B, q)) ++q;
         lanes.template operator()<true, true>(q);
         return;
       }
