@@ -13,7 +13,11 @@ interleaved: each repetition goes once through every P and kind.
 
   bench/scaling.py build/trubal [--ranks 1 2 4 8 16] [--strong 30x30x30] [--weak 15x15x15]
                    [--steps 300] [--reps 1] [--lmp lmp] [--mpirun mpirun] [--raw FILE]
-                   [--no-strong] [--no-weak] [--no-threaded] [--no-mpi]
+                   [--no-strong] [--no-weak] [--no-threaded] [--no-mpi] [--copies]
+
+--copies adds, to weak scaling, P copies of the serial run (and of LAMMPS on 1 rank) started at
+once, each on its own 13,500 balls, nothing exchanged: how much each core slows as P cores work,
+against which the ranks' efficiency can be read (the time is the copies' median).
 
 The scenes are the peers' (../shared/peers/gen_scenes.py, or --peers DIR). Each deck takes 2
 untimed cycles first, as LAMMPS's setup is outside its loop time. Writes only under a temporary
@@ -24,6 +28,7 @@ import json
 import os
 import re
 import shlex
+import shutil
 import statistics
 import subprocess
 import sys
@@ -76,6 +81,8 @@ def main():
     ap.add_argument("--no-weak", action="store_true")
     ap.add_argument("--no-threaded", action="store_true")
     ap.add_argument("--no-mpi", action="store_true")
+    ap.add_argument("--copies", action="store_true",
+                    help="weak scaling also as P independent serial runs at once (and P LAMMPS runs of 1 rank)")
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--reps", type=int, default=1)
     ap.add_argument("--lmp", default="", help="LAMMPS binary, run beside trubal where given")
@@ -135,6 +142,30 @@ def main():
             print(f"  FAILED (rc {rc}): {' '.join(cmd)}\n{out[-2000:]}", flush=True)
         return rc, out, whole
 
+    def run_copies(cmds):
+        # Each copy pinned to its own core where taskset is at hand (as mpirun binds its ranks).
+        pin = shutil.which("taskset") is not None
+        procs = [subprocess.Popen((["taskset", "-c", str(c)] if pin else []) + cmd, cwd=work, env=env,
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+                 for c, cmd in enumerate(cmds)]
+        outs = []
+        for pr in procs:
+            try:
+                out, _ = pr.communicate(timeout=a.timeout)
+            except subprocess.TimeoutExpired:
+                pr.kill()
+                out, _ = pr.communicate()
+            outs.append(out if pr.returncode == 0 else "")
+        return outs
+
+    def loop_time(out, lammps):
+        if lammps:
+            m = re.search(rf"^Loop time of ([0-9.e+-]+) on .* for {a.steps} steps", out, re.M)
+        else:
+            m = list(re.finditer(rf"\({a.steps} cycles in ([0-9.e+-]+) s", out))
+            m = m[-1] if m else None
+        return float(m.group(1)) if m else None
+
     print(cpu_line())
     print(f"{a.steps} steps per run, {a.reps} repetition(s), ranks {a.ranks}", flush=True)
     rows = []
@@ -152,7 +183,25 @@ def main():
                 kinds.append(("lammps", mpirun + ["-np", str(p)] + shlex.split(a.lmp) +
                               ["-in", lmp_in, "-var", "data", os.path.join(work, name + ".data"),
                                "-var", "nsteps", str(a.steps), "-log", "none"]))
+            if a.copies and mode == "weak":
+                one, n1 = scenes[("weak", 1)]
+                kinds.append(("copies", [[trubal, deck_for(one, "serial")]] * p))
+                if a.lmp:
+                    kinds.append(("lmpcopies", [shlex.split(a.lmp) + ["-in", lmp_in, "-var", "data",
+                                  os.path.join(work, one + ".data"), "-var", "nsteps", str(a.steps), "-log", "none"]] * p))
             for kind, cmd in kinds:
+                if kind in ("copies", "lmpcopies"):
+                    outs = run_copies(cmd)
+                    times = [loop_time(o, kind == "lmpcopies") for o in outs]
+                    if not outs or None in times:
+                        print(f"  {kind} x{p}: a copy failed or printed no time", flush=True)
+                        continue
+                    row = dict(mode=mode, p=p, kind=kind, n=n1, rep=rep, step_s=statistics.median(times),
+                               whole_s=0.0, peaks=[], copies=times)
+                    rows.append(row)
+                    print(f"  {mode} P={p:<3d} {kind:9s} {p} x N={n1:<8d} median {row['step_s']:8.3f} s"
+                          f"  (min {min(times):.3f}, max {max(times):.3f})", flush=True)
+                    continue
                 rc, out, whole = run(cmd)
                 if rc != 0:
                     continue
@@ -211,6 +260,14 @@ def main():
             mp = t(mode, p, "mpi")
             ratio = f"{lp / mp:5.2f}x" if lp and mp else "-"
             print(f"  {p:3d} {n:8d} | {cols[0]} | {cols[1]} {mem:>11s} | {lcol} | {ratio}")
+        if mode == "weak" and any(k[2] == "copies" for k in med):
+            c1, lc1 = t("weak", 1, "copies"), t("weak", 1, "lmpcopies")
+            print("  P independent copies at once, each on 13,500 balls a core (median time; efficiency T1/Tp):")
+            for p in a.ranks:
+                cp, lc = t("weak", p, "copies"), t("weak", p, "lmpcopies")
+                tr = f"trubal {cp:7.3f} s {c1 / cp:5.2f}" if cp and c1 else "trubal -"
+                lm = f"LAMMPS {lc:7.3f} s {lc1 / lc:5.2f}" if lc and lc1 else "LAMMPS -"
+                print(f"  {p:3d}  {tr}   {lm}")
 
 
 if __name__ == "__main__":

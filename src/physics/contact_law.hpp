@@ -73,11 +73,18 @@ struct ContactBatch {
 // makes each shear spring as if it held (CoulombSpring::force): a lane whose spring would slide is
 // then marked state 2 and is to be made again with kCap. (Out of line: inlined into contact_forces
 // twice, g++ 12 lost the restrict of the history pointers and no longer vectorised the loop.)
-template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne>
+// kRest: with one law and dashpots, whether it has a restitution dashpot, tested here once
+// (dashpot.hpp, kRestPerLane).
+template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRestPerLane>
 [[gnu::noinline]] void contact_lanes(ContactBatch& B, std::size_t lane, std::size_t count, const PairLaw& law, double dt,
                                      double beta, const double* __restrict hx_in, const double* __restrict hy_in,
                                      const double* __restrict hz_in, double* __restrict hx_out,
                                      double* __restrict hy_out, double* __restrict hz_out) {
+  if constexpr (F.dashpot && kOneLaw && kRest == kRestPerLane) {
+    if (law.rest_xi > 0)
+      return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+    return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+  }
   using Model = ContactModel<F.law()>;
   using Normal = typename Model::Normal;
   using Tangential = typename Model::Tangential;
@@ -95,7 +102,13 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne>
     const double u = rsum - d;
     // Coincident centres (a ball launched onto another) have no direction: push along +z rather
     // than make NaN, and let the energy guard judge the outcome.
-    const double inv_d = d > 0 ? 1.0 / (d > 0 ? d : 1.0) : 0.0;
+    // The division made on every lane, of a denominator that is never 0: a positive d is at least
+    // 2.2e-162 (the square root of the least positive double), so d_safe is d wherever d > 0.
+    // (Written `d > 0 ? 1.0 / d : 0.0`, g++ keeps the division on that path alone, a division
+    // that may trap, which it vectorises only with AVX-512's masks: the AVX2 build was scalar.)
+    const double d_safe = d < 1e-200 ? 1e-200 : d;
+    const double inv_safe = 1.0 / d_safe;
+    const double inv_d = d > 0 ? inv_safe : 0.0;
     const double nx = dx * inv_d, ny = dy * inv_d, nz = d > 0 ? dz * inv_d : 1.0;
 
     // Relative velocity of j's contact point against i's: V = v_j - v_i - (R_i w_i + R_j w_j) x n.
@@ -110,7 +123,7 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne>
 
     const Springs k = Normal::springs(L, ri, rj, rsum, u, touching);
     double work_damping = 0, cn = 0;
-    const double fn = Damping::template normal<Normal>(k.fn, k.kn, F.dashpot ? B.mstar[q] : 0.0, L.rest_xi, beta, vn, dt, cn, work_damping);
+    const double fn = Damping::template normal<Normal, kRest>(k.fn, k.kn, F.dashpot ? B.mstar[q] : 0.0, L.rest_xi, beta, vn, dt, cn, work_damping);
 
     double sx = 0, sy = 0, sz = 0, work_friction = 0, strain_shear = 0, state = 1;
     double fsx = 0, fsy = 0, fsz = 0;

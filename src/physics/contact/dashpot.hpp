@@ -7,15 +7,26 @@
 
 namespace trubal {
 
+// Whether a lane's law has a restitution dashpot: tested on each lane (rest_xi > 0), or known for
+// the whole loop (every pair of one law: contact_lanes tests it once). Known, the loop holds no
+// test of a value that is the same on every lane, which g++ 12 turned into a select it does not
+// vectorise with AVX2. The same numbers each way: without, c is 0 and nothing is clamped.
+inline constexpr int kRestPerLane = 0, kRestOn = 1, kRestOff = 2;
+
 struct ContactDashpot {
   // F_n = F_spring + (beta k_n + c) (-V.n), clamped at 0 where c > 0; sets c and the work.
-  template <class Normal>
+  template <class Normal, int kRest = kRestPerLane>
   [[gnu::always_inline]] static double normal(double fn_spring, double kn, double mstar, double rest_xi, double beta, double vn,
                        double dt, double& cn, double& work) {
     const double km = kn * mstar;
-    cn = rest_xi > 0 ? Normal::kDashpotFactor * rest_xi * std::sqrt(km > 0 ? km : 0.0) : 0.0;
+    if constexpr (kRest == kRestOff) cn = 0.0;
+    else if constexpr (kRest == kRestOn) cn = Normal::kDashpotFactor * rest_xi * std::sqrt(km > 0 ? km : 0.0);
+    else cn = rest_xi > 0 ? Normal::kDashpotFactor * rest_xi * std::sqrt(km > 0 ? km : 0.0) : 0.0;
     double f_dash = (beta * kn + cn) * -vn;                              // dU/dt = -V.n
-    f_dash = cn > 0 && fn_spring + f_dash < 0 ? -fn_spring : f_dash;   // a restitution dashpot never pulls
+    // A restitution dashpot never pulls. (Both tests made, joined by &: with && g++ 12 made the
+    // select of an inverted, unordered test, which it does not vectorise with AVX2.)
+    const bool pulls = (cn > 0) & (fn_spring + f_dash < 0);
+    f_dash = pulls ? -fn_spring : f_dash;
     work = f_dash * -vn * dt;
     return fn_spring + f_dash;
   }

@@ -1,11 +1,13 @@
 // Damping part, off: no contact dashpot (mass and local damping act in the law of motion).
 #pragma once
 
+#include "physics/contact/dashpot.hpp"   // (kRestPerLane)
+
 namespace trubal {
 
 struct NoDashpot {
   // Normal force with the dashpot, its coefficient (time step) and the work it dissipates.
-  template <class Normal>
+  template <class Normal, int kRest = kRestPerLane>
   [[gnu::always_inline]] static double normal(double fn_spring, double, double, double, double, double, double, double&, double&) {
     return fn_spring;
   }
