@@ -262,7 +262,8 @@ def main():
             print(f"  {p:3d} {n:8d} | {cols[0]} | {cols[1]} {mem:>11s} | {lcol} | {ratio}")
         if mode == "weak" and any(k[2] == "copies" for k in med):
             c1, lc1 = t("weak", 1, "copies"), t("weak", 1, "lmpcopies")
-            print("  P independent copies at once, each on 13,500 balls a core (median time; efficiency T1/Tp):")
+            print(f"  P independent copies at once, each on {scenes[('weak', 1)][1]} balls, a core each (median time;"
+                  " efficiency T1/Tp):")
             for p in a.ranks:
                 cp, lc = t("weak", p, "copies"), t("weak", p, "lmpcopies")
                 tr = f"trubal {cp:7.3f} s {c1 / cp:5.2f}" if cp and c1 else "trubal -"
