@@ -205,19 +205,13 @@ def main():
                 rc, out, whole = run(cmd)
                 if rc != 0:
                     continue
-                if kind == "lammps":
-                    m = re.search(rf"^Loop time of ([0-9.e+-]+) on .* for {a.steps} steps", out, re.M)
-                    peaks = []
-                else:
-                    m = list(re.finditer(rf"\({a.steps} cycles in ([0-9.e+-]+) s", out))
-                    m = m[-1] if m else None
-                    pk = re.findall(r"^peak memory: ([0-9 ]+) MiB", out, re.M)
-                    peaks = [int(v) for v in pk[-1].split()] if pk else []
-                if not m:
+                step_s = loop_time(out, kind == "lammps")
+                if step_s is None:
                     print(f"  no stepping time in the output of {' '.join(cmd)}", flush=True)
                     continue
-                row = dict(mode=mode, p=p, kind=kind, n=n, rep=rep, step_s=float(m.group(1)),
-                           whole_s=whole, peaks=peaks)
+                pk = re.findall(r"^peak memory: ([0-9 ]+) MiB", out, re.M)   # (trubal's, per rank)
+                peaks = [int(v) for v in pk[-1].split()] if pk else []
+                row = dict(mode=mode, p=p, kind=kind, n=n, rep=rep, step_s=step_s, whole_s=whole, peaks=peaks)
                 rows.append(row)
                 print(f"  {mode} P={p:<3d} {kind:9s} N={n:<8d} {row['step_s']:8.3f} s  whole {whole:7.2f} s"
                       f"  peaks {peaks}", flush=True)

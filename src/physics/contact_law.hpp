@@ -102,13 +102,7 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
     const double u = rsum - d;
     // Coincident centres (a ball launched onto another) have no direction: push along +z rather
     // than make NaN, and let the energy guard judge the outcome.
-    // The division made on every lane, of a denominator that is never 0: a positive d is at least
-    // 2.2e-162 (the square root of the least positive double), so d_safe is d wherever d > 0.
-    // (Written `d > 0 ? 1.0 / d : 0.0`, g++ keeps the division on that path alone, a division
-    // that may trap, which it vectorises only with AVX-512's masks: the AVX2 build was scalar.)
-    const double d_safe = d < 1e-200 ? 1e-200 : d;
-    const double inv_safe = 1.0 / d_safe;
-    const double inv_d = d > 0 ? inv_safe : 0.0;
+    const double inv_d = d > 0 ? 1.0 / (d > 0 ? d : 1.0) : 0.0;
     const double nx = dx * inv_d, ny = dy * inv_d, nz = d > 0 ? dz * inv_d : 1.0;
 
     // Relative velocity of j's contact point against i's: V = v_j - v_i - (R_i w_i + R_j w_j) x n.

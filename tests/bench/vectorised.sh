@@ -2,8 +2,8 @@
 # Whether the contact law's batch loop (physics/contact_law.hpp, contact_lanes) was compiled to SIMD
 # code: each instantiation in the binary must hold packed double arithmetic (mulpd, vmulpd, ...),
 # not only scalar (mulsd). g++ 12 once left the loop scalar on AVX2 machines, where a division it
-# kept on one path of a select could trap (CMakeLists.txt, -fno-trapping-math): 2.4 times slower,
-# with the same answers, so no other test saw it. Exit 77 (skipped) where it cannot look: not
+# kept on one path of a select could trap (CMakeLists.txt, -fno-trapping-math): the dense block's
+# step 1.3 times slower, with the same answers, so no other test saw it. Exit 77 (skipped) where it cannot look: not
 # x86-64, or no objdump.
 #   tests/bench/vectorised.sh BINARY
 set -eu

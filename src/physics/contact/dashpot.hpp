@@ -23,10 +23,7 @@ struct ContactDashpot {
     else if constexpr (kRest == kRestOn) cn = Normal::kDashpotFactor * rest_xi * std::sqrt(km > 0 ? km : 0.0);
     else cn = rest_xi > 0 ? Normal::kDashpotFactor * rest_xi * std::sqrt(km > 0 ? km : 0.0) : 0.0;
     double f_dash = (beta * kn + cn) * -vn;                              // dU/dt = -V.n
-    // A restitution dashpot never pulls. (Both tests made, joined by &: with && g++ 12 made the
-    // select of an inverted, unordered test, which it does not vectorise with AVX2.)
-    const bool pulls = (cn > 0) & (fn_spring + f_dash < 0);
-    f_dash = pulls ? -fn_spring : f_dash;
+    f_dash = cn > 0 && fn_spring + f_dash < 0 ? -fn_spring : f_dash;   // a restitution dashpot never pulls
     work = f_dash * -vn * dt;
     return fn_spring + f_dash;
   }
