@@ -30,14 +30,12 @@ echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; $S
 "$HERE/core_speeds.sh"   # a lopsided machine shows beside its figures
 for N in $SIZES; do
   [ -f "$W/fcc_$N.xyz" ] || { echo "no scene with N=$N (1680, 13500, 108000)" >&2; exit 2; }
-  python3 - "$W" "$N" "$STEPS" "$RANKS" <<'PY'
+  python3 - "$W" "$N" "$STEPS" "$RANKS" "$HERE" <<'PY'
 import sys
 w, n, steps, ranks = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split()
-lines = open(f"{w}/fcc_{n}.xyz").read().split("\n")
-count, lx, ly, lz = lines[0].split()
-body = [f"START {lx} {ly} {lz}", "PROP KN 1.5E9 KS 1.5E9 MU 0.12278 DENS 2000"]
-body += [f"BALL {l} 20 ID {i}" for i, l in enumerate(lines[1:int(count) + 1], 1)]
-body += ["TSTEP 0.02"]
+sys.path.insert(0, sys.argv[5])
+from fcc_deck import fcc_body
+body = fcc_body(f"{w}/fcc_{n}.xyz")
 backends = {"serial": "BACKEND serial"}
 for p in ranks:
     if p != "1":
