@@ -134,7 +134,9 @@ const Command hist_command = {
     "run does not fill the memory; without `file` every row stays in memory. A file that is there already is "
     "started afresh (`new`, the default; without the word HIST says how many rows of an earlier run it "
     "replaced), or with `append` kept up to the present cycle (later rows, of a later part of the run that "
-    "wrote it, are dropped) and added to; its columns must be this HIST's. A second HIST on the file of a live "
+    "wrote it, are dropped, the file cut where they start and its bytes before kept as they were) and added "
+    "to, the file read a row at a time (memory keeps its last 10,000 rows, however long it is); its columns "
+    "must be this HIST's. A second HIST on the file of a live "
     "history is refused, unless it asks for the same quantities every the same period: then that history goes "
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",

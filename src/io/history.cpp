@@ -7,6 +7,9 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
+#include <fstream>
+#include <optional>
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
@@ -77,28 +80,54 @@ std::string csv_row(const std::vector<double>& row) {
   return line;
 }
 
-// The data rows of an existing history file, or nullopt when there is no such file (or it is
-// empty). Throws for a file that is there but not a history (read_history_csv's message).
-std::unique_ptr<HistoryTable> existing(const std::string& path) {
+// An earlier run's history file, read a row at a time: its columns, and about its rows, split at the
+// first one past `cycle` (that row and all after it are of a part of the run that is not this one):
+// the count before it, their first and last cycles and the last kWindow of them; the count from it
+// on, their first and last cycles, and the byte its line starts at.
+struct FileRows {
+  std::vector<std::string> columns;
+  std::size_t kept = 0, dropped = 0;
+  double first_kept = 0, last_kept = 0, first_dropped = 0, last_dropped = 0;
+  std::deque<std::vector<double>> tail;   // the last kWindow rows kept
+  std::uint64_t cut = 0;                  // where the first row dropped starts
+
+  std::string kept_cycles() const { return kept ? span(first_kept, last_kept) : std::string(); }
+  std::string dropped_cycles() const { return dropped ? span(first_dropped, last_dropped) : std::string(); }
+  static std::string span(double a, double b) { return fmt::format(" (cycles {} to {})", csv_real(a), csv_real(b)); }
+};
+
+// The rows of an existing history file (every row kept where `cycle` is the largest), or nullopt
+// when there is no such file (or it is empty). Throws for a file that is there but not a history
+// (read_history_csv's message).
+std::optional<FileRows> existing(const std::string& path, double cycle = std::numeric_limits<double>::infinity()) {
   std::error_code ec;
   // Only a regular file can hold an earlier run's rows: a device (/dev/full, /dev/null) or a fifo
   // is written to, never read (reading /dev/full never ends).
-  if (!std::filesystem::is_regular_file(path, ec) || std::filesystem::file_size(path, ec) == 0 || ec) return nullptr;
-  return read_history_csv(path);
-}
-
-std::string cycles_of(const std::vector<std::vector<double>>& rows) {
-  if (rows.empty()) return "";
-  return fmt::format(" (cycles {} to {})", csv_real(rows.front()[0]), csv_real(rows.back()[0]));
+  if (!std::filesystem::is_regular_file(path, ec) || std::filesystem::file_size(path, ec) == 0 || ec) return std::nullopt;
+  FileRows f;
+  scan_history_csv(
+      path, [&](std::vector<std::string>& columns) { f.columns = std::move(columns); },
+      [&](std::vector<double>& row, std::uint64_t offset) {
+        if (f.dropped == 0 && !(row[0] > cycle)) {
+          if (f.kept++ == 0) f.first_kept = row[0];
+          f.last_kept = row[0];
+          f.tail.push_back(std::move(row));
+          if (f.tail.size() > HistoryTable::kWindow) f.tail.pop_front();
+          return;
+        }
+        if (f.dropped++ == 0) { f.first_dropped = row[0]; f.cut = offset; }
+        f.last_dropped = row[0];
+      });
+  return f;
 }
 
 }  // namespace
 
 std::string History::append_to_file(HistoryTable& t, std::int64_t cycle, bool resumed) {
-  std::unique_ptr<HistoryTable> old;
+  std::optional<FileRows> old;
   std::string why_afresh;
   try {
-    old = existing(t.file);
+    old = existing(t.file, static_cast<double>(cycle));
     if (!old) why_afresh = "it was not there";
   } catch (const std::runtime_error& e) {
     if (!resumed) throw std::runtime_error(fmt::format("cannot append to '{}': {}", t.file, e.what()));
@@ -128,29 +157,33 @@ std::string History::append_to_file(HistoryTable& t, std::int64_t cycle, bool re
     return note;
   }
   // Keep the rows up to the present cycle; later ones are of a part of the run that is not this one.
-  auto& rows = old->rows;
-  const auto later = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return r[0] > static_cast<double>(cycle); });
-  const std::size_t dropped = static_cast<std::size_t>(rows.end() - later);
-  std::vector<std::vector<double>> dropped_rows(later, rows.end());
-  rows.erase(later, rows.end());
+  // The file is cut where they start, its bytes before that copied as they are (through a
+  // temporary and a rename: a failure leaves the file whole).
   std::string dropped_note;
-  if (dropped > 0) {
-    std::string text;
-    text += fmt::format("{}\n", fmt::join(t.columns, ","));
-    for (const auto& row : rows) text += csv_row(row);
-    write_file_atomically(t.file, text);
+  if (old->dropped > 0) {
+    const std::uint64_t cut = old->cut;
+    write_file_atomically(t.file, [&](std::ostream& to) {
+      std::ifstream from(t.file, std::ios::binary);
+      std::vector<char> buffer(1 << 16);
+      for (std::uint64_t left = cut; left > 0;) {
+        const auto n = static_cast<std::streamsize>(std::min<std::uint64_t>(left, buffer.size()));
+        if (!from.read(buffer.data(), n))
+          throw std::runtime_error(fmt::format("cannot read the history file '{}' again", t.file));
+        to.write(buffer.data(), n);
+        left -= static_cast<std::uint64_t>(n);
+      }
+    });
     dropped_note = fmt::format("dropped its {} rows after cycle {}{}, of a later part of the run that wrote it",
-                               dropped, cycle, cycles_of(dropped_rows));
+                               old->dropped, cycle, old->dropped_cycles());
   }
   std::string note;
   if (!resumed)
-    note = fmt::format("{}: appending to its {} rows{}{}", t.file, rows.size(), cycles_of(rows),
+    note = fmt::format("{}: appending to its {} rows{}{}", t.file, old->kept, old->kept_cycles(),
                        dropped_note.empty() ? "" : "; " + dropped_note);
   else if (!dropped_note.empty())
     note = fmt::format("{}: {}", t.file, dropped_note);
-  t.recorded = rows.size();
-  const std::size_t keep = std::min(rows.size(), HistoryTable::kWindow);
-  t.rows.assign(rows.end() - static_cast<std::ptrdiff_t>(keep), rows.end());
+  t.recorded = old->kept;
+  t.rows.assign(std::make_move_iterator(old->tail.begin()), std::make_move_iterator(old->tail.end()));
   t.out = std::make_unique<std::ofstream>(t.file, std::ios::app);
   if (!*t.out) throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", t.file, std::strerror(errno)));
   return note;
@@ -199,11 +232,11 @@ HistoryAdded History::add(std::vector<std::string> items, std::int64_t every, co
       note = append_to_file(*t, cycle, false);
     } else {
       if (mode == HistoryFileMode::Default) {
-        std::unique_ptr<HistoryTable> old;
+        std::optional<FileRows> old;
         try { old = existing(file); } catch (const std::runtime_error&) {}
-        if (old && !old->rows.empty())
+        if (old && old->kept > 0)
           note = fmt::format("{}: replaced its {} rows{} of an earlier run (HIST ... append keeps them; `new` replaces them without this note)", file,
-                             old->rows.size(), cycles_of(old->rows));
+                             old->kept, old->kept_cycles());
       }
       t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
       if (!*t->out)
@@ -412,14 +445,13 @@ std::pair<const HistoryTable*, std::size_t> History::find_column(const std::stri
   return {nullptr, 0};
 }
 
-std::unique_ptr<HistoryTable> read_history_csv(const std::string& path) {
+void scan_history_csv(const std::string& path, const std::function<void(std::vector<std::string>&)>& header,
+                      const std::function<void(std::vector<double>&, std::uint64_t offset)>& row_read) {
   std::error_code ec;
   if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
     throw std::runtime_error(fmt::format("the history file '{}' is not a regular file", path));
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(fmt::format("cannot open the history file '{}'", path));
-  auto table = std::make_unique<HistoryTable>();
-  table->file = path;
   auto split = [](const std::string& line) {
     std::vector<std::string> cells;
     std::size_t start = 0;
@@ -432,19 +464,25 @@ std::unique_ptr<HistoryTable> read_history_csv(const std::string& path) {
   };
   std::string line;
   int line_no = 0;
+  std::size_t columns = 0;
+  std::uint64_t offset = 0, next = 0;   // where this line starts, and the next
+  std::vector<double> row;
   while (std::getline(in, line)) {
     ++line_no;
+    offset = next;
+    next += line.size() + 1;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
     auto cells = split(line);
-    if (table->columns.empty()) {
-      table->columns = std::move(cells);
+    if (columns == 0) {
+      columns = cells.size();
+      header(cells);
       continue;
     }
-    if (cells.size() != table->columns.size())
+    if (cells.size() != columns)
       throw std::runtime_error(fmt::format("{}:{}: {} values where the header has {} columns", path, line_no,
-                                           cells.size(), table->columns.size()));
-    std::vector<double> row;
+                                           cells.size(), columns));
+    row.clear();
     for (const auto& c : cells) {
       char* end = nullptr;
       double v = std::strtod(c.c_str(), &end);
@@ -452,9 +490,18 @@ std::unique_ptr<HistoryTable> read_history_csv(const std::string& path) {
         throw std::runtime_error(fmt::format("{}:{}: '{}' is not a number", path, line_no, c));
       row.push_back(v);
     }
-    table->rows.push_back(std::move(row));
+    row_read(row, offset);
   }
-  if (table->columns.empty()) throw std::runtime_error(fmt::format("'{}' is empty: no header row", path));
+  if (in.bad()) throw std::runtime_error(fmt::format("cannot read the history file '{}'", path));
+  if (columns == 0) throw std::runtime_error(fmt::format("'{}' is empty: no header row", path));
+}
+
+std::unique_ptr<HistoryTable> read_history_csv(const std::string& path) {
+  auto table = std::make_unique<HistoryTable>();
+  table->file = path;
+  scan_history_csv(
+      path, [&](std::vector<std::string>& columns) { table->columns = std::move(columns); },
+      [&](std::vector<double>& row, std::uint64_t) { table->rows.push_back(row); });
   table->recorded = table->rows.size();
   return table;
 }

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -111,5 +112,10 @@ MeasureSphere measure_item_sphere(const std::string& item);
 // Reads a CSV file written by HIST ... file (a header row, then rows of numbers) as a table whose
 // `file` is the path. Throws std::runtime_error naming the file and line of anything malformed.
 std::unique_ptr<HistoryTable> read_history_csv(const std::string& path);
+// The same file a row at a time, nothing kept (a long `every 1` run's file may hold millions of
+// rows): `header` gets the column names, then `row` each row of numbers and the byte offset where
+// its line starts. The same checks and messages as read_history_csv.
+void scan_history_csv(const std::string& path, const std::function<void(std::vector<std::string>&)>& header,
+                      const std::function<void(std::vector<double>&, std::uint64_t offset)>& row);
 
 }  // namespace trubal

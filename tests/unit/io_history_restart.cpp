@@ -3,6 +3,9 @@
 #include <catch2/catch.hpp>
 
 #include <cstring>
+#include <fstream>
+
+#include <fmt/format.h>
 
 #include "io/save.hpp"
 #include "io_support.hpp"
@@ -18,6 +21,12 @@ const std::string kScene = std::string(kPressedRow) + "grav 0 0 -9.81\n";
 std::size_t data_rows(const std::string& csv) {
   const auto lines = lines_of(csv);
   return lines.empty() ? 0 : lines.size() - 1;
+}
+
+void write_text(const fs::path& p, const std::string& text) {
+  std::ofstream f(p, std::ios::binary | std::ios::trunc);
+  f << text;
+  REQUIRE(f.good());
 }
 
 }  // namespace
@@ -121,6 +130,56 @@ TEST_CASE("io history: HIST ... file on a file of an earlier run replaces it (sa
     CHECK_THAT(h.first_error_line(), Catch::StartsWith("deck.dat:10: error: cannot append to 'h.csv': its columns are "
                                                        "cycle,time,s11"));
     CHECK(data_rows(slurp(dir.path() / "h.csv")) == 8);   // untouched
+  }
+}
+
+TEST_CASE("io history: `append` reads a long file a row at a time, keeping its bytes and the last rows",
+          "[io][history]") {
+  // A long `every 1` run's file may hold millions of rows: HIST ... append keeps the last kWindow of
+  // them in memory (what PRINT history and the SAVE keep), and where it drops rows after the present
+  // cycle it cuts the file there, its bytes before the cut as they were (here a number written
+  // "2.50", as a spreadsheet might, and CRLF line ends), rather than writing the rows kept again.
+  TempDir dir;
+  WorkingDir cd(dir.path());
+  const std::string header = "cycle,time,s11,s22,s33,s12,s13,s23\r\n";
+  auto row = [](double cycle, int k) {
+    return fmt::format("{},{},2.50,{},0,0,0,0\r\n", cycle, 0.001 * k, k);
+  };
+  SECTION("rows past the present cycle are cut off, the rest byte for byte") {
+    std::string kept = header, all;
+    for (int k = 1; k <= 20; ++k) kept += row(k, k);
+    all = kept;
+    for (int k = 21; k <= 25000; ++k) all += row(k, k);
+    write_text(dir.path() / "h.csv", all);
+    Harness h;
+    REQUIRE(h.deck(kScene + "cycle 20\nhist stress every 5 file h.csv append\n"));
+    CHECK_THAT(h.err.str(), Catch::Contains("appending to its 20 rows (cycles 1 to 20); dropped its 24980 rows after "
+                                            "cycle 20 (cycles 21 to 25000)"));
+    CHECK(slurp(dir.path() / "h.csv") == kept);
+    const HistoryTable& t = *h.session.history().tables()[0];
+    CHECK(t.recorded == 20);
+    REQUIRE(t.rows.size() == 20);
+    CHECK(t.rows.front()[0] == 1);
+    CHECK(t.rows.back()[3] == 20);   // s22 of the last row kept
+  }
+  SECTION("every row kept: the file untouched, the last kWindow rows in memory") {
+    // 25,000 rows, their cycles below the present one (fractions of a cycle, which the file allows).
+    std::string all = header;
+    for (int k = 1; k <= 25000; ++k) all += row(k / 2000.0, k);
+    write_text(dir.path() / "h.csv", all);
+    Harness h;
+    REQUIRE(h.deck(kScene + "cycle 20\nhist stress every 5 file h.csv append\n"));
+    CHECK_THAT(h.err.str(), Catch::Contains("h.csv: appending to its 25000 rows (cycles 0.0005 to 12.5)"));
+    CHECK(slurp(dir.path() / "h.csv") == all);
+    const HistoryTable& t = *h.session.history().tables()[0];
+    CHECK(t.recorded == 25000);
+    REQUIRE(t.rows.size() == HistoryTable::kWindow);
+    CHECK(t.rows.front()[3] == 25000 - HistoryTable::kWindow + 1);
+    CHECK(t.rows.back()[3] == 25000);
+    REQUIRE(h.deck("cycle 5\n"));   // and the next row goes after them
+    CHECK(t.recorded == 25001);
+    const auto lines = lines_of(slurp(dir.path() / "h.csv"));
+    CHECK(lines.back().rfind("25,", 0) == 0);
   }
 }
 
