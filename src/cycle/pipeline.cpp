@@ -32,20 +32,18 @@ constexpr std::size_t kParallelBalls = 8192;
 // balls numbered far from their places (read from another program's file in random order), which
 // the split by numbers shares badly (each such pair is computed twice, its balls scattered). A part
 // copies its balls, so smaller scenes and well numbered ones keep the split by numbers. The two
-// bounds are not tuned: measured only at the extremes (the peers' settle scene, numbered at random,
-// half its pairs across: in space 1.6x one thread, by numbers no faster than one).
+// bounds are not tuned: they were measured only at the extremes (the peers' settle scene, numbered
+// at random, half its pairs across, where the split by numbers was no faster than one thread and
+// the split in space was; doc/speed.md "Threads").
 constexpr std::size_t kSpaceBalls = 4096;
 constexpr double kSpaceCross = 0.25;
 // From kSpaceLarge balls on, the threads share in space however well the balls are numbered: each
-// part's balls, pairs and sums are then compact arrays of its own. Measured at two sizes only
-// (Intel(R) Xeon(R) Processor, 2 threads, the peers' dense FCC block numbered in lattice order,
-// 2026-12-04): 13,500 balls, the same time either way (1.89-2.00 s against 1.91-2.02 s for 2000
-// steps); 108,000 balls, 2.33-2.41 s in space against 2.70-2.84 s by numbers for 300 steps, at
-// 256 MiB peak against 216 MiB (the parts are copies). Such steps are not timed against one
-// thread (below, in step()).
-// Up to kSpaceLargeMax balls: beyond, the parts' copies (about 0.8 KB a ball more: 1876 against
-// 1051 MiB by numbers at 1,000,188 balls of the dense block, trubal_bench --backend threaded) are
-// the larger cost, and a million balls should stay at about 1 GiB on the threads (issue 22).
+// part's balls, pairs and sums are then compact arrays of its own, which was faster on the dense
+// FCC block at 108,000 balls and no slower at 13,500, the only two sizes measured (bench/NOTES.md,
+// "Threads in space from 50,000 balls"). Such steps are not timed against one thread (below, in
+// step()). Up to kSpaceLargeMax balls: beyond, the parts' copies (about 0.8 KB a ball more) are the
+// larger cost, and a million balls should stay within about 1 GiB on the threads as they do
+// serially (doc/speed.md "Memory").
 constexpr std::size_t kSpaceLarge = 50000, kSpaceLargeMax = 500000;
 bool large_in_space(std::size_t balls) { return balls >= kSpaceLarge && balls < kSpaceLargeMax; }
 

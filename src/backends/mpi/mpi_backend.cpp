@@ -12,7 +12,7 @@
 namespace trubal {
 namespace {
 
-// The distributed backend (issue 17): every rank holds the whole model between steps that need it;
+// The distributed backend (BACKEND mpi, doc/distributed.md): every rank holds the whole model between steps that need it;
 // the step itself is shared by a spatial decomposition (cycle/brick_step.hpp), whose parts rebuild
 // their own lists (Backend::find_part_pairs). A search through the whole model is the serial one, shared: each rank searches the pairs whose lower ball i is in its range of indices
 // (consecutive ranges, ascending by rank), and every rank joins the ranks' lists in rank order,
