@@ -127,7 +127,7 @@ const Command hist_command = {
     "sratio is sigma1/sigma3 of the assembly itself: s33 over the mean of s11 and s22 of its average stress "
     "from the contact forces (Love's formula over every contact; the volume cancels), which for Rowe's "
     "test is F1 / (S sigma2) with S the section through the perimeter balls' centres, where the membrane "
-    "acts (README). "
+    "acts (doc/validation.md, 5). "
     "platen is the z reaction force of the balls in the range (all balls without one). With `file` the rows "
     "are written as CSV (header cycle,time,... then one row per record, flushed as they come), and memory keeps "
     "only the last 10,000 to 20,000 (PRINT history shows those, PLOT reads the file back), so a long `every 1` "
