@@ -34,7 +34,7 @@ constexpr std::size_t kParallelBalls = 8192;
 // copies its balls, so smaller scenes and well numbered ones keep the split by numbers. The two
 // bounds are not tuned: they were measured only at the extremes (the peers' settle scene, numbered
 // at random, half its pairs across, where the split by numbers was no faster than one thread and
-// the split in space was; doc/speed.md "Threads").
+// the split in space was; doc/speed.md "Threads and the numbering of the balls").
 constexpr std::size_t kSpaceBalls = 4096;
 constexpr double kSpaceCross = 0.25;
 // From kSpaceLarge balls on, the threads share in space however well the balls are numbered: each
