@@ -1,0 +1,17 @@
+// The law-of-motion loops.
+#include "cycle/kernel_loops.hpp"
+
+namespace trubal::loops {
+namespace {
+
+template <std::size_t... I>
+constexpr std::array<MotionLoop, sizeof...(I)> motion_table(std::index_sequence<I...>) {
+  return {&motion_loop<MotionFeatures::from_index(0 + I)>...};
+}
+constexpr auto kTable = motion_table(std::make_index_sequence<MotionFeatures::kCount>{});
+
+}  // namespace
+
+MotionLoop motion_loop_at(unsigned i) { return kTable.at(i - 0); }
+
+}  // namespace trubal::loops
