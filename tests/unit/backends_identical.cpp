@@ -105,32 +105,32 @@ ThreadedRun run_threaded(const Scene& scene, const Model& serial_model, int cycl
 
 }  // namespace
 
-TEST_CASE("backends: dense FCC under compression with friction, bitwise on every backend", "[backends]") {
+TEST_CASE("backends: dense FCC under compression with friction, bitwise on every backend", "[backends][threads]") {
   Scene s = fcc_compression(9, 8, 8);   // 2304 balls, about 15,000 pairs: 8 pair blocks, 2 ball blocks
   REQUIRE(s.model.balls.size() > 2 * 2048 / 2);
   check_scene(s);
 }
 
-TEST_CASE("backends: polydisperse settling under gravity onto fixed balls, bitwise", "[backends]") {
+TEST_CASE("backends: polydisperse settling under gravity onto fixed balls, bitwise", "[backends][threads]") {
   check_scene(settling(14, 12, 250));   // 196 held + 2352 falling
 }
 
-TEST_CASE("backends: Hertz-Mindlin with restitution, bitwise", "[backends]") {
+TEST_CASE("backends: Hertz-Mindlin with restitution, bitwise", "[backends][threads]") {
   check_scene(hertz_block(7));   // 1372 balls
 }
 
-TEST_CASE("backends: Rayleigh damping, bitwise", "[backends]") {
+TEST_CASE("backends: Rayleigh damping, bitwise", "[backends][threads]") {
   check_scene(rayleigh_cloud(13));   // 2197 balls
 }
 
-TEST_CASE("backends: a sheared periodic cell, images renamed mid-run, bitwise", "[backends][periodic]") {
+TEST_CASE("backends: a sheared periodic cell, images renamed mid-run, bitwise", "[backends][periodic][threads]") {
   const Scene scene = sheared_periodic(12, 300);   // 1728 balls
   const Model reference = run(scene, "serial", 1, scene.cycles);
   REQUIRE(reference.space.tilt[0] < 0);   // the xy tilt passed half an edge and the images were renamed
   check_scene(scene);
 }
 
-TEST_CASE("backends: a periodic cell under the servo, bitwise", "[backends][periodic]") {
+TEST_CASE("backends: a periodic cell under the servo, bitwise", "[backends][periodic][threads]") {
   // The servo reads the stress and stiffness the contact loops sum per pair block.
   Scene scene = sheared_periodic(10, 300);   // 1000 balls
   scene.model.space.servo_on = {true, true, false};
@@ -141,7 +141,7 @@ TEST_CASE("backends: a periodic cell under the servo, bitwise", "[backends][peri
   check_scene(scene);
 }
 
-TEST_CASE("backends: threads share a step only where it pays, with the same answer", "[backends]") {
+TEST_CASE("backends: threads share a step only where it pays, with the same answer", "[backends][threads]") {
   // Whether two threads share the step is timed (a trial of shared and one-thread chunks within the
   // first 128 steps), so which way it goes depends on the machine; every way gives the serial bits,
   // and PRINT info says when one thread does the work. Numbered layer by layer, the pairs stay near
@@ -169,7 +169,7 @@ TEST_CASE("backends: threads share a step only where it pays, with the same answ
 }
 
 TEST_CASE("backends: threads share the step in space where ball numbers are far from the places, same answer",
-          "[backends]") {
+          "[backends][threads]") {
   // 4400 balls (at least kSpaceBalls). Numbered layer by layer, a split of the numbers in two
   // leaves few pairs across the halves: the threads share by numbers. Numbered by layer parity,
   // about two pairs in three join the halves: they share in space, a part each. Both the serial bits.
@@ -193,7 +193,7 @@ TEST_CASE("backends: threads share the step in space where ball numbers are far 
 }
 
 TEST_CASE("backends: the split in space falls back to one thread where the trial times it slower, same answer",
-          "[backends]") {
+          "[backends][threads]") {
   // 4400 balls numbered by layer parity: the list says in space. The trial (cycle/timed_choice.hpp,
   // 128 steps from the first) times the split in space against one thread; its in-space steps
   // counted 1000 times slower, one thread must win (and the steps after it run on one thread), a
@@ -218,7 +218,7 @@ TEST_CASE("backends: the split in space falls back to one thread where the trial
 }
 
 TEST_CASE("backends: a large scene shares the step in space however it is numbered and untimed with the serial bits",
-          "[backends]") {
+          "[backends][threads]") {
   // 50,784 balls numbered layer by layer (few pairs across a split by numbers): from kSpaceLarge
   // (50,000) balls the threads share in space anyway, each part compact, and without the timed
   // trial against one thread (each switch would make the parts afresh). The in-space steps counted
@@ -235,7 +235,7 @@ TEST_CASE("backends: a large scene shares the step in space however it is number
   CHECK(r.threads_used == 2);
 }
 
-TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewer balls), same answer", "[backends]") {
+TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewer balls), same answer", "[backends][threads]") {
   // Member 1's work counted eight times slower (BrickStep::slow_member_for_test, as a core the
   // machine slows would be): from the second decomposition on, its share of the balls falls below
   // half, halfway to its speed's (clamped at half an equal share) at each split, each move more than
@@ -262,7 +262,7 @@ TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewe
   CHECK(static_cast<double>(least) < 0.9 * static_cast<double>(most));
 }
 
-TEST_CASE("backends: the periodic pair search finds what testing every pair at its nearest image finds", "[backends][periodic]") {
+TEST_CASE("backends: the periodic pair search finds what testing every pair at its nearest image finds", "[backends][periodic][threads]") {
   // The search takes each pair's image from the bins (no rounding); testing every pair i < j at its
   // nearest image (nearest_image_within) must give the same pairs, images and order. A cell sheared
   // past half an edge (tilted, images renamed) and a cubic one, with a skin.
@@ -298,11 +298,11 @@ TEST_CASE("backends: the periodic pair search finds what testing every pair at i
   }
 }
 
-TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[backends]") {
+TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[backends][threads]") {
   check_scene(settling(9, 8, 3000), false);   // 81 held + 648 falling; two threads only
 }
 
-TEST_CASE("backends: switching backend mid-run gives the same result as not switching", "[backends]") {
+TEST_CASE("backends: switching backend mid-run gives the same result as not switching", "[backends][threads]") {
   const Scene scene = settling(14, 10, 240);
   const Picture expected = picture(run(scene, "serial", 1, scene.cycles));
   const char* order[][2] = {{"serial", "allpairs"}, {"allpairs", "threaded"}, {"threaded", "serial"},
@@ -322,7 +322,7 @@ TEST_CASE("backends: switching backend mid-run gives the same result as not swit
   }
 }
 
-TEST_CASE("backends: allpairs finds exactly the touching pairs, as brute force does", "[backends]") {
+TEST_CASE("backends: allpairs finds exactly the touching pairs, as brute force does", "[backends][threads]") {
   Scene scene = fcc_compression(4, 4, 5);
   auto backend = make_pipeline("allpairs", 2);
   backend->prepare(scene.model);
@@ -337,7 +337,7 @@ TEST_CASE("backends: allpairs finds exactly the touching pairs, as brute force d
   CHECK(touching > 1000);
 }
 
-TEST_CASE("backends: allpairs refuses more pair slots than maxmem allows, before taking them", "[backends]") {
+TEST_CASE("backends: allpairs refuses more pair slots than maxmem allows, before taking them", "[backends][threads]") {
   Scene scene = rayleigh_cloud(6);   // 216 balls: 23,220 pair slots of one byte
   const Picture before = picture(scene.model);
   auto backend = make_pipeline("allpairs", 2, 20000);
@@ -355,7 +355,7 @@ TEST_CASE("backends: allpairs refuses more pair slots than maxmem allows, before
   CHECK_THROWS_AS(make_pipeline("serial", 1, 1), std::invalid_argument);
 }
 
-TEST_CASE("backends: threads default to the machine's and are reported", "[backends]") {
+TEST_CASE("backends: threads default to the machine's and are reported", "[backends][threads]") {
   CHECK(make_pipeline("threaded", 0)->threads() >= 1);
   CHECK(make_pipeline("threaded", 3)->threads() == 3);
   CHECK(make_pipeline("allpairs", 2)->threads() == 2);
@@ -363,7 +363,7 @@ TEST_CASE("backends: threads default to the machine's and are reported", "[backe
   CHECK_THROWS_AS(make_pipeline("serial", 2), std::invalid_argument);
 }
 
-TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread count", "[backends]") {
+TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread count", "[backends][threads]") {
   // 2548, 4913, 2048 balls, and a periodic cell of 4096 (searched on every thread from 4096 on)
   for (Scene scene : {settling(14, 12, 0), rayleigh_cloud(17), fcc_compression(8, 8, 8), sheared_periodic(16, 0)}) {
     INFO(scene.name);
@@ -384,7 +384,7 @@ TEST_CASE("backends: threaded builds the serial pair list exactly, on any thread
 }
 
 TEST_CASE("backends: allpairs tests every pair once per step, the first step of a CYCLE included",
-          "[backends]") {
+          "[backends][threads]") {
   Scene scene = fcc_compression(3, 3, 3);   // 108 balls: 5,778 pair slots
   auto backend = make_pipeline("allpairs", 1);
   const std::size_t n = scene.model.balls.size(), slots = n * (n - 1) / 2;

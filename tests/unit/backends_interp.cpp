@@ -37,7 +37,7 @@ Files run_deck(const std::string& cycling) {
 
 }  // namespace
 
-TEST_CASE("backends: a deck writes byte-identical balls and contacts files on every backend", "[backends]") {
+TEST_CASE("backends: a deck writes byte-identical balls and contacts files on every backend", "[backends][threads]") {
   const Files serial = run_deck("cycle 900\n");
   REQUIRE(lines_of(serial.contacts).size() > 300);
   const char* variants[] = {"backend threaded threads 1\ncycle 900\n", "backend threaded threads 2\ncycle 900\n",
@@ -54,7 +54,7 @@ TEST_CASE("backends: a deck writes byte-identical balls and contacts files on ev
   }
 }
 
-TEST_CASE("backends: PRINT info names the backend and its threads", "[backends]") {
+TEST_CASE("backends: PRINT info names the backend and its threads", "[backends][threads]") {
   Harness h;
   REQUIRE(h.line("backend threaded threads 3"));
   CHECK(h.out.str() == "backend threaded (3 threads)\n");
@@ -86,7 +86,7 @@ TEST_CASE("backends: allpairs above maxmem stops CYCLE with a clear error, model
 }
 
 TEST_CASE("backends: PRINT info reports the boxes of the search that ran, the periodic one's in a periodic space",
-          "[backends]") {
+          "[backends][threads]") {
   // A box space: the boxes of TRUBAL's search. A box with periodic x and y: the periodic search's
   // bins (the boxes are never made; reporting their empty 1 x 1 x 1 misled).
   for (const char* backend : {"serial", "threaded threads 2"}) {

@@ -164,7 +164,7 @@ TEST_CASE("commands: GEN places non-overlapping balls reproducibly and says when
   CHECK(d.first_error_line().find("1000 balls of radius 2 or more cannot fit in the space (at most 22.1") != std::string::npos);
 }
 
-TEST_CASE("commands: GEN numbers its balls in space order", "[commands]") {
+TEST_CASE("commands: GEN numbers its balls in space order", "[commands][threads]") {
   // By cells of the largest diameter (8 here), z slowest, then y, then x: balls near in space are
   // near in number, which the threaded backend's split into number ranges needs. Generation order
   // would put neighbours anywhere in the numbering.

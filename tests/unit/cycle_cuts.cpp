@@ -6,6 +6,7 @@
 // column sums of those files), so that a change that shifts every backend and cut alike fails
 // too. TRUBAL_UPDATE_REFERENCES=1 rewrites the references instead (after an intended change of
 // the physics; say why in the commit).
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -333,33 +334,33 @@ void check_scene_mpi(const Scene& scene) {
 
 }  // namespace
 
-TEST_CASE("cycle cuts: servo, strain and shear strain in a periodic cell", "[cuts][backends]") {
+TEST_CASE("cycle cuts: servo, strain and shear strain in a periodic cell", "[cuts][backends][system][threads]") {
   check_scene(kServoShear);
 }
 
-TEST_CASE("cycle cuts: Hertz, dashpots, Rayleigh damping, gravity and applied loads", "[cuts][backends]") {
+TEST_CASE("cycle cuts: Hertz, dashpots, Rayleigh damping, gravity and applied loads", "[cuts][backends][system][threads]") {
   check_scene(kHertzDrop);
 }
 
-TEST_CASE("cycle cuts: Rowe's test with the membrane and moving platens", "[cuts][backends]") {
+TEST_CASE("cycle cuts: Rowe's test with the membrane and moving platens", "[cuts][backends][system][threads]") {
   check_scene(kMembrane);
 }
 
-TEST_CASE("cycle cuts: walls of every kind, moving and servo-driven", "[cuts][backends][walls]") {
+TEST_CASE("cycle cuts: walls of every kind, moving and servo-driven", "[cuts][backends][walls][system][threads]") {
   check_scene(kWalls);
 }
 
-TEST_CASE("cycle cuts: a shear box, periodic in x and y between walls across z", "[cuts][backends][walls]") {
+TEST_CASE("cycle cuts: a shear box, periodic in x and y between walls across z", "[cuts][backends][walls][system][threads]") {
   check_scene(kShearBox);
 }
 
 TEST_CASE("cycle cuts: threads sharing the step in space on 2 and 3 threads give the serial bits, every scene",
-          "[cuts][backends]") {
+          "[cuts][backends][system][threads]") {
   for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox}) {
     check_scene(*scene, true);   // (and every run's PRINT info says the threads shared it in space)
   }
 }
 
-TEST_CASE("cycle cuts: BACKEND mpi on 2 and 3 ranks gives the serial bits, every scene", "[cuts][mpi]") {
+TEST_CASE("cycle cuts: BACKEND mpi on 2 and 3 ranks gives the serial bits, every scene", "[cuts][mpi][system][threads]") {
   for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox}) check_scene_mpi(*scene);
 }

@@ -1,4 +1,5 @@
 // The pipeline's contract and counters, and the rooms' dependency rule.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <filesystem>
@@ -48,7 +49,7 @@ TEST_CASE("pipeline: every CYCLE leaves the contacts' results of its last step c
   CHECK(from_table == Approx(measured).epsilon(1e-9));   // rounding of a sum of ~1000 terms
 }
 
-TEST_CASE("pipeline: counters say how the pair list was kept", "[cycle]") {
+TEST_CASE("pipeline: counters say how the pair list was kept", "[cycle][threads]") {
   Harness h;
   REQUIRE(h.deck(kGas));
   REQUIRE(h.line("cycle 2000"));

@@ -3,6 +3,7 @@
 // ranks restarted on two, a fast gas crossing the periodic faces for 10,000 steps, and bad input on
 // several ranks (one message, exit 1, no rank left hanging). Skipped with a warning where this build
 // or machine has no MPI.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
@@ -50,7 +51,7 @@ const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts
 
 }  // namespace
 
-TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the serial bits", "[mpi]") {
+TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the serial bits", "[mpi][system]") {
   if (!have_mpi()) return;
   TempDir serial;
   serial.write("deck.dat", std::string(kServoShearDeck) + "cycle 400\n" + kOutputs);
@@ -82,7 +83,7 @@ TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the 
 }
 
 TEST_CASE("distributed: the spatial decomposition on 2, 3 and 4 ranks, and its save restarted, give the serial bits",
-          "[mpi]") {
+          "[mpi][system]") {
   // A periodic cell squeezed at a constant strain rate (no servo: the ranks step their own balls
   // and ghosts, cycle/brick_step.hpp), with friction and local damping, so that contacts carry
   // history across the ranks' boundaries and the pair list is rebuilt many times. The shrinking
@@ -131,7 +132,7 @@ cycle 1500
   CHECK(slurp(cut.path() / "contacts.csv") == contacts);
 }
 
-TEST_CASE("distributed: a shearing cell whose tilt is reduced gives the serial bits on 2 and 3 ranks", "[mpi]") {
+TEST_CASE("distributed: a shearing cell whose tilt is reduced gives the serial bits on 2 and 3 ranks", "[mpi][system]") {
   // Simple shear past half an edge: the cell's tilt is brought back by an edge (reduce_cell_tilt),
   // which renumbers the images of every copy of the pair list, the ranks' parts included; the
   // strain rates' velocity field and the wraps of a shrinking, shearing cell come with it.
@@ -163,7 +164,7 @@ print info
   }
 }
 
-TEST_CASE("distributed: RENUMBER mid-run gives the serial bits on 2 and 3 ranks", "[mpi]") {
+TEST_CASE("distributed: RENUMBER mid-run gives the serial bits on 2 and 3 ranks", "[mpi][system]") {
   // Every rank renumbers its whole model alike (model/edit.hpp renumber_balls), and the next CYCLE
   // makes the parts from the new numbers: contacts turned round keep their history on every copy.
   if (!have_mpi()) return;
@@ -186,7 +187,7 @@ TEST_CASE("distributed: RENUMBER mid-run gives the serial bits on 2 and 3 ranks"
   }
 }
 
-TEST_CASE("distributed: a fast gas crossing the periodic faces for 10,000 steps keeps the serial bits", "[mpi]") {
+TEST_CASE("distributed: a fast gas crossing the periodic faces for 10,000 steps keeps the serial bits", "[mpi][system]") {
   // Balls at 3 to 7 m/s, about ten of their radii per thousand steps, in a cell a few diameters wide: every
   // ball crosses the faces (and, in a decomposition, the ranks' boundaries) many times, and the
   // collisions carry shear history (friction) from one crossing to the next.
@@ -242,7 +243,7 @@ cycle 10000
   CHECK(slurp(two.path() / "contacts.csv") == contacts);
 }
 
-TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on their parts, not through the whole model", "[mpi]") {
+TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on their parts, not through the whole model", "[mpi][system]") {
   // A resting FCC block of 37,800 balls, every one touching 12 (a periodic cell of 30 x 30 x 42
   // layers): the CYCLE's first list is searched by each rank on its part (Pipeline::split_parts),
   // so that rank 1 never holds the whole model's list, its search's arrays or its index. Its peak by
@@ -287,7 +288,7 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
 #endif
 }
 
-TEST_CASE("distributed: rank 0 alone makes the contact results a command reads after a CYCLE", "[mpi]") {
+TEST_CASE("distributed: rank 0 alone makes the contact results a command reads after a CYCLE", "[mpi][system]") {
   // A CYCLE leaves its last step's contact results to be made when read (make_results_to_read).
   // On several ranks rank 0 alone takes that step again, for what it prints and writes; the others
   // leave them unmade, so that their memory stays at their share (129 bytes a pair: 28 MiB for this
@@ -318,7 +319,7 @@ TEST_CASE("distributed: rank 0 alone makes the contact results a command reads a
   CHECK_THAT(out, Catch::Contains("contact results made when read: 2"));
 }
 
-TEST_CASE("distributed: a run that goes unstable is put back to the same rescue copy as serial's", "[mpi]") {
+TEST_CASE("distributed: a run that goes unstable is put back to the same rescue copy as serial's", "[mpi][system]") {
   // A chain held between two fixed balls, stepped a little above its critical step from an overlap
   // of 1e-14: the error grows for some hundred steps, so the copy put back is one taken in the
   // CYCLE (at cycle 500), which on several ranks rank 0 alone holds in full and hands to the others
@@ -356,7 +357,7 @@ cycle 5000
   }
 }
 
-TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message and exit 1", "[mpi]") {
+TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message and exit 1", "[mpi][system]") {
   if (!have_mpi()) return;
   SECTION("a deck error") {
     TempDir dir;
@@ -506,7 +507,7 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
 }
 
 TEST_CASE("distributed: Rowe's test with a following membrane runs by the spatial decomposition, with the serial bits",
-          "[mpi]") {
+          "[mpi][system]") {
   // The membrane's forces are made again from the positions every 3 cycles: the whole model is made
   // current, the forces are set on it, and each rank's part takes its balls' new loads
   // (BrickStep::loads_changed). A part that kept the old loads parts from serial at the first
@@ -545,7 +546,7 @@ cycle 400
 // in a serial run; Ctrl-C (or SIGTERM) at mpirun itself ends the job (SIGTERM to the ranks, SIGKILL
 // a second later), and the ranks stop together and say where. A rank that stopped alone would leave the
 // others waiting in the step's exchange: the time limit would end the run, without the message.
-TEST_CASE("distributed: rank 0 alone reads the input files (the others need not see them)", "[mpi]") {
+TEST_CASE("distributed: rank 0 alone reads the input files (the others need not see them)", "[mpi][system]") {
   if (!have_mpi()) return;
   // Rank 1 starts in an empty folder (an MPMD launch): the deck, a CALLed file and GEN's sieve
   // curve are rank 0's to read. Rank 1 read the sieve curve itself, failed alone and left rank 0's
@@ -569,7 +570,7 @@ TEST_CASE("distributed: rank 0 alone reads the input files (the others need not 
   CHECK(slurp(dir.path() / "balls.csv") == serial);
 }
 
-TEST_CASE("distributed: a signal stops every rank's CYCLE at the same step, with one message", "[mpi]") {
+TEST_CASE("distributed: a signal stops every rank's CYCLE at the same step, with one message", "[mpi][system]") {
   if (!have_mpi()) return;
   const std::string deck = std::string(R"(backend mpi
 start 0.007 0.007 0.007

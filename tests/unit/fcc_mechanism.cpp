@@ -20,6 +20,7 @@
 // and for z = [111], x = [11-2] one in which only 4 contacts slide and the stress has shear
 // components; trubal has no command that builds those orientations.)
 // tests/validation/periodic_fcc_strength.cpp runs the longer, prestressed variants.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <algorithm>

@@ -124,7 +124,7 @@ TEST_CASE("gen psd: types share the mass as asked, each with the sample's gradin
   CHECK(mass[2] / (mass[1] + mass[2]) == Approx(0.3).margin(0.005));
 }
 
-TEST_CASE("gen psd: the same seed gives the same sample on every backend and thread count", "[gen]") {
+TEST_CASE("gen psd: the same seed gives the same sample on every backend and thread count", "[gen][threads]") {
   TempDir dir;
   std::string first;
   for (const char* backend : {"serial", "threaded threads 2", "allpairs"}) {

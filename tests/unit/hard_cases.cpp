@@ -208,7 +208,7 @@ TEST_CASE("hard: a dense pack compressed to 5% overlap is stable with forces kn 
 }
 
 TEST_CASE("hard: a ball crossing a whole contact box in one step meets the same contacts on every backend",
-          "[hard]") {
+          "[hard][threads]") {
   // A row of resting balls along x and one fast ball flying into it; at this speed it moves more than
   // a contact box (about 2.2 diameters) per step, far more than the pair list's skin. The man page:
   // allpairs "cannot miss a contact" and every backend gives the same numbers, bitwise; so every

@@ -1,5 +1,6 @@
 // Bad input through the real interpreter: each mistake gets its own clear message that starts with
 // NAME:LINE: error:, a batch run stops there, and nothing crashes.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <fmt/format.h>
@@ -247,7 +248,7 @@ struct FlushLog : std::stringbuf {
 }  // namespace
 
 TEST_CASE("interp errors: a batch deck flushes the echo before a command that may take long, not before each BALL",
-          "[interp][errors]") {
+          "[interp][errors][system]") {
   // A deck of a million BALL lines spent most of its time writing each echo line by itself (and
   // under mpirun each write went through mpirun): quick commands wait for the next flush.
   FlushLog screen;
@@ -319,7 +320,7 @@ TEST_CASE("interp errors: a ball thrown across the periodic space, all balls hel
   CHECK(massless.starts_with("deck.dat:4: error: ball 1 has mass 0"));
 }
 
-TEST_CASE("interp errors: outputs never replace a link, and a failed write is reported", "[interp][errors][hard]") {
+TEST_CASE("interp errors: outputs never replace a link, and a failed write is reported", "[interp][errors][hard][system]") {
   TempDir dir;
   const std::string target = dir.write("target.txt", "keep me\n");
   const std::string link = (dir.path() / "link.csv").string();
@@ -385,7 +386,7 @@ TEST_CASE("interp errors: GEN and LATTICE check their size first and heed Ctrl-C
   CHECK_FALSE(interrupt_requested().load());
 }
 
-TEST_CASE("interp errors: BACKEND threads the system cannot start is an error, not a hang", "[interp][errors][hard]") {
+TEST_CASE("interp errors: BACKEND threads the system cannot start is an error, not a hang", "[interp][errors][hard][system][threads]") {
   // Under a 4 GB address-space limit 4096 threads' stacks do not fit: the pool used to destroy the
   // condition variable its started workers waited on, and hung. In a child process, with a timeout.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)

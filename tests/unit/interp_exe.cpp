@@ -1,4 +1,5 @@
 // The trubal executable: batch exit codes, standard input as a deck, --version, --help, -i.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include "interp/manpage.hpp"
@@ -30,7 +31,7 @@ Run run_trubal(const TempDir& dir, const std::string& args, const std::string& i
 
 }  // namespace
 
-TEST_CASE("interp exe: a deck that succeeds exits 0 and echoes its commands", "[interp][exe]") {
+TEST_CASE("interp exe: a deck that succeeds exits 0 and echoes its commands", "[interp][exe][system]") {
   TempDir dir;
   dir.write("ok.dat", "; a comment\necho hello\nstart box 0 10 0 10 0 10\nprint info\n");
   auto r = run_trubal(dir, "ok.dat");
@@ -41,7 +42,7 @@ TEST_CASE("interp exe: a deck that succeeds exits 0 and echoes its commands", "[
   CHECK_THAT(r.out, Catch::Contains("balls: 0\n"));
 }
 
-TEST_CASE("interp exe: the first error stops a deck with FILE:LINE and exit status 1", "[interp][exe]") {
+TEST_CASE("interp exe: the first error stops a deck with FILE:LINE and exit status 1", "[interp][exe][system]") {
   TempDir dir;
   dir.write("bad.dat", "echo first\n\nstart box 0 10 0 10 0 10\nball 5 5 5 1\nsave kept.sav\ncycle 1.5\necho never\nsave never.sav\n");
   auto r = run_trubal(dir, "bad.dat");
@@ -57,7 +58,7 @@ TEST_CASE("interp exe: the first error stops a deck with FILE:LINE and exit stat
   for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().extension() != ".tmp");
 }
 
-TEST_CASE("interp exe: a missing deck file or a directory is an error", "[interp][exe]") {
+TEST_CASE("interp exe: a missing deck file or a directory is an error", "[interp][exe][system]") {
   TempDir dir;
   auto r = run_trubal(dir, "no-such.dat");
   CHECK(r.status == 1);
@@ -69,7 +70,7 @@ TEST_CASE("interp exe: a missing deck file or a directory is an error", "[interp
   CHECK_THAT(d.err, Catch::Contains("cannot open the deck 'decks': it is a directory"));
 }
 
-TEST_CASE("interp exe: trubal - and a pipe read standard input as a deck named <stdin>", "[interp][exe]") {
+TEST_CASE("interp exe: trubal - and a pipe read standard input as a deck named <stdin>", "[interp][exe][system]") {
   TempDir dir;
   dir.write("in.dat", "echo from stdin\nwhat is this\necho never\n");
   auto dash = run_trubal(dir, "-", "<in.dat");
@@ -91,7 +92,7 @@ TEST_CASE("interp exe: trubal - and a pipe read standard input as a deck named <
   CHECK(failing_pipe.err.starts_with("<stdin>:3: error: missing n (number of cycles)"));
 }
 
-TEST_CASE("interp exe: --version --help and --man-commands", "[interp][exe]") {
+TEST_CASE("interp exe: --version --help and --man-commands", "[interp][exe][system]") {
   TempDir dir;
   auto v = run_trubal(dir, "--version");
   CHECK(v.status == 0);
@@ -106,7 +107,7 @@ TEST_CASE("interp exe: --version --help and --man-commands", "[interp][exe]") {
   CHECK(bad.status != 0);
 }
 
-TEST_CASE("interp exe: -i runs the deck then the shell which ends cleanly at end of input", "[interp][exe]") {
+TEST_CASE("interp exe: -i runs the deck then the shell which ends cleanly at end of input", "[interp][exe][system]") {
   TempDir dir;
   dir.write("setup.dat", "echo set up\nset answer 42\n");
   auto r = run_trubal(dir, "-i setup.dat", "</dev/null");
@@ -127,7 +128,7 @@ TEST_CASE("interp exe: -i runs the deck then the shell which ends cleanly at end
   CHECK(stops.out.find("should not run") == std::string::npos);
 }
 
-TEST_CASE("exe: exit status 2 for a bad command line, and SAVE clears the temporaries of killed saves", "[interp][exe]") {
+TEST_CASE("exe: exit status 2 for a bad command line, and SAVE clears the temporaries of killed saves", "[interp][exe][system]") {
   TempDir dir;
   // CLI11's own codes (109 for an unknown option) are not what the man page says.
   CHECK(shell(quote(TRUBAL_EXE) + " --no-such-option 2>/dev/null") == 2);

@@ -9,6 +9,7 @@
 // TRUBAL_FUZZ_DECKS sets how many mutants (default 40; CI's sanitizer build runs more),
 // TRUBAL_FUZZ_SEED the seed (default 1). A failing mutant is printed whole: save it as a
 // regression deck.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <cstdlib>
@@ -168,7 +169,7 @@ std::string sanitizer_report(const std::string& out) {
 
 }  // namespace
 
-TEST_CASE("fuzz: mutated decks of the corpus fail cleanly or run, never crash or hang", "[hard][fuzz]") {
+TEST_CASE("fuzz: mutated decks of the corpus fail cleanly or run, never crash or hang", "[hard][fuzz][system]") {
   const auto corpus = decks_in(kFuzzDir / "corpus");
   REQUIRE(corpus.size() >= 5);
   const char* count_env = std::getenv("TRUBAL_FUZZ_DECKS");
@@ -198,7 +199,7 @@ TEST_CASE("fuzz: mutated decks of the corpus fail cleanly or run, never crash or
   WARN(count << " mutants: " << failed_cleanly << " stopped at an error, " << ran << " ran to the end");
 }
 
-TEST_CASE("fuzz: every regression deck fails with the error its first line names", "[hard][fuzz]") {
+TEST_CASE("fuzz: every regression deck fails with the error its first line names", "[hard][fuzz][system]") {
   const auto decks = decks_in(kFuzzDir / "regressions");
   REQUIRE(decks.size() >= 10);
   for (const auto& deck : decks) {

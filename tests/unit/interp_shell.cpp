@@ -1,6 +1,7 @@
 // The interactive shell under a real pseudo-terminal (tmux): commands run, Tab completes, Ctrl-C
 // clears the line or stops a CYCLE, errors do not end the session, history outlives the session.
 // Without tmux these tests warn and pass (CI installs it: Debian package `tmux`).
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <fcntl.h>
@@ -114,7 +115,7 @@ class TmuxShell {
 
 }  // namespace
 
-TEST_CASE("interp shell: a command runs and HELP lists the commands", "[interp][shell]") {
+TEST_CASE("interp shell: a command runs and HELP lists the commands", "[interp][shell][system]") {
   REQUIRE_TMUX();
   TempDir dir;
   TmuxShell sh(dir, dir.str() + "/history");
@@ -128,7 +129,7 @@ TEST_CASE("interp shell: a command runs and HELP lists the commands", "[interp][
   CHECK(sh.alive());
 }
 
-TEST_CASE("interp shell: Tab completes keywords and the words a command takes", "[interp][shell]") {
+TEST_CASE("interp shell: Tab completes keywords and the words a command takes", "[interp][shell][system]") {
   REQUIRE_TMUX();
   TempDir dir;
   TmuxShell sh(dir, dir.str() + "/history");
@@ -149,7 +150,7 @@ TEST_CASE("interp shell: Tab completes keywords and the words a command takes", 
   CHECK_SCREEN(sh, sh.wait_for("STOP/QUIT/END/EXIT"));
 }
 
-TEST_CASE("interp shell: Ctrl-C at the prompt clears the line and the shell goes on", "[interp][shell]") {
+TEST_CASE("interp shell: Ctrl-C at the prompt clears the line and the shell goes on", "[interp][shell][system]") {
   REQUIRE_TMUX();
   TempDir dir;
   TmuxShell sh(dir, dir.str() + "/history");
@@ -177,7 +178,7 @@ TEST_CASE("interp shell: Ctrl-C at the prompt clears the line and the shell goes
   CHECK(sh.alive());
 }
 
-TEST_CASE("interp shell: an error is reported and the session goes on", "[interp][shell]") {
+TEST_CASE("interp shell: an error is reported and the session goes on", "[interp][shell][system]") {
   REQUIRE_TMUX();
   TempDir dir;
   TmuxShell sh(dir, dir.str() + "/history");
@@ -199,7 +200,7 @@ TEST_CASE("interp shell: an error is reported and the session goes on", "[interp
   CHECK_SCREEN(sh, sh.wait_exit());
 }
 
-TEST_CASE("interp shell: history is kept between sessions", "[interp][shell]") {
+TEST_CASE("interp shell: history is kept between sessions", "[interp][shell][system]") {
   REQUIRE_TMUX();
   TempDir dir;
   const std::string history = dir.str() + "/history";
@@ -221,7 +222,7 @@ TEST_CASE("interp shell: history is kept between sessions", "[interp][shell]") {
   CHECK_SCREEN(again, again.wait_for("trubal> echo remembered 123"));
 }
 
-TEST_CASE("interp shell: Ctrl-C stops a running CYCLE and keeps the model", "[interp][shell]") {
+TEST_CASE("interp shell: Ctrl-C stops a running CYCLE and keeps the model", "[interp][shell][system]") {
   REQUIRE_TMUX();
   TempDir dir;
   TmuxShell sh(dir, dir.str() + "/history");

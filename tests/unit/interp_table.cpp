@@ -1,5 +1,6 @@
 // The command table is the one list the dispatcher, HELP, Tab completion and the man page read:
 // these tests check that they agree with it and with each other.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <algorithm>

@@ -124,7 +124,7 @@ TEST_CASE("io_plot: PLOT ... from draws the histories of other runs from their C
   CHECK_THAT(h.err.str(), Catch::Contains("unknown history column 'contacts'"));
 }
 
-TEST_CASE("plot: a history written to a file keeps a window in memory, and PLOT and the file have every row", "[io][hard]") {
+TEST_CASE("plot: a history written to a file keeps a window in memory, and PLOT and the file have every row", "[io][hard][system]") {
   TempDir dir;
   WorkingDir wd(dir.path());
   Harness h;
@@ -145,7 +145,7 @@ TEST_CASE("plot: a history written to a file keeps a window in memory, and PLOT 
   }
 }
 
-TEST_CASE("plot: axis labels name the quantity, or what xlabel and ylabel say", "[io]") {
+TEST_CASE("plot: axis labels name the quantity, or what xlabel and ylabel say", "[io][system]") {
   CHECK(column_label("e33") == "axial strain e33 (compression +)");
   CHECK(column_label("evol") == "volumetric strain (compression +)");
   CHECK(column_label("w2_stress") == "wall 2 stress (compression +)");

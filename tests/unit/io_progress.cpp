@@ -1,6 +1,7 @@
 // What a long run shows while it runs and after: progress lines (a redrawn bar only at an
 // interactive terminal, plain lines elsewhere and in the log), the one-line summary after each
 // CYCLE in batch, the table at the end of the program, and SET log's copy of it all.
+#include "paths.hpp"
 #include <chrono>
 #include <string>
 #include <vector>
@@ -127,7 +128,7 @@ TEST_CASE("io_progress: at an interactive terminal a bar is redrawn and erased b
   CHECK(count(slurp(dir.path() / "run.log"), " cycles/s, ") >= 1);
 }
 
-TEST_CASE("io_progress: the program ends with a run summary of where the time went", "[io][progress]") {
+TEST_CASE("io_progress: the program ends with a run summary of where the time went", "[io][progress][system]") {
   TempDir dir;
   dir.write("deck.dat", kScene + "cycle 200\nset log run.log\ncycle 100\n");
   const int status = shell("cd " + quote(dir.str()) + " && timeout 60 " + quote(TRUBAL_EXE) +

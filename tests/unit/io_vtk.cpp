@@ -81,7 +81,7 @@ TEST_CASE("io_vtk: balls and force chains read back with VTK's reader", "[io][vt
   CHECK(array_of(chains, "cd:force").size() == 6);
 }
 
-TEST_CASE("io_vtk: periodic dumps, DUMP off, and the .pvd collection with the times", "[io][vtk]") {
+TEST_CASE("io_vtk: periodic dumps, DUMP off, and the .pvd collection with the times", "[io][vtk][system]") {
   TempDir dir;
   WorkingDir wd(dir.path());
   fs::create_directory(dir.path() / "out");

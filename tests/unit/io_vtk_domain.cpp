@@ -84,7 +84,7 @@ TEST_CASE("vtk domain: a sheared periodic cell is written as its parallelepiped"
   check_domain(dir, (dir.path() / "snap_domain_000100.vtp").string(), s);
 }
 
-TEST_CASE("vtk domain: a box periodic along x only, and the collection's part 3", "[io][vtk]") {
+TEST_CASE("vtk domain: a box periodic along x only, and the collection's part 3", "[io][vtk][system]") {
   TempDir dir;
   WorkingDir wd(dir.path());
   Harness h;

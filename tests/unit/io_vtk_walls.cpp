@@ -153,7 +153,7 @@ TEST_CASE("vtk walls: a plane, a polygon and a cylinder read back with VTK's rea
   }
 }
 
-TEST_CASE("vtk walls: the collection names the walls as part 2, only in dumps with walls", "[io][vtk][walls]") {
+TEST_CASE("vtk walls: the collection names the walls as part 2, only in dumps with walls", "[io][vtk][walls][system]") {
   TempDir dir;
   WorkingDir wd(dir.path());
   fs::create_directory(dir.path() / "out");

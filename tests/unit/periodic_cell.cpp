@@ -57,7 +57,7 @@ Model run(const Model& start, const std::string& backend_name, int threads, int 
 
 }  // namespace
 
-TEST_CASE("periodic: a dense FCC block in a periodic cell has exactly 6N contacts on every backend", "[periodic]") {
+TEST_CASE("periodic: a dense FCC block in a periodic cell has exactly 6N contacts on every backend", "[periodic][threads]") {
   const Model start = periodic_fcc(4, 0, 0);   // 256 balls, the ones at the faces touch images
   for (const char* name : {"serial", "threaded", "allpairs"}) {
     INFO(name);
@@ -66,7 +66,7 @@ TEST_CASE("periodic: a dense FCC block in a periodic cell has exactly 6N contact
   }
 }
 
-TEST_CASE("periodic: images and a straining cell give bitwise equal answers on every backend", "[periodic][backends]") {
+TEST_CASE("periodic: images and a straining cell give bitwise equal answers on every backend", "[periodic][backends][threads]") {
   const Model start = periodic_fcc(5, 0.05, 2e-3);   // 500 balls, balls cross faces as the cell shrinks
   const int cycles = 400;
   const Model reference = run(start, "serial", 1, cycles);
@@ -84,7 +84,7 @@ TEST_CASE("periodic: images and a straining cell give bitwise equal answers on e
   }
 }
 
-TEST_CASE("periodic: a ball wrapped across a face keeps its contact and shear history", "[periodic]") {
+TEST_CASE("periodic: a ball wrapped across a face keeps its contact and shear history", "[periodic][threads]") {
   for (const char* name : {"serial", "allpairs", "threaded"}) {
     INFO(name);
     Model m;
@@ -185,7 +185,7 @@ cycle 16000
   CHECK(std::abs(e.total()) < 0.02 * std::abs(e.boundary_work));
 }
 
-TEST_CASE("periodic: a loose assembly under the servo is bitwise equal on every backend", "[periodic][backends]") {
+TEST_CASE("periodic: a loose assembly under the servo is bitwise equal on every backend", "[periodic][backends][threads]") {
   auto run_deck = [](const std::string& backend) {
     auto h = std::make_unique<Harness>();
     REQUIRE(h->deck("start 200 200 200\nprop kn 1e6 ks 1e6 fric 0.3 dens 2000\ngen 300 9 11 seed 9\n"

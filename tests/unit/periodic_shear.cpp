@@ -117,7 +117,7 @@ TEST_CASE("periodic shear: simple shear of a frictional FCC block has the cell's
 }
 
 TEST_CASE("periodic shear: a pair across the shifted y face feels its image where the tilt puts it",
-          "[periodic]") {
+          "[periodic][threads]") {
   for (const char* name : {"serial", "allpairs", "threaded"}) {
     INFO(name);
     // At rest: the overlap is the one across the shifted face.
@@ -161,7 +161,7 @@ TEST_CASE("periodic shear: a pair across the shifted y face feels its image wher
   }
 }
 
-TEST_CASE("periodic shear: a ball crossing a shifted face keeps its contact and shear history", "[periodic]") {
+TEST_CASE("periodic shear: a ball crossing a shifted face keeps its contact and shear history", "[periodic][threads]") {
   for (const char* name : {"serial", "allpairs", "threaded"}) {
     INFO(name);
     Model m = pair_across_y(3.25, 0.05);

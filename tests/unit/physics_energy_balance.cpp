@@ -1,6 +1,7 @@
 // The energy balance at the step's force pass (doc/physics.md "Energy"): every term taken at the
 // same time, the works up to that time, so that what is left is the integration's error, which
 // falls with the step; and the warning a CYCLE gives when that error is large.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <algorithm>

@@ -44,7 +44,7 @@ std::vector<Picture> record(Model model, const std::string& backend_name, int cy
 
 }  // namespace
 
-TEST_CASE("lean steps: what history reads equals a run that writes every step", "[physics][lean]") {
+TEST_CASE("lean steps: what history reads equals a run that writes every step", "[physics][lean][threads]") {
   for (const char* backend : {"serial", "threaded"}) {
     for (Scene& scene : scenes()) {
       INFO(scene.name << " on " << backend);
@@ -87,7 +87,7 @@ TEST_CASE("lean steps: a run stopped by Ctrl-C ends on a step that wrote its con
 // freed, and make_results takes that step again from the rescue copy when they are read. What it
 // makes is what a run writing the last step gives, to the bit, on every backend, and so is the
 // state a second run goes on from.
-TEST_CASE("lean steps: a run's last results, made when read, are those of a run that wrote them", "[physics][lean]") {
+TEST_CASE("lean steps: a run's last results, made when read, are those of a run that wrote them", "[physics][lean][threads]") {
   for (const char* backend : {"serial", "threaded"}) {
     for (Scene& scene : scenes()) {
       INFO(scene.name << " on " << backend);

@@ -141,7 +141,7 @@ TEST_CASE("renumber: mid-run every ball keeps its state and every contact its hi
   CHECK(worst < 1e-8);
 }
 
-TEST_CASE("renumber: every backend gives the same bits after a renumber mid-run", "[backends]") {
+TEST_CASE("renumber: every backend gives the same bits after a renumber mid-run", "[backends][threads]") {
   auto run = [](const std::string& backend) {
     TempDir dir;
     WorkingDir cd(dir.path());

@@ -1,4 +1,5 @@
 // The test suite's own hygiene: every TEST_CASE name must reach ctest whole.
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <filesystem>

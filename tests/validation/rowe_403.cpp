@@ -12,6 +12,7 @@
 // both from the virial -- peaks at Rowe's 2 tan(45 + phi_mu) = 2.56. The forces of a membrane act
 // through the balls' centres whatever the area, so the smaller value is what this sample gives; a
 // slower loading only removes the dashpots' share (see README, "Rowe's triaxial test").
+#include "paths.hpp"
 #include <catch2/catch.hpp>
 
 #include <algorithm>
