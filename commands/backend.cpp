@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "cycle/pipeline.hpp"
 
 namespace trubal {
 

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "cycle/pipeline.hpp"
 #include "support/comm.hpp"
 #include "support/peak_memory.hpp"
 #include "model/wall_shape.hpp"

@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "backends/mpi/mpi_backend.hpp"
+#include "cycle/pipeline.hpp"
 #include "cycle/brick_step.hpp"
 #include "interp/interpreter.hpp"
 #include "interp/manpage.hpp"

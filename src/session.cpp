@@ -1,4 +1,5 @@
 #include "session.hpp"
+#include "cycle/pipeline.hpp"
 
 #include "support/comm.hpp"
 

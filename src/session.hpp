@@ -12,7 +12,6 @@
 #include <unordered_map>
 #include <vector>
 
-#include "cycle/pipeline.hpp"
 #include "gen/pack.hpp"
 #include "gen/size_distribution.hpp"
 #include "cycle/run.hpp"
@@ -23,6 +22,10 @@
 #include "model/range.hpp"
 
 namespace trubal {
+
+// (Declared only: the commands reach the pipeline through Session; the few that read it include
+// cycle/pipeline.hpp themselves, so the step's headers are not compiled into every command.)
+class Pipeline;
 
 class Session {
  public:

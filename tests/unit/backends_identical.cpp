@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "backends/periodic_pairs.hpp"
+#include "cycle/pipeline.hpp"
 #include "model/periodic_cell.hpp"
 #include "cycle/brick_step.hpp"
 #include "cycle/parallel_step.hpp"

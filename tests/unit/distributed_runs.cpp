@@ -4,6 +4,7 @@
 // several ranks (one message, exit 1, no rank left hanging). Skipped with a warning where this build
 // or machine has no MPI.
 #include "paths.hpp"
+#include "cycle/pipeline.hpp"
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "interp_support.hpp"
+#include "cycle/pipeline.hpp"
 #include "cycle/kernels.hpp"
 #include "physics/measure.hpp"
 #include "physics_helpers.hpp"

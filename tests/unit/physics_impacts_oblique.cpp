@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "physics_helpers.hpp"
+#include "cycle/pipeline.hpp"
 
 using namespace trubal;
 
