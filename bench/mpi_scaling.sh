@@ -1,5 +1,5 @@
 #!/bin/bash
-# Distributed runs against serial and threaded on the dense FCC benchmark scene (issue 17): for each
+# Distributed runs against serial and threaded on the dense FCC benchmark scene: for each
 # N, trubal serial, threaded on P threads and BACKEND mpi on P ranks, interleaved REPS times; prints
 # the median cycling time, ball-steps/s, the speedup Sp = T*/Tp and efficiency Ep = Sp/p as the seed
 # paper's Table 2 defines them (T*: serial), and the largest peak resident memory of a rank (PRINT

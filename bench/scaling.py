@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Strong and weak scaling of trubal on the dense FCC benchmark scene (issue 17), with LAMMPS
+"""Strong and weak scaling of trubal on the dense FCC benchmark scene, with LAMMPS
 beside it where one is given.
 
 Strong scaling: one scene (default 30x30x30 FCC cells, 108,000 balls) on P = 1, 2, 4, ... threads

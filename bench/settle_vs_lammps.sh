@@ -1,5 +1,5 @@
 #!/bin/bash
-# Speed of trubal beside LAMMPS on the peers' sparse scene (issue 22), as ../shared/peers/compare.sh
+# Speed of trubal beside LAMMPS on the peers' sparse scene, as ../shared/peers/compare.sh
 # does for the dense one: balls of R = 20 settling from a loose random gas (solid fraction 0.3,
 # gen_scenes.py settle) under gravity 0.03 onto a floor wall at z = 0, x and y periodic,
 # gran/hooke/history 1.5e9 1.5e9 with mu 0.12278 and a normal dashpot (gamma_n 1.338), dt 0.04:

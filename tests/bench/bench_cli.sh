@@ -1,5 +1,5 @@
 #!/bin/sh
-# trubal_bench's command line (issue 22): --help prints the usage and exits 0 without running a
+# trubal_bench's command line: --help prints the usage and exits 0 without running a
 # benchmark; bad arguments are refused with a message and exit status 2, before any run; with the
 # peers' scene generator (../shared/peers, or TRUBAL_PEERS), --settle runs a small settle scene.
 #   bench_cli.sh BENCH [PEERS_DIR]
@@ -39,7 +39,7 @@ refuse "not ball counts" --settle x.xyz 1000
 rc=$?
 [ "$rc" -eq 1 ] && grep -q "cannot open" "$W/err" || { echo "FAIL: --settle of a missing file: exit $rc"; cat "$W/err"; fail=1; }
 
-# The dense block prints its peak memory (issue 22 asks the benchmark to measure it): a small block,
+# The dense block prints its peak memory: a small block,
 # whose peak is above the program's own few MiB and below 200 MiB, and the same per ball.
 if "$BENCH" --steps 20 1680 >"$W/out" 2>"$W/err"; then
   grep -q 'peak MiB' "$W/out" || { echo "FAIL: no peak MiB column"; cat "$W/out"; fail=1; }

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Checked against a peer (issue 16): trubal and LAMMPS on the peers' sparse settle scene.
+"""Checked against a peer: trubal and LAMMPS on the peers' sparse settle scene.
 
 A few thousand spheres of one size (R = 20, density 2000) settle from a loose random gas under
 gravity 0.03 onto a floor wall, with gran/hooke/history (kn = kt = 1.5e9, mu = 0.12278, normal

@@ -73,7 +73,7 @@ TEST_CASE("pipeline: the model and physics rooms include neither the cycle nor a
   namespace fs = std::filesystem;
   const fs::path src = fs::path(TRUBAL_SOURCE_DIR) / "src";
   const std::regex include(R"(#include\s+"([a-z_]+)/)");
-  // room -> the rooms it may include (README "Code layout")
+  // room -> the rooms it may include (doc/developer.md, "Rooms")
   const std::map<std::string, std::set<std::string>> allowed = {
       {"model", {"model"}},
       {"physics", {"model", "physics"}},

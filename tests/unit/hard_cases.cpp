@@ -1,4 +1,4 @@
-// Numerical stability on hard cases (issue 7): each runs stably with the default settings, or stops
+// Numerical stability on hard cases: each runs stably with the default settings, or stops
 // with a message naming the cause and the fix, never with NaN.
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,4 @@
-// The deck fuzzer (issue 20, "Keep it fixed"): the decks of tests/fuzz/corpus/, mutated (words
+// The deck fuzzer: the decks of tests/fuzz/corpus/, mutated (words
 // dropped, swapped, duplicated; numbers replaced by 0, -1, 1e308, 1e-320, nan, inf, huge integers;
 // binary bytes; unterminated quotes and continuations; lines dropped, doubled, or nonsense put in),
 // run by the real program in a scratch folder. Any signal, sanitizer report, hang past the timeout

@@ -1,4 +1,4 @@
-// Histories across SAVE and RESTART (issue 18): SAVE keeps them, RESTART resumes them and appends
+// Histories across SAVE and RESTART: SAVE keeps them, RESTART resumes them and appends
 // to their files; HIST ... file says what it does to a file that is there (new, append).
 #include <catch2/catch.hpp>
 

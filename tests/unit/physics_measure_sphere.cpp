@@ -1,4 +1,4 @@
-// Measurement spheres and porosity (issue 18): PRINT stress|fabric|coordination|porosity|measure
+// Measurement spheres and porosity: PRINT stress|fabric|coordination|porosity|measure
 // range sphere x y z r, HIST measure and HIST porosity, against an FCC packing whose porosity and
 // coordination are known in closed form.
 #include <catch2/catch.hpp>
