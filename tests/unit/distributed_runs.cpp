@@ -1,8 +1,8 @@
 // Distributed runs (issue 17) beyond the cut matrix of cycle_cuts.cpp: four ranks, the spatial
 // decomposition of a strained and of a shearing cell on 2 to 4 ranks, a save on three
 // ranks restarted on two, a fast gas crossing the periodic faces for 10,000 steps, and bad input on
-// several ranks (one message, exit 1, no rank left hanging). Skipped with a warning where this build
-// or machine has no MPI.
+// several ranks (one message, exit 1, no rank left hanging). Skipped where this build or machine
+// has no MPI.
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
@@ -12,18 +12,13 @@
 
 #include "interp_support.hpp"
 #include "scene_decks.hpp"
+#include "skip.hpp"
 #include "support/comm.hpp"
 
 using namespace trubal;
 using namespace trubal::test;
 
 namespace {
-
-bool have_mpi() {
-  if (comm::built_with_mpi() && shell("command -v mpirun >/dev/null 2>&1") == 0) return true;
-  WARN("not built with MPI, or no mpirun: distributed runs are not checked (Debian: libopenmpi-dev openmpi-bin)");
-  return false;
-}
 
 // Runs trubal in `dir` with `args` (the file to run and the redirections) on `ranks` ranks (0: a
 // plain trubal, no mpirun), with a time limit so that a hang fails the test instead of stalling it;
@@ -51,7 +46,7 @@ const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts
 }  // namespace
 
 TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the serial bits", "[mpi]") {
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   TempDir serial;
   serial.write("deck.dat", std::string(kServoShearDeck) + "cycle 400\n" + kOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
@@ -88,7 +83,7 @@ TEST_CASE("distributed: the spatial decomposition on 2, 3 and 4 ranks, and its s
   // history across the ranks' boundaries and the pair list is rebuilt many times. The shrinking
   // cell leaves balls outside it after a step: the first version missed them (it looked before the
   // cell moved) and parted from serial at cycle 505.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = R"(start 0.007 0.007 0.007
 prop kn 1e5 ks 1e5 fric 26.57 dens 2650
 gen 500 0.0003 0.0005 seed 5
@@ -135,7 +130,7 @@ TEST_CASE("distributed: a shearing cell whose tilt is reduced gives the serial b
   // Simple shear past half an edge: the cell's tilt is brought back by an edge (reduce_cell_tilt),
   // which renumbers the images of every copy of the pair list, the ranks' parts included; the
   // strain rates' velocity field and the wraps of a shrinking, shearing cell come with it.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = R"(start 0.006 0.006 0.006
 prop kn 1e5 ks 1e5 fric 26.57 dens 2650
 gen 330 0.0003 0.0005 seed 3
@@ -166,7 +161,7 @@ print info
 TEST_CASE("distributed: RENUMBER mid-run gives the serial bits on 2 and 3 ranks", "[mpi]") {
   // Every rank renumbers its whole model alike (model/edit.hpp renumber_balls), and the next CYCLE
   // makes the parts from the new numbers: contacts turned round keep their history on every copy.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = scrambled_settle_deck() + "cycle 150\nrenumber\ncycle 150\n" + kOutputs;
   TempDir serial;
   serial.write("deck.dat", deck);
@@ -190,7 +185,7 @@ TEST_CASE("distributed: a fast gas crossing the periodic faces for 10,000 steps 
   // Balls at 3 to 7 m/s, about ten of their radii per thousand steps, in a cell a few diameters wide: every
   // ball crosses the faces (and, in a decomposition, the ranks' boundaries) many times, and the
   // collisions carry shear history (friction) from one crossing to the next.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = R"(start 0.006 0.006 0.006
 prop kn 1e5 ks 1e5 fric 30 dens 2650 rest 0.8
 gen 250 0.0003 0.0005 seed 11
@@ -250,7 +245,7 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
   // whole model (TRUBAL_REBUILD_WHOLE): 38 against 58 MiB (rank 0: 70 and 75) on 2026-12-03,
   // where rank 1's whole model between CYCLEs and its part are about 26 and 8 MiB. The files give
   // the serial bits either way.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
                            "lattice fcc 1 30 30 42\ncycle 20\n" + std::string(kOutputs);
   TempDir serial, parts, whole;
@@ -292,7 +287,7 @@ TEST_CASE("distributed: rank 0 alone makes the contact results a command reads a
   // On several ranks rank 0 alone takes that step again, for what it prints and writes; the others
   // leave them unmade, so that their memory stays at their share (129 bytes a pair: 28 MiB for this
   // block's 226,800 pairs). The files, and the CYCLE after, give the serial bits.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
                            "lattice fcc 1 30 30 42\ninit xvel 0.01 range x 0 10\ncycle 20\n"
                            "print contacts file first.csv\nprint stress\nprint energy\ncycle 30\n" +
@@ -323,7 +318,7 @@ TEST_CASE("distributed: a run that goes unstable is put back to the same rescue 
   // of 1e-14: the error grows for some hundred steps, so the copy put back is one taken in the
   // CYCLE (at cycle 500), which on several ranks rank 0 alone holds in full and hands to the others
   // (Pipeline::restore_rescue); every rank then steps through the whole model to the same message.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = R"(start box -1 1 -1 1 -1 1
 prop kn 1e6 ks 1e6 fric 0.3 dens 1000
 ball 0 0 0 0.01 id 1
@@ -357,7 +352,7 @@ cycle 5000
 }
 
 TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message and exit 1", "[mpi]") {
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   SECTION("a deck error") {
     TempDir dir;
     dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nprop kn banana\ncycle 10\n");
@@ -511,7 +506,7 @@ TEST_CASE("distributed: Rowe's test with a following membrane runs by the spatia
   // current, the forces are set on it, and each rank's part takes its balls' new loads
   // (BrickStep::loads_changed). A part that kept the old loads parts from serial at the first
   // cycle after 3.
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = R"(start box -200 440 -200 440 -100 450
 prop kn 1.5e9 ks 1.5e9 fric 7 dens 2000
 lattice fcc 40 7 7 13 layers even range octagon 120 120 120 127
@@ -546,7 +541,7 @@ cycle 400
 // a second later), and the ranks stop together and say where. A rank that stopped alone would leave the
 // others waiting in the step's exchange: the time limit would end the run, without the message.
 TEST_CASE("distributed: rank 0 alone reads the input files (the others need not see them)", "[mpi]") {
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   // Rank 1 starts in an empty folder (an MPMD launch): the deck, a CALLed file and GEN's sieve
   // curve are rank 0's to read. Rank 1 read the sieve curve itself, failed alone and left rank 0's
   // GEN waiting on a collective call (a hang, or a GEN cut short).
@@ -570,7 +565,7 @@ TEST_CASE("distributed: rank 0 alone reads the input files (the others need not 
 }
 
 TEST_CASE("distributed: a signal stops every rank's CYCLE at the same step, with one message", "[mpi]") {
-  if (!have_mpi()) return;
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = std::string(R"(backend mpi
 start 0.007 0.007 0.007
 prop kn 1e5 ks 1e5 fric 26.57 dens 2650
