@@ -134,11 +134,13 @@ long local_rebuilds(const std::string& info) { return info_count(info, "pair lis
 // Balls that changed owner at those rebuilds.
 long migrations(const std::string& info) { return info_count(info, "balls that changed rank: "); }
 
-// Runs the scene with `cycling` (its cycle lines) after the setup, on `backend`.
-Result run(const Scene& scene, const std::string& backend, const std::string& cycling) {
+// Runs the scene with `cycling` (its cycle lines) after the setup, on `backend`, the threads
+// sharing the steps in space as `split_rule` says (StepPolicy::split_rule).
+Result run(const Scene& scene, const std::string& backend, const std::string& cycling, int split_rule = 0) {
   TempDir dir;
   WorkingDir cd(dir.path());
   Harness h;
+  h.session.policy().split_rule = split_rule;
   const std::string deck = "backend " + backend + "\n" + scene.setup + scene.during + cycling +
                            "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\n"
                            "print info\n";
@@ -235,7 +237,7 @@ void check_reference(const Scene& scene, const Result& r) {
   CHECK(checked == sums.size());
 }
 
-// in_space: the threads share every step in space (Pipeline::split_rule 1, a part of the
+// in_space: the threads share every step in space (StepPolicy::split_rule 1, a part of the
 // decomposition per thread), on 2 and 3 threads only; else every backend.
 void check_scene(const Scene& scene, bool in_space = false) {
   const std::string unbroken = "cycle " + std::to_string(scene.cycles) + "\n";
@@ -246,10 +248,7 @@ void check_scene(const Scene& scene, bool in_space = false) {
   const std::vector<std::string> backends =
       in_space ? std::vector<std::string>{"threaded threads 2", "threaded threads 3"}
                : std::vector<std::string>{"serial", "threaded threads 2", "threaded threads 3", "allpairs threads 2"};
-  struct SplitRule {
-    explicit SplitRule(int rule) { Pipeline::split_rule = rule; }
-    ~SplitRule() { Pipeline::split_rule = 0; }
-  } rule(in_space ? 1 : -1);
+  const int split_rule = in_space ? 1 : -1;
   for (const std::string& backend : backends) {
     std::vector<Cut> all = cuts(scene);
     if (backend != "serial") all.insert(all.begin(), {"unbroken", unbroken, true});
@@ -257,7 +256,7 @@ void check_scene(const Scene& scene, bool in_space = false) {
       // (In space on 3 threads: the unbroken run and the restart only, to keep the suite short.)
       if (in_space && backend == "threaded threads 3" && cut.name != "unbroken" && cut.name != "save and restart") continue;
       INFO(scene.name << " on " << backend << ", cut: " << cut.name);
-      const Result other = run(scene, backend, cut.lines);
+      const Result other = run(scene, backend, cut.lines, split_rule);
       CHECK(other.balls == serial.balls);
       CHECK(other.contacts == serial.contacts);
       CHECK(other.walls == serial.walls);
