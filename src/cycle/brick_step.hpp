@@ -155,6 +155,15 @@ class BrickStep {
 
   std::vector<std::pair<std::string, std::string>> info() const;
   std::size_t local_rebuilds() const { return local_rebuilds_; }
+  // The decomposition's counts (PRINT counters): the same on every member, but the balls and
+  // ghosts, which are this member's, and least/most_balls over the members at the last split.
+  struct Counts {
+    std::size_t decompositions = 0, list_rebuilds = 0, wraps = 0, migrations = 0;
+    std::size_t ghosts = 0, least_balls = 0, most_balls = 0;
+  };
+  Counts counts() const {
+    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_};
+  }
   // The bytes of the part's arrays of balls, pairs and wall contacts.
   std::size_t part_bytes() const;
 

@@ -512,7 +512,9 @@ bool Pipeline::Deferred::same(const Deferred& o) const {
 }
 
 PipelineCounters Pipeline::counters() const {
-  return {ref_.rebuilds(), space_threads_ ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0, backend_->pair_tests()};
+  return {ref_.rebuilds(),    space_threads_ ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
+          backend_->pair_tests(), results_made_, bricks().counts(), cycle_peaks_,
+          static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20)};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {

@@ -24,12 +24,16 @@
 
 namespace trubal {
 
-// Counters for tests and PRINT info.
+// Counters for tests and PRINT counters.
 struct PipelineCounters {
   std::size_t rebuilds = 0;        // pair searches that built a new list
   int threads_used = 0;            // threads the steps share their work among (0 before the first)
   double skin = 0;                 // of the list now (0 for a backend that keeps none)
   std::uint64_t pair_tests = 0;    // the backend's count, where it keeps one
+  std::int64_t results_made = 0;   // a CYCLE's last step taken again to make the contact results read
+  BrickStep::Counts parts;         // the spatial decomposition's (the ranks' or the threads')
+  std::vector<double> cycle_peaks_mib;   // per rank: peak memory by the end of the last distributed CYCLE
+  double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
 };
 
 class Pipeline {

@@ -75,6 +75,7 @@ void check_scene(const Scene& scene, bool all_variants = true) {
 struct ThreadedRun {
   std::map<std::string, std::string> info;
   int threads_used = 0;
+  BrickStep::Counts parts;
 };
 ThreadedRun run_threaded(const Scene& scene, const Model& serial_model, int cycles, StepPolicy policy) {
   Model model = scene.model;
@@ -84,6 +85,7 @@ ThreadedRun run_threaded(const Scene& scene, const Model& serial_model, int cycl
   ThreadedRun r;
   for (const auto& [name, value] : threaded->info()) r.info[name] = value;
   r.threads_used = threaded->counters().threads_used;
+  r.parts = threaded->counters().parts;
   return r;
 }
 
@@ -232,17 +234,15 @@ TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewe
   policy.slow_member = 1;
   ThreadedRun r = run_threaded(scene, serial_model, kCycles, policy);
   std::map<std::string, std::string>& info = r.info;
-  INFO("decompositions made: " << info["decompositions made"] << "; shares: " << info["shares of the balls"]
-                               << "; balls per thread: " << info["balls per thread"]);
-  REQUIRE(std::stoi(info["decompositions made"]) >= 3);
+  INFO("decompositions made: " << r.parts.decompositions << "; shares: " << info["shares of the balls"]
+                               << "; balls per thread: " << r.parts.least_balls << " to " << r.parts.most_balls);
+  REQUIRE(r.parts.decompositions >= 3);
   double first = 0, second = 0;
   REQUIRE(std::sscanf(info["shares of the balls"].c_str(), "%lf %lf", &first, &second) == 2);
   CHECK(second < 0.45);     // eight times slower: the share heads for 1/9, clamped at 1/4
   CHECK(second >= 0.24);    // never far below half an equal share (clamped there, then normalised)
   CHECK(first + second == Approx(1.0).margin(0.011));   // (printed to two places)
-  std::size_t least = 0, most = 0;
-  REQUIRE(std::sscanf(info["balls per thread"].c_str(), "%zu to %zu", &least, &most) == 2);
-  CHECK(static_cast<double>(least) < 0.9 * static_cast<double>(most));
+  CHECK(static_cast<double>(r.parts.least_balls) < 0.9 * static_cast<double>(r.parts.most_balls));
 }
 
 TEST_CASE("backends: the periodic pair search finds what testing every pair at its nearest image finds", "[backends][periodic]") {

@@ -16,6 +16,7 @@
 #include <tuple>
 #include <vector>
 
+#include "counters.hpp"
 #include "interp_support.hpp"
 #include "scene_decks.hpp"
 #include "skip.hpp"
@@ -109,6 +110,7 @@ struct Result {
   std::string balls, contacts, history, walls;
   std::string info = {};   // PRINT info at the end
   std::string dumps = {};  // every file of DUMP vtk d, by name (a scene's `during` may dump)
+  Counters counters = {};  // PRINT counters at the end
 };
 
 // The files of the scene's dumps (d.pvd, d_*.vtp) in `dir`, each named, in the order of their names.
@@ -124,15 +126,14 @@ std::string dump_files(const std::filesystem::path& dir) {
   return all;
 }
 
-// A count PRINT info gives after `key` (-1: no such line).
-long info_count(const std::string& info, const std::string& key) {
-  const auto at = info.find(key);
-  return at == std::string::npos ? -1 : std::stol(info.substr(at + key.size()));
-}
+// What every run prints at its end: its files, PRINT info and PRINT counters.
+const char* const kEndOutputs = "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\n"
+                                "print info\nprint counters file counters.txt\n";
+
 // Pair lists rebuilt on the parts of the decomposition (ranks' or threads').
-long local_rebuilds(const std::string& info) { return info_count(info, "pair lists rebuilt on the parts: "); }
+double local_rebuilds(const Result& r) { return counter(r.counters, "part_list_rebuilds"); }
 // Balls that changed owner at those rebuilds.
-long migrations(const std::string& info) { return info_count(info, "balls that changed rank: "); }
+double migrations(const Result& r) { return counter(r.counters, "migrations"); }
 
 // Runs the scene with `cycling` (its cycle lines) after the setup, on `backend`, the threads
 // sharing the steps in space as `split_rule` says (StepPolicy::split_rule).
@@ -141,15 +142,13 @@ Result run(const Scene& scene, const std::string& backend, const std::string& cy
   WorkingDir cd(dir.path());
   Harness h;
   h.session.policy().split_rule = split_rule;
-  const std::string deck = "backend " + backend + "\n" + scene.setup + scene.during + cycling +
-                           "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\n"
-                           "print info\n";
+  const std::string deck = "backend " + backend + "\n" + scene.setup + scene.during + cycling + kEndOutputs;
   const bool ok = h.deck(deck);
   INFO(deck);
   INFO(h.err.str());
   REQUIRE(ok);
   return {slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
-          slurp(dir.path() / "walls.csv"), h.out.str(), dump_files(dir.path())};
+          slurp(dir.path() / "walls.csv"), h.out.str(), dump_files(dir.path()), read_counters(dir.path() / "counters.txt")};
 }
 
 // The cuts of a run of n cycles. `keeps_history`: the history file is the unbroken one's (every cut
@@ -265,8 +264,8 @@ void check_scene(const Scene& scene, bool in_space = false) {
         CHECK_THAT(other.info, Catch::Contains("last step shared by: the spatial decomposition, a part per thread"));
       // The threads rebuild the lists on their parts too (BrickStep::rebuild_local), so the files
       // above check that path on threads.
-      if (in_space && cut.name == "unbroken" && std::string(scene.name) == "hertz_drop") CHECK(local_rebuilds(other.info) >= 20);
-      if (in_space && cut.name == "unbroken" && std::string(scene.name) == "servo_shear") CHECK(migrations(other.info) >= 10);
+      if (in_space && cut.name == "unbroken" && std::string(scene.name) == "hertz_drop") CHECK(local_rebuilds(other) >= 20);
+      if (in_space && cut.name == "unbroken" && std::string(scene.name) == "servo_shear") CHECK(migrations(other) >= 10);
     }
   }
 }
@@ -275,8 +274,7 @@ void check_scene(const Scene& scene, bool in_space = false) {
 // ASan, leak checking is off for the ranks: Open MPI keeps allocations of its own start-up to the end.
 Result run_mpi(const Scene& scene, int ranks, const std::string& cycling) {
   TempDir dir;
-  const std::string deck = "backend mpi\n" + std::string(scene.setup) + scene.during + cycling +
-                           "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\nprint info\n";
+  const std::string deck = "backend mpi\n" + std::string(scene.setup) + scene.during + cycling + kEndOutputs;
   dir.write("deck.dat", deck);
   const std::string command = "cd " + quote(dir.str()) +
                               " && OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
@@ -288,10 +286,11 @@ Result run_mpi(const Scene& scene, int ranks, const std::string& cycling) {
   REQUIRE(status == 0);
   // Really on that many ranks, and rank 0 alone printed (one copy of each line).
   const std::string out = slurp(dir.path() / "out.txt");
-  CHECK_THAT(out, Catch::Contains("ranks: " + std::to_string(ranks) + "\n"));
+  const Counters counters = read_counters(dir.path() / "counters.txt");
+  CHECK(counter(counters, "ranks") == ranks);
   CHECK(out.find("trubal> print info") == out.rfind("trubal> print info"));
   return Result{slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
-                slurp(dir.path() / "walls.csv"), out, dump_files(dir.path())};
+                slurp(dir.path() / "walls.csv"), out, dump_files(dir.path()), counters};
 }
 
 // Every scene on 2 and 3 ranks, unbroken and cut (a switch from serial to mpi, SAVE and RESTART),
@@ -315,10 +314,10 @@ void check_scene_mpi(const Scene& scene) {
     if (std::string(scene.name) == "servo_shear") CHECK(serial.dumps.find("d_contacts_") != std::string::npos);
     // The scene without walls whose balls fall through many lists rebuilds them on the ranks'
     // parts (BrickStep::rebuild_local), so the files above check that path too.
-    if (std::string(scene.name) == "hertz_drop") CHECK(local_rebuilds(other.info) >= 20);
+    if (std::string(scene.name) == "hertz_drop") CHECK(local_rebuilds(other) >= 20);
     // Its balls change rank at those rebuilds, with their history (44 to 81 of them in runs on
     // 2026-12-03; the count follows the shares, which follow the ranks' speeds).
-    if (std::string(scene.name) == "servo_shear") CHECK(migrations(other.info) >= 10);
+    if (std::string(scene.name) == "servo_shear") CHECK(migrations(other) >= 10);
   }
 }
 

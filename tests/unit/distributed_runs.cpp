@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "counters.hpp"
 #include "interp_support.hpp"
 #include "scene_decks.hpp"
 #include "skip.hpp"
@@ -42,6 +43,9 @@ int run_shell(const TempDir& dir, int ranks, const std::string& env = "") {
 }
 
 const char* kOutputs = "print balls file balls.csv\nprint contacts file contacts.csv\n";
+// The counts, read back with counters_of.
+const char* kCounters = "print counters file counters.txt\n";
+Counters counters_of(const TempDir& dir) { return read_counters(dir.path() / "counters.txt"); }
 
 }  // namespace
 
@@ -54,10 +58,10 @@ TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the 
   REQUIRE(lines_of(contacts).size() > 100);   // contacts to carry history across the cut
 
   TempDir four;
-  four.write("deck.dat", "backend mpi\n" + std::string(kServoShearDeck) + "cycle 400\n" + kOutputs + "print info\n");
+  four.write("deck.dat", "backend mpi\n" + std::string(kServoShearDeck) + "cycle 400\n" + kOutputs + kCounters);
   REQUIRE(run_deck(four, 4) == 0);
   INFO(slurp(four.path() / "out.txt"));
-  CHECK_THAT(slurp(four.path() / "out.txt"), Catch::Contains("ranks: 4\n"));
+  CHECK(counter(counters_of(four), "ranks") == 4);
   CHECK(slurp(four.path() / "balls.csv") == balls);
   CHECK(slurp(four.path() / "contacts.csv") == contacts);
 
@@ -99,18 +103,19 @@ cycle 1500
   std::string three_save;
   for (int ranks : {2, 3, 4}) {
     TempDir dir;
-    dir.write("deck.dat", "backend mpi\n" + deck + "save s.sav\ncycle 500\n" + kOutputs + "print info\n");
+    dir.write("deck.dat", "backend mpi\n" + deck + "save s.sav\ncycle 500\n" + kOutputs + "print info\n" + kCounters);
     REQUIRE(run_deck(dir, ranks) == 0);
     const std::string out = slurp(dir.path() / "out.txt");
     INFO(ranks << " ranks\n" << out);
+    const Counters counters = counters_of(dir);
     CHECK_THAT(out, Catch::Contains("last step shared by: the spatial decomposition"));
-    CHECK_THAT(out, Catch::Contains("balls per rank: "));
+    CHECK(counter(counters, "decompositions") >= 1);
     // Each rank searched its own range of balls and the lists were joined, or searched its own part:
     // the files below are serial's only if the joined lists are the serial list.
     CHECK_THAT(out, Catch::Contains("pair search: a stale list on each rank's part"));
     // Each CYCLE left its last step's results to be made when read, as serial does (SAVE after the
     // first, PRINT balls after the second): the ranks held no result arrays while they ran.
-    CHECK_THAT(out, Catch::Contains("contact results made when read: 2 "));
+    CHECK(counter(counters, "results_made") == 2);
     CHECK(slurp(dir.path() / "s.sav") == slurp(serial.path() / "s.sav"));
     CHECK(slurp(dir.path() / "balls.csv") == balls);
     CHECK(slurp(dir.path() / "contacts.csv") == contacts);
@@ -196,30 +201,20 @@ cycle 10000
   TempDir serial, two;
   serial.write("deck.dat", deck);
   REQUIRE(run_deck(serial, 0) == 0);
-  two.write("deck.dat", "backend mpi\n" + deck + "print info\n");
+  two.write("deck.dat", "backend mpi\n" + deck + kCounters);
   REQUIRE(run_deck(two, 2) == 0);
   INFO(slurp(two.path() / "out.txt"));
-  CHECK_THAT(slurp(two.path() / "out.txt"), Catch::Contains("balls per rank: "));
+  const Counters counters = counters_of(two);
+  CHECK(counter(counters, "decompositions") >= 1);
   // Most of its lists are rebuilt on the ranks' parts, and at those rebuilds the balls change rank
   // as they cross the split's planes, taking their pairs' history along (841 moves on 2026-12-03;
   // the count follows the shares, which follow the ranks' speeds): checked by the bits.
-  auto count = [&](const std::string& key) {
-    const std::string out = slurp(two.path() / "out.txt");
-    const auto at = out.find(key);
-    REQUIRE(at != std::string::npos);
-    return std::stol(out.substr(at + key.size()));
-  };
-  CHECK(count("pair lists rebuilt on the parts: ") >= 100);
-  CHECK(count("balls that changed rank: ") >= 100);
+  CHECK(counter(counters, "part_list_rebuilds") >= 100);
+  CHECK(counter(counters, "migrations") >= 100);
   // Rank 1 stepped its part without the whole model's arrays (Pipeline::hollow): it kept their ids
   // and radii, 16 of a ball's 180-odd bytes, where rank 0 kept them all.
   {
-    const std::string out = slurp(two.path() / "out.txt"), key = "arrays held in the last step: whole model ";
-    const auto at = out.find(key);
-    REQUIRE(at != std::string::npos);
-    std::istringstream held(out.substr(at + key.size()));
-    double rank0 = 0, rank1 = 0;
-    held >> rank0 >> rank1;
+    const double rank0 = counter(counters, "rank0_whole_arrays_mib"), rank1 = counter(counters, "rank1_whole_arrays_mib");
     INFO("whole model's arrays held: rank 0 " << rank0 << " MiB, rank 1 " << rank1 << " MiB");
     CHECK(rank0 > 0);
     CHECK(rank1 < 0.2 * rank0);
@@ -227,9 +222,9 @@ cycle 10000
   // And with every list rebuilt through the whole model (TRUBAL_REBUILD_WHOLE): none on the parts,
   // the same bits.
   TempDir whole;
-  whole.write("deck.dat", "backend mpi\n" + deck + "print info\n");
+  whole.write("deck.dat", "backend mpi\n" + deck + kCounters);
   REQUIRE(run_deck(whole, 2, "TRUBAL_REBUILD_WHOLE=1") == 0);
-  CHECK_THAT(slurp(whole.path() / "out.txt"), Catch::Contains("pair lists rebuilt on the parts: 0 "));
+  CHECK(counter(counters_of(whole), "part_list_rebuilds") == 0);
   CHECK(slurp(whole.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
   const std::string contacts = slurp(serial.path() / "contacts.csv");
   CHECK(lines_of(contacts).size() > 2);   // collisions under way at the end (a header and at least two)
@@ -252,24 +247,19 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
   serial.write("deck.dat", deck);
   REQUIRE(run_deck(serial, 0) == 0);
   auto peaks = [](const TempDir& dir) {
-    const std::string out = slurp(dir.path() / "out.txt"), key = "peak memory by the last CYCLE's end: ";
-    const auto at = out.find(key);
-    INFO(out);
-    REQUIRE(at != std::string::npos);
-    std::istringstream in(out.substr(at + key.size()));
-    std::pair<double, double> p;
-    in >> p.first >> p.second;
-    return p;
+    INFO(slurp(dir.path() / "out.txt"));
+    const Counters counters = counters_of(dir);
+    return std::pair{counter(counters, "rank0_cycle_peak_mib"), counter(counters, "rank1_cycle_peak_mib")};
   };
-  parts.write("deck.dat", "backend mpi\n" + deck + "print info\n");
-  whole.write("deck.dat", "backend mpi\n" + deck + "print info\n");
+  parts.write("deck.dat", "backend mpi\n" + deck + kCounters);
+  whole.write("deck.dat", "backend mpi\n" + deck + kCounters);
   REQUIRE(run_deck(parts, 2) == 0);
   REQUIRE(run_deck(whole, 2, "TRUBAL_REBUILD_WHOLE=1") == 0);
   for (const char* file : {"balls.csv", "contacts.csv"}) {
     CHECK(slurp(parts.path() / file) == slurp(serial.path() / file));
     CHECK(slurp(whole.path() / file) == slurp(serial.path() / file));
   }
-  CHECK(slurp(parts.path() / "out.txt").find("pair lists rebuilt on the parts: 1") != std::string::npos);
+  CHECK(counter(counters_of(parts), "part_list_rebuilds") == 1);
   const auto [parts0, parts1] = peaks(parts);
   const auto [whole0, whole1] = peaks(whole);
   INFO("peak MiB by the CYCLE's end, ranks 0 and 1: searched on the parts " << parts0 << " " << parts1
@@ -295,22 +285,17 @@ TEST_CASE("distributed: rank 0 alone makes the contact results a command reads a
   TempDir serial, two;
   serial.write("deck.dat", deck);
   REQUIRE(run_deck(serial, 0) == 0);
-  two.write("deck.dat", "backend mpi\n" + deck + "print info\n");
+  two.write("deck.dat", "backend mpi\n" + deck + kCounters);
   REQUIRE(run_deck(two, 2) == 0);
   const std::string out = slurp(two.path() / "out.txt");
   INFO(out);
   for (const char* file : {"first.csv", "balls.csv", "contacts.csv"}) CHECK(slurp(two.path() / file) == slurp(serial.path() / file));
   CHECK(lines_of(slurp(serial.path() / "first.csv")).size() > 100000);   // most pairs of the block touch
   // The results each rank holds at the end (made for the last PRINT: rank 0's, of 226,800 pairs).
-  const std::string key = "contact results held: ";
-  const auto at = out.find(key);
-  REQUIRE(at != std::string::npos);
-  std::istringstream held(out.substr(at + key.size()));
-  double rank0 = -1, rank1 = -1;
-  held >> rank0 >> rank1;
-  CHECK(rank0 >= 20);
-  CHECK(rank1 == 0);
-  CHECK_THAT(out, Catch::Contains("contact results made when read: 2"));
+  const Counters counters = counters_of(two);
+  CHECK(counter(counters, "rank0_contact_results_mib") >= 20);
+  CHECK(counter(counters, "rank1_contact_results_mib") == 0);
+  CHECK(counter(counters, "results_made") == 2);
 }
 
 TEST_CASE("distributed: a run that goes unstable is put back to the same rescue copy as serial's", "[mpi]") {
