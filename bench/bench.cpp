@@ -35,6 +35,7 @@
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
 #include "physics/measure.hpp"
+#include "../tests/unit/fcc_lattice.hpp"   // the FCC block the tests build too
 
 using namespace trubal;
 
@@ -68,23 +69,18 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
     seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
     return (static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5) * 0.1;
   };
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   if (g_periodic) {   // the lattice's own cell: every ball has its 12 neighbours, across the faces too
     model.space.periodic = true;
     model.space.hi = {nx * a, ny * a, nz * a};
   }
   std::int64_t id = 1;
   // Ids in lattice order, as the peers' data files number them.
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        for (const auto& b : basis) {
-          const double x = (i + b[0] + 0.25) * a + jitter(), y = (j + b[1] + 0.25) * a + jitter();
-          const double z = (k + b[2] + 0.25) * a + jitter();
-          const std::size_t ball = add_ball(model, id++, 1, x, y, z, r);
-          const bool shell = i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
-          if (shell && !g_periodic) model.balls.fixed[ball] = kVel | kSpin;
-        }
+  test::for_each_fcc_site(nx, ny, nz, a, 0.25, [&](const test::FccSite& site) {
+    const double x = site.x + jitter(), y = site.y + jitter();
+    const double z = site.z + jitter();
+    const std::size_t ball = add_ball(model, id++, 1, x, y, z, r);
+    if (site.on_surface && !g_periodic) model.balls.fixed[ball] = kVel | kSpin;
+  });
   return model;
 }
 

@@ -21,7 +21,7 @@ namespace trubal {
 
 static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
                                                      "energy", "fabric", "coordination", "prop", "damp",
-                                                     "history", "walls", "psd", "porosity", "measure"};
+                                                     "history", "walls", "psd", "porosity", "measure", "counters"};
 
 // The region of PRINT stress, fabric, coordination, porosity and measure: a measurement sphere,
 // given as the range element `sphere x y z r` (nothing else, since the measurement needs a volume).
@@ -127,6 +127,55 @@ static void print_info(Context& ctx) {
                    f.gravity || f.applied ? ", loads" : "", damping, estimate);
   o << fmt::format("types: {}\n", m.materials.size());
   o << fmt::format("groups: {}\n", m.groups.size());
+}
+
+// PRINT counters: the counts PRINT info tells in words, one `name value` line each under a name that
+// stays (HELP lists them), for scripts and tests to read. Every rank runs it (the per-rank values
+// are gathered); rank 0 alone prints or writes.
+static void print_counters(Context& ctx, const std::string& file) {
+  const Session& s = ctx.session;
+  const Model& m = s.model();
+  const PipelineCounters c = s.pipeline().counters();
+  std::size_t wall_touching = 0;
+  for (auto st : m.wall_contacts.state) wall_touching += st != 0;
+  std::string text;
+  auto line = [&](std::string_view name, auto value) { text += fmt::format("{} {}\n", name, value); };
+  line("cycle", m.cycle);
+  line("balls", m.balls.size());
+  line("contacts", contact_count(m));
+  line("wall_contacts", wall_touching);
+  line("balls_destroyed", m.space.destroyed);
+  line("ranks", comm::size());
+  line("threads", s.pipeline().threads());
+  line("threads_used", c.threads_used);
+  line("pair_list_rebuilds", c.rebuilds);
+  line("pair_tests", c.pair_tests);
+  line("results_made", c.results_made);
+  line("decompositions", c.parts.decompositions);
+  line("part_list_rebuilds", c.parts.list_rebuilds);
+  line("part_wraps", c.parts.wraps);
+  line("migrations", c.parts.migrations);
+  line("ghosts", c.parts.ghosts);
+  line("least_part_balls", c.parts.least_balls);
+  line("most_part_balls", c.parts.most_balls);
+  if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
+    std::vector<double> mine{static_cast<double>(m.contacts.result_bytes()) / (1 << 20), c.whole_arrays_mib,
+                             c.part_arrays_mib}, all;
+    comm::allgather(mine, all);
+    for (std::size_t r = 0; 3 * r + 2 < all.size(); ++r) {
+      line(fmt::format("rank{}_contact_results_mib", r), all[3 * r]);
+      line(fmt::format("rank{}_whole_arrays_mib", r), all[3 * r + 1]);
+      line(fmt::format("rank{}_part_arrays_mib", r), all[3 * r + 2]);
+    }
+    for (std::size_t r = 0; r < c.cycle_peaks_mib.size(); ++r) line(fmt::format("rank{}_cycle_peak_mib", r), c.cycle_peaks_mib[r]);
+  }
+  if (!comm::root()) return;
+  if (file.empty()) {
+    ctx.out << text;
+    return;
+  }
+  write_file_atomically(file, text);
+  ctx.out << fmt::format("counters written to {}\n", file);
 }
 
 static void print_balls(Context& ctx, const Range& range, const std::string& file) {
@@ -287,11 +336,12 @@ static void run_print(Context& ctx, Args& args) {
   auto item = args.expect(kItems, "PRINT item");
   std::string file;
   if (args.accept("file")) file = args.word("file name");
-  if (!file.empty() && item != 1 && item != 2 && item != 11 && item != 12)
-    args.fail("`file` goes with PRINT balls, contacts, walls and psd");
+  if (!file.empty() && item != 1 && item != 2 && item != 11 && item != 12 && item != 15)
+    args.fail("`file` goes with PRINT balls, contacts, walls, psd and counters");
   const Model& m = ctx.session.model();
   switch (item) {
     case 0: args.done(); print_info(ctx); return;
+    case 15: args.done(); print_counters(ctx, file); return;
     case 1: print_balls(ctx, read_range(args), file); return;
     case 2: print_contacts(ctx, read_range(args), file); return;
     case 3: {
@@ -416,7 +466,7 @@ static void run_print(Context& ctx, Args& args) {
 }
 
 const Command print_command = {
-    "PRINT", {}, "PRINT info|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure [file f] [range ...]",
+    "PRINT", {}, "PRINT info|counters|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
@@ -424,7 +474,16 @@ const Command print_command = {
     "uses fewer threads than it has, and why; under mpirun the ranks; how many times a CYCLE's last step "
     "was taken again to make the contact results a command read (CYCLE); the peak resident memory so far, "
     "of each rank, and under mpirun also by the end of the last CYCLE stepped in parts, and the contact "
-    "results each rank holds: rank 0 alone makes those a command reads after a CYCLE). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
+    "results each rank holds: rank 0 alone makes those a command reads after a CYCLE). counters [file f]: the "
+    "counts for scripts, one `name value` line each: cycle, balls, contacts (touching ball pairs), wall_contacts, "
+    "balls_destroyed, ranks, threads, threads_used, pair_list_rebuilds, pair_tests (candidate pairs the backend "
+    "tested, where it counts them), results_made (a CYCLE's last step taken again to make the contact results a "
+    "command read), decompositions (splits of the spatial decomposition, by ranks or threads), part_list_rebuilds "
+    "and part_wraps (pair lists rebuilt and balls wrapped on the parts), migrations (balls that changed part at "
+    "those rebuilds), ghosts (part 0's), least_part_balls and most_part_balls (at the last split); under mpirun "
+    "also, per rank r, rank<r>_contact_results_mib (the results it holds), rank<r>_whole_arrays_mib and "
+    "rank<r>_part_arrays_mib (the arrays it held in the last step) and, after a CYCLE stepped in parts, "
+    "rank<r>_cycle_peak_mib (its peak memory by that CYCLE's end). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
     "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
@@ -452,8 +511,8 @@ const Command print_command = {
     "point). psd: the grading of the balls the last GEN made (those still there), percent passing by mass "
     "(solid volume) at the sieve diameters of a sieve curve or at 21 diameters evenly spaced in log d, next to "
     "the grading asked for, and the largest difference; with `file f.csv`: diameter,passing_asked,passing_sample.",
-    {"info", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp", "history",
-     "walls", "psd", "porosity", "measure", "file", "volume", "range"},
+    {"info", "counters", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
+     "history", "walls", "psd", "porosity", "measure", "file", "volume", "range"},
     run_print};
 
 }  // namespace trubal

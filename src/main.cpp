@@ -13,9 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
-#include "backends/mpi/mpi_backend.hpp"
-#include "cycle/pipeline.hpp"
-#include "cycle/brick_step.hpp"
+#include "cycle/step_policy.hpp"
 #include "interp/interpreter.hpp"
 #include "interp/manpage.hpp"
 #include "interp/output.hpp"
@@ -93,21 +91,22 @@ int run(int argc, char** argv) {
   // Tests: "R L" makes rank R's command at line L of the deck fail there alone, "R split" rank R's
   // first split of the spatial decomposition, "R search" its first share of a pair search through
   // the whole model, "R part" its first search on its part (distributed_runs.cpp).
+  trubal::StepPolicy& policy = session.policy();
   if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
     int rank = -1, line = 0;
     char word[8] = {};
     if (std::sscanf(at, "%d %d", &rank, &line) == 2) {
       if (rank == trubal::comm::rank()) interp.fail_line_for_test = line;
     } else if (std::sscanf(at, "%d %7s", &rank, word) == 2) {
-      if (std::strcmp(word, "split") == 0) trubal::BrickStep::fail_split_for_test = rank;
-      if (std::strcmp(word, "search") == 0) trubal::fail_search_for_test = rank;
-      if (std::strcmp(word, "part") == 0) trubal::BrickStep::fail_part_search_for_test = rank;
+      if (std::strcmp(word, "split") == 0) policy.fail_split = rank;
+      if (std::strcmp(word, "search") == 0) policy.fail_search = rank;
+      if (std::strcmp(word, "part") == 0) policy.fail_part_search = rank;
     }
   }
   // Measurements: every stale pair list rebuilt through the whole model, as before the ranks
   // rebuilt them on their parts (to compare the two ways in one build).
   if (const char* whole = std::getenv("TRUBAL_REBUILD_WHOLE"); whole && std::strcmp(whole, "1") == 0)
-    trubal::BrickStep::local_rule = -1;
+    policy.local_rule = -1;
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).
   std::int64_t stdin_deck = deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO)) ? 1 : 0;

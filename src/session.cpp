@@ -23,7 +23,7 @@ namespace trubal {
 
 // Under mpirun the ranks share the step (BACKEND mpi); otherwise one thread, as TRUBAL.
 Session::Session()
-    : pipeline_(make_pipeline(comm::size() > 1 ? "mpi" : "serial", 1)), history_(std::make_unique<History>()) {}
+    : pipeline_(make_pipeline(comm::size() > 1 ? "mpi" : "serial", 1, 0, &policy_)), history_(std::make_unique<History>()) {}
 Session::~Session() = default;
 
 Model& Session::edit() {
@@ -42,7 +42,7 @@ const Model& Session::model_with_masses() {
 }
 
 void Session::set_backend(const std::string& name, int threads, std::uint64_t max_memory) {
-  auto pipeline = make_pipeline(name, threads, max_memory);
+  auto pipeline = make_pipeline(name, threads, max_memory, &policy_);
   make_results_to_read(model_, *pipeline_);   // the old pipeline holds the copy they are made from
   pipeline_ = std::move(pipeline);
 }

@@ -15,6 +15,7 @@
 #include "gen/pack.hpp"
 #include "gen/size_distribution.hpp"
 #include "cycle/run.hpp"
+#include "cycle/step_policy.hpp"
 #include "io/history.hpp"
 #include "io/vtk.hpp"
 #include "model/edit.hpp"
@@ -60,6 +61,9 @@ class Session {
 
   // The step pipeline: its backend (pair finding) and threads.
   const Pipeline& pipeline() const { return *pipeline_; }
+  // How the steps are shared where the default is a timed choice, and the faults a test injects
+  // (cycle/step_policy.hpp): every pipeline of the session reads this one, BACKEND's too.
+  StepPolicy& policy() { return policy_; }
   // BACKEND: threads <= 0 the backend's default; max_memory 0 its default (throws
   // std::invalid_argument for a bad name or option).
   void set_backend(const std::string& name, int threads, std::uint64_t max_memory = 0);
@@ -144,6 +148,7 @@ class Session {
   void start(const Space& space);   // a fresh model in this space; histories and dumps end
   // mutable: model() makes deferred results (a cache of what the state determines).
   mutable Model model_;
+  StepPolicy policy_;   // (before pipeline_, which reads it to the end)
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<History> history_;
   std::unique_ptr<VtkSeries> dumps_;

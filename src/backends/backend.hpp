@@ -49,6 +49,9 @@ class Backend {
 struct BackendOptions {
   int threads = 0;                 // <= 0: the backend's default
   std::uint64_t max_memory = 0;    // allpairs: the limit on its pair slots (0: its default)
+  // mpi, a test's fault (the pipeline's StepPolicy::fail_search): the rank whose next share of a
+  // search fails as if out of memory, once (-1: none); none without it.
+  int* fail_search = nullptr;
 };
 
 // Backends by name (nothing outside src/backends/ names a concrete one). Throws

@@ -22,7 +22,7 @@ const Entry kBackends[] = {
     {"serial", 1, false, [](const BackendOptions&) { return make_serial_backend(); }},
     {"allpairs", 0, true, [](const BackendOptions& o) { return make_allpairs_backend(o.max_memory); }},
     {"threaded", 0, false, [](const BackendOptions&) { return make_threaded_backend(); }},
-    {"mpi", 1, false, [](const BackendOptions&) { return make_mpi_backend(); }},
+    {"mpi", 1, false, [](const BackendOptions& o) { return make_mpi_backend(o.fail_search); }},
 };
 
 const Entry& entry(std::string_view name) {

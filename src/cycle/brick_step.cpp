@@ -330,7 +330,7 @@ std::vector<double> BrickStep::proposed_shares() {
   // balls.
   const int ranks = team_->size();
   if (shares_.size() != static_cast<std::size_t>(ranks)) shares_.assign(ranks, 1.0 / ranks);
-  const double seconds = work_seconds_ * (team_->rank() == slow_member_for_test.load(std::memory_order_relaxed) ? kSlowFactorForTest : 1);
+  const double seconds = work_seconds_ * (team_->rank() == policy_->slow_member ? StepPolicy::kSlowFactor : 1);
   std::vector<double> mine{seconds, work_ball_steps_}, all;
   team_->allgather(mine, all);   // (a collective call: every member asks at once)
   std::vector<double> speed(ranks, 0.0), next(ranks, 0.0);
@@ -366,8 +366,8 @@ void BrickStep::split(const Model& full, const VerletReference& ref) {
   // A rank that cannot make its part (out of memory) must not leave the others stepping theirs and
   // waiting for its ghosts: the ranks agree here, and every one stops with that rank's message.
   together([&] {
-    if (!team_->shares_whole() && team_->rank() == fail_split_for_test.load()) {   // (a rank's test hook)
-      fail_split_for_test = -1;
+    if (!team_->shares_whole() && team_->rank() == policy_->fail_split) {   // (a rank's test fault)
+      policy_->fail_split = -1;
       throw std::bad_alloc();
     }
     make_part(full, ref);
@@ -528,7 +528,7 @@ int BrickStep::owner_at(double x, double y, double z, std::uint32_t k) const {
 
 bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool) {
   // (Every test below reads what is the same on every rank, or is agreed on: every rank returns alike.)
-  if (local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
+  if (policy_->local_rule < 0 || !live_ || model_ != &full) return false;
   if (results_written_ && !current_) return false;   // (the parts hold results the whole model has not)
   // The members' speeds have moved the shares by a tenth since the split (a core slowed, contacts
   // crowding in a part): the parts are made afresh, balanced by them.
@@ -728,8 +728,8 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   ContactTable arrived_pairs;   // the pairs of the balls that move to this rank, with their history
   WallContacts arrived_walls;   // and their wall contacts
   together([&] {
-    if (!team_->shares_whole() && team_->rank() == fail_part_search_for_test.load()) {   // (a rank's test hook)
-      fail_part_search_for_test = -1;
+    if (!team_->shares_whole() && team_->rank() == policy_->fail_part_search) {   // (a rank's test fault)
+      policy_->fail_part_search = -1;
       throw std::bad_alloc();
     }
     // This rank's balls and those received, in the whole model's order.
@@ -1038,7 +1038,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
 }
 
 bool BrickStep::wrap(Model& full) {
-  if (local_rule.load(std::memory_order_relaxed) < 0 || !live_ || model_ != &full) return false;
+  if (policy_->local_rule < 0 || !live_ || model_ != &full) return false;
   if (results_written_ && !current_) return false;
   part_.space = full.space;
   // (Set first: where a member fails below, the others' parts may be wrapped, and every member
@@ -1337,7 +1337,7 @@ void BrickStep::release() {
   auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
   part_ = Model{};
   scratch_ = StepScratch{};
-  step_ = ParallelStep{};
+  step_ = ParallelStep{*policy_};
   ref_ = VerletReference{};
   free(owner_); free(global_ball_); free(owned_); free(owned_pairs_); free(owned_walls_);
   free(rank_balls_); free(rank_pairs_); free(rank_walls_); free(send_); free(recv_); free(send_buf_); free(recv_buf_);

@@ -27,7 +27,6 @@
 //   other ranks step without the whole model's arrays meanwhile (Pipeline::hollow).
 #pragma once
 
-#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -39,6 +38,7 @@
 #include "support/exact_sum.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
+#include "cycle/step_policy.hpp"
 #include "cycle/step_scratch.hpp"
 #include "cycle/team.hpp"
 #include "cycle/verlet.hpp"
@@ -61,6 +61,9 @@ void broadcast_arrays(Model& m);
 
 class BrickStep {
  public:
+  // policy: the pipeline's (StepPolicy: local_rule, slow_member, the faults), outliving this.
+  explicit BrickStep(StepPolicy& policy) : policy_(&policy), step_(policy) {}
+
   // The members sharing the step: the ranks of the MPI run (the default), or the threads of one
   // process, one BrickStep each (cycle/team.hpp).
   void set_team(Team& team) { team_ = &team; }
@@ -99,7 +102,7 @@ class BrickStep {
   // made afresh from the whole model instead (the same answer on every member): a decomposition
   // whose balls have spread (the shell of balls received grew past twice its size at the first
   // such rebuild), members whose speeds would move their shares by a tenth, results not yet
-  // gathered, TRUBAL_REBUILD_WHOLE (local_rule). The walls' contacts of the member's own balls are
+  // gathered, TRUBAL_REBUILD_WHOLE (StepPolicy::local_rule). The walls' contacts of the member's own balls are
   // found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
@@ -152,21 +155,17 @@ class BrickStep {
 
   std::vector<std::pair<std::string, std::string>> info() const;
   std::size_t local_rebuilds() const { return local_rebuilds_; }
+  // The decomposition's counts (PRINT counters): the same on every member, but the balls and
+  // ghosts, which are this member's, and least/most_balls over the members at the last split.
+  struct Counts {
+    std::size_t decompositions = 0, list_rebuilds = 0, wraps = 0, migrations = 0;
+    std::size_t ghosts = 0, least_balls = 0, most_balls = 0;
+  };
+  Counts counts() const {
+    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_};
+  }
   // The bytes of the part's arrays of balls, pairs and wall contacts.
   std::size_t part_bytes() const;
-
-  // Tests: 0 rebuilds stale lists on the parts where it can (the default), -1 never does (every
-  // rebuild through the whole model, as before 2026-12-03); for every BrickStep of the process.
-  static inline std::atomic<int> local_rule{0};
-  // Tests: the member (team rank) whose own work is counted kSlowFactorForTest times slower at each
-  // split, as a busy core would make it, to see the shares follow; -1: none. Eight times, so that a
-  // machine busy with other work (which slows both members by up to about two) cannot hide it.
-  static inline std::atomic<int> slow_member_for_test{-1};
-  static constexpr double kSlowFactorForTest = 8;
-  // Tests (TRUBAL_TEST_FAIL_AT "R split"): rank R's next split fails as if out of memory; -1: none.
-  static inline std::atomic<int> fail_split_for_test{-1};
-  // Tests (TRUBAL_TEST_FAIL_AT "R part"): rank R's next search on its part fails so; -1: none.
-  static inline std::atomic<int> fail_part_search_for_test{-1};
 
  private:
   // split()'s work: the owners, and this member's part.
@@ -185,6 +184,7 @@ class BrickStep {
   std::vector<double> proposed_shares();
   void update_shares();
 
+  StepPolicy* policy_;
   Team* team_ = &rank_team();
   Model part_;
   StepScratch scratch_;

@@ -13,6 +13,8 @@ ContactLoop contact_loop_full(unsigned i);
 // The cross loop of index i (never with details: i < ContactFeatures::kCount / 2).
 CrossLoop cross_loop_at(unsigned i);
 WallLoop wall_loop_at(unsigned i);
-MotionLoop motion_loop_at(unsigned i);
+// The motion loop of MotionFeatures index i: forces unwritten (i < kCount / 2) or written.
+MotionLoop motion_loop_lean(unsigned i);
+MotionLoop motion_loop_full(unsigned i);
 
 }  // namespace trubal::loops

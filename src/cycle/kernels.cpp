@@ -30,9 +30,9 @@ StepKernels make_kernels(const Model& model) {
   k.walls = k.walls_full;
   k.contacts = k.contacts_full;
   MotionFeatures motion{f.rotation, f.gravity || f.applied, f.mass_damping, k.estimate, false};
-  k.motion_lean = loops::motion_loop_at(motion.index());
+  k.motion_lean = loops::motion_loop_lean(motion.index());
   motion.write_forces = true;
-  k.motion_full = loops::motion_loop_at(motion.index());
+  k.motion_full = loops::motion_loop_full(motion.index());
   k.motion = k.motion_full;
   return k;
 }

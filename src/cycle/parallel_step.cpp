@@ -76,7 +76,7 @@ void ParallelStep::add_wall_loads(Model& model, int parts) {
 }
 
 bool ParallelStep::share_now(std::size_t balls, int parts) {
-  const int rule = share_rule.load(std::memory_order_relaxed);
+  const int rule = policy_->share_rule;
   if (rule != 0) return rule > 0;
   return trial_.shared_now(balls, parts);
 }
@@ -167,7 +167,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   for (double m : moved_) moved2_ = std::max(moved2_, m);
   for (StepSums& part : thread_sums_) sums.add(part);
   const auto t2 = Clock::now();
-  if (parts > 1 && share_rule.load(std::memory_order_relaxed) == 0 && trial_.in_trial())
+  if (parts > 1 && policy_->share_rule == 0 && trial_.in_trial())
     trial_.record(parallel, std::chrono::duration<double>(t2 - t0).count());
   times.forces += std::chrono::duration<double>(t1 - t0).count();
   times.motion += std::chrono::duration<double>(t2 - t1).count();

@@ -14,12 +14,12 @@
 // by pair counts, not by measured thread speeds (bench/NOTES.md says why).
 #pragma once
 
-#include <atomic>
 #include <vector>
 
 #include "support/thread_pool.hpp"
 #include "cycle/kernels.hpp"
 #include "cycle/phase_times.hpp"
+#include "cycle/step_policy.hpp"
 #include "cycle/step_scratch.hpp"
 #include "cycle/timed_choice.hpp"
 #include "cycle/verlet.hpp"
@@ -33,6 +33,9 @@ void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals);
 
 class ParallelStep {
  public:
+  // policy: whether the threads share a step (StepPolicy::share_rule), the owner's, outliving this.
+  explicit ParallelStep(const StepPolicy& policy) : policy_(&policy) {}
+
   // Contacts over model.contacts (every pair; `scratch` indexes it), then motion over the balls;
   // the time of each phase is added to `times` (forces, motion).
   // With `moved`, each thread also measures, right after moving its balls, their largest squared
@@ -44,14 +47,10 @@ class ParallelStep {
   // Threads the steps share their work among: 1 where the rule or the last trial says one thread,
   // at most one per pair block, all of them while a trial runs; 0 before the first step.
   int active() const {
-    const int rule = share_rule.load(std::memory_order_relaxed);
+    const int rule = policy_->share_rule;
     const bool sharing = rule != 0 ? rule > 0 : trial_.in_trial() || trial_.verdict();
     return sharing ? split_parts_ : 1;
   }
-  // Tests: 0 times whether sharing pays (the default), 1 always shares (small scenes still exercise
-  // the split), -1 never does; for every ParallelStep of the process.
-  static inline std::atomic<int> share_rule{0};
-
   // A rank's part of a spatially decomposed step (cycle/brick_step.hpp): the walls' loads are left
   // in wall_totals() for the ranks to merge, not written to the walls.
   void set_part_only(bool on) { part_only_ = on; }
@@ -60,6 +59,7 @@ class ParallelStep {
  private:
   // The walls' loads of this step from the `parts` threads' loads (Model::walls' force, moment, ...).
   void add_wall_loads(Model& model, int parts);
+  const StepPolicy* policy_;
   bool part_only_ = false;
   std::vector<WallLoad> wall_totals_;      // per wall: the threads' loads merged
   // Splits the pair blocks among `parts` threads, balancing each thread's pairs plus the cross

@@ -56,11 +56,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads)
-    : backend_(std::move(backend)), pool_(threads > 0 ? threads : default_threads(backend_->name())) {
+Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* policy)
+    : own_policy_(policy ? nullptr : std::make_unique<StepPolicy>()),
+      policy_(policy ? policy : own_policy_.get()),
+      backend_(std::move(backend)),
+      pool_(threads > 0 ? threads : default_threads(backend_->name())),
+      step_(*policy_) {
   distributed_ = backend_->distributed() && comm::size() > 1;
   const int members = distributed_ ? 1 : pool_.size();
-  for (int t = 0; t < members; ++t) bricks_.push_back(std::make_unique<BrickStep>());
+  for (int t = 0; t < members; ++t) bricks_.push_back(std::make_unique<BrickStep>(*policy_));
   if (members > 1) {
     thread_team_ = std::make_unique<ThreadTeam::Shared>(members);
     member_times_.resize(members);
@@ -103,7 +107,7 @@ template <class F> void Pipeline::each_part(F&& f) {
 
 bool Pipeline::threads_in_space(const Model& model) {
   if (distributed_ || bricks_.size() < 2 || !backend_->keeps_list()) return false;
-  const int rule = split_rule.load(std::memory_order_relaxed);
+  const int rule = policy_->split_rule;
   if (rule != 0) return rule > 0;
   const ContactTable& c = model.contacts;
   if (space_model_ == &model && space_version_ == c.list_version) return space_verdict_;
@@ -289,7 +293,7 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
       if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
     }
   }
-  if (search && distributed_ && parts_may_search && !whole_next_ && BrickStep::local_rule.load(std::memory_order_relaxed) >= 0) {
+  if (search && distributed_ && parts_may_search && !whole_next_ && policy_->local_rule >= 0) {
     // The ranks search on their parts at the split (brick_step), not through the whole model: no
     // rank but 0 then ever holds the whole model's list in a CYCLE. A whole step searches first.
     search_parts_ = true;
@@ -454,8 +458,7 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
       // (Not timed from kSpaceLarge balls on: each switch between one thread and the parts makes
       // the parts afresh, 0.2 s at 108,000 balls, four times in a trial; and a shared step where
       // one thread would have been faster costs only a few percent, timed_choice.hpp.)
-      const bool timed = split_rule.load(std::memory_order_relaxed) == 0 &&
-                         ParallelStep::share_rule.load(std::memory_order_relaxed) == 0 &&
+      const bool timed = policy_->split_rule == 0 && policy_->share_rule == 0 &&
                          !large_in_space(model.balls.size());
       const bool in_space = !timed || space_choice_.shared_now(model.balls.size(), pool_.size());
       one_thread_ = !in_space;
@@ -469,7 +472,7 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
         whole_step(model, kernels, sums);
       }
       if (timed && space_choice_.in_trial())
-        space_choice_.record(in_space, seconds_since(t0) * (in_space ? space_time_scale_for_test.load() : 1.0));
+        space_choice_.record(in_space, seconds_since(t0) * (in_space ? policy_->space_time_scale : 1.0));
       move_walls(model, kernels.dt);
       return;
     }
@@ -507,7 +510,9 @@ bool Pipeline::Deferred::same(const Deferred& o) const {
 }
 
 PipelineCounters Pipeline::counters() const {
-  return {ref_.rebuilds(), space_threads_ ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0, backend_->pair_tests()};
+  return {ref_.rebuilds(),    space_threads_ ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
+          backend_->pair_tests(), results_made_, bricks().counts(), cycle_peaks_,
+          static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20)};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
@@ -553,8 +558,10 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   return lines;
 }
 
-std::unique_ptr<Pipeline> make_pipeline(std::string_view backend, int threads, std::uint64_t max_memory) {
-  return std::make_unique<Pipeline>(make_backend(backend, {threads, max_memory}), threads);
+std::unique_ptr<Pipeline> make_pipeline(std::string_view backend, int threads, std::uint64_t max_memory,
+                                        StepPolicy* policy) {
+  return std::make_unique<Pipeline>(make_backend(backend, {threads, max_memory, policy ? &policy->fail_search : nullptr}),
+                                    threads, policy);
 }
 
 }  // namespace trubal

@@ -4,7 +4,6 @@
 // Threads are a setting of the pipeline; the backend is only its pair search.
 #pragma once
 
-#include <atomic>
 #include <memory>
 #include <string>
 #include <utility>
@@ -16,6 +15,7 @@
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
 #include "cycle/snapshot.hpp"
+#include "cycle/step_policy.hpp"
 #include "cycle/step_scratch.hpp"
 #include "cycle/team.hpp"
 #include "cycle/timed_choice.hpp"
@@ -24,18 +24,23 @@
 
 namespace trubal {
 
-// Counters for tests and PRINT info.
+// Counters for tests and PRINT counters.
 struct PipelineCounters {
   std::size_t rebuilds = 0;        // pair searches that built a new list
   int threads_used = 0;            // threads the steps share their work among (0 before the first)
   double skin = 0;                 // of the list now (0 for a backend that keeps none)
   std::uint64_t pair_tests = 0;    // the backend's count, where it keeps one
+  std::int64_t results_made = 0;   // a CYCLE's last step taken again to make the contact results read
+  BrickStep::Counts parts;         // the spatial decomposition's (the ranks' or the threads')
+  std::vector<double> cycle_peaks_mib;   // per rank: peak memory by the end of the last distributed CYCLE
+  double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
 };
 
 class Pipeline {
  public:
-  // threads <= 0: the backend's default.
-  Pipeline(std::unique_ptr<Backend> backend, int threads);
+  // threads <= 0: the backend's default. policy: its owner's, which outlives the pipeline (the
+  // Session's); none: the pipeline keeps the defaults of its own.
+  Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* policy = nullptr);
 
   const Backend& backend() const { return *backend_; }
   int threads() const { return pool_.size(); }
@@ -72,12 +77,10 @@ class Pipeline {
   // only where a distributed run's ranks found none; the caller then need not sync to look).
   bool may_be_outside_box(const Model& model) const;
 
-  // Tests: 0 lets each pair list decide whether the threads share the steps in space (the default),
-  // 1 always shares them so where there are threads, -1 never does; for every Pipeline of the process.
-  static inline std::atomic<int> split_rule{0};
-  // Tests: the split in space's trial steps count this many times their time (1000: the trial finds
-  // one thread faster, 0.001: the split), so either verdict can be asserted on any machine.
-  static inline std::atomic<double> space_time_scale_for_test{1.0};
+  // How the steps are shared where the default is a timed choice, and the faults a test injects
+  // (cycle/step_policy.hpp): read at each step, by this pipeline and its parts.
+  StepPolicy& policy() { return *policy_; }
+  const StepPolicy& policy() const { return *policy_; }
 
   PipelineCounters counters() const;
   std::vector<std::pair<std::string, std::string>> info() const;
@@ -89,7 +92,6 @@ class Pipeline {
   // run only rank 0 holds its balls and pairs (the others, the rest: Snapshot::take_light); taking it
   // follows sync(), and putting it back is a collective call, rank 0 handing the state to the others.
   const Snapshot& rescue() const { return rescue_; }
-  Snapshot& rescue_for_test() { return rescue_; }
   void take_rescue(const Model& model);
   // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
   bool restore_rescue(Model& model);
@@ -161,7 +163,7 @@ class Pipeline {
   std::vector<double> cycle_peaks_;              // per rank: peak MiB by the end of the last distributed CYCLE
 
   // Whether the threads of this process share the step in space (the decomposition, one part per
-  // thread) rather than by ball numbers: decided for each pair list (split_rule, kSpaceBalls).
+  // thread) rather than by ball numbers: decided for each pair list (StepPolicy::split_rule, kSpaceBalls).
   bool threads_in_space(const Model& model);
   // f(part, member) on every part of the decomposition: this rank's alone, or each thread's on its thread.
   template <class F> void each_part(F&& f);
@@ -173,6 +175,8 @@ class Pipeline {
   // The walls' motion over a step, and how far any wall's surface may have gone since the search.
   void move_walls(Model& model, double dt);
 
+  std::unique_ptr<StepPolicy> own_policy_;   // where no owner gave one
+  StepPolicy* policy_;
   std::unique_ptr<Backend> backend_;
   ThreadPool pool_;
   StepScratch scratch_;
@@ -211,7 +215,9 @@ class Pipeline {
   std::int64_t results_made_ = 0;
 };
 
-// A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument).
-std::unique_ptr<Pipeline> make_pipeline(std::string_view backend, int threads = 0, std::uint64_t max_memory = 0);
+// A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument), both
+// reading `policy` where given (Pipeline's constructor).
+std::unique_ptr<Pipeline> make_pipeline(std::string_view backend, int threads = 0, std::uint64_t max_memory = 0,
+                                        StepPolicy* policy = nullptr);
 
 }  // namespace trubal

@@ -11,8 +11,7 @@
 #include "backends/periodic_pairs.hpp"
 #include "cycle/pipeline.hpp"
 #include "model/periodic_cell.hpp"
-#include "cycle/brick_step.hpp"
-#include "cycle/parallel_step.hpp"
+#include "cycle/step_policy.hpp"
 #include "backends_scenes.hpp"
 
 using namespace trubal;
@@ -22,28 +21,24 @@ namespace {
 
 struct Variant { const char* backend; int threads; bool in_space = false; };
 
-// The threads share the work even where one would be as fast (the small scenes), so that the split
-// is what is tested.
-struct ShareRule {
-  explicit ShareRule(int rule) { ParallelStep::share_rule = rule; }
-  ~ShareRule() { ParallelStep::share_rule = 0; }
-};
-
-// in_space: the threads share each step in space, a part of the decomposition each (Pipeline::split_rule).
+// in_space: the threads share each step in space, a part of the decomposition each (StepPolicy::split_rule).
 const Variant kVariants[] = {{"allpairs", 1},         {"allpairs", 2},        {"allpairs", 3},
                              {"threaded", 1},         {"threaded", 2},        {"threaded", 3},
                              {"threaded", 4},         {"threaded", 2, true},  {"threaded", 3, true}};
 
-struct SplitRule {
-  explicit SplitRule(int rule) { Pipeline::split_rule = rule; }
-  ~SplitRule() { Pipeline::split_rule = 0; }
-};
+// The threads share the work even where one would be as fast (the small scenes), so that the split
+// is what is tested; in space or by ball numbers as the variant says.
+StepPolicy shared_always(bool in_space) {
+  StepPolicy policy;
+  policy.share_rule = 1;
+  policy.split_rule = in_space ? 1 : -1;
+  return policy;
+}
 
 Model run(const Scene& scene, const std::string& backend_name, int threads, int cycles, bool in_space = false) {
-  const ShareRule share(1);
-  const SplitRule split(in_space ? 1 : -1);
+  StepPolicy policy = shared_always(in_space);
   Model model = scene.model;
-  auto backend = make_pipeline(backend_name, threads);
+  auto backend = make_pipeline(backend_name, threads, 0, &policy);
   const CycleResult r = run_cycles(model, *backend, cycles, {});
   REQUIRE_FALSE(r.unstable);
   REQUIRE(r.done == cycles);
@@ -76,31 +71,22 @@ void check_scene(const Scene& scene, bool all_variants = true) {
   }
 }
 
-// `scene` on the threaded backend (2 threads) for `cycles` steps with a test hook set for the run
-// (`set` sets it, `reset` puts it back whatever happens): the bits must be serial_model's. Returns
-// PRINT info's lines and the threads the last step used.
+// `scene` on the threaded backend (2 threads) for `cycles` steps under `policy`: the bits must be
+// serial_model's. Returns PRINT info's lines and the threads the last step used.
 struct ThreadedRun {
   std::map<std::string, std::string> info;
   int threads_used = 0;
+  BrickStep::Counts parts;
 };
-template <class Set, class Reset>
-ThreadedRun run_threaded(const Scene& scene, const Model& serial_model, int cycles, Set&& set, Reset&& reset) {
+ThreadedRun run_threaded(const Scene& scene, const Model& serial_model, int cycles, StepPolicy policy) {
   Model model = scene.model;
-  auto threaded = make_pipeline("threaded", 2);
-  set();
-  bool done = false;
-  try {
-    done = run_cycles(model, *threaded, cycles, {}).done == cycles;
-  } catch (...) {
-    reset();
-    throw;
-  }
-  reset();
-  REQUIRE(done);
+  auto threaded = make_pipeline("threaded", 2, 0, &policy);
+  REQUIRE(run_cycles(model, *threaded, cycles, {}).done == cycles);
   CHECK(difference(picture(serial_model), picture(model)) == "");
   ThreadedRun r;
   for (const auto& [name, value] : threaded->info()) r.info[name] = value;
   r.threads_used = threaded->counters().threads_used;
+  r.parts = threaded->counters().parts;
   return r;
 }
 
@@ -157,9 +143,10 @@ TEST_CASE("backends: threads share a step only where it pays, with the same answ
     const Picture expected = picture(serial_model);
     for (int rule : {1, -1, 0}) {   // always share, never, timed (the trial switches every 16 steps)
       INFO("share rule " << rule);
-      const ShareRule share(rule);
+      StepPolicy policy;
+      policy.share_rule = rule;
       Model model = scene.model;
-      auto threaded = make_pipeline("threaded", 2);
+      auto threaded = make_pipeline("threaded", 2, 0, &policy);
       REQUIRE(run_cycles(model, *threaded, 200, {}).done == 200);
       const int used = threads_used(*threaded);
       if (rule != 0) CHECK(used == (rule > 0 ? 2 : 1));
@@ -181,9 +168,10 @@ TEST_CASE("backends: threads share the step in space where ball numbers are far 
     Model serial_model = scene.model;
     auto serial = make_pipeline("serial", 1);
     REQUIRE(run_cycles(serial_model, *serial, 60, {}).done == 60);
-    const ShareRule share(1);
+    StepPolicy policy;
+    policy.share_rule = 1;
     Model model = scene.model;
-    auto threaded = make_pipeline("threaded", 2);
+    auto threaded = make_pipeline("threaded", 2, 0, &policy);
     REQUIRE(run_cycles(model, *threaded, 60, {}).done == 60);
     CHECK(difference(picture(serial_model), picture(model)) == "");
     std::string shared_by;
@@ -202,12 +190,11 @@ TEST_CASE("backends: the split in space falls back to one thread where the trial
   const Scene scene = fcc_compression(11, 10, 10, true);
   constexpr int kCycles = 200;
   const Model serial_model = run(scene, "serial", 1, kCycles);
-  const ShareRule share(0);
-  const SplitRule split(0);
   for (double scale : {1000.0, 0.001}) {
     INFO("in-space trial steps counted " << scale << " times their time");
-    ThreadedRun r = run_threaded(scene, serial_model, kCycles, [&] { Pipeline::space_time_scale_for_test = scale; },
-                                 [] { Pipeline::space_time_scale_for_test = 1.0; });
+    StepPolicy policy;   // the timed choices, as in a run
+    policy.space_time_scale = scale;
+    ThreadedRun r = run_threaded(scene, serial_model, kCycles, policy);
     if (scale > 1) {
       CHECK(r.info["last step shared by"] == "one thread (sharing the steps in space was timed slower)");
       CHECK(r.threads_used == 1);
@@ -228,16 +215,15 @@ TEST_CASE("backends: a large scene shares the step in space however it is number
   REQUIRE(scene.model.balls.size() >= 50000);
   constexpr int kCycles = 12;
   const Model serial_model = run(scene, "serial", 1, kCycles);
-  const ShareRule share(0);
-  const SplitRule split(0);
-  ThreadedRun r = run_threaded(scene, serial_model, kCycles, [] { Pipeline::space_time_scale_for_test = 1000.0; },
-                               [] { Pipeline::space_time_scale_for_test = 1.0; });
+  StepPolicy policy;   // the timed choices, as in a run
+  policy.space_time_scale = 1000.0;
+  ThreadedRun r = run_threaded(scene, serial_model, kCycles, policy);
   CHECK(r.info["last step shared by"] == "the spatial decomposition, a part per thread");
   CHECK(r.threads_used == 2);
 }
 
 TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewer balls), same answer", "[backends][threads]") {
-  // Member 1's work counted eight times slower (BrickStep::slow_member_for_test, as a core the
+  // Member 1's work counted eight times slower (StepPolicy::slow_member, as a core the
   // machine slows would be): from the second decomposition on, its share of the balls falls below
   // half, halfway to its speed's (clamped at half an equal share) at each split, each move more than
   // a tenth of the share until it nears that floor; the bits stay serial's. (At three times slower a
@@ -245,22 +231,19 @@ TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewe
   const Scene scene = fcc_compression(11, 10, 10, true);
   constexpr int kCycles = 400;
   const Model serial_model = run(scene, "serial", 1, kCycles);
-  const ShareRule share(1);
-  const SplitRule split(1);
-  ThreadedRun r = run_threaded(scene, serial_model, kCycles, [] { BrickStep::slow_member_for_test = 1; },
-                               [] { BrickStep::slow_member_for_test = -1; });
+  StepPolicy policy = shared_always(true);
+  policy.slow_member = 1;
+  ThreadedRun r = run_threaded(scene, serial_model, kCycles, policy);
   std::map<std::string, std::string>& info = r.info;
-  INFO("decompositions made: " << info["decompositions made"] << "; shares: " << info["shares of the balls"]
-                               << "; balls per thread: " << info["balls per thread"]);
-  REQUIRE(std::stoi(info["decompositions made"]) >= 3);
+  INFO("decompositions made: " << r.parts.decompositions << "; shares: " << info["shares of the balls"]
+                               << "; balls per thread: " << r.parts.least_balls << " to " << r.parts.most_balls);
+  REQUIRE(r.parts.decompositions >= 3);
   double first = 0, second = 0;
   REQUIRE(std::sscanf(info["shares of the balls"].c_str(), "%lf %lf", &first, &second) == 2);
   CHECK(second < 0.45);     // eight times slower: the share heads for 1/9, clamped at 1/4
   CHECK(second >= 0.24);    // never far below half an equal share (clamped there, then normalised)
   CHECK(first + second == Approx(1.0).margin(0.011));   // (printed to two places)
-  std::size_t least = 0, most = 0;
-  REQUIRE(std::sscanf(info["balls per thread"].c_str(), "%zu to %zu", &least, &most) == 2);
-  CHECK(static_cast<double>(least) < 0.9 * static_cast<double>(most));
+  CHECK(static_cast<double>(r.parts.least_balls) < 0.9 * static_cast<double>(r.parts.most_balls));
 }
 
 TEST_CASE("backends: the periodic pair search finds what testing every pair at its nearest image finds", "[backends][periodic][threads]") {
@@ -308,16 +291,17 @@ TEST_CASE("backends: switching backend mid-run gives the same result as not swit
   const Picture expected = picture(run(scene, "serial", 1, scene.cycles));
   const char* order[][2] = {{"serial", "allpairs"}, {"allpairs", "threaded"}, {"threaded", "serial"},
                             {"threaded", "allpairs"}};
-  const ShareRule share(1);
+  StepPolicy policy;
+  policy.share_rule = 1;
   for (const auto& pair : order) {
     INFO(pair[0] << " then " << pair[1] << " then " << pair[0]);
     Model model = scene.model;
     auto threads = [](const char* name, int n) { return std::string(name) == "serial" ? 1 : n; };
-    auto first = make_pipeline(pair[0], threads(pair[0], 2));
+    auto first = make_pipeline(pair[0], threads(pair[0], 2), 0, &policy);
     REQUIRE(run_cycles(model, *first, 80, {}).done == 80);
-    auto second = make_pipeline(pair[1], threads(pair[1], 3));
+    auto second = make_pipeline(pair[1], threads(pair[1], 3), 0, &policy);
     REQUIRE(run_cycles(model, *second, 80, {}).done == 80);
-    auto third = make_pipeline(pair[0], 1);
+    auto third = make_pipeline(pair[0], 1, 0, &policy);
     REQUIRE(run_cycles(model, *third, 80, {}).done == 80);
     CHECK(difference(expected, picture(model)) == "");
   }

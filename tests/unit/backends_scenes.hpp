@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cycle/pipeline.hpp"
+#include "fcc_lattice.hpp"
 #include "model/edit.hpp"
 #include "model/model.hpp"
 #include "physics/cell.hpp"
@@ -43,24 +44,20 @@ inline Scene fcc_compression(int nx, int ny, int nz, bool by_layer_parity = fals
   s.model.settings.fixed_dt = 0.02;
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> jitter(-0.05, 0.05);
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   const double cx = 0.5 * nx * a, cy = 0.5 * ny * a, cz = 0.5 * nz * a, rate = 2e-3;
   for (int parity = 0; parity < (by_layer_parity ? 2 : 1); ++parity)
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        for (const auto& b : basis) {
-          if (by_layer_parity && (b[2] != 0) != (parity == 1)) continue;
-          const double x = (i + b[0] + 0.25) * a + jitter(rng), y = (j + b[1] + 0.25) * a + jitter(rng);
-          const double z = (k + b[2] + 0.25) * a + jitter(rng);
-          const std::size_t ball = add_ball(s.model, 0, 1, x, y, z, r);
-          if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1) {
-            s.model.balls.fixed[ball] = kVel | kSpin;
-            s.model.balls.vx[ball] = -rate * (x - cx);
-            s.model.balls.vy[ball] = -rate * (y - cy);
-            s.model.balls.vz[ball] = -rate * (z - cz);
-          }
-        }
+    for_each_fcc_site(nx, ny, nz, a, 0.25, [&](const FccSite& site) {
+      if (by_layer_parity && (kFccBasis[site.basis][2] != 0) != (parity == 1)) return;
+      const double x = site.x + jitter(rng), y = site.y + jitter(rng);
+      const double z = site.z + jitter(rng);
+      const std::size_t ball = add_ball(s.model, 0, 1, x, y, z, r);
+      if (site.on_surface) {
+        s.model.balls.fixed[ball] = kVel | kSpin;
+        s.model.balls.vx[ball] = -rate * (x - cx);
+        s.model.balls.vy[ball] = -rate * (y - cy);
+        s.model.balls.vz[ball] = -rate * (z - cz);
+      }
+    });
   return s;
 }
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "cycle/pipeline.hpp"
+#include "counters.hpp"
 #include "interp_support.hpp"
 #include "physics/measure.hpp"
 
@@ -107,4 +109,41 @@ TEST_CASE("commands: a ball leaving the START box stops CYCLE, or is destroyed a
     CHECK_FALSE(bad.deck("start box 0 1 0 1 0 1 vanish\n"));
     CHECK(bad.first_error_line().starts_with("deck.dat:1: error: "));
   }
+}
+
+TEST_CASE("commands: PRINT counters gives one `name value` line per count, on the screen or in a file", "[commands]") {
+  // An FCC block at rest, its balls just touching (no contact), a held pair pressed together (one
+  // contact), and a fast ball leaving the box.
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  Harness h;
+  REQUIRE(h.deck("start box -2 6 -2 6 -2 6 destroy\nprop kn 1e5 ks 1e5 fric 0.5 dens 1000\n"
+                 "lattice fcc 1.0 4 4 4 origin 0 0 0\nball -1.5 -1.5 5 0.4 id 601\nball -1.5 -0.8 5 0.4 id 602\n"
+                 "fix vel spin range id 601 602\n"
+                 "ball 5.5 5.5 5.5 0.3 id 500\ninit zvel 50 range id 500\ncycle 300\nprint counters file c.txt\n"));
+  const Counters c = read_counters(dir.path() / "c.txt");
+  const Model& m = h.session.model();
+  const PipelineCounters p = h.session.pipeline().counters();
+  CHECK(counter(c, "cycle") == 300);
+  CHECK(counter(c, "balls") == static_cast<double>(m.balls.size()));
+  CHECK(counter(c, "balls_destroyed") == 1);   // ball 500 left through the top
+  CHECK(counter(c, "contacts") == static_cast<double>(contact_count(m)));
+  CHECK(counter(c, "contacts") == 1);   // the held pair
+  CHECK(counter(c, "pair_list_rebuilds") == static_cast<double>(p.rebuilds));
+  CHECK(counter(c, "pair_list_rebuilds") >= 1);
+  CHECK(counter(c, "ranks") == 1);
+  CHECK(counter(c, "threads") == 1);
+  CHECK(counter(c, "decompositions") == 0);   // one serial thread: no decomposition
+  // On the screen, the same lines; the file is said to be written.
+  CHECK_THAT(h.out.str(), Catch::Contains("counters written to c.txt"));
+  const std::size_t before = h.out.str().size();
+  REQUIRE(h.deck("print counters\n"));
+  CHECK(parse_counters(h.out.str().substr(before)) == c);
+  // Bad input: the file and line of the command.
+  CHECK_FALSE(h.deck("print counters now\n", "bad.dat"));
+  CHECK_THAT(h.first_error_line(), Catch::StartsWith("bad.dat:1: error:"));
+  Harness h2;
+  CHECK_FALSE(h2.deck("start box 0 1 0 1 0 1\n\nprint counters file no/such/folder/c.txt\n", "bad.dat"));
+  CHECK_THAT(h2.first_error_line(), Catch::StartsWith("bad.dat:3: error:"));
+  CHECK_THAT(h2.first_error_line(), Catch::Contains("no/such/folder/c.txt"));
 }

@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "fcc_lattice.hpp"
 #include "interp_support.hpp"
 #include "physics/measure.hpp"
 
@@ -298,15 +299,11 @@ TEST_CASE("FCC plane-strain strength: a cube-aligned lattice has no mechanism an
   // slide would not pass.
   const int n = 4;
   const double a = 2 * std::sqrt(2.0), edge = n * a;
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   std::string deck = "start " + number(edge) + " " + number(edge) + " " + number(edge) +
                      "\nprop kn 1e8 ks 1e8 mu 0.3 dens 1000\n";
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& b : basis)
-          deck += "ball " + number((i + b[0] + 0.25) * a) + " " + number((j + b[1] + 0.25) * a) + " " +
-                  number((k + b[2] + 0.25) * a) + " 1\n";
+  trubal::test::for_each_fcc_site(n, n, n, a, 0.25, [&](const trubal::test::FccSite& site) {
+    deck += "ball " + number(site.x) + " " + number(site.y) + " " + number(site.z) + " 1\n";
+  });
   deck += kLoading;
   Harness h;
   REQUIRE(h.deck(deck, "cube.dat"));

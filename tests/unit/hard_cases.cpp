@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <random>
 
+#include "fcc_lattice.hpp"
 #include "interp_support.hpp"
 #include "cycle/pipeline.hpp"
 #include "cycle/kernels.hpp"
@@ -31,18 +32,14 @@ template <class TypeOf>
 Model fcc_block(int n, double squeeze, TypeOf type_of) {
   Model model;
   const double r = 0.01, a = squeeze * 2 * r * std::sqrt(2.0);
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> jitter(-2e-5, 2e-5);
   int k_ball = 0;
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& b : basis) {
-          const std::size_t ball = add_ball(model, 0, type_of(k_ball++), (i + b[0]) * a + jitter(rng),
-                                            (j + b[1]) * a + jitter(rng), (k + b[2]) * a + jitter(rng), r);
-          if (i == 0 || j == 0 || k == 0 || i == n - 1 || j == n - 1 || k == n - 1) model.balls.fixed[ball] = kVel | kSpin;
-        }
+  test::for_each_fcc_site(n, n, n, a, 0, [&](const test::FccSite& site) {
+    const std::size_t ball = add_ball(model, 0, type_of(k_ball++), site.x + jitter(rng), site.y + jitter(rng),
+                                      site.z + jitter(rng), r);
+    if (site.on_surface) model.balls.fixed[ball] = kVel | kSpin;
+  });
   return model;
 }
 

@@ -1,6 +1,7 @@
 // The interactive shell under a real pseudo-terminal (tmux): commands run, Tab completes, Ctrl-C
 // clears the line or stops a CYCLE, errors do not end the session, history outlives the session.
-// Without tmux these tests warn and pass (CI installs it: Debian package `tmux`).
+// Without tmux, or without a pseudo-terminal, they are skipped (CI installs tmux: Debian package
+// `tmux`).
 #include "paths.hpp"
 #include <catch2/catch.hpp>
 
@@ -14,12 +15,11 @@
 #include <thread>
 
 #include "interp_support.hpp"
+#include "skip.hpp"
 
 using namespace trubal::test;
 
 namespace {
-
-bool have_tmux() { return shell("command -v tmux >/dev/null 2>&1") == 0; }
 
 // A pseudo-terminal can be opened (not in a chroot whose /dev has no devpts mounted).
 bool have_pty() {
@@ -103,15 +103,11 @@ class TmuxShell {
     CHECK(screen_ok_);                                                    \
   } while (0)
 
-#define REQUIRE_TMUX()                                                  \
-  if (!have_tmux()) {                                                   \
-    WARN("tmux is not installed: the shell tests are skipped");         \
-    return;                                                             \
-  }                                                                     \
-  if (!have_pty()) {                                                    \
-    WARN("no pseudo-terminal can be opened: the shell tests are skipped"); \
-    return;                                                             \
-  }
+#define REQUIRE_TMUX()                                                                  \
+  do {                                                                                  \
+    if (!on_path("tmux")) TRUBAL_SKIP("tmux is not installed (Debian: tmux)");          \
+    if (!have_pty()) TRUBAL_SKIP("no pseudo-terminal can be opened (no devpts mounted)"); \
+  } while (0)
 
 }  // namespace
 

@@ -11,6 +11,7 @@
 
 #include "model/periodic_cell.hpp"
 #include "backends_scenes.hpp"
+#include "fcc_lattice.hpp"
 #include "interp_support.hpp"
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
@@ -34,12 +35,9 @@ Model periodic_fcc(int n, double jitter_size, double rate) {
   m.settings.fixed_dt = 0.02;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> jitter(-jitter_size, jitter_size);
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& b : basis)
-          add_ball(m, 0, 1, (i + b[0]) * a + jitter(rng), (j + b[1]) * a + jitter(rng), (k + b[2]) * a + jitter(rng), r);
+  for_each_fcc_site(n, n, n, a, 0, [&](const FccSite& site) {
+    add_ball(m, 0, 1, site.x + jitter(rng), site.y + jitter(rng), site.z + jitter(rng), r);
+  });
   update_mass(m);
   if (rate != 0) set_strain_rates(m, {0.5 * rate, 0.25 * rate, rate});
   return m;

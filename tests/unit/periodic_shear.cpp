@@ -36,12 +36,7 @@ Model fcc_cell(int n) {
   m.space.hi = {n * a, n * a, n * a};
   m.started = true;
   m.materials[1] = scene_linear(1e6, 1e6, 0.5, 1000);
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& b : basis)
-          add_ball(m, 0, 1, (i + b[0] + 0.25) * a, (j + b[1] + 0.25) * a, (k + b[2] + 0.25) * a, r);
+  for_each_fcc_site(n, n, n, a, 0.25, [&](const FccSite& site) { add_ball(m, 0, 1, site.x, site.y, site.z, r); });
   update_mass(m);
   return m;
 }

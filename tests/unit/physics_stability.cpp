@@ -4,6 +4,7 @@
 #include <random>
 
 #include "physics/measure.hpp"
+#include "fcc_lattice.hpp"
 #include "physics_helpers.hpp"
 
 using namespace trubal;
@@ -15,17 +16,12 @@ Model fcc_pack(int n, double ks) {
   Model model;
   model.materials[1] = test::linear_material(1e8, ks, 0.3, 2500);
   const double r = 0.01, a = 0.99 * 2 * r * std::sqrt(2.0);
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> jitter(-2e-5, 2e-5);
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& b : basis) {
-          const std::size_t ball = add_ball(model, 0, 1, (i + b[0]) * a + jitter(rng), (j + b[1]) * a + jitter(rng),
-                                            (k + b[2]) * a + jitter(rng), r);
-          if (i == 0 || j == 0 || k == 0 || i == n - 1 || j == n - 1 || k == n - 1) model.balls.fixed[ball] = kVel | kSpin;
-        }
+  test::for_each_fcc_site(n, n, n, a, 0, [&](const test::FccSite& site) {
+    const std::size_t ball = add_ball(model, 0, 1, site.x + jitter(rng), site.y + jitter(rng), site.z + jitter(rng), r);
+    if (site.on_surface) model.balls.fixed[ball] = kVel | kSpin;
+  });
   return model;
 }
 

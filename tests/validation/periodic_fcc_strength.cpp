@@ -16,6 +16,7 @@
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
 #include "physics/measure.hpp"
+#include "../unit/fcc_lattice.hpp"
 
 using namespace trubal;
 
@@ -35,12 +36,7 @@ Model fcc_block(double f) {
   m.materials[1] = mat;
   const double a = std::sqrt(2.0) * d;
   m.space.hi = {n * a, n * a, n * a};
-  const double basis[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& b : basis)
-          add_ball(m, 0, 1, (i + b[0] + 0.25) * a, (j + b[1] + 0.25) * a, (k + b[2] + 0.25) * a, r);
+  test::for_each_fcc_site(n, n, n, a, 0.25, [&](const test::FccSite& site) { add_ball(m, 0, 1, site.x, site.y, site.z, r); });
   m.settings.frac = 0.5;
   return m;
 }

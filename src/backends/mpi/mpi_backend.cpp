@@ -20,6 +20,7 @@ namespace {
 // The answer is the serial one, bit for bit, for any rank count.
 class MpiBackend final : public Backend {
  public:
+  explicit MpiBackend(int* fail_search) : fail_search_(fail_search) {}
   std::string name() const override { return "mpi"; }
   void find_pairs(const Model& model, double skin, ThreadPool&, PairCandidates& out) override {
     const int ranks = comm::size(), rank = comm::rank();
@@ -27,8 +28,8 @@ class MpiBackend final : public Backend {
     PairCandidates& mine = ranks > 1 ? mine_ : out;
     mine.periodic_bins = {};
     auto search = [&] {
-      if (rank == fail_search_for_test.load()) {
-        fail_search_for_test = -1;
+      if (fail_search_ && rank == *fail_search_) {   // (a rank's test fault)
+        *fail_search_ = -1;
         throw std::bad_alloc();
       }
       find_serial_pairs(model, skin, grid_, mine, split_point(n, ranks, rank), split_point(n, ranks, rank + 1));
@@ -71,6 +72,7 @@ class MpiBackend final : public Backend {
   }
 
  private:
+  int* fail_search_;
   BoxGrid grid_;
   std::array<int, 3> periodic_bins_{};   // of the last search, where it was the periodic one
   PairCandidates mine_;
@@ -79,6 +81,6 @@ class MpiBackend final : public Backend {
 
 }  // namespace
 
-std::unique_ptr<Backend> make_mpi_backend() { return std::make_unique<MpiBackend>(); }
+std::unique_ptr<Backend> make_mpi_backend(int* fail_search) { return std::make_unique<MpiBackend>(fail_search); }
 
 }  // namespace trubal

@@ -3,17 +3,14 @@
 // ranks by ranges of ball indices.
 #pragma once
 
-#include <atomic>
 #include <memory>
 
 #include "backends/backend.hpp"
 
 namespace trubal {
 
-std::unique_ptr<Backend> make_mpi_backend();
-
-// Tests (TRUBAL_TEST_FAIL_AT "R search"): rank R's next share of the search fails as if out of
-// memory; -1: none.
-inline std::atomic<int> fail_search_for_test{-1};
+// fail_search: where given, rank *fail_search's next share of a search fails as if out of memory
+// (a test's fault, TRUBAL_TEST_FAIL_AT "R search"; BackendOptions::fail_search).
+std::unique_ptr<Backend> make_mpi_backend(int* fail_search = nullptr);
 
 }  // namespace trubal

@@ -1,4 +1,4 @@
-// The law-of-motion loops.
+// The law-of-motion loops that leave the forces unwritten (a plain step).
 #include "cycle/kernel_loops.hpp"
 
 namespace trubal::loops {
@@ -8,10 +8,10 @@ template <std::size_t... I>
 constexpr std::array<MotionLoop, sizeof...(I)> motion_table(std::index_sequence<I...>) {
   return {&motion_loop<MotionFeatures::from_index(0 + I)>...};
 }
-constexpr auto kTable = motion_table(std::make_index_sequence<MotionFeatures::kCount>{});
+constexpr auto kTable = motion_table(std::make_index_sequence<MotionFeatures::kCount / 2>{});
 
 }  // namespace
 
-MotionLoop motion_loop_at(unsigned i) { return kTable.at(i - 0); }
+MotionLoop motion_loop_lean(unsigned i) { return kTable.at(i - 0); }
 
 }  // namespace trubal::loops

@@ -1,0 +1,41 @@
+// How a run's steps are shared among threads and ranks where the default is a timed or measured
+// choice, and the faults a test injects. One per Session (the pipeline and what it holds read it
+// by reference; a pipeline made without one keeps its own defaults). The defaults are a normal
+// run's: tests set other values to force one path on any machine; main.cpp sets some from the
+// environment (TRUBAL_TEST_FAIL_AT, TRUBAL_REBUILD_WHOLE). No rule changes the answer: every
+// path gives the same bits.
+#pragma once
+
+namespace trubal {
+
+struct StepPolicy {
+  // Whether the threads share the steps in space (a part of the decomposition each) rather than by
+  // ball numbers: 0 each pair list decides (Pipeline::threads_in_space), 1 always where there are
+  // threads, -1 never.
+  int split_rule = 0;
+  // The split in space's trial steps count this many times their time (1000: the trial finds one
+  // thread faster, 0.001: the split), so that either verdict can be asserted on any machine.
+  double space_time_scale = 1.0;
+  // Whether the threads share a step at all (ParallelStep): 0 timed (a trial), 1 always (small
+  // scenes still exercise the split), -1 never.
+  int share_rule = 0;
+  // Stale pair lists of a run by the decomposition: 0 rebuilt on the parts where they can be
+  // (BrickStep::rebuild_local), -1 always through the whole model (TRUBAL_REBUILD_WHOLE, to compare
+  // the two ways in one build).
+  int local_rule = 0;
+  // The member (team rank) whose own work is counted kSlowFactor times slower at each split, as a
+  // busy core would make it, to see the shares follow; -1: none. Eight times, so that a machine
+  // busy with other work (which slows both members by up to about two) cannot hide it.
+  int slow_member = -1;
+  static constexpr double kSlowFactor = 8;
+
+  // Faults (TRUBAL_TEST_FAIL_AT), each on one rank of a distributed run (-1: none), each once: the
+  // rank's next split of the decomposition ("R split"), next search on its part ("R part") and
+  // next share of a search through the whole model ("R search") fail as if out of memory.
+  int fail_split = -1;
+  int fail_part_search = -1;
+  int fail_search = -1;
+  // (A deck's line that fails on one rank, "R L", is the interpreter's: Interpreter::fail_line_for_test.)
+};
+
+}  // namespace trubal
