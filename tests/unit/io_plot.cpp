@@ -159,7 +159,7 @@ TEST_CASE("plot: a history longer than its window in memory is drawn from its fi
   CHECK(fs::file_size(dir.path() / "t.png") > 0);
 }
 
-TEST_CASE("plot: axis labels name the quantity, or what xlabel and ylabel say", "[io][system]") {
+TEST_CASE("plot: axis labels name the quantity, or what xlabel and ylabel say", "[io]") {
   CHECK(column_label("e33") == "axial strain e33 (compression +)");
   CHECK(column_label("evol") == "volumetric strain (compression +)");
   CHECK(column_label("w2_stress") == "wall 2 stress (compression +)");
