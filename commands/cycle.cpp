@@ -39,8 +39,10 @@ const Command cycle_command = {
     "CYCLE", {}, "CYCLE n", "n time steps",
     "Runs n time steps. Ctrl-C stops at the end of the current step and keeps the model (in a batch run the "
     "deck then stops). Under mpirun, Ctrl-C ends the job (mpirun's way): the ranks stop together and rank 0 "
-    "says at which cycle; SIGUSR1 sent to mpirun stops the CYCLE as Ctrl-C does without it. A run that goes unstable stops with a message naming the cycle, a ball and a "
-    "suggested FRAC, and leaves the last good state to print or save. When the energy balance (PRINT energy) "
+    "says at which cycle; SIGUSR1 sent to mpirun stops the CYCLE as Ctrl-C does without it. A run that goes unstable stops with a message naming the cycle, how much the energy "
+    "balance grew over the last cycles (or that the velocities flip sign every cycle), the fastest ball and a "
+    "suggested FRAC (from the energy's growth where it grew exponentially, at most half the FRAC), and leaves the "
+    "last good state to print or save. When the energy balance (PRINT energy) "
     "moved during the CYCLE by more than 1% of the energy that moved (the largest energy in play: kinetic, "
     "strain, and the changes of the potential and the works), a warning says so once at the end, with the "
     "FRAC (or TSTEP) that would hold it, from the error falling as the step squared: the step is too coarse "

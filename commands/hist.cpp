@@ -104,9 +104,11 @@ static void run_hist(Context& ctx, Args& args) {
 
 const Command hist_command = {
     "HIST", {},
-    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: stress strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, measure sphere x y z r [id n]",
+    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: stress pq strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, measure sphere x y z r [id n]",
     "record quantities every n cycles",
-    "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), strain (e11 e22 e33 e12 e13 e23), "
+    "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), pq (p = (s11 + s22 + s33) / 3 "
+    "and q = s33 - (s11 + s22) / 2, the mean stress and the deviator of a triaxial test with z the axial direction, "
+    "compression positive; in a dry sample the effective stresses p' and q), strain (e11 e22 e33 e12 e13 e23), "
     "volumetric (evol = 1 - V/V0, the cell's loss of volume over its volume V0 at START or the last STRAIN reset, "
     "compression positive: a strain, about e11 + e22 + e33 while they are small), "
     "porosity (porosity void_ratio: of the whole space, the balls' volume over SET volume, the periodic cell or the "
@@ -140,7 +142,7 @@ const Command hist_command = {
     "history is refused, unless it asks for the same quantities every the same period: then that history goes "
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",
-    {"stress", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall",
+    {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},
     run_hist};
 

@@ -147,6 +147,8 @@ void take_kernels(const StepKernels& from, StepKernels& to) {
   to.estimate = from.estimate;
   to.moments = from.moments;
   to.dt = from.dt;
+  to.dt_prev = from.dt_prev;
+  to.dt_mean = from.dt_mean;
   to.beta = from.beta;
   to.alpha = from.alpha;
   to.local = from.local;
@@ -968,6 +970,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   Balls& b = part_.balls;
   const std::size_t m = b.size();
   if (kernels_.moments) scratch_.ball_moments.resize(m);
+  if (kernels_.features.stiffness_damping) scratch_.ball_dashpot.resize(m);
   StepSums mine;
   const auto t0 = std::chrono::steady_clock::now();
   step_.run(pool, part_, scratch_, kernels_, mine, times, ref_.x.size() == m ? &ref_ : nullptr);

@@ -64,12 +64,19 @@ struct PairInputs {
   }
 };
 
-// The dashpots' work of a step, c V(t - dt/2)^2 dt (physics/contact/dashpot.hpp), stands for its
-// force F(t) = -c V(t - dt/2) times v(t) dt, which the law of motion's balance charges it with, half
-// of it after t with v(t + dt/2). For a dashpot of constant c the sum of the steps' works up to t
-// less a quarter of the last is that charge up to t, to second order in the step (doc/physics.md
-// "Energy"): the quarter is the dashpots' part after t.
-constexpr double kDashpotAhead = 0.25;
+// The dashpots' work (doc/physics.md "Energy"). The law of motion charges every force F(t) with
+// F(t) . (v(t - dt/2) + v(t + dt/2)) / 2 dt_mean, half of it after t: the dashpots too, however
+// their force jumps where a contact starts or ends. A contact's loop knows the relative velocity
+// before the step: it books F(t) . V(t - dt/2) dt_mean (half of it after t), as if the velocity
+// stayed; the law of motion adds, per ball, the dashpot force (DashpotForce) times the change of
+// the ball's velocity over the step, half of dt_mean, to the work and to its part after t.
+constexpr double kDashpotAhead = 0.5;
+
+// Lane q's dashpot part to ball j's sums (as PairForce's: +F on j, and t).
+[[gnu::always_inline]] inline void add_dashpot(DashpotForce& d, const ContactBatch& B, std::size_t q) {
+  d.fx += B.dfx[q]; d.fy += B.dfy[q]; d.fz += B.dfz[q];
+  d.tx += B.dtx[q]; d.ty += B.dty[q]; d.tz += B.dtz[q];
+}
 
 // The pairs of [begin, end), by the law F composes; F.details: also write what measurements read
 // (normal, overlap, forces, stiffness, dashpot coefficient, work, state). Without it a step writes
@@ -83,8 +90,9 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
   TRUBAL_PTR(state, c.state);
   TRUBAL_PTR(ball_sum, scratch.ball_force); TRUBAL_PTR(cn_sum, scratch.ball_cn);
+  DashpotForce* __restrict dash_sum = kLaw.dashpot ? scratch.ball_dashpot.data() : nullptr;
   const PairInputs in(model);
-  const double dt = k.dt, beta = k.beta;
+  const double dt = k.dt_prev, dt_work = k.dt_mean, beta = k.beta;
   const PairLaw& one_law = k.laws.ball_law();
   const bool sum_stiffness = k.sums_stiffness();
   // A periodic cell that does not move gives every image a velocity of +-0 and the image power
@@ -105,10 +113,11 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   std::size_t acc_ball = kNone;
   PairForce acc{};
   double acc_cn = 0;
+  DashpotForce acc_dash{};
   auto flush = [&] {
     if (acc_ball == kNone) return;
     ball_sum[acc_ball] = acc;
-    if constexpr (kLaw.dashpot) cn_sum[acc_ball] = acc_cn;
+    if constexpr (kLaw.dashpot) { cn_sum[acc_ball] = acc_cn; dash_sum[acc_ball] = acc_dash; }
     parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0, kDashpotAhead * work_damping, 0.0};
     work_friction = work_damping = strain = image_power = 0;
     if (k.moments) [[unlikely]] {
@@ -122,7 +131,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
       const std::size_t p = p0 + q;
       in.gather<kLaw, kOneLaw>(B, q, k, p, pi[p], pj[p]);
     }
-    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz, &clean_run);
+    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, dt_work, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz, &clean_run);
     if constexpr (kLaw.shear) {   // the batch's new history goes back where it was read
       std::copy(hx, hx + count, fsx + p0);
       std::copy(hy, hy + count, fsy + p0);
@@ -140,18 +149,25 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
         flush();
         acc_ball = pi[p];
         acc = ball_sum[acc_ball];
-        if constexpr (kLaw.dashpot) acc_cn = cn_sum[acc_ball];
+        if constexpr (kLaw.dashpot) { acc_cn = cn_sum[acc_ball]; acc_dash = dash_sum[acc_ball]; }
       }
       acc.fx -= B.fx[q]; acc.fy -= B.fy[q]; acc.fz -= B.fz[q];
       if constexpr (kLaw.rotation) { acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q]; }
       if (sum_stiffness) { acc.kmax += kmax; acc.ks += B.ks[q]; }
-      if constexpr (kLaw.dashpot) acc_cn += B.cn[q];
+      if constexpr (kLaw.dashpot) {
+        acc_cn += B.cn[q];
+        acc_dash.fx -= B.dfx[q]; acc_dash.fy -= B.dfy[q]; acc_dash.fz -= B.dfz[q];
+        acc_dash.tx += B.dtx[q]; acc_dash.ty += B.dty[q]; acc_dash.tz += B.dtz[q];
+      }
       if (pj[p] < own_end) {
         PairForce& fj = ball_sum[pj[p]];
         fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
         if constexpr (kLaw.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
         if (sum_stiffness) { fj.kmax += kmax; fj.ks += B.ks[q]; }
-        if constexpr (kLaw.dashpot) cn_sum[pj[p]] += B.cn[q];
+        if constexpr (kLaw.dashpot) {
+          cn_sum[pj[p]] += B.cn[q];
+          add_dashpot(dash_sum[pj[p]], B, q);
+        }
       }
       if (cell_moving) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
       if (k.moments) {   // force on j times the branch vector i -> j (zero where apart)
@@ -199,6 +215,8 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   ContactTable& c = model.contacts;
   std::fill(scratch.ball_force.begin() + ball_begin, scratch.ball_force.begin() + ball_end, PairForce{});
   std::fill(scratch.ball_cn.begin() + ball_begin, scratch.ball_cn.begin() + ball_end, 0.0);
+  if constexpr (F.dashpot)
+    std::fill(scratch.ball_dashpot.begin() + ball_begin, scratch.ball_dashpot.begin() + ball_end, DashpotForce{});
   std::fill(scratch.ball_parts.begin() + ball_begin, scratch.ball_parts.begin() + ball_end, BallParts{});
   if (k.moments) std::fill(scratch.ball_moments.begin() + ball_begin, scratch.ball_moments.begin() + ball_end, std::array<double, 9>{});
   if (pair_count == 0) return;
@@ -220,15 +238,18 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       }
     }
     // The new history is the owner's to write: here it goes to a scratch copy, unread.
-    if (one_law) contact_forces<F, true>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
-    else contact_forces<F, false>(B, count, law, k.dt, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
+    if (one_law) contact_forces<F, true>(B, count, law, k.dt_prev, k.dt_mean, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
+    else contact_forces<F, false>(B, count, law, k.dt_prev, k.dt_mean, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];
       PairForce& fj = scratch.ball_force[j];
       fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
       if constexpr (F.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
       if (k.sums_stiffness()) { fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q]; }
-      if constexpr (F.dashpot) scratch.ball_cn[j] += B.cn[q];
+      if constexpr (F.dashpot) {
+        scratch.ball_cn[j] += B.cn[q];
+        add_dashpot(scratch.ball_dashpot[j], B, q);
+      }
     }
   }
 }
@@ -264,7 +285,7 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       point[q] = lane.point;
       surface[q] = lane.velocity;
     }
-    contact_forces<kLaw, false>(B, count, k.laws.table[0], k.dt, k.beta, c.fsx.data() + p0, c.fsy.data() + p0,
+    contact_forces<kLaw, false>(B, count, k.laws.table[0], k.dt_prev, k.dt_mean, k.beta, c.fsx.data() + p0, c.fsy.data() + p0,
                                 c.fsz.data() + p0, hx, hy, hz);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q, i = c.ball[p];
@@ -273,7 +294,12 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       fi.fx -= B.fx[q]; fi.fy -= B.fy[q]; fi.fz -= B.fz[q];
       if constexpr (kLaw.rotation) { fi.tx += B.tx[q]; fi.ty += B.ty[q]; fi.tz += B.tz[q]; }
       if (k.sums_stiffness()) { fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q]; }
-      if constexpr (kLaw.dashpot) scratch.ball_cn[i] += B.cn[q];
+      if constexpr (kLaw.dashpot) {
+        scratch.ball_cn[i] += B.cn[q];
+        DashpotForce& d = scratch.ball_dashpot[i];
+        d.fx -= B.dfx[q]; d.fy -= B.dfy[q]; d.fz -= B.dfz[q];
+        d.tx += B.dtx[q]; d.ty += B.dty[q]; d.tz += B.dtz[q];
+      }
       const Wall& w = walls[c.wall[p]];
       WallLoad& load = loads[c.wall[p]];
       const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q];
@@ -284,11 +310,11 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       load.mx.add(ay * fz - az * fy); load.my.add(az * fx - ax * fz); load.mz.add(ax * fy - ay * fx);
       load.normal_force.add(B.fn[q]);
       load.stiffness.add(B.kn[q]);
-      load.work.add(power * k.dt);
+      load.work.add(power * k.dt_mean);
       load.contacts += B.state[q] != 0;
       BallParts& part = scratch.ball_parts[i];
-      part.boundary += power * k.dt;
-      part.boundary_ahead += power * (0.5 * k.dt);   // the wall moves on with the balls: half after t
+      part.boundary += power * k.dt_mean;
+      part.boundary_ahead += power * (0.5 * k.dt_mean);   // the wall moves on with the balls: half after t
       part.friction += B.work_friction[q];
       part.damping += B.work_damping[q];
       part.damping_ahead += kDashpotAhead * B.work_damping[q];
@@ -332,12 +358,15 @@ struct LaneConstants {
 // rather than branches, so that the compiler vectorises the block's loop; each lane does the
 // arithmetic the ball always had (a fixed component keeps its velocity and charges the boundary with
 // its force's work; a free one moves, damped as the scene says). `fixed` selects per lane.
+// The velocity moves by F/m times dt_mean, the mean of the step before and this one (central
+// differences with a step that changes: LaneConstants::dt is dt_mean).
 // Kinetic energy at t as m v(t - dt/2) v(t + dt/2) / 2: with the spring energy and the potential at
-// t this is the quantity central differences conserve exactly for a linear spring (and free fall),
-// so the guard sees no false imbalance from a stable step however coarse it is. Its change over a
-// step is (F(t - dt) + F(t)) / 2 . v(t - dt/2) dt, so a force F(t) other than the springs' does the
-// work F(t) . v(t) dt, v(t) = (v(t - dt/2) + v(t + dt/2)) / 2, of which the part F(t) . v(t + dt/2)
-// dt/2 lies after t (the aheads).
+// t this is the quantity central differences conserve exactly for a linear spring (and free fall)
+// at a fixed step, so the guard sees no false imbalance from a stable step however coarse it is.
+// Its change from the step before is F(t) . v(t - dt/2) dt_mean / 2 plus the step before's
+// F . v(t - dt/2) dt_mean / 2, so a force F(t) other than the springs' does the work F(t) . v(t)
+// dt_mean, v(t) = (v(t - dt/2) + v(t + dt/2)) / 2, of which the part F(t) . v(t + dt/2) dt_mean / 2
+// lies after t (the aheads).
 template <MotionFeatures M>
 [[gnu::always_inline]] inline double advance_lane(double force, double applied, double v, double inv_m, double m,
                                                   bool fixed, const LaneConstants c, MotionSums& s) {
@@ -375,6 +404,18 @@ template <MotionFeatures M>
 // Balls [b0, b0 + n) of a motion loop: moves them and writes each one's terms of the global sums
 // (terms[t][q], MotionTerm order) and its speed^2 (|v|^2 + |R w|^2) for the fastest ball. A ghost (a
 // ball another rank or thread moves, kGhosts) is left as it is, its terms 0 and its speed -1.
+// Balls [b0, b0 + n)'s dashpot power F_d . v + M_d . w at their velocities now (M_d = -R t_d).
+template <bool kRot>
+inline void dashpot_power(const Balls& b, std::size_t b0, std::size_t n, const DashpotForce* dash, double* out) {
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::size_t i = b0 + q;
+    const DashpotForce& d = dash[q];
+    double p = d.fx * b.vx[i] + d.fy * b.vy[i] + d.fz * b.vz[i];
+    if constexpr (kRot) p -= b.rad[i] * (d.tx * b.wx[i] + d.ty * b.wy[i] + d.tz * b.wz[i]);
+    out[q] = p;
+  }
+}
+
 enum MotionTerm { kFriction, kStrain, kImage, kKinetic, kSpin, kBoundary, kPotential, kDamping, kBoundaryAhead,
                   kDampingAhead, kTerms };
 inline constexpr std::size_t kTermBlock = 128;
@@ -382,9 +423,10 @@ template <MotionFeatures M, bool kGhosts>
 void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, std::size_t b0, std::size_t n,
                   double (*__restrict terms)[kTermBlock], double* __restrict speed2) {
   constexpr bool kRot = M.rotation, kLoads = M.loads, kWriteForces = M.write_forces;
-  const double dt = k.dt;
-  // Mass-proportional damping, factor form: v' = (v (1 - a dt/2) + F/m dt) / (1 + a dt/2).
-  const LaneConstants c{dt, 0.5 * dt, k.local, k.alpha, 1 - 0.5 * k.alpha * dt, 1 / (1 + 0.5 * k.alpha * dt)};
+  const double dt = k.dt, dt_mean = k.dt_mean;
+  // Mass-proportional damping, factor form: v' = (v (1 - a dt/2) + F/m dt) / (1 + a dt/2), dt_mean.
+  const LaneConstants c{dt_mean, 0.5 * dt_mean, k.local, k.alpha, 1 - 0.5 * k.alpha * dt_mean,
+                        1 / (1 + 0.5 * k.alpha * dt_mean)};
   const double gx = k.gravity[0], gy = k.gravity[1], gz = k.gravity[2];
   // The block's contact sums and parts, one array each (the structs' fields apart, so that the
   // loop below reads contiguous lanes): cf fx fy fz tx ty tz, pt by Part.
@@ -406,6 +448,11 @@ void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, st
     fixed[q] = fixed_bytes[q];
     if constexpr (kGhosts) ghost[q] = ghost_bytes[q];
   }
+  // Scenes with dashpots: each ball's dashpot power at v(t - dt/2), to take from the same at
+  // v(t + dt/2) after the step (kDashpotAhead).
+  const DashpotForce* __restrict dash = k.features.stiffness_damping ? scratch.ball_dashpot.data() + b0 : nullptr;
+  alignas(64) double dash_power[kTermBlock];
+  if (dash) dashpot_power<kRot>(b, b0, n, dash, dash_power);
   auto* __restrict x = b.x.data() + b0; auto* __restrict y = b.y.data() + b0; auto* __restrict z = b.z.data() + b0;
   auto* __restrict vx = b.vx.data() + b0; auto* __restrict vy = b.vy.data() + b0; auto* __restrict vz = b.vz.data() + b0;
   auto* __restrict wx = b.wx.data() + b0; auto* __restrict wy = b.wy.data() + b0; auto* __restrict wz = b.wz.data() + b0;
@@ -470,6 +517,15 @@ void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, st
     terms[kDamping][q] = pick(g, 0.0, s.damping);
     terms[kBoundaryAhead][q] = pick(g, 0.0, s.boundary_ahead);
     terms[kDampingAhead][q] = pick(g, 0.0, s.damping_ahead);
+  }
+  if (dash) {
+    alignas(64) double after[kTermBlock];
+    dashpot_power<kRot>(b, b0, n, dash, after);
+    for (std::size_t q = 0; q < n; ++q) {
+      const double more = (kGhosts && ghost[q] != 0) ? 0.0 : (dash_power[q] - after[q]) * (0.5 * dt_mean);
+      terms[kDamping][q] += more;
+      terms[kDampingAhead][q] += more;
+    }
   }
 }
 

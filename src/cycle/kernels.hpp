@@ -177,7 +177,14 @@ struct StepKernels {
   StepEstimate estimate = StepEstimate::Undamped;
   bool moments = false;                     // the contact loops sum StepSums::force_moment and
                                             // stiffness_moment (set while a servo runs)
+  // The steps of central differences with a step that changes (doc/physics.md "Law of motion"):
+  // positions move by v(t + dt/2) dt, this step; velocities by F(t)/m times dt_mean, the mean of the
+  // step before and this one, and so does the work the law of motion charges a force with; a
+  // contact's shear spring takes the relative velocity v(t - dt/2) over dt_prev, the step that
+  // velocity moved the balls by. (With a step held fixed all three are the same number.)
   double dt = 0;                            // this step
+  double dt_prev = 0;                       // the step before (this one on a model's first step)
+  double dt_mean = 0;                       // (dt_prev + dt) / 2
   double beta = 0, alpha = 0, local = 0;    // damping
   std::array<double, 3> gravity{0, 0, 0};
   PairLaws laws;                            // by pair of ball types

@@ -24,6 +24,7 @@ namespace trubal {
 namespace {
 
 constexpr std::int64_t kSnapshotEvery = 500;   // a copy costs less than one step's memory traffic
+constexpr int kGrowthSteps = 32;    // steps the guard looks back over to measure the energy's growth
 constexpr int kFlippingSteps = 20;   // steps running with a negative kinetic term that stop the run (below)
 constexpr double kProgressSeconds = 0.2;
 constexpr std::int64_t kAgreeEvery = 16;   // steps between the ranks' checks of an interrupt
@@ -103,6 +104,31 @@ std::string balance_warning(const Model& model, const CycleResult& r, double ene
       100 * error, r.balance_error, r.energy_scale, advice, 100 * kBalanceWarning);
 }
 
+// How fast the balance grew over the last steps before the guard stopped step s (`recent`, a ring
+// of its distances from the start; `now`, step s's): an unstable mode of central differences grows
+// by a factor mu a step in amplitude, mu^2 in energy, where (omega dt)^2 = 2 + mu + 1/mu, so the
+// step was omega dt / 2 times the stable one (`over`; 1 where no growth is seen).
+struct Growth {
+  int steps = 0;
+  double grew = 0, factor = 1, over = 1;
+};
+Growth energy_growth(const std::array<double, kGrowthSteps>& recent, std::int64_t s, double now, double floor) {
+  Growth g;
+  if (!std::isfinite(now) || !(now > floor)) return g;
+  // The earliest of the ring's steps whose distance was above the floor (and a trillionth of now).
+  for (int back = static_cast<int>(std::min<std::int64_t>(s - 1, kGrowthSteps - 1)); back >= 1; --back) {
+    const double then = recent[static_cast<std::size_t>(s - back) % kGrowthSteps];
+    if (!(then > floor) || !(then > 1e-12 * now) || !(then < now)) continue;
+    g.steps = back;
+    g.grew = now - then;
+    g.factor = std::pow(now / then, 1.0 / back);
+    const double mu = std::sqrt(g.factor);
+    g.over = std::max(1.0, 0.5 * std::sqrt(2 + mu + 1 / mu));
+    return g;
+  }
+  return g;
+}
+
 }  // namespace
 
 CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control) {
@@ -148,6 +174,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   const double boundary0 = model.energy.boundary_work, gross0 = model.space.gross_work;
   double balance_ref = 0, potential_ref = 0, scale_max = 0;
   int flipping = 0;   // steps running with the kinetic term negative
+  // The balance's distance from its start over the last kGrowthSteps steps (a ring): how fast the
+  // energy grows when the guard stops the run.
+  std::array<double, kGrowthSteps> recent{};
   // A scene at rest has almost no energy, and rounding alone then looks like a large relative
   // imbalance. Below the energy of springs compressed by 1e-6 of a radius nothing is reported;
   // an unstable step grows exponentially and passes this within a few steps.
@@ -197,6 +226,10 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     // edge is refused (no tilt reduction could follow it; the run stays at its last step).
     check_cell_step(model.space, dt);
     kernels.dt = dt;
+    // The step before, which moved the balls to where this step's forces are computed (Model::dt;
+    // none before a model's first step).
+    kernels.dt_prev = model.dt > 0 ? model.dt : dt;
+    kernels.dt_mean = 0.5 * (kernels.dt_prev + dt);
     const Space& space = model.space;
     // A servo reads the stress and stiffness of each force pass: the contact loops sum them.
     kernels.moments = space.periodic && (space.servo_on[0] || space.servo_on[1] || space.servo_on[2]);
@@ -223,7 +256,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     const StepTotals sums(step_sums);
     model.space.servo_measured_valid = kernels.moments;
     if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};
-    cell_after_step(model, dt, sums.image_power, false);   // periodic space: the cell's work, its new edges, the strain
+    cell_after_step(model, dt, kernels.dt_mean, sums.image_power, false);   // periodic space: the cell's work, its new edges, the strain
     pipeline.reduce_cell_tilt(model);                     // and its tilts, on every copy of the pairs
     timing.step += std::chrono::duration<double>(Clock::now() - step_start).count();
     model.cycle += 1;
@@ -247,7 +280,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     now.strain = sums.strain;
     now.potential = sums.potential;
     now.damping_ahead = sums.damping_ahead;
-    now.boundary_ahead = sums.boundary_ahead + (model.space.periodic ? 0.5 * sums.image_power * dt : 0.0);
+    now.boundary_ahead = sums.boundary_ahead + (model.space.periodic ? 0.5 * sums.image_power * kernels.dt_mean : 0.0);
     return sums;
   };
 
@@ -351,30 +384,51 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     result.balance_error = std::max(result.balance_error, std::abs(balance - balance_ref));
     result.energy_scale = scale_max;
     flipping = kinetic < -energy_floor ? flipping + 1 : 0;
-    if (!std::isfinite(balance) || std::abs(balance - balance_ref) > 0.5 * scale_max + energy_floor ||
-        flipping >= kFlippingSteps) {
+    const double drift = std::abs(balance - balance_ref);
+    recent[static_cast<std::size_t>(s) % kGrowthSteps] = drift;
+    if (!std::isfinite(balance) || drift > 0.5 * scale_max + energy_floor || flipping >= kFlippingSteps) {
       const std::size_t ball = sums.fastest_ball < model.balls.size() ? sums.fastest_ball : 0;
       const std::int64_t id = model.balls.size() ? model.balls.id[ball] : 0;
       const double speed = std::sqrt(sums.fastest_speed2);
       const std::int64_t bad_cycle = model.cycle;
+      const Growth growth = energy_growth(recent, s, drift, energy_floor);
+      const double in_play = scale_max;
       const bool results_current = rescue(bad_cycle);
       const double frac = model.settings.frac;
+      // The step to take: beyond the stable step by growth.over, and by half again (0.5 at most).
+      const double shrink = std::min(0.5, 0.8 / growth.over);
       std::string advice;
       if (model.settings.fixed_dt > 0)
-        advice = fmt::format("try TSTEP {:.3g} (now {:.3g}; critical step about {:.3g})", 0.5 * critical_timestep(model),
+        advice = fmt::format("try TSTEP {:.3g} (now {:.3g}; critical step about {:.3g})",
+                             std::min(0.5 * critical_timestep(model), shrink * model.settings.fixed_dt),
                              model.settings.fixed_dt, critical_timestep(model));
       else
         advice = frac < 1e-3
                      ? fmt::format("FRAC is {:.3g} already, so the step is not the cause: look at the loads, "
                                    "velocities, properties and the servo's rates", frac)
-                     : fmt::format("try FRAC {:.3g} (now {:.3g})", std::min(0.8, 0.5 * frac), frac);
+                     : fmt::format("try FRAC {:.2g} (now {:.3g})", std::min(0.8, shrink * frac), frac);
+      std::string what;
+      if (growth.steps > 0 && growth.factor > 1.001) {
+        what = fmt::format("energy was created: the balance grew by {:.3g} ({:.3g}% of the energy in play) over the "
+                           "last {} cycles",
+                           growth.grew, in_play > 0 ? 100 * growth.grew / in_play : 0.0, growth.steps);
+        if (growth.factor > 1.05)   // a clear exponential: a mode beyond the stable step
+          what += fmt::format(", {:.3g} times a cycle, as a step about {:.2g} times the stable one makes it",
+                              growth.factor, growth.over);
+      }
+      else if (flipping >= kFlippingSteps)
+        what = fmt::format("the velocities flip sign every cycle (the kinetic term m v(t-dt/2).v(t+dt/2)/2 stayed "
+                           "negative for {} cycles), as a step beyond the stable one makes them",
+                           kFlippingSteps);
+      else
+        what = "energy was created";
+      what += fmt::format(" (the fastest ball is {}, at {:.3g})", id, speed);
       result.unstable = true;
       result.done = model.cycle - start_cycle;
-      result.message = fmt::format(
-          "unstable at cycle {}: ball {} moved at {:.3g} and energy was created; the model is back at cycle {}, "
-          "its last good state{}; {}",
-          bad_cycle, id, speed, model.cycle,
-          results_current ? "" : " (its contact forces were not kept: CYCLE computes them)", advice);
+      result.message = fmt::format("unstable at cycle {}: {}; the model is back at cycle {}, its last good state{}; {}",
+                                   bad_cycle, what, model.cycle,
+                                   results_current ? "" : " (its contact forces were not kept: CYCLE computes them)",
+                                   advice);
       return finish();
     }
     result.done = s;

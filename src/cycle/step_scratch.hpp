@@ -20,6 +20,13 @@ struct alignas(64) PairForce {
   double kmax, ks;
 };
 
+// A ball's sums of the contact dashpots' part of PairForce's fx fy fz tx ty tz (scenes with
+// dashpots): the law of motion charges the dashpots with their force times the ball's velocity, as it
+// does every force, so that their work is booked to second order however they start and stop.
+struct DashpotForce {
+  double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
+};
+
 // One ball's parts of the step's global sums from its contacts: its run of pairs (those with
 // higher partners, in list order), then its wall contacts in order. The motion loop adds its own
 // and hands them to the exact sums (StepSums), ball by ball.
@@ -35,6 +42,8 @@ struct StepScratch {
   // ascending, then higher ones) whichever thread adds them, so they are the same to the bit.
   std::vector<PairForce> ball_force;
   std::vector<double> ball_cn;            // the dashpot coefficients' sum (time step with dashpots)
+  // Features::stiffness_damping only (sized by the pipeline, as ball_moments): DashpotForce.
+  std::vector<DashpotForce> ball_dashpot;
   std::vector<BallParts> ball_parts;
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.

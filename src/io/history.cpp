@@ -27,7 +27,7 @@
 namespace trubal {
 
 const std::vector<std::string_view>& History::item_names() {
-  static const std::vector<std::string_view> names = {"stress", "strain", "volumetric", "ratio", "sratio", "axial",
+  static const std::vector<std::string_view> names = {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial",
                                                       "platen", "energy", "unbal", "contacts", "time", "wall",
                                                       "porosity", "measure"};
   return names;
@@ -35,6 +35,7 @@ const std::vector<std::string_view>& History::item_names() {
 
 static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "stress") return {"s11", "s22", "s33", "s12", "s13", "s23"};
+  if (item == "pq") return {"p", "q"};
   if (item == "strain") return {"e11", "e22", "e33", "e12", "e13", "e23"};
   if (item == "volumetric") return {"evol"};
   if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work", "potential"};
@@ -303,6 +304,10 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
   for (const auto& item : t.items) {
     if (item == "stress") {
       for (double s : get_stress()) row.push_back(s);
+    } else if (item == "pq") {   // mean stress and deviator, z axial (a triaxial test's p and q)
+      const Sym6& s = get_stress();
+      row.push_back((s[0] + s[1] + s[2]) / 3);
+      row.push_back(s[2] - 0.5 * (s[0] + s[1]));
     } else if (item == "strain") {
       for (int a = 0; a < 6; ++a) row.push_back(model.space.strain[a]);
     } else if (item == "volumetric") {   // 1 - V / V0 since START or STRAIN reset, compression positive

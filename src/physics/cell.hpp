@@ -67,11 +67,14 @@ void check_cell_step(const Space& space, double dt);
 // (`last`, or the contact table's per-pair results when it is null).
 // With `defer`, the velocity change of the new rates is handed back, not applied (set_all_strain_rates).
 void cell_before_step(Model& model, double dt, const ContactMoments* last = nullptr, FieldChange* defer = nullptr);
-// After a step: the work the cell did on the balls through image contacts (image_power: the
-// contact loop's sum of -F_j . (image velocity), StepSums::image_power), the new cell edges and
-// tilts (about the centre, tilts kept within half an edge) and the accumulated strain.
+// After a step of dt: the work the cell did on the balls through image contacts (image_power: the
+// contact loop's sum of -F_j . (image velocity), StepSums::image_power, charged over work_dt, the
+// mean of the step before and this one, as the law of motion charges every force), the new cell
+// edges and tilts (about the centre, tilts kept within half an edge) and the accumulated strain.
+// An edge L at the rate e becomes L exp(-e dt), so the strain summed, sum(e dt), is the natural
+// strain -ln(L / L0), and rates whose trace is zero keep the volume to rounding.
 // `reduce` false leaves the tilts to the caller (reduce_cell_tilt, which renumbers the pair images:
 // the cycle's pipeline does it where the pairs are).
-void cell_after_step(Model& model, double dt, double image_power, bool reduce = true);
+void cell_after_step(Model& model, double dt, double work_dt, double image_power, bool reduce = true);
 
 }  // namespace trubal

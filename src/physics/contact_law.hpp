@@ -62,6 +62,9 @@ struct ContactBatch {
   alignas(64) double fx[kBatch], fy[kBatch], fz[kBatch], tx[kBatch], ty[kBatch], tz[kBatch];
   alignas(64) double kn[kBatch], ks[kBatch], cn[kBatch];
   alignas(64) double work_friction[kBatch], work_damping[kBatch], strain[kBatch], state[kBatch];
+  // F.dashpot only: the dashpots' part of the force on j and of t (the law of motion books their
+  // work per ball: cycle/kernel_loops.hpp, DashpotForce).
+  alignas(64) double dfx[kBatch], dfy[kBatch], dfz[kBatch], dtx[kBatch], dty[kBatch], dtz[kBatch];
 
   void set_law(std::size_t q, const PairLaw& law) {
     kn_law[q] = law.kn; ks_law[q] = law.ks; friction[q] = law.friction; cohesion[q] = law.cohesion;
@@ -77,13 +80,13 @@ struct ContactBatch {
 // (dashpot.hpp, kRestPerLane).
 template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRestPerLane>
 [[gnu::noinline]] void contact_lanes(ContactBatch& B, std::size_t lane, std::size_t count, const PairLaw& law, double dt,
-                                     double beta, const double* __restrict hx_in, const double* __restrict hy_in,
+                                     double dt_work, double beta, const double* __restrict hx_in, const double* __restrict hy_in,
                                      const double* __restrict hz_in, double* __restrict hx_out,
                                      double* __restrict hy_out, double* __restrict hz_out) {
   if constexpr (F.dashpot && kOneLaw && kRest == kRestPerLane) {
     if (law.rest_xi > 0)
-      return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
-    return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+      return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+    return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
   }
   using Model = ContactModel<F.law()>;
   using Normal = typename Model::Normal;
@@ -116,8 +119,9 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
     const double vn = vx * nx + vy * ny + vz * nz;
 
     const Springs k = Normal::springs(L, ri, rj, rsum, u, touching);
-    double work_damping = 0, cn = 0;
-    const double fn = Damping::template normal<Normal, kRest>(k.fn, k.kn, F.dashpot ? B.mstar[q] : 0.0, L.rest_xi, beta, vn, dt, cn, work_damping);
+    double work_damping = 0, cn = 0, fn_dash = 0;
+    const double fn = Damping::template normal<Normal, kRest>(k.fn, k.kn, F.dashpot ? B.mstar[q] : 0.0, L.rest_xi, beta, vn,
+                                                              dt_work, cn, work_damping, fn_dash);
 
     double sx = 0, sy = 0, sz = 0, work_friction = 0, strain_shear = 0, state = 1;
     double fsx = 0, fsy = 0, fsz = 0;
@@ -130,7 +134,7 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
       strain_shear = s.strain;
       state = s.slide ? 2 : 1;
       sx = fsx; sy = fsy; sz = fsz;
-      Damping::shear(beta, k.ks, s.vsx, s.vsy, s.vsz, sx, sy, sz, work_damping, dt);
+      Damping::shear(beta, k.ks, s.vsx, s.vsy, s.vsz, sx, sy, sz, work_damping, dt_work);
     }
 
     const double strain = normal_spring_energy<Normal>(k.fn, u) + strain_shear;
@@ -151,6 +155,15 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
     B.work_damping[q] = touching ? work_damping : 0.0;
     B.strain[q] = touching ? strain : 0.0;
     B.state[q] = touching ? state : 0.0;
+    if constexpr (F.dashpot) {   // the dashpots' part: normal, and the shear force's beyond the spring's
+      const double dsx = sx - fsx, dsy = sy - fsy, dsz = sz - fsz;
+      B.dfx[q] = touching ? fn_dash * nx + dsx : 0.0;
+      B.dfy[q] = touching ? fn_dash * ny + dsy : 0.0;
+      B.dfz[q] = touching ? fn_dash * nz + dsz : 0.0;
+      B.dtx[q] = touching ? ny * dsz - nz * dsy : 0.0;
+      B.dty[q] = touching ? nz * dsx - nx * dsz : 0.0;
+      B.dtz[q] = touching ? nx * dsy - ny * dsx : 0.0;
+    }
   }
 }
 
@@ -167,7 +180,8 @@ inline std::size_t sliding_lanes(const ContactBatch& B, std::size_t count) {
 // The forces of lanes [0, count) of a batch, by the law the features compose (contact/models.hpp).
 // one_law: every pair has `law` (a scene of one material, or all pairs of one pair of types); else
 // each lane's law is in the batch. beta: Rayleigh stiffness-proportional coefficient (0 without).
-// dt: this step. (F.shear) h*_in: the lanes' shear force history; h*_out: where the new history goes.
+// dt: the step the relative velocity moved the pair by (the shear spring's increment); dt_work: the
+// step the dashpots' work is charged over (StepKernels::dt_mean). (F.shear) h*_in: the lanes' shear force history; h*_out: where the new history goes.
 // clean_run (a loop's, over its batches; null: every batch with the cap): how many batches in a
 // row had no sliding lane. After kCleanRun of them a batch is first made as if every spring held,
 // which skips the cap's square root and two divisions a lane; a lane that would slide is then made
@@ -178,12 +192,12 @@ inline std::size_t sliding_lanes(const ContactBatch& B, std::size_t count) {
 // the loop ran as vectors.
 inline constexpr int kCleanRun = 2;
 template <ContactFeatures F, bool kOneLaw>
-inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double beta,
+inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double dt_work, double beta,
                            const double* __restrict hx_in, const double* __restrict hy_in,
                            const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
                            double* __restrict hz_out, int* clean_run = nullptr) {
   auto lanes = [&]<bool kCap, bool kOne>(std::size_t lane) {
-    contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+    contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
   };
   if constexpr (ContactModel<F.law()>::Tangential::kOn) {
     if (clean_run && *clean_run >= kCleanRun) {
@@ -212,7 +226,7 @@ inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, d
   B.vx[0] = in.vx; B.vy[0] = in.vy; B.vz[0] = in.vz; B.sx[0] = in.sx; B.sy[0] = in.sy; B.sz[0] = in.sz;
   B.mstar[0] = in.mstar;
   double hx = 0, hy = 0, hz = 0;
-  contact_forces<F, true>(B, 1, law, dt, beta, &in.fsx, &in.fsy, &in.fsz, &hx, &hy, &hz);
+  contact_forces<F, true>(B, 1, law, dt, dt, beta, &in.fsx, &in.fsy, &in.fsz, &hx, &hy, &hz);
   ContactResult r;
   r.nx = B.nx[0]; r.ny = B.ny[0]; r.nz = B.nz[0]; r.overlap = B.overlap[0]; r.fn = B.fn[0];
   r.fx = B.fx[0]; r.fy = B.fy[0]; r.fz = B.fz[0]; r.tx = B.tx[0]; r.ty = B.ty[0]; r.tz = B.tz[0];

@@ -2,6 +2,8 @@
 // with a message naming the cause and the fix, never with NaN.
 #include <catch2/catch.hpp>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <random>
 
@@ -77,6 +79,35 @@ TEST_CASE("hard: a step above critical stops with a message naming FRAC or TSTEP
   CHECK(m.cycle < 2000);
   // The last good state: balls 2 and 3 still near where they were put.
   CHECK(std::abs(m.balls.x[2] - 0.0297) < 0.01);
+  // It says what happened to the energy, and the step it names holds.
+  CHECK((err.find("energy was created") != std::string::npos || err.find("velocities flip sign") != std::string::npos));
+  const std::string named = fixed_step ? "try TSTEP " : "try FRAC ";
+  const auto at = err.find(named);
+  REQUIRE(at != std::string::npos);
+  const double step = std::stod(err.substr(at + named.size()));
+  test::Harness again;
+  REQUIRE(again.deck(setup + (fixed_step ? "tstep " : "frac ") + fmt::format("{:.17g}", step) + "\ncycle 2000\n"));
+  CHECK(again.err.str().find("unstable") == std::string::npos);
+}
+
+TEST_CASE("hard: a whole assembly heated by too coarse a step is told how the energy grew, and a FRAC that holds",
+          "[hard]") {
+  // A dense packing in a periodic cell at FRAC 3: every contact's step beyond the stable one.
+  test::Harness h;
+  const std::string setup =
+      "start 0.01 0.01 0.01\nprop kn 1e5 ks 1e5 fric 0.3 dens 2650\ngen porosity 0.38 0.0004 0.0006 seed 4\n";
+  REQUIRE_FALSE(h.deck(setup + "frac 3\ncycle 3000\n"));
+  const std::string err = h.err.str();
+  INFO(err);
+  CHECK(err.find("the balance grew by") != std::string::npos);
+  CHECK(err.find("% of the energy in play) over the last") != std::string::npos);
+  const auto at = err.find("try FRAC ");
+  REQUIRE(at != std::string::npos);
+  const double frac = std::stod(err.substr(at + 9));
+  CHECK(frac <= 0.8);
+  test::Harness again;
+  REQUIRE(again.deck(setup + fmt::format("frac {}\ncycle 3000\n", frac)));
+  CHECK(again.err.str().find("unstable") == std::string::npos);
 }
 
 TEST_CASE("hard: size ratio 1:20 polydisperse packing settles under gravity onto fixed balls", "[hard]") {

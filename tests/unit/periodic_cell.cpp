@@ -144,7 +144,7 @@ print strain
   CHECK(m.space.strain[0] == Approx(100 * 1e-3 * dt));
   CHECK(m.space.strain[2] == Approx(100 * 2e-3 * dt));
   CHECK(m.space.strain[1] == 0);
-  CHECK(m.space.length()[2] == Approx(200 * std::pow(1 - 2e-3 * dt, 100)));
+  CHECK(m.space.length()[2] == Approx(200 * std::exp(-100 * 2e-3 * dt)).epsilon(1e-13));   // L0 exp(-sum e dt)
   CHECK(h.out.str().find("strain: xx 0.001") != std::string::npos);
   const auto L = m.space.length();
   CHECK(h.session.stress_volume() == Approx(L[0] * L[1] * L[2]));
@@ -252,19 +252,53 @@ TEST_CASE("periodic: the volumetric strain is 1 - V/V0 from START or STRAIN rese
   trubal::test::TempDir dir;
   trubal::test::WorkingDir cd(dir.path());
   trubal::test::Harness h;
-  // 3000 steps at 1e-4 per step on every axis: accumulated strains of 0.3 each, 0.9 in all, where
-  // the cell has lost 1 - (1 - 1e-4)^9000 = 59.3% of its volume: a strain below 1, as a strain is.
+  // 3000 steps at 1e-4 per step on every axis: accumulated (natural) strains of 0.3 each, 0.9 in
+  // all, where the cell has lost 1 - exp(-0.9) = 59.3% of its volume: a strain below 1, as a strain is.
   REQUIRE(h.deck("start 10 10 10\nprop kn 1e5 dens 1000\nball 5 5 5 0.1\nstrain 1 1 1\ntstep 1e-4\ncycle 3000\n"
                  "print strain\n"));
   const auto& s = h.session.model().space;
   CHECK(s.strain[0] + s.strain[1] + s.strain[2] == Approx(0.9).epsilon(1e-9));
   const double evol = trubal::volumetric_strain(h.session.model());
-  CHECK(evol == Approx(1 - std::pow(1 - 1e-4, 9000)).epsilon(1e-9));
+  CHECK(evol == Approx(1 - std::exp(-0.9)).epsilon(1e-9));   // ((1 - 1e-4)^9000, the edges' old update, is 3e-5 off)
   CHECK_THAT(h.out.str(), Catch::Contains(fmt::format("volumetric strain: {:.6g} (1 - V/V0", evol)));
-  // A new stage: measured from its own start. 100 more steps shrink the volume by 1 - (1 - 1e-4)^300.
+  // A new stage: measured from its own start. 100 more steps shrink the volume by 1 - exp(-0.03).
   REQUIRE(h.deck("strain reset\ncycle 100\nsave s.sav\n"));
-  CHECK(trubal::volumetric_strain(h.session.model()) == Approx(1 - std::pow(1 - 1e-4, 300)).epsilon(1e-9));
+  CHECK(trubal::volumetric_strain(h.session.model()) == Approx(1 - std::exp(-0.03)).epsilon(1e-9));
   trubal::test::Harness restarted;
   REQUIRE(restarted.deck("restart s.sav\n"));
   CHECK(trubal::volumetric_strain(restarted.session.model()) == trubal::volumetric_strain(h.session.model()));
+}
+
+TEST_CASE("periodic: rates whose trace is zero keep the cell's volume to rounding, and the strain is natural",
+          "[periodic]") {
+  // An undrained (constant-volume) triaxial test, as CONBAL-2 ran them (Ng and Dobry 1992): STRAIN
+  // -0.25 -0.25 0.5 to 10% axial strain. Each edge advanced as L (1 - e dt) lost (3/4)(e dt)^2 of the
+  // volume a step: 1.9e-4 over these 1000 steps of e dt = 5e-4; as L exp(-e dt), none.
+  for (const char* rates : {"-0.25 -0.25 0.5", "0.3 -0.1 -0.2", "-0.25 -0.25 0.5 0.1 0 0"}) {
+    INFO(rates);
+    Harness h;
+    REQUIRE(h.deck(std::string("start 10 10 10\nprop kn 1e5 dens 1000\nball 5 5 5 0.1\ntstep 1e-3\nstrain ") + rates +
+                   "\ncycle 200\n"));
+    for (int k = 0; k < 4; ++k) REQUIRE(h.deck("cycle 200\n"));   // cut into CYCLEs: the same
+    const Model& m = h.session.model();
+    const auto L = m.space.length();
+    CHECK(std::abs(1 - L[0] * L[1] * L[2] / 1000) < 1e-12);
+    CHECK(std::abs(volumetric_strain(m)) < 1e-12);
+    // The strain summed is -ln(L / L0) on each axis (0.5 * 1e-3 * 1000 = 0.5 on z for the first).
+    for (int a = 0; a < 3; ++a) CHECK(m.space.strain[a] == Approx(-std::log(L[a] / 10)).margin(1e-12));
+  }
+}
+
+TEST_CASE("periodic: HIST pq records a triaxial test's mean stress and deviator, z axial", "[periodic][commands]") {
+  Harness h;
+  // A dense packing (GEN porosity leaves small overlaps: a stress at once), compressed along z.
+  REQUIRE(h.deck("start 100 100 100\nprop kn 1e6 ks 1e6 fric 0.3 dens 2000\ngen porosity 0.4 8 10 seed 3\n"
+                 "tstep 0.01\nstrain 1e-3 0 2e-3\nhist stress pq every 50\ncycle 200\n"));
+  const HistoryTable& t = *h.session.history().tables().front();
+  REQUIRE(t.columns == std::vector<std::string>{"cycle", "time", "s11", "s22", "s33", "s12", "s13", "s23", "p", "q"});
+  REQUIRE(t.rows.size() == 4);
+  const auto& r = t.rows.back();
+  REQUIRE(r[4] > 0);   // compressed along z: the balls touch
+  CHECK(r[8] == Approx((r[2] + r[3] + r[4]) / 3).epsilon(1e-14));
+  CHECK(r[9] == Approx(r[4] - 0.5 * (r[2] + r[3])).epsilon(1e-14));
 }

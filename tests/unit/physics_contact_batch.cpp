@@ -60,10 +60,10 @@ void check_same_bits(const PairLaw& law) {
       Lanes capped = make_lanes(sliding, seed, law);
       Lanes tried = capped;
       std::vector<double> ch(3 * kBatch), th(3 * kBatch);
-      contact_forces<F, true>(capped.B, kBatch, law, 1e-3, 0.0, capped.hx.data(), capped.hy.data(),
+      contact_forces<F, true>(capped.B, kBatch, law, 1e-3, 1e-3, 0.0, capped.hx.data(), capped.hy.data(),
                               capped.hz.data(), ch.data(), ch.data() + kBatch, ch.data() + 2 * kBatch);
       int clean_run = kCleanRun;   // the batches before had no sliding lane: this one is tried without the cap
-      contact_forces<F, true>(tried.B, kBatch, law, 1e-3, 0.0, tried.hx.data(), tried.hy.data(), tried.hz.data(),
+      contact_forces<F, true>(tried.B, kBatch, law, 1e-3, 1e-3, 0.0, tried.hx.data(), tried.hy.data(), tried.hz.data(),
                               th.data(), th.data() + kBatch, th.data() + 2 * kBatch, &clean_run);
       std::size_t slid = 0;
       for (std::size_t q = 0; q < kBatch; ++q) slid += capped.B.state[q] == 2.0;
@@ -108,12 +108,12 @@ TEST_CASE("contact batch: a batch made with the cap counts the clean batches bef
   int clean_run = 0;
   for (int k = 1; k <= kCleanRun; ++k) {
     Lanes L = make_lanes(0, 7, law);
-    contact_forces<F, true>(L.B, kBatch, law, 1e-3, 0.0, L.hx.data(), L.hy.data(), L.hz.data(), h.data(),
+    contact_forces<F, true>(L.B, kBatch, law, 1e-3, 1e-3, 0.0, L.hx.data(), L.hy.data(), L.hz.data(), h.data(),
                             h.data() + kBatch, h.data() + 2 * kBatch, &clean_run);
     CHECK(clean_run == k);
   }
   Lanes L = make_lanes(3, 7, law);
-  contact_forces<F, true>(L.B, kBatch, law, 1e-3, 0.0, L.hx.data(), L.hy.data(), L.hz.data(), h.data(),
+  contact_forces<F, true>(L.B, kBatch, law, 1e-3, 1e-3, 0.0, L.hx.data(), L.hy.data(), L.hz.data(), h.data(),
                           h.data() + kBatch, h.data() + 2 * kBatch, &clean_run);
   CHECK(clean_run == 0);
 }

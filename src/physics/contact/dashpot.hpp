@@ -14,10 +14,11 @@ namespace trubal {
 inline constexpr int kRestPerLane = 0, kRestOn = 1, kRestOff = 2;
 
 struct ContactDashpot {
-  // F_n = F_spring + (beta k_n + c) (-V.n), clamped at 0 where c > 0; sets c and the work.
+  // F_n = F_spring + (beta k_n + c) (-V.n), clamped at 0 where c > 0; sets c, the dashpot's part of
+  // F_n and its work over dt at V (the relative velocity the force was made from).
   template <class Normal, int kRest = kRestPerLane>
   [[gnu::always_inline]] static double normal(double fn_spring, double kn, double mstar, double rest_xi, double beta, double vn,
-                       double dt, double& cn, double& work) {
+                       double dt, double& cn, double& work, double& dashpot) {
     const double km = kn * mstar;
     if constexpr (kRest == kRestOff) cn = 0.0;
     else if constexpr (kRest == kRestOn) cn = Normal::kDashpotFactor * rest_xi * std::sqrt(km > 0 ? km : 0.0);
@@ -25,6 +26,7 @@ struct ContactDashpot {
     double f_dash = (beta * kn + cn) * -vn;                              // dU/dt = -V.n
     f_dash = cn > 0 && fn_spring + f_dash < 0 ? -fn_spring : f_dash;   // a restitution dashpot never pulls
     work = f_dash * -vn * dt;
+    dashpot = f_dash;
     return fn_spring + f_dash;
   }
   // The tangential dashpot beta k_s on the sliding velocity vs, beside the Coulomb spring.
