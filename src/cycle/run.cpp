@@ -444,7 +444,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       if (output_on_root && observed && control.share_output) control.share_output();
       timing.output += std::chrono::duration<double>(Clock::now() - output_start).count();
     }
-    if ((s + 1) % kSnapshotEvery == 0) take_copy();   // the rescue steps on to cycles on kSnapshotEvery
+    // The rescue steps on to cycles on kSnapshotEvery. Not after the last step: the next CYCLE takes
+    // its own copy at its start, and a deferred last step needs the copy of the step before it.
+    if (s < n && (s + 1) % kSnapshotEvery == 0) take_copy();
     if (control.progress && (s & 7) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_progress).count() > kProgressSeconds) {
@@ -457,6 +459,11 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
       break;
     }
     if (deferred) {
+      // The results can be made again only from a copy of the step before (results_deferred).
+      if (pipeline.rescue().cycle + 1 != model.cycle)
+        throw std::logic_error(fmt::format(
+            "internal error: the rescue copy is of cycle {}, not the step before cycle {} whose contact results it "
+            "is to make", pipeline.rescue().cycle, model.cycle));
       model.contacts.drop_results();
       pipeline.defer_results(model);
     }
