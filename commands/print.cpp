@@ -102,7 +102,7 @@ static void print_info(Context& ctx) {
   if (m.space.destroyed > 0) o << fmt::format("balls destroyed: {} (they left the box)\n", m.space.destroyed);
   o << fmt::format("backend: {}\n", s.pipeline().backend().name());
   o << fmt::format("threads: {}\n", s.pipeline().threads());
-  if (comm::size() > 1) o << fmt::format("ranks: {}\n", comm::size());
+  if (comm::launched()) o << fmt::format("ranks: {}\n", comm::size());   // (under mpirun, one rank included)
   // The process's peak resident memory so far (every rank's, gathered: every rank runs PRINT).
   o << fmt::format("peak memory: {} MiB{}\n", mib_list(peak_memory_per_rank()), comm::size() > 1 ? " (per rank)" : "");
   if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
@@ -471,7 +471,7 @@ const Command print_command = {
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
     "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
-    "uses fewer threads than it has, and why; under mpirun the ranks; how many times a CYCLE's last step "
+    "uses fewer threads than it has, and why; under mpirun the ranks (`ranks: n`, `ranks: 1` under `mpirun -np 1`; no such line without mpirun); how many times a CYCLE's last step "
     "was taken again to make the contact results a command read (CYCLE); the peak resident memory so far, "
     "of each rank, and under mpirun also by the end of the last CYCLE stepped in parts, and the contact "
     "results each rank holds: rank 0 alone makes those a command reads after a CYCLE). counters [file f]: the "
