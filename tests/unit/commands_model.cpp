@@ -320,6 +320,26 @@ TEST_CASE("commands: HIST ball names a ball that exists; one deleted later recor
   CHECK(lines_of(slurp("h.csv")).size() == 6);
 }
 
+TEST_CASE("commands: PRINT walls file writes nan for the stress of a wall that has no area", "[commands]") {
+  TempDir dir;
+  WorkingDir here(dir.path());
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1e6 ks 1e6 dens 1000\nball 0 0 0 0.1\n"
+                 "wall id 1 plane 0 0 -0.5 0 0 1\nwall id 2 plane 0 0 0.5 0 0 -1\n"
+                 "servo wall 2 stress 100 area 0.5\nprint walls\nprint walls file w.csv\n"));
+  // The screen says "(no area)" for wall 1, a plane with no area of its own; the file says nan.
+  CHECK_THAT(h.out.str(), Catch::Contains("stress (no area)"));
+  const auto rows = lines_of(slurp("w.csv"));
+  REQUIRE(rows.size() == 3);
+  const auto header = cells_of(rows[0]);
+  const auto at = std::find(header.begin(), header.end(), "stress") - header.begin();
+  REQUIRE(at < static_cast<std::ptrdiff_t>(header.size()));
+  CHECK(cells_of(rows[1])[0] == "1");
+  CHECK(cells_of(rows[1])[static_cast<std::size_t>(at)] == "nan");
+  // Wall 2 has the servo's area: a stress, 0 while nothing touches it.
+  CHECK(cells_of(rows[2])[static_cast<std::size_t>(at)] == "0");
+}
+
 TEST_CASE("commands: CYCLE names the type that lacks a density or a stiffness", "[commands]") {
   Harness h;
   CHECK_FALSE(h.deck("start box 0 10 0 10 0 10\nprop kn 1e6\nball 5 5 5 1\ncycle 1\n", "t.dat"));
