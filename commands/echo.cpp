@@ -13,8 +13,14 @@ static void run_title(Context& ctx, Args& args) {
   ctx.out << "title: " << title << '\n';
 }
 
-const Command title_command = {"TITLE", {}, "TITLE text", "a title printed with output",
-                               "Sets the title shown by PRINT info and kept in saves.", {}, run_title};
+const Command title_command = {
+    "TITLE", {}, "TITLE text", "a title printed with output",
+    "Sets the title shown by PRINT info and kept in saves. The title is the rest of the line as typed: commas, "
+    "`=`, parentheses and the blanks between words are kept, not read as separators (`TITLE test 2, Al alloy` "
+    "is the title `test 2, Al alloy`). A comment (`;`, `#`, `!` outside double quotes) still ends the line and "
+    "$variables are still replaced; a title written as one double-quoted string loses its quotes, which is how "
+    "a title holds a comment character (`TITLE \"run 2; dense\"`).",
+    {}, run_title, false, true};
 
 static void run_stop(Context& ctx, Args& args) {
   args.done();

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include "commands/common.hpp"
+#include "model/edit.hpp"
 #include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
 #include "physics/walls.hpp"
@@ -38,6 +39,25 @@ static void run_hist(Context& ctx, Args& args) {
       if (!find_wall(ctx.session.model(), id))
         args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
       item = fmt::format("wall {}", id);
+    } else if (item == "ball") {
+      const std::int64_t id = args.count("ball id", 1);
+      if (find_ball(ctx.session.model(), id) < 0)
+        args.fail(fmt::format("there is no ball {} (PRINT balls lists them)", id));
+      const auto& quantities = History::ball_quantities();
+      std::vector<std::string_view> asked;
+      // Its quantities: the words that name one exactly (x, vz, fx: no prefixes, they are short).
+      while (!args.empty()) {
+        const auto q = std::find_if(quantities.begin(), quantities.end(),
+                                    [&](std::string_view n) { return to_lower(args.peek()) == n; });
+        if (q == quantities.end()) break;
+        if (std::find(asked.begin(), asked.end(), *q) != asked.end())
+          args.fail(fmt::format("`ball {}` names {} twice", id, *q));
+        asked.push_back(*q);
+        args.word("ball quantity");
+      }
+      if (asked.empty())
+        args.fail(fmt::format("`ball {}` needs the quantities to record, any of: {}", id, fmt::join(quantities, " ")));
+      item = fmt::format("ball {} {}", id, fmt::join(asked, " "));
     } else if (item == "measure") {
       if (!args.accept("sphere")) args.fail("`measure` takes its sphere: `measure sphere x y z r [id n]`");
       MeasureSphere sphere;
@@ -104,7 +124,7 @@ static void run_hist(Context& ctx, Args& args) {
 
 const Command hist_command = {
     "HIST", {},
-    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: stress pq strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, measure sphere x y z r [id n]",
+    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: stress pq strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, ball id x y z vx vy vz wx wy wz fx fy fz, measure sphere x y z r [id n]",
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), pq (p = (s11 + s22 + s33) / 3 "
     "and q = s33 - (s11 + s22) / 2, the mean stress and the deviator of a triaxial test with z the axial direction, "
@@ -117,7 +137,14 @@ const Command hist_command = {
     "measure and the man page say how each is taken; n counts the spheres from 1 unless given; NaN where a "
     "periodic cell has shrunk until it cannot hold the sphere), "
     "ratio, sratio, axial, platen, wall n (w<n>_fx w<n>_fy w<n>_fz: the force on wall n; w<n>_stress; w<n>_pos: a "
-    "cylinder's radius, else the plane's offset point.normal), energy (ke strain_energy friction_work damping_work boundary_work potential; potential is gravity's, as PRINT energy shows it), unbal (mean "
+    "cylinder's radius, else the plane's offset point.normal), ball id followed by any of x y z vx vy vz wx wy "
+    "wz fx fy fz, in the order given (b<id>_x ... b<id>_fz: one ball's position, velocity, spin and unbalanced "
+    "force, PFC's ball histories, as PRINT balls shows them: the position at the model's time, the velocity "
+    "and spin at the half step before it, the force of the last step; the id must be a ball's when HIST is "
+    "given; the ball is found by its id at each record, so after RENUMBER it is the ball that has that id "
+    "then, and NaN is recorded once no ball has it, after DELETE or an escape from the START box), energy (ke "
+    "strain_energy friction_work damping_work boundary_work potential; potential is gravity's, as PRINT energy "
+    "shows it), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
     "range holding the top and bottom platens (the balls above and below the middle of its height): ratio "
@@ -142,7 +169,8 @@ const Command hist_command = {
     "history is refused, unless it asks for the same quantities every the same period: then that history goes "
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",
-    {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall",
+    {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall", "ball",
+     "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "fx", "fy", "fz",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},
     run_hist};
 

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -102,7 +103,7 @@ static void print_info(Context& ctx) {
   if (m.space.destroyed > 0) o << fmt::format("balls destroyed: {} (they left the box)\n", m.space.destroyed);
   o << fmt::format("backend: {}\n", s.pipeline().backend().name());
   o << fmt::format("threads: {}\n", s.pipeline().threads());
-  if (comm::size() > 1) o << fmt::format("ranks: {}\n", comm::size());
+  if (comm::launched()) o << fmt::format("ranks: {}\n", comm::size());   // (under mpirun, one rank included)
   // The process's peak resident memory so far (every rank's, gathered: every rank runs PRINT).
   o << fmt::format("peak memory: {} MiB{}\n", mib_list(peak_memory_per_rank()), comm::size() > 1 ? " (per rank)" : "");
   if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
@@ -267,10 +268,12 @@ static void print_walls(Context& ctx, const std::string& file) {
     csv << "id,kind,type,x,y,z,nx,ny,nz,radius,vx,vy,vz,wx,wy,wz,rrate,fx,fy,fz,mx,my,mz,stress,contacts,work\n";
     for (const Wall& w : m.walls) {
       const Vec3 c = wall_centre(w);
+      // No area, no stress: nan, as the screen's "(no area)" and HIST's w<n>_stress say it.
+      const double stress = wall_servo_area(m, w) > 0 ? wall_stress(m, w) : std::numeric_limits<double>::quiet_NaN();
       csv << w.id << ',' << wall_kind_name(w.kind) << ',' << w.type;
       for (double v : {c[0], c[1], c[2], w.normal[0], w.normal[1], w.normal[2], w.radius, w.velocity[0], w.velocity[1],
                        w.velocity[2], w.spin[0], w.spin[1], w.spin[2], w.radius_rate, w.force[0], w.force[1], w.force[2],
-                       w.moment[0], w.moment[1], w.moment[2], wall_stress(m, w)})
+                       w.moment[0], w.moment[1], w.moment[2], stress})
         csv << ',' << csv_real(v);
       csv << ',' << w.contacts << ',' << csv_real(w.work) << '\n';
     }
@@ -471,7 +474,7 @@ const Command print_command = {
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
     "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
-    "uses fewer threads than it has, and why; under mpirun the ranks; how many times a CYCLE's last step "
+    "uses fewer threads than it has, and why; under mpirun the ranks (`ranks: n`, `ranks: 1` under `mpirun -np 1`; no such line without mpirun); how many times a CYCLE's last step "
     "was taken again to make the contact results a command read (CYCLE); the peak resident memory so far, "
     "of each rank, and under mpirun also by the end of the last CYCLE stepped in parts, and the contact "
     "results each rank holds: rank 0 alone makes those a command reads after a CYCLE). counters [file f]: the "
@@ -506,7 +509,8 @@ const Command print_command = {
     "shape, motion, and the loads of the last step (force and moment on it, the moment about its spin point; "
     "its stress, touching contacts, and the work it has done on the balls); with `file f.csv`: "
     "id,kind,type,x,y,z,nx,ny,nz,radius,vx,vy,vz,wx,wy,wz,rrate,fx,fy,fz,mx,my,mz,stress,contacts,work (x y z "
-    "its centre). The coordination number counts ball pairs only; stress and the unbalanced-force ratio "
+    "its centre; stress is nan for a wall with no area, a plane that SERVO wall gave no `area` or `in`, where the "
+    "screen says \"(no area)\", as HIST's w<n>_stress). The coordination number counts ball pairs only; stress and the unbalanced-force ratio "
     "include the wall contacts (a wall contact's branch vector runs from the ball's centre to the contact "
     "point). psd: the grading of the balls the last GEN made (those still there), percent passing by mass "
     "(solid volume) at the sieve diameters of a sieve curve or at 21 diameters evenly spaced in log d, next to "

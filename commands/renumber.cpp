@@ -30,7 +30,8 @@ const Command renumber_command = {
     "the balls\"; PRINT info's `ball order` says how far apart consecutive ids lie). The balls and their contacts stay "
     "as they are (a contact's shear history follows it); groups, the membrane's balls, HIST's "
     "platens and PRINT psd's balls follow their balls. Ids given later (ranges by `id`, BALL's "
-    "`id`) are the new ones. A run renumbered at the same point gives the same results on every "
+    "`id`) are the new ones; so is the id of a `HIST ball n` given before: it records whichever ball has id n "
+    "(its columns keep their names). A run renumbered at the same point gives the same results on every "
     "backend and however it is cut, as any command does; it is not the run without RENUMBER, "
     "since each ball then adds its contacts in another order (the same physics, other rounding).",
     {"space", "present"}, run_renumber};

@@ -68,6 +68,9 @@ struct Command {
   // such a deck takes, and under mpirun each goes through mpirun's forwarding); any other command,
   // an error or a warning flushes it.
   bool quick = false;
+  // Reads the rest of its line as typed, one word (TITLE): commas, `=` and parentheses are kept,
+  // not taken as separators (the lexer's text_after_keyword).
+  bool raw_text = false;
 };
 
 // The command table (commands/table.cpp): the dispatcher, HELP, completion and the man-page test

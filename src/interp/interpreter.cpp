@@ -134,6 +134,11 @@ void Interpreter::execute(const std::string& line) {
     if (flush) output_.out() << std::flush;
   }
   words.erase(words.begin());
+  if (command.raw_text) {   // (split_words has checked the quotes; the text is the line's, as typed)
+    std::string text = text_after_keyword(expanded);
+    words.clear();
+    if (!text.empty()) words.push_back(std::move(text));
+  }
   Args args(command.usage, std::move(words));
   Context ctx{session_, *this, output_.out()};
   if (comm::size() == 1) command.run(ctx, args);

@@ -104,6 +104,21 @@ std::vector<std::string> split_words(std::string_view line) {
   return words;
 }
 
+std::string text_after_keyword(std::string_view line) {
+  std::size_t k = 0;
+  while (k < line.size() && is_separator(line[k])) ++k;
+  if (k < line.size() && line[k] == '"') {   // (the first word as split_words reads it)
+    const auto end = line.find('"', k + 1);
+    k = end == std::string_view::npos ? line.size() : end + 1;
+  } else {
+    while (k < line.size() && !is_separator(line[k]) && line[k] != '"') ++k;
+  }
+  while (k < line.size() && is_separator(line[k]) && line[k] != '(' && line[k] != ')') ++k;
+  std::string_view text = trim_right(line.substr(k));
+  if (text.size() >= 2 && text.front() == '"' && text.find('"', 1) == text.size() - 1) text = text.substr(1, text.size() - 2);
+  return std::string(text);
+}
+
 static bool is_name_char(char c, bool first) {
   return std::isalpha(static_cast<unsigned char>(c)) || c == '_' || (!first && std::isdigit(static_cast<unsigned char>(c)));
 }

@@ -43,6 +43,12 @@ class LineReader {
 // string is one word (quotes removed). Throws InputError for an unterminated quote.
 std::vector<std::string> split_words(std::string_view line);
 
+// The text after a line's first word, as typed, for a command that reads the rest of its line raw
+// (TITLE): the blanks, commas and `=` between the keyword and the text are skipped, trailing blanks
+// dropped, and the rest kept whole (commas, `=`, parentheses and inner blanks included). A text
+// that is one double-quoted string loses its quotes. "" where nothing follows the first word.
+std::string text_after_keyword(std::string_view line);
+
 // Replaces $name and ${name} using lookup (which returns nullopt for an unknown name: an error).
 std::string expand_variables(std::string_view line,
                              const std::function<std::optional<std::string>(const std::string&)>& lookup);

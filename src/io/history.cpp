@@ -20,6 +20,7 @@
 #include "io/atomic_file.hpp"
 
 #include "io/csv.hpp"
+#include "model/edit.hpp"
 #include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
 #include "physics/walls.hpp"
@@ -29,9 +30,40 @@ namespace trubal {
 const std::vector<std::string_view>& History::item_names() {
   static const std::vector<std::string_view> names = {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial",
                                                       "platen", "energy", "unbal", "contacts", "time", "wall",
-                                                      "porosity", "measure"};
+                                                      "porosity", "measure", "ball"};
   return names;
 }
+
+const std::vector<std::string_view>& History::ball_quantities() {
+  static const std::vector<std::string_view> names = {"x",  "y",  "z",  "vx", "vy", "vz",
+                                                      "wx", "wy", "wz", "fx", "fy", "fz"};
+  return names;
+}
+
+namespace {
+
+// A ball item's id and quantities ("ball <id> <q>..."), as words.
+struct BallItem {
+  std::int64_t id = 0;
+  std::vector<std::string> quantities;
+};
+
+BallItem ball_item(const std::string& item) {
+  std::istringstream in(item.size() > 5 ? item.substr(5) : std::string());
+  BallItem b;
+  in >> b.id;
+  for (std::string q; in >> q;) b.quantities.push_back(q);
+  return b;
+}
+
+// The array of Balls a quantity names (one of History::ball_quantities).
+const std::vector<double>& ball_array(const Balls& b, const std::string& quantity) {
+  const std::vector<double>* arrays[] = {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz};
+  const auto& names = History::ball_quantities();
+  return *arrays[std::find(names.begin(), names.end(), quantity) - names.begin()];
+}
+
+}  // namespace
 
 static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "stress") return {"s11", "s22", "s33", "s12", "s13", "s23"};
@@ -46,6 +78,12 @@ static std::vector<std::string> columns_of(const std::string& item) {
     const std::string id = item.substr(5);
     std::vector<std::string> out;
     for (const char* what : {"fx", "fy", "fz", "stress", "pos"}) out.push_back(fmt::format("w{}_{}", id, what));
+    return out;
+  }
+  if (item.rfind("ball ", 0) == 0) {   // "ball <id> <q>...": one ball's quantities, b<id>_<q>
+    const BallItem b = ball_item(item);
+    std::vector<std::string> out;
+    for (const auto& q : b.quantities) out.push_back(fmt::format("b{}_{}", b.id, q));
     return out;
   }
   if (item.rfind("measure ", 0) == 0) {   // "measure <id> x y z r": a measurement sphere
@@ -275,6 +313,15 @@ bool History::valid_table(const HistoryTable& t) {
         const MeasureSphere s = measure_item_sphere(item);
         if (!(s.radius > 0) || !std::isfinite(s.radius)) return false;
       }
+    } else if (word == "ball") {
+      const BallItem b = ball_item(item);
+      const auto& quantities = ball_quantities();
+      if (b.id < 1 || b.quantities.empty()) return false;
+      for (std::size_t k = 0; k < b.quantities.size(); ++k)
+        if (std::find(quantities.begin(), quantities.end(), b.quantities[k]) == quantities.end() ||
+            std::find(b.quantities.begin(), b.quantities.begin() + static_cast<std::ptrdiff_t>(k), b.quantities[k]) !=
+                b.quantities.begin() + static_cast<std::ptrdiff_t>(k))
+          return false;
     } else if (item != word) {
       return false;
     }
@@ -356,6 +403,12 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
         // A cell that has shrunk until it cannot hold the sphere: the row says so rather than stopping.
         for (int k = 0; k < 16; ++k) row.push_back(std::numeric_limits<double>::quiet_NaN());
       }
+    } else if (item.rfind("ball ", 0) == 0) {
+      const BallItem b = ball_item(item);
+      const std::int64_t k = find_ball(model, b.id);
+      for (const auto& q : b.quantities)   // a ball deleted since: NaN, the row says so rather than stopping
+        row.push_back(k >= 0 ? ball_array(model.balls, q)[static_cast<std::size_t>(k)]
+                             : std::numeric_limits<double>::quiet_NaN());
     } else if (item.rfind("wall ", 0) == 0) {
       const Wall* it = find_wall(model, std::stoll(item.substr(5)));
       if (!it) {   // deleted since: the row says so rather than stopping

@@ -55,6 +55,10 @@ class History {
  public:
   // The item names HIST accepts, for parsing and completion.
   static const std::vector<std::string_view>& item_names();
+  // The quantities `ball <id>` records, any of them in any order: position, velocity, spin and the
+  // unbalanced force of the last step (as PRINT balls shows them). Its item is "ball <id> <q>...",
+  // its columns b<id>_<q>.
+  static const std::vector<std::string_view>& ball_quantities();
   // Adds a table; opens its file as `mode` says (at the model's `cycle`) and writes the header.
   // Throws std::runtime_error if the file cannot be written, if `append` finds other columns in it,
   // or if another live table writes the same file with other columns.

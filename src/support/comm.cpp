@@ -106,6 +106,14 @@ void finalize() {
 #endif
 }
 
+bool launched() {
+#ifdef TRUBAL_HAVE_MPI
+  return g_started;
+#else
+  return false;
+#endif
+}
+
 int rank() { return g_rank; }
 int size() { return g_size; }
 

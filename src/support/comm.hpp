@@ -20,6 +20,9 @@ void init(int& argc, char**& argv);
 void finalize();
 // Built with MPI at all (for PRINT info and tests).
 bool built_with_mpi();
+// Whether init started MPI: the process was launched by mpirun, on however many ranks (one
+// included). False in a build without MPI and in a plain `trubal`.
+bool launched();
 
 int rank();
 int size();

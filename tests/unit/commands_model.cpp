@@ -3,9 +3,12 @@
 // files have the documented layout.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 
 #include <cmath>
+#include <sstream>
+#include <utility>
 
 #include "interp_support.hpp"
 #include "io/csv.hpp"
@@ -221,6 +224,120 @@ TEST_CASE("commands: PRINT balls file and HIST file write the documented CSV", "
     CHECK((i > pi || (i == pi && j > pj)));
     pi = i, pj = j;
   }
+}
+
+namespace {
+
+// The cells of one CSV line.
+std::vector<std::string> cells_of(const std::string& line) {
+  std::vector<std::string> f;
+  std::stringstream ss(line);
+  for (std::string c; std::getline(ss, c, ',');) f.push_back(c);
+  return f;
+}
+
+// kPack on a backend, with two balls' histories, cut into CYCLEs as `cycling`: the history file and
+// PRINT balls' file at the end.
+std::pair<std::string, std::string> ball_history(const std::string& backend, const std::string& cycling) {
+  TempDir dir;
+  WorkingDir here(dir.path());
+  Harness h;
+  const bool ok = h.deck(std::string(kPack) + backend +
+                         "hist ball 18 x y z vx vy vz wx wy wz fx fy fz ball 26 fz vx every 5 file h.csv\n" + cycling +
+                         "print balls file b.csv\n");
+  INFO(h.err.str());
+  REQUIRE(ok);
+  return {slurp("h.csv"), slurp("b.csv")};
+}
+
+}  // namespace
+
+TEST_CASE("commands: HIST ball records one ball's values, the same bits on every backend and however the run is cut",
+          "[commands][threads]") {
+  const auto [hist, balls] = ball_history("", "cycle 100\n");
+  const auto rows = lines_of(hist);
+  REQUIRE(rows.size() == 21);   // header + cycles 5, 10, ..., 100
+  CHECK(rows[0] == "cycle,time,b18_x,b18_y,b18_z,b18_vx,b18_vy,b18_vz,b18_wx,b18_wy,b18_wz,b18_fx,b18_fy,b18_fz,"
+                   "b26_fz,b26_vx");
+  // The row of cycle 100 is PRINT balls' row of the ball, to the bit (both in round-trip form):
+  // x y z vx vy vz wx wy wz fx fy fz are its columns 2-4 and 6-14.
+  const auto last = cells_of(rows[20]);
+  REQUIRE(last.size() == 16);
+  CHECK(last[0] == "100");
+  std::vector<std::string> row18, row26;
+  for (const auto& line : lines_of(balls)) {
+    const auto f = cells_of(line);
+    if (f[0] == "18") row18 = f;
+    if (f[0] == "26") row26 = f;
+  }
+  REQUIRE(row18.size() == 15);
+  REQUIRE(row26.size() == 15);
+  for (int k = 0; k < 3; ++k) CHECK(last[2 + k] == row18[2 + k]);
+  for (int k = 0; k < 9; ++k) CHECK(last[5 + k] == row18[6 + k]);
+  CHECK(last[14] == row26[14]);
+  CHECK(last[15] == row26[6]);
+  // The ball is in the pack's contacts: a force and a motion to record.
+  CHECK(last[13] != "0");
+  CHECK(last[7] != "0");
+  // Histories are taken at cycles fixed by the absolute count, so cuts that are not multiples of
+  // the period, and other backends, write the same bytes.
+  CHECK(ball_history("", "cycle 33\ncycle 1\ncycle 66\n").first == hist);
+  CHECK(ball_history("backend allpairs\n", "cycle 33\ncycle 1\ncycle 66\n").first == hist);
+  CHECK(ball_history("backend threaded threads 2\n", "cycle 48\ncycle 52\n").first == hist);
+}
+
+TEST_CASE("commands: HIST ball names a ball that exists; one deleted later records NaN; SAVE keeps it",
+          "[commands]") {
+  {
+    Harness h;
+    CHECK_FALSE(h.deck(std::string(kPack) + "hist ball 99999 x\n"));
+    CHECK(h.first_error_line().starts_with("deck.dat:10: error: there is no ball 99999"));
+  }
+  {
+    Harness h;
+    CHECK_FALSE(h.deck(std::string(kPack) + "hist ball 18 every 5\n"));
+    CHECK(h.first_error_line().starts_with("deck.dat:10: error: `ball 18` needs the quantities to record"));
+  }
+  {
+    Harness h;
+    CHECK_FALSE(h.deck(std::string(kPack) + "hist ball 18 x vx x\n"));
+    CHECK(h.first_error_line().starts_with("deck.dat:10: error: `ball 18` names x twice"));
+  }
+  TempDir dir;
+  WorkingDir here(dir.path());
+  Harness h;
+  REQUIRE(h.deck(std::string(kPack) + "hist ball 18 z fz every 10 file h.csv\ncycle 20\ndelete range id 18\ncycle 20\n"
+                 "save s.sav\n"));
+  const auto rows = lines_of(slurp("h.csv"));
+  REQUIRE(rows.size() == 5);
+  CHECK(rows[0] == "cycle,time,b18_z,b18_fz");
+  CHECK(cells_of(rows[2])[2] != "nan");
+  CHECK(cells_of(rows[3])[2] == "nan");
+  CHECK(cells_of(rows[4])[3] == "nan");
+  // A save holding a ball's history restarts (its table passes the checks of a saved table).
+  Harness again;
+  REQUIRE(again.deck("restart s.sav\ncycle 10\n"));
+  CHECK(lines_of(slurp("h.csv")).size() == 6);
+}
+
+TEST_CASE("commands: PRINT walls file writes nan for the stress of a wall that has no area", "[commands]") {
+  TempDir dir;
+  WorkingDir here(dir.path());
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1e6 ks 1e6 dens 1000\nball 0 0 0 0.1\n"
+                 "wall id 1 plane 0 0 -0.5 0 0 1\nwall id 2 plane 0 0 0.5 0 0 -1\n"
+                 "servo wall 2 stress 100 area 0.5\nprint walls\nprint walls file w.csv\n"));
+  // The screen says "(no area)" for wall 1, a plane with no area of its own; the file says nan.
+  CHECK_THAT(h.out.str(), Catch::Contains("stress (no area)"));
+  const auto rows = lines_of(slurp("w.csv"));
+  REQUIRE(rows.size() == 3);
+  const auto header = cells_of(rows[0]);
+  const auto at = std::find(header.begin(), header.end(), "stress") - header.begin();
+  REQUIRE(at < static_cast<std::ptrdiff_t>(header.size()));
+  CHECK(cells_of(rows[1])[0] == "1");
+  CHECK(cells_of(rows[1])[static_cast<std::size_t>(at)] == "nan");
+  // Wall 2 has the servo's area: a stress, 0 while nothing touches it.
+  CHECK(cells_of(rows[2])[static_cast<std::size_t>(at)] == "0");
 }
 
 TEST_CASE("commands: CYCLE names the type that lacks a density or a stiffness", "[commands]") {

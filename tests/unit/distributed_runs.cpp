@@ -527,6 +527,23 @@ cycle 400
 // in a serial run; Ctrl-C (or SIGTERM) at mpirun itself ends the job (SIGTERM to the ranks, SIGKILL
 // a second later), and the ranks stop together and say where. A rank that stopped alone would leave the
 // others waiting in the step's exchange: the time limit would end the run, without the message.
+// One rank under mpirun is still a distributed run (BACKEND mpi is its default): PRINT info says so.
+// A plain trubal has no ranks line.
+TEST_CASE("distributed: PRINT info says `ranks: 1` under mpirun -np 1", "[system]") {
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  TempDir dir;
+  dir.write("deck.dat", "start box 0 1 0 1 0 1\nprop kn 1e5 dens 1000\nball 0.5 0.5 0.5 0.1\nbackend mpi\ncycle 2\n"
+                        "print info\n");
+  REQUIRE(run_deck(dir, 1) == 0);
+  const std::string out = slurp(dir.path() / "out.txt");
+  INFO(out);
+  CHECK_THAT(out, Catch::Contains("\nranks: 1\n"));
+  CHECK_THAT(out, Catch::Contains("\nbackend: mpi\n"));
+  dir.write("deck.dat", "start box 0 1 0 1 0 1\nprop kn 1e5 dens 1000\nball 0.5 0.5 0.5 0.1\ncycle 2\nprint info\n");
+  REQUIRE(run_deck(dir, 0) == 0);
+  CHECK_THAT(slurp(dir.path() / "out.txt"), !Catch::Contains("ranks:"));
+}
+
 TEST_CASE("distributed: rank 0 alone reads the input files (the others need not see them)", "[mpi][system]") {
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   // Rank 1 starts in an empty folder (an MPMD launch): the deck, a CALLed file and GEN's sieve

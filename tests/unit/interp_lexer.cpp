@@ -154,6 +154,25 @@ TEST_CASE("interp lexer: blanks tabs commas equals and parentheses separate word
   CHECK(h.out.str() == "a b c d e\n");
 }
 
+TEST_CASE("interp lexer: TITLE keeps the rest of its line as typed, commas included", "[interp][lexer]") {
+  CHECK(text_after_keyword("title test 2, Al alloy") == "test 2, Al alloy");
+  CHECK(text_after_keyword("  TITLE\t a = (b),  c  \t") == "a = (b),  c");
+  CHECK(text_after_keyword("title, x") == "x");
+  CHECK(text_after_keyword("title \"a; b, c\"") == "a; b, c");
+  CHECK(text_after_keyword("title \"a\" and \"b\"") == "\"a\" and \"b\"");
+  CHECK(text_after_keyword("title").empty());
+
+  Harness h;
+  REQUIRE(h.deck("set echo off\nset n 2\ntitle test $n, Al alloy (T6)  x=1 ; a comment\nprint info\n"
+                 "title \"run 2; dense\"\n"));
+  CHECK_THAT(h.out.str(), Catch::Contains("title: test 2, Al alloy (T6)  x=1\ntitle: "));   // TITLE's echo
+  CHECK_THAT(h.out.str(), Catch::Contains("\ntitle: test 2, Al alloy (T6)  x=1\nspace: none"));   // PRINT info
+  CHECK(h.session.model().title == "run 2; dense");
+  // The quotes are still checked: an unclosed one is an error, as on any line.
+  Harness open;
+  CHECK_FALSE(open.deck("title \"never closed\n"));
+}
+
 TEST_CASE("interp lexer: every Fortran number form is read and malformed numbers are refused", "[interp][lexer]") {
   struct Case { const char* text; double value; };
   const Case good[] = {{"20", 20},          {"20.", 20},           {".5", 0.5},         {"1.5e9", 1.5e9},
