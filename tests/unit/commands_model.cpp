@@ -286,7 +286,7 @@ TEST_CASE("commands: HIST ball records one ball's values, the same bits on every
   CHECK(ball_history("backend threaded threads 2\n", "cycle 48\ncycle 52\n").first == hist);
 }
 
-TEST_CASE("commands: HIST ball names a ball that exists; one deleted later records NaN; SAVE keeps it",
+TEST_CASE("commands: HIST ball names a ball that exists, one deleted later records NaN, and SAVE keeps it",
           "[commands]") {
   {
     Harness h;
