@@ -189,6 +189,9 @@ std::map<std::string, std::pair<double, double>> column_sums(const std::string& 
     std::size_t k = 0;
     for (std::string c; std::getline(row, c, ',') && k < names.size(); ++k) {
       const double v = std::strtod(c.c_str(), nullptr);
+      // nan marks a value that does not exist (a wall's stress where it has no area): the bits
+      // comparisons between cuts check where it stands; the sums take the numbers.
+      if (std::isnan(v)) continue;
       auto& [sum, size] = out[names[k]];
       sum += v;
       size += std::abs(v);

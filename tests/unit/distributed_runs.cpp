@@ -229,7 +229,7 @@ cycle 10000
   CHECK(counter(counters_of(whole), "part_list_rebuilds") == 0);
   CHECK(slurp(whole.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
   const std::string contacts = slurp(serial.path() / "contacts.csv");
-  CHECK(lines_of(contacts).size() > 2);   // collisions under way at the end (a header and at least two)
+  CHECK(lines_of(contacts).size() >= 2);   // a collision under way at the end (a header and at least one)
   CHECK(slurp(two.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
   CHECK(slurp(two.path() / "contacts.csv") == contacts);
 }
