@@ -5,8 +5,9 @@
 namespace trubal {
 
 static void run_delete(Context& ctx, Args& args) {
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto n = ctx.session.delete_balls(range);
+  if (n == 0 && !range.empty()) ctx.warn("the range holds for no ball");
   ctx.out << fmt::format("{} balls deleted\n", n);
 }
 

@@ -18,7 +18,7 @@ static std::uint8_t read_dofs(Args& args) {
 static void set_fixed(Context& ctx, Args& args, bool fix) {
   ctx.session.require_started();
   std::uint8_t mask = read_dofs(args);
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto sel = ctx.session.select(range);
   Model& m = ctx.session.edit();
   for (auto k : sel) m.balls.fixed[k] = fix ? (m.balls.fixed[k] | mask) : (m.balls.fixed[k] & ~mask);

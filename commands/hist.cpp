@@ -80,7 +80,7 @@ static void run_hist(Context& ctx, Args& args) {
   }
   if (items.empty()) args.fail("name at least one quantity to record");
   if (mode != HistoryFileMode::Default && file.empty()) args.fail("`new` and `append` go with `file f.csv`");
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto has = [&](const char* item) { return std::find(items.begin(), items.end(), item) != items.end(); };
   const bool rowe = has("ratio") || has("axial");
   if (!range.empty() && !has("platen") && !rowe)

@@ -13,7 +13,7 @@ static void run_init(Context& ctx, Args& args) {
     values.emplace_back(k, args.real(words[k]));
   }
   if (values.empty()) args.fail("name at least one component and its value");
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto sel = ctx.session.select(range);
   Model& m = ctx.session.edit();
   std::vector<double>* arrays[] = {&m.balls.vx, &m.balls.vy, &m.balls.vz, &m.balls.wx, &m.balls.wy, &m.balls.wz};
@@ -38,7 +38,7 @@ static void run_apply(Context& ctx, Args& args) {
     values.emplace_back(k, args.real(words[k]));
   }
   if (!off && values.empty()) args.fail("name at least one load and its value, or APPLY off");
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto sel = ctx.session.select(range);
   Model& m = ctx.session.edit();
   std::vector<double>* arrays[] = {&m.balls.ax, &m.balls.ay, &m.balls.az, &m.balls.amx, &m.balls.amy, &m.balls.amz};

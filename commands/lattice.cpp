@@ -24,7 +24,7 @@ static void run_lattice(Context& ctx, Args& args) {
       layers = kinds[args.expect({"all", "even", "odd"}, "layers (all, even or odd)")];
     }
   }
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto n = ctx.session.lattice_fcc(d, nx, ny, nz, origin, type, range, layers);
   ctx.out << fmt::format("{} balls on the fcc lattice\n", n);
 }

@@ -345,12 +345,12 @@ static void run_print(Context& ctx, Args& args) {
   switch (item) {
     case 0: args.done(); print_info(ctx); return;
     case 15: args.done(); print_counters(ctx, file); return;
-    case 1: print_balls(ctx, read_range(args), file); return;
-    case 2: print_contacts(ctx, read_range(args), file); return;
+    case 1: print_balls(ctx, read_range(args, ctx.session), file); return;
+    case 2: print_contacts(ctx, read_range(args, ctx.session), file); return;
     case 3: {
       double volume = 0;
       if (args.accept("volume")) volume = args.real("volume");
-      const auto sphere = measurement_sphere(args, read_range(args));
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
       ctx.session.require_started();
       if (sphere) {
         if (volume > 0) args.fail("`volume` goes with the whole space's stress, not a measurement sphere's");
@@ -387,7 +387,7 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
     case 6: {
-      if (const auto sphere = measurement_sphere(args, read_range(args))) {
+      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
         const SphereMeasurement sm = measure_sphere(m, *sphere);
         print_sphere_header(ctx, *sphere, sm);
         print_sym(ctx, "fabric", sm.fabric);
@@ -397,7 +397,7 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
     case 7: {
-      if (const auto sphere = measurement_sphere(args, read_range(args))) {
+      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
         const SphereMeasurement sm = measure_sphere(m, *sphere);
         print_sphere_header(ctx, *sphere, sm);
         ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n", sm.coordination,
@@ -441,7 +441,7 @@ static void run_print(Context& ctx, Args& args) {
     case 11: args.done(); print_walls(ctx, file); return;
     case 12: args.done(); print_psd(ctx, file); return;
     case 13: {
-      const auto sphere = measurement_sphere(args, read_range(args));
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
       ctx.session.require_started();
       if (sphere) {
         const SphereMeasurement sm = measure_sphere(m, *sphere);
@@ -454,7 +454,7 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
     case 14: {
-      const auto sphere = measurement_sphere(args, read_range(args));
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
       if (!sphere) args.fail("PRINT measure needs its sphere: `range sphere x y z r`");
       ctx.session.require_started();
       const SphereMeasurement sm = measure_sphere(m, *sphere);
