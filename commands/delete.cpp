@@ -14,6 +14,7 @@ static void run_delete(Context& ctx, Args& args) {
 const Command delete_command = {
     "DELETE", {}, "DELETE [range ...]", "remove balls",
     "Removes the balls where the range holds (all balls without a range), with their contacts.",
+    "delete range z 0.15 0.2",
     {"range"}, run_delete};
 
 }  // namespace trubal

@@ -17,6 +17,7 @@ const Command group_command = {
     "GROUP", {}, "GROUP name [range ...]", "name a set of balls",
     "Names the set of balls where the range holds now; later ranges can use `group name`. The set does "
     "not change as balls move; deleted balls leave it.",
+    "group platens range z 0 0.01",
     {"range"}, run_group};
 
 }  // namespace trubal

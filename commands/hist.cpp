@@ -169,6 +169,7 @@ const Command hist_command = {
     "history is refused, unless it asks for the same quantities every the same period: then that history goes "
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",
+    "hist stress strain every 100 file tri.csv",
     {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall", "ball",
      "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "fx", "fy", "fz",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},

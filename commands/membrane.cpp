@@ -75,6 +75,7 @@ const Command membrane_command = {
     "grown with its layer's extent across it, so that every side of the bulging sample still carries p "
     "times its area, and HIST ratio's A follows the widest layer's extent. `MEMBRANE 0` removes them. "
     "Balls must be of one size, each loaded layer on a square grid.",
+    "membrane 1e5 follow every 10",
     {"follow", "every", "range"}, run_membrane};
 
 }  // namespace trubal

@@ -473,20 +473,11 @@ const Command print_command = {
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
-    "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
-    "uses fewer threads than it has, and why; under mpirun the ranks (`ranks: n`, `ranks: 1` under `mpirun -np 1`; no such line without mpirun); how many times a CYCLE's last step "
-    "was taken again to make the contact results a command read (CYCLE); the peak resident memory so far, "
-    "of each rank, and under mpirun also by the end of the last CYCLE stepped in parts, and the contact "
-    "results each rank holds: rank 0 alone makes those a command reads after a CYCLE). counters [file f]: the "
-    "counts for scripts, one `name value` line each: cycle, balls, contacts (touching ball pairs), wall_contacts, "
-    "balls_destroyed, ranks, threads, threads_used, pair_list_rebuilds, pair_tests (candidate pairs the backend "
-    "tested, where it counts them), results_made (a CYCLE's last step taken again to make the contact results a "
-    "command read), decompositions (splits of the spatial decomposition, by ranks or threads), part_list_rebuilds "
-    "and part_wraps (pair lists rebuilt and balls wrapped on the parts), migrations (balls that changed part at "
-    "those rebuilds), ghosts (part 0's), least_part_balls and most_part_balls (at the last split); under mpirun "
-    "also, per rank r, rank<r>_contact_results_mib (the results it holds), rank<r>_whole_arrays_mib and "
-    "rank<r>_part_arrays_mib (the arrays it held in the last step) and, after a CYCLE stepped in parts, "
-    "rank<r>_cycle_peak_mib (its peak memory by that CYCLE's end). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
+    "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
+    "processes under mpirun; the peak memory so far). counters [file f]: the counts for scripts, one `name value` "
+    "line each, under names that stay (cycle, balls, contacts, wall_contacts, balls_destroyed, threads, "
+    "pair_list_rebuilds, ...; doc/language.md lists them all and what each counts). "
+    "balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
     "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
@@ -515,6 +506,7 @@ const Command print_command = {
     "point). psd: the grading of the balls the last GEN made (those still there), percent passing by mass "
     "(solid volume) at the sieve diameters of a sieve curve or at 21 diameters evenly spaced in log d, next to "
     "the grading asked for, and the largest difference; with `file f.csv`: diameter,passing_asked,passing_sample.",
+    "print stress",
     {"info", "counters", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
      "history", "walls", "psd", "porosity", "measure", "file", "volume", "range"},
     run_print};

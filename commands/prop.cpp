@@ -69,6 +69,7 @@ const Command prop_command = {
     "restitution e in a head-on impact. kn and ks are the stiffness of a contact between two balls of this "
     "type; two types meet with k = 2 k1 k2 / (k1 + k2) (each ball a spring of stiffness 2k in series), the "
     "smaller friction and the smaller cohesion.",
+    "prop kn 1e6 ks 1e6 fric 30 dens 2650",
     {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest"}, run_prop, true};
 
 }  // namespace trubal
