@@ -25,6 +25,7 @@ const Command ball_command = {
     "Creates one ball at (x, y, z) with radius rad, at rest. Without `id` it takes one more than the largest "
     "id; an id already taken is an error, and so is a centre another ball has (the two would have no normal "
     "between them and fly apart; the message names the ball). Type defaults to 1.",
+    "ball 0.05 0.05 0.1 0.003 id 1001",
     {"id", "type"}, run_ball, true};
 
 }  // namespace trubal

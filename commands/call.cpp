@@ -15,6 +15,7 @@ const Command call_command = {
     "Reads and runs the commands in a file, then continues. Calls nest; a file that calls itself (directly "
     "or not) is an error. A relative name is looked up in the working directory, then beside the calling "
     "file. An error inside names that file and line.",
+    "call materials.dat",
     {}, run_call};
 
 }  // namespace trubal

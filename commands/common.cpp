@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include "physics/overlap.hpp"
+
 namespace trubal {
 
 const std::vector<std::string_view> kRangeWords = {"range", "id", "x", "y", "z", "type", "group",
@@ -57,6 +59,24 @@ Range read_range(Args& args) {
         break;
     }
     range.push_back(e);
+  }
+  return range;
+}
+
+Range read_range(Args& args, const Session& session) {
+  Range range = read_range(args);
+  const auto& groups = session.state().groups;
+  for (const RangeElement& e : range) {
+    if (e.kind != RangeElement::Kind::Group || groups.count(e.group)) continue;
+    std::vector<std::string_view> names;
+    for (const auto& [name, ids] : groups) names.push_back(name);
+    if (names.empty()) args.fail(fmt::format("no group '{}': there are no groups yet (GROUP name range ... makes one)", e.group));
+    if (const auto near = nearest_word(e.group, names))
+      args.fail(fmt::format("no group '{}': did you mean '{}'?", e.group, names[*near]));
+    std::string list;
+    for (std::size_t k = 0; k < names.size() && k < 10; ++k) list += fmt::format("{}{}", k ? ", " : "", names[k]);
+    if (names.size() > 10) list += fmt::format(" and {} more", names.size() - 10);
+    args.fail(fmt::format("no group '{}' (the groups are {})", e.group, list));
   }
   return range;
 }
@@ -131,12 +151,35 @@ void ProgressReporter::finish() {
   ctx_.out << "\r\033[K" << std::flush;
 }
 
+// Overlaps past kOverlapWarning of the smaller radius at the end of a run (physics/overlap.hpp):
+// said once, and again only where the largest doubles or after they all came back below.
+static void warn_of_overlaps(Context& ctx) {
+  const Model& m = ctx.session.state();   // (the positions: no contact result is read or made)
+  const LargestOverlap big = largest_overlap(m);
+  double& warned = ctx.session.overlap_warned;
+  if (big.beyond == 0) {
+    warned = 0;
+    return;
+  }
+  if (!(big.ratio > 2 * warned)) return;
+  warned = big.ratio;
+  const std::string pair = big.wall ? fmt::format("ball {} on wall {}", big.ball, big.other)
+                                    : fmt::format("balls {} and {}", big.ball, big.other);
+  const std::string others = big.beyond > 1 ? fmt::format("; {} contacts are past {:g}", big.beyond, kOverlapWarning) : "";
+  ctx.warn(fmt::format(
+      "at cycle {} the overlap of {} is {:.3g} of ball {}'s radius{}: past {:g} of a radius the contact law no longer "
+      "describes a stiff grain (a load, wall or servo too fast or too strong for the stiffness kn, or shear G? balls "
+      "generated overlapping?); said again where the largest overlap doubles",
+      m.cycle, pair, big.ratio, big.ball, others, kOverlapWarning));
+}
+
 void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked) {
   if (r.destroyed > 0)
     ctx.out << fmt::format("{} ball{} left the box and {} destroyed ({} since START)\n", r.destroyed,
                            r.destroyed == 1 ? "" : "s", r.destroyed == 1 ? "was" : "were",
                            ctx.session.state().space.destroyed);
   if (r.unstable || r.left_box) throw std::runtime_error(r.message);
+  warn_of_overlaps(ctx);
   if (!r.energy_warning.empty()) ctx.warn(r.energy_warning);
   if (r.interrupted)
     ctx.out << fmt::format("interrupted after {} of {} cycles; the model is kept (cycle {})\n", r.done, asked,

@@ -13,7 +13,11 @@
 
 namespace trubal {
 
-// Reads an optional RANGE phrase, which ends the command (so done() is checked here).
+// Reads an optional RANGE phrase, which ends the command (so done() is checked here). A `group`
+// that the model does not hold is an error (with the nearest group's name where one is near): a
+// misspelt group would otherwise hold for no ball and the deck run on.
+Range read_range(Args& args, const Session& session);
+// The phrase alone, its groups not looked up (GEN's: the balls it makes are in no group yet).
 Range read_range(Args& args);
 // The words a RANGE phrase takes, for completion.
 extern const std::vector<std::string_view> kRangeWords;

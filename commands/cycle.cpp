@@ -133,6 +133,7 @@ const Command cycle_command = {
     "first command after it that reads them takes the last step again from a copy of the step before, to "
     "the same bits (unless HIST or DUMP recorded that step; on several ranks rank 0 alone takes it, for what it "
     "prints and writes, and the others leave the results unmade).",
+    "cycle 1000",
     {"until", "axial", "volumetric", "q", "p", "sig1", "sig3", "time", "every"}, run_cycle};
 
 static void run_solve(Context& ctx, Args& args) {
@@ -159,6 +160,7 @@ const Command solve_command = {
     "SOLVE", {}, "SOLVE [ratio r] [limit n]", "cycle to equilibrium",
     "Cycles until the mean unbalanced-force ratio (mean unbalanced force over mean contact force) is below "
     "r (default 1e-3), checking every 100 cycles, or until n cycles (default 100000).",
+    "solve ratio 1e-4 limit 50000",
     {"ratio", "limit"}, run_solve};
 
 }  // namespace trubal

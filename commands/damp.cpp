@@ -42,6 +42,7 @@ const Command damp_command = {
     "(Hz): alpha = lambda 2 pi f, beta = lambda / (2 pi f); or the coefficients directly (mass a, stiff b). "
     "The stiffness part is a dashpot at each contact and shortens the automatic time step. `DAMP local a` "
     "selects Cundall's local non-viscous damping. There is no damping until a deck asks for it.",
+    "damp local 0.7",
     {"mass", "stiff", "local", "off"}, run_damp};
 
 }  // namespace trubal

@@ -5,14 +5,16 @@
 namespace trubal {
 
 static void run_delete(Context& ctx, Args& args) {
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto n = ctx.session.delete_balls(range);
+  if (n == 0 && !range.empty()) ctx.warn("the range holds for no ball");
   ctx.out << fmt::format("{} balls deleted\n", n);
 }
 
 const Command delete_command = {
     "DELETE", {}, "DELETE [range ...]", "remove balls",
     "Removes the balls where the range holds (all balls without a range), with their contacts.",
+    "delete range z 0.15 0.2",
     {"range"}, run_delete};
 
 }  // namespace trubal

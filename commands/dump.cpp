@@ -46,6 +46,7 @@ const Command dump_command = {
     "balls, 1 the contacts, 2 the walls, 3 the domain); "
     "it is rewritten after each dump. Arrays are binary (appended raw, little-endian); every file is written "
     "under a temporary name and renamed. START and RESTART stop periodic dumps.",
+    "dump vtk out/run every 1000",
     {"vtk", "every", "off"}, run_dump};
 
 }  // namespace trubal

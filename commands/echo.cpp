@@ -4,8 +4,9 @@ namespace trubal {
 
 static void run_echo(Context& ctx, Args& args) { ctx.out << args.rest() << '\n'; }
 
-const Command echo_command = {"ECHO", {}, "ECHO text", "print a line of text",
-                              "Prints its words (after $variables are replaced).", {}, run_echo, true};
+const Command echo_command = {
+    "ECHO", {}, "ECHO text", "print a line of text", "Prints its words (after $variables are replaced).",
+    "echo stage 2: shearing", {}, run_echo, true};
 
 static void run_title(Context& ctx, Args& args) {
   std::string title = args.rest();
@@ -20,6 +21,7 @@ const Command title_command = {
     "is the title `test 2, Al alloy`). A comment (`;`, `#`, `!` outside double quotes) still ends the line and "
     "$variables are still replaced; a title written as one double-quoted string loses its quotes, which is how "
     "a title holds a comment character (`TITLE \"run 2; dense\"`).",
+    "title drained triaxial, 500 balls",
     {}, run_title, false, true};
 
 static void run_stop(Context& ctx, Args& args) {
@@ -27,7 +29,8 @@ static void run_stop(Context& ctx, Args& args) {
   ctx.interp.request_stop();
 }
 
-const Command stop_command = {"STOP", {"QUIT", "END", "EXIT"}, "STOP", "end the session",
-                              "Ends the session (a batch deck also ends at the end of its file).", {}, run_stop};
+const Command stop_command = {
+    "STOP", {"QUIT", "END", "EXIT"}, "STOP", "end the session",
+    "Ends the session (a batch deck also ends at the end of its file).", "stop", {}, run_stop};
 
 }  // namespace trubal

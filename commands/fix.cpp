@@ -18,7 +18,7 @@ static std::uint8_t read_dofs(Args& args) {
 static void set_fixed(Context& ctx, Args& args, bool fix) {
   ctx.session.require_started();
   std::uint8_t mask = read_dofs(args);
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto sel = ctx.session.select(range);
   Model& m = ctx.session.edit();
   for (auto k : sel) m.balls.fixed[k] = fix ? (m.balls.fixed[k] | mask) : (m.balls.fixed[k] & ~mask);
@@ -34,11 +34,13 @@ const Command fix_command = {
     "Fixes the named velocity components of the balls in the range: they keep their present value (set it "
     "with INIT), and the force the ball would have received is recorded as its reaction (PRINT balls, HIST "
     "platen).",
+    "fix vel spin range group platens",
     {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_fix};
 
 const Command free_command = {
     "FREE", {}, "FREE xvel|yvel|zvel|xspin|yspin|zspin|vel|spin ... [range ...]", "free velocity components",
     "Frees the named velocity components of the balls in the range (undoes FIX).",
+    "free zvel range group platens",
     {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_free};
 
 }  // namespace trubal

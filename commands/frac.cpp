@@ -22,6 +22,7 @@ const Command frac_command = {
     "between episodes or when stability needs it (man page, CONVENTIONS). The default is for stability, not for "
     "resolving collisions: an impact's rebound is off by a few percent at 0.8 (CYCLE warns where the energy "
     "balance shows it; man page, CONVENTIONS, says why the default stays). Cancels a fixed TSTEP.",
+    "frac 0.5",
     {}, run_frac};
 
 static void run_tstep(Context& ctx, Args& args) {
@@ -40,6 +41,7 @@ const Command tstep_command = {
     "TSTEP", {}, "TSTEP dt  |  TSTEP auto", "fix the time step",
     "Fixes the time step to dt (the instability guard still watches the run). `TSTEP auto` goes back to "
     "FRAC times the critical step.",
+    "tstep 1e-6",
     {"auto"}, run_tstep};
 
 static void run_grav(Context& ctx, Args& args) {
@@ -50,7 +52,9 @@ static void run_grav(Context& ctx, Args& args) {
 
 const Command grav_command = {
     "GRAV", {}, "GRAV gx gy gz", "gravity",
-    "Sets the gravitational acceleration (a body force m g on every ball). GRAV 0 0 0 turns it off.", {},
+    "Sets the gravitational acceleration (a body force m g on every ball). GRAV 0 0 0 turns it off.",
+    "grav 0 0 -9.81",
+    {},
     run_grav};
 
 }  // namespace trubal

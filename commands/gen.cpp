@@ -202,6 +202,7 @@ const Command gen_command = {
     "printed. The balls come out at rest with their small overlaps (a slight prestress at the first CYCLE). A "
     "porosity outside (0, 1), below 0.2595 with balls of one size (the densest packing), or a region too small "
     "for the balls is an error at once. Generation is the same on every backend and thread count.",
+    "gen 500 0.002 0.003 seed 7",
     {"porosity", "void", "psd", "uniform", "volume", "normal", "lognormal", "sieve", "cut", "file", "type", "types",
      "seed", "range"},
     run_gen};

@@ -44,12 +44,14 @@ static void run_help(Context& ctx, Args& args) {
     ctx.out << '\n';
   }
   ctx.out << wrap(c.help, 76, "  ");
+  ctx.out << "Example:\n  " << c.example << '\n';
 }
 
 const Command help_command = {
     "HELP", {}, "HELP [command]", "the command table, or one command in detail",
     "Without a word, lists every command with a one-line summary; `HELP cycle` shows the usage and details "
     "of one command.",
+    "help cycle",
     {}, run_help};
 
 }  // namespace trubal

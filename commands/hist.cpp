@@ -86,7 +86,7 @@ static void run_hist(Context& ctx, Args& args) {
       args.fail("`sample` and `pq` would both make columns p and q: give them to two HISTs");
   }
   if (mode != HistoryFileMode::Default && file.empty()) args.fail("`new` and `append` go with `file f.csv`");
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto has = [&](const char* item) { return std::find(items.begin(), items.end(), item) != items.end(); };
   const bool rowe = has("ratio") || has("axial");
   if (!range.empty() && !has("platen") && !rowe)
@@ -177,6 +177,7 @@ const Command hist_command = {
     "history is refused, unless it asks for the same quantities every the same period: then that history goes "
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",
+    "hist stress strain every 100 file tri.csv",
     {"sample", "stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall", "ball",
      "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "fx", "fy", "fz",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},

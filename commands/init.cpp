@@ -13,7 +13,7 @@ static void run_init(Context& ctx, Args& args) {
     values.emplace_back(k, args.real(words[k]));
   }
   if (values.empty()) args.fail("name at least one component and its value");
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto sel = ctx.session.select(range);
   Model& m = ctx.session.edit();
   std::vector<double>* arrays[] = {&m.balls.vx, &m.balls.vy, &m.balls.vz, &m.balls.wx, &m.balls.wy, &m.balls.wz};
@@ -26,6 +26,7 @@ static void run_init(Context& ctx, Args& args) {
 const Command init_command = {
     "INIT", {}, "INIT xvel|yvel|zvel|xspin|yspin|zspin v ... [range ...]", "set velocities",
     "Sets velocity and spin components of the balls in the range (a fixed component keeps this value).",
+    "init zvel -0.01 range group platens",
     {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "range"}, run_init};
 
 static void run_apply(Context& ctx, Args& args) {
@@ -38,7 +39,7 @@ static void run_apply(Context& ctx, Args& args) {
     values.emplace_back(k, args.real(words[k]));
   }
   if (!off && values.empty()) args.fail("name at least one load and its value, or APPLY off");
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto sel = ctx.session.select(range);
   Model& m = ctx.session.edit();
   std::vector<double>* arrays[] = {&m.balls.ax, &m.balls.ay, &m.balls.az, &m.balls.amx, &m.balls.amy, &m.balls.amz};
@@ -56,6 +57,7 @@ const Command apply_command = {
     "applied forces and moments",
     "Applies constant forces and moments to the balls in the range (added to contact forces and gravity "
     "every cycle). `APPLY off` removes all applied loads from the range.",
+    "apply zforce -10 range id 1",
     {"xforce", "yforce", "zforce", "xmom", "ymom", "zmom", "off", "range"}, run_apply};
 
 }  // namespace trubal

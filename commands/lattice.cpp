@@ -24,7 +24,7 @@ static void run_lattice(Context& ctx, Args& args) {
       layers = kinds[args.expect({"all", "even", "odd"}, "layers (all, even or odd)")];
     }
   }
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto n = ctx.session.lattice_fcc(d, nx, ny, nz, origin, type, range, layers);
   ctx.out << fmt::format("{} balls on the fcc lattice\n", n);
 }
@@ -41,6 +41,7 @@ const Command lattice_command = {
     "`lattice fcc 40 10 10 25 layers even range octagon 180 180 180 184` then "
     "`lattice fcc 40 10 10 25 layers odd range octagon 180 180 180 156` (|dx| + |dy| <= b sqrt(2) "
     "keeps 6 d in the large layers and 5 d in the small ones).",
+    "lattice fcc 0.01 5 5 5 origin 0.02 0.02 0.02",
     {"fcc", "origin", "type", "layers", "all", "even", "odd", "range"}, run_lattice};
 
 }  // namespace trubal

@@ -11,7 +11,7 @@ static void run_membrane(Context& ctx, Args& args) {
   if (pressure < 0) args.fail("the confining pressure must not be negative (0 removes the membrane)");
   std::int64_t follow = 0;
   if (args.accept("follow")) follow = args.accept("every") ? args.count("every", 1) : 1;
-  Range range = read_range(args);
+  Range range = read_range(args, ctx.session);
   auto sel = ctx.session.select(range);
   if (sel.empty()) {
     ctx.warn("the range holds for no ball");
@@ -75,6 +75,7 @@ const Command membrane_command = {
     "grown with its layer's extent across it, so that every side of the bulging sample still carries p "
     "times its area, and HIST ratio's A follows the widest layer's extent. `MEMBRANE 0` removes them. "
     "Balls must be of one size, each loaded layer on a square grid.",
+    "membrane 1e5 follow every 10",
     {"follow", "every", "range"}, run_membrane};
 
 }  // namespace trubal

@@ -68,6 +68,7 @@ const Command plot_command = {
     "files written by HIST ... file (one series per file, named after it) instead of this run's histories, so "
     "runs of different decks share one figure. Drawn by gnuplot (Debian: gnuplot-nox), run "
     "with a generated script; the picture is written under a temporary name and renamed.",
+    "plot s33 vs e33 from tri.csv file q.png",
     {"vs", "from", "file", "line", "title", "xlabel", "ylabel", "size"}, run_plot};
 
 }  // namespace trubal

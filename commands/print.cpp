@@ -349,12 +349,12 @@ static void run_print(Context& ctx, Args& args) {
     case 0: args.done(); print_info(ctx); return;
     case 16: args.done(); print_sample(ctx); return;
     case 15: args.done(); print_counters(ctx, file); return;
-    case 1: print_balls(ctx, read_range(args), file); return;
-    case 2: print_contacts(ctx, read_range(args), file); return;
+    case 1: print_balls(ctx, read_range(args, ctx.session), file); return;
+    case 2: print_contacts(ctx, read_range(args, ctx.session), file); return;
     case 3: {
       double volume = 0;
       if (args.accept("volume")) volume = args.real("volume");
-      const auto sphere = measurement_sphere(args, read_range(args));
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
       ctx.session.require_started();
       if (sphere) {
         if (volume > 0) args.fail("`volume` goes with the whole space's stress, not a measurement sphere's");
@@ -391,7 +391,7 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
     case 6: {
-      if (const auto sphere = measurement_sphere(args, read_range(args))) {
+      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
         const SphereMeasurement sm = measure_sphere(m, *sphere);
         print_sphere_header(ctx, *sphere, sm);
         print_sym(ctx, "fabric", sm.fabric);
@@ -401,7 +401,7 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
     case 7: {
-      if (const auto sphere = measurement_sphere(args, read_range(args))) {
+      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
         const SphereMeasurement sm = measure_sphere(m, *sphere);
         print_sphere_header(ctx, *sphere, sm);
         ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n", sm.coordination,
@@ -445,7 +445,7 @@ static void run_print(Context& ctx, Args& args) {
     case 11: args.done(); print_walls(ctx, file); return;
     case 12: args.done(); print_psd(ctx, file); return;
     case 13: {
-      const auto sphere = measurement_sphere(args, read_range(args));
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
       ctx.session.require_started();
       if (sphere) {
         const SphereMeasurement sm = measure_sphere(m, *sphere);
@@ -458,7 +458,7 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
     case 14: {
-      const auto sphere = measurement_sphere(args, read_range(args));
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
       if (!sphere) args.fail("PRINT measure needs its sphere: `range sphere x y z r`");
       ctx.session.require_started();
       const SphereMeasurement sm = measure_sphere(m, *sphere);
@@ -477,20 +477,11 @@ const Command print_command = {
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
-    "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; threads used, where the threaded backend "
-    "uses fewer threads than it has, and why; under mpirun the ranks (`ranks: n`, `ranks: 1` under `mpirun -np 1`; no such line without mpirun); how many times a CYCLE's last step "
-    "was taken again to make the contact results a command read (CYCLE); the peak resident memory so far, "
-    "of each rank, and under mpirun also by the end of the last CYCLE stepped in parts, and the contact "
-    "results each rank holds: rank 0 alone makes those a command reads after a CYCLE). counters [file f]: the "
-    "counts for scripts, one `name value` line each: cycle, balls, contacts (touching ball pairs), wall_contacts, "
-    "balls_destroyed, ranks, threads, threads_used, pair_list_rebuilds, pair_tests (candidate pairs the backend "
-    "tested, where it counts them), results_made (a CYCLE's last step taken again to make the contact results a "
-    "command read), decompositions (splits of the spatial decomposition, by ranks or threads), part_list_rebuilds "
-    "and part_wraps (pair lists rebuilt and balls wrapped on the parts), migrations (balls that changed part at "
-    "those rebuilds), ghosts (part 0's), least_part_balls and most_part_balls (at the last split); under mpirun "
-    "also, per rank r, rank<r>_contact_results_mib (the results it holds), rank<r>_whole_arrays_mib and "
-    "rank<r>_part_arrays_mib (the arrays it held in the last step) and, after a CYCLE stepped in parts, "
-    "rank<r>_cycle_peak_mib (its peak memory by that CYCLE's end). balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
+    "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
+    "processes under mpirun; the peak memory so far). counters [file f]: the counts for scripts, one `name value` "
+    "line each, under names that stay (cycle, balls, contacts, wall_contacts, balls_destroyed, threads, "
+    "pair_list_rebuilds, ...; doc/language.md lists them all and what each counts). "
+    "balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
     "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
@@ -521,6 +512,7 @@ const Command print_command = {
     "the grading asked for, and the largest difference; with `file f.csv`: diameter,passing_asked,passing_sample. "
     "sample: the measures of the sample between walls (SAMPLE): height, cross-section and volume, the axial and "
     "volumetric strains, sigma1, sigma3, q and p.",
+    "print stress",
     {"sample", "info", "counters", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
      "history", "walls", "psd", "porosity", "measure", "file", "volume", "range"},
     run_print};

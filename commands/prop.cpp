@@ -1,5 +1,6 @@
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -15,6 +16,7 @@ static void run_prop(Context& ctx, Args& args) {
   Material m = ctx.session.model().materials.count(type) ? ctx.session.model().materials.at(type) : Material{};
   static const std::vector<std::string_view> names = {"kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson",
                                                       "rest"};
+  std::optional<double> small_angle;   // a fric in (0, 1): a coefficient typed where an angle goes?
   while (!args.empty()) {
     auto k = args.expect(names, "property");
     double v = args.real(names[k]);
@@ -25,8 +27,9 @@ static void run_prop(Context& ctx, Args& args) {
       case 2:
         if (v < 0 || v >= 90) args.fail("fric is a friction angle in degrees, in [0, 90)");
         m.friction = std::tan(v * std::numbers::pi / 180);
+        small_angle = v > 0 && v < 1 ? std::optional<double>(v) : std::nullopt;
         break;
-      case 3: nonneg(); m.friction = v; break;
+      case 3: nonneg(); m.friction = v; small_angle.reset(); break;
       case 4:
         if (!(v > 0)) args.fail("dens must be positive");
         m.density = v;
@@ -45,18 +48,28 @@ static void run_prop(Context& ctx, Args& args) {
     }
   }
   ctx.session.edit().materials[type] = m;
+  // PFC's `fric` is the coefficient: 0.5 typed here is half a degree, mu 0.0087.
+  if (small_angle)
+    ctx.warn(fmt::format("fric {0:g} is a friction angle in degrees: mu = tan({0:g} deg) = {1:.3g}; for a friction "
+                         "coefficient of {0:g} write `mu {0:g}`", *small_angle, m.friction));
 }
 
 const Command prop_command = {
-    "PROP", {}, "PROP [type t] kn v ks v fric v dens v [coh v] [shear G poisson nu] [rest e]",
+    "PROP", {}, "PROP [type t] kn v ks v fric deg|mu v dens v [coh v] [shear G poisson nu] [rest e]",
     "material properties of a ball type",
     "Sets material properties of a type (default type 1); properties not named keep their value (0 at "
-    "first). kn, ks: normal and shear spring stiffness (force/length) of the linear law; fric: friction "
-    "angle in degrees (mu v gives the coefficient instead); dens: density; coh: cohesion, a force added to "
-    "the Coulomb limit; shear G and poisson nu select the Hertz-Mindlin law for the type; rest e adds a "
-    "contact dashpot giving restitution e in a head-on impact. kn and ks are the stiffness of a contact "
-    "between two balls of this type; two types meet with k = 2 k1 k2 / (k1 + k2) (each ball a spring of "
-    "stiffness 2k in series), the smaller friction and the smaller cohesion.",
+    "first). The units are SI (N, m, kg, s), as everywhere in trubal. kn, ks: normal and shear spring "
+    "stiffness of the linear law, in N/m (force per metre of overlap or of shear displacement); "
+    "fric: friction angle in degrees, mu = tan(fric) (a value between 0 and 1 gets a warning: a friction "
+    "coefficient typed as an angle, as PFC's `fric` is the coefficient); mu: the friction coefficient itself, "
+    "no unit (fric and mu set the same property; the later one wins); dens: density in kg/m^3; coh: cohesion "
+    "in N, a force added to the Coulomb limit; shear G (Pa) and poisson nu (no unit, in (-1, 0.5)) select the "
+    "Hertz-Mindlin law for the type, whose stiffness then follows from G, nu, the radii and the overlap (kn "
+    "and ks are not used between two Hertz types); rest e (no unit, in (0, 1]) adds a contact dashpot giving "
+    "restitution e in a head-on impact. kn and ks are the stiffness of a contact between two balls of this "
+    "type; two types meet with k = 2 k1 k2 / (k1 + k2) (each ball a spring of stiffness 2k in series), the "
+    "smaller friction and the smaller cohesion.",
+    "prop kn 1e6 ks 1e6 fric 30 dens 2650",
     {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest"}, run_prop, true};
 
 }  // namespace trubal

@@ -19,21 +19,19 @@ static void run_renumber(Context& ctx, Args& args) {
 
 const Command renumber_command = {
     "RENUMBER", {}, "RENUMBER [space | present]", "give the balls ids 1 to N, in space order",
-    "Gives the balls the ids 1 to N. `space` (the default) numbers them in space order: the Morton "
-    "(Z) order of cubic cells one largest diameter wide, from the lowest centre, balls in one cell in "
-    "the order of their ids, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins. `present` "
-    "keeps their order and closes the gaps DELETE left. "
-    "trubal keeps the balls in memory in id order, and each ball adds its contacts in the order of "
-    "its partners' ids, so balls numbered at random (read from another program, say) make every "
-    "contact a jump in memory: RENUMBER once after reading them makes the contact loop faster, and "
-    "lets the threaded backend split the balls by number (doc/speed.md, \"Threads and the numbering of "
-    "the balls\"; PRINT info's `ball order` says how far apart consecutive ids lie). The balls and their contacts stay "
-    "as they are (a contact's shear history follows it); groups, the membrane's balls, HIST's "
-    "platens and PRINT psd's balls follow their balls. Ids given later (ranges by `id`, BALL's "
-    "`id`) are the new ones; so is the id of a `HIST ball n` given before: it records whichever ball has id n "
-    "(its columns keep their names). A run renumbered at the same point gives the same results on every "
-    "backend and however it is cut, as any command does; it is not the run without RENUMBER, "
-    "since each ball then adds its contacts in another order (the same physics, other rounding).",
+    "Gives the balls the ids 1 to N. `space` (the default) numbers them in space order: the Morton (Z) order "
+    "of cubic cells one largest diameter wide, from the lowest centre, balls in one cell in the order of their "
+    "ids, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins. `present` keeps their order and closes "
+    "the gaps DELETE left. Balls numbered at random (read from another program, say) make the steps slow: "
+    "RENUMBER once after reading them (PRINT info's `ball order` says how far apart consecutive ids lie; "
+    "doc/speed.md, \"Threads and the numbering of the balls\", says why). The balls and their contacts stay as "
+    "they are (a contact's shear history follows it); groups, the membrane's balls, HIST's platens and PRINT "
+    "psd's balls follow their balls. Ids given later (ranges by `id`, BALL's `id`) are the new ones; so is the id "
+    "of a `HIST ball n` given before: it records whichever ball has id n (its columns keep their names). A run "
+    "renumbered at the same point gives the same results on every backend and however it is cut, as any command "
+    "does; it is not the run without RENUMBER, since each ball then adds its contacts in another order (the same "
+    "physics, other rounding).",
+    "renumber",
     {"space", "present"}, run_renumber};
 
 }  // namespace trubal

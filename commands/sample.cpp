@@ -82,9 +82,10 @@ const Command sample_command = {
     "`reset` takes the sample as it stands now (after consolidation, say) as their reference. HIST sample "
     "records them (columns ea ev sig1 sig3 q p), CYCLE ... until axial e (or volumetric, q, p, sig1, sig3) "
     "cycles until one reaches a value, SAMPLE alone or PRINT sample prints them. The stresses are those "
-    "of the last step's forces. Saved with the model.\n"
-    "Example: `sample platens 1 2 cylinder 3`, then `hist sample every 100 file triax.csv` and "
-    "`cycle 500000 until axial 0.1`.",
+    "of the last step's forces. Saved with the model. A triaxial test: `sample platens 1 2 cylinder 3`, "
+    "`sample reset` after consolidation, `hist sample every 100 file triax.csv`, `cycle 500000 until axial 0.1`, "
+    "`plot q vs ea`.",
+    "sample platens 1 2 cylinder 3",
     {"platens", "cylinder", "sides", "reset", "off"}, run_sample};
 
 }  // namespace trubal

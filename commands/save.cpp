@@ -15,12 +15,12 @@ static void run_save(Context& ctx, Args& args) {
 const Command save_command = {
     "SAVE", {}, "SAVE file", "write the whole state",
     "Writes the whole state (balls, contacts with their shear history, materials, settings, groups, energy) "
-    "to a versioned binary file with a checksum. Of the pair list it writes the pairs that touch or carry a "
-    "shear history (the rest are the search's spare candidates, found again after RESTART), so the bytes "
-    "of a state do not depend on when the list was made: a run cut into CYCLEs, or on P ranks, saves the "
-    "bytes of the straight serial run. The file is written to a temporary name and renamed, so "
-    "an existing save is never left half-written. The histories (HIST) are saved with their settings and the rows "
-    "they hold in memory; the backend choice is not saved.",
+    "to a versioned binary file with a checksum. The bytes are those of the state alone: a run cut into "
+    "CYCLEs, or run on another backend or on several processes, saves the same bytes as the straight run. "
+    "The file is written to a temporary name and renamed, so an existing save is never left half-written. The "
+    "histories (HIST) are saved with their settings and the rows they hold in memory; the backend choice is not "
+    "saved.",
+    "save dense.sav",
     {}, run_save};
 
 static void run_restart(Context& ctx, Args& args) {
@@ -44,6 +44,7 @@ const Command restart_command = {
     "the rows the save kept, and RESTART says so. A HIST given again with the same quantities, period and file "
     "(a deck that repeats its HIST after RESTART) goes on with the resumed history. A save of format 5 or older "
     "restarts with no histories.",
+    "restart dense.sav",
     {}, run_restart};
 
 }  // namespace trubal

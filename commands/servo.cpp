@@ -166,6 +166,7 @@ const Command servo_command = {
     "contacts; the default max speed 1e-4 of the smallest ball radius per step, also the speed at which a "
     "wall touching nothing approaches. The other velocity components stay as WALL set them. `SERVO wall n "
     "off` stops it (and its motion along the normal).",
+    "servo 1e5 1e5 1e5",
     {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area", "in", "between"}, run_servo};
 
 }  // namespace trubal

@@ -56,6 +56,7 @@ const Command set_command = {
     "file, appending; `SET log off` stops; while a log is on, progress comes as plain lines), progress (seconds "
     "between the plain progress lines of a long CYCLE or SOLVE, default 10; 0: none), volume (the volume for the average stress in free space; 0 uses the START "
     "box).",
+    "set seed 42",
     {"echo", "seed", "log", "progress", "volume", "on", "off"}, run_set};
 
 }  // namespace trubal

@@ -62,6 +62,7 @@ const Command start_command = {
     "smaller cell: a ball could touch two images of another); centres are wrapped into the cell as they "
     "cross a face ([0, x) etc.; in a sheared cell, the parallelepiped of its edge vectors). STRAIN and SERVO deform the cell. Materials, damping, gravity and histories are cleared; the backend choice and variables "
     "stay.",
+    "start box 0 0.1 0 0.1 0 0.2",
     {"box", "stop", "destroy", "periodic", "x", "y", "z"}, run_start};
 
 }  // namespace trubal

@@ -101,6 +101,7 @@ const Command strain_command = {
     "strain and HIST strain (e11 ... e23); the cell's tilts are in PRINT info. `STRAIN reset` sets the "
     "accumulated strain to 0 and leaves the rates and the cell as they are, so that a new stage (shear after "
     "the isotropic compression) is measured from its own start.",
+    "strain 0 0 1e-3",
     {"xx", "yy", "zz", "xy", "xz", "yz", "off", "reset"}, run_strain};
 
 }  // namespace trubal

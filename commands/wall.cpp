@@ -184,6 +184,7 @@ const Command wall_command = {
     "wall's force and moment (about its spin point) from the last step, its stress and the work it has done "
     "on the balls (counted as boundary work in the energy balance); HIST wall n records them; DUMP vtk writes "
     "the walls beside the balls.",
+    "wall plane 0 0 0 0 0 1",
     {"id", "plane", "polygon", "cylinder", "radius", "length", "inside", "outside", "type", "velocity", "spin", "about",
      "rrate", "delete", "all"},
     run_wall};

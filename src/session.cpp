@@ -29,6 +29,7 @@ Session::~Session() = default;
 Model& Session::edit() {
   make_results_to_read(model_, *pipeline_);   // of the state before the change
   ++changes_;
+  unsaved_ = true;
   model_.energy_at_step.valid = false;   // the balls may no longer be as the last step left them
   pipeline_->invalidate();
   model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
@@ -61,6 +62,8 @@ void Session::start(const Space& space) {
   last_sizes_.reset();
   last_generated_.clear();
   ++changes_;
+  unsaved_ = true;
+  overlap_warned = 0;
   history_->clear();
   dumps_.reset();
   pipeline_->invalidate();
@@ -150,7 +153,7 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
     if (static_cast<double>(n) > most)
       throw std::runtime_error(fmt::format(
           "GEN: {} balls of radius {} or more cannot fit in the space (at most {:.3g} even packed as densely as "
-          "spheres can be)", n, rlo, most));
+          "spheres can be){}", n, rlo, most, radius_unit_hint(rlo, rhi, L)));
   }
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -330,6 +333,7 @@ std::size_t Session::define_group(const std::string& name, const Range& range) {
   for (auto k : select(range)) ids.push_back(model_.balls.id[k]);
   std::size_t n = ids.size();
   model_.groups[name] = std::move(ids);
+  unsaved_ = true;
   return n;
 }
 
@@ -342,6 +346,7 @@ double Session::stress_volume() const {
 CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress,
                            bool defer_results) {
   ++changes_;   // the balls move
+  unsaved_ = true;
   require_started();
   check_ready(model_);
   update_mass(model_);
@@ -467,7 +472,10 @@ Session::UntilResult Session::cycle_until(std::int64_t limit, const std::functio
   return out;
 }
 
-void Session::save(const std::string& path) const { save_model(model(), path, history_.get()); }
+void Session::save(const std::string& path) const {
+  save_model(model(), path, history_.get());
+  unsaved_ = false;
+}
 
 std::vector<std::string> Session::restart(const std::string& path) {
   auto histories = std::make_unique<History>();
@@ -477,6 +485,8 @@ std::vector<std::string> Session::restart(const std::string& path) {
   last_sizes_.reset();
   last_generated_.clear();
   ++changes_;
+  unsaved_ = false;
+  overlap_warned = 0;
   history_ = std::move(histories);
   dumps_.reset();
   pipeline_->invalidate();

@@ -49,15 +49,22 @@ class Session {
   // For commands that change the balls: the backend's lists are invalidated, and the energy terms
   // of the last step (Model::energy_at_step) are no longer the state's.
   Model& edit();
-  void set_title(const std::string& title) { model_.title = title; }
+  void set_title(const std::string& title) {
+    model_.title = title;
+    unsaved_ = true;
+  }
   // SAMPLE: the specimen's walls and reference (no change to the balls or the step).
-  Sample& edit_sample() { return model_.sample; }
+  Sample& edit_sample() {
+    unsaved_ = true;
+    return model_.sample;
+  }
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
   // estimated afresh, and PRINT energy takes the state as it is until the next step.
   Settings& settings() {
     make_results_to_read(model_, *pipeline_);   // the step taken again reads the settings
     model_.critical_dt = 0;
     model_.energy_at_step.valid = false;   // gravity's potential, say, is no longer the last step's
+    unsaved_ = true;
     return model_.settings;
   }
 
@@ -152,9 +159,13 @@ class Session {
   // them, appending to their files, and returns what it had to do to those files (notes).
   void save(const std::string& path) const;
   std::vector<std::string> restart(const std::string& path);
+  // Whether the model changed (START, an edit, a setting, a CYCLE) since the last SAVE or RESTART:
+  // the shell says so before it lets the session end.
+  bool unsaved() const { return unsaved_; }
 
   std::uint64_t seed = 12345;          // SET seed: default seed of GEN
   bool gen_interrupted = false;        // the last GEN was stopped by Ctrl-C
+  double overlap_warned = 0;           // the largest overlap ratio a run last warned of (0: none outstanding)
   double volume = 0;                   // SET volume: volume for stress in free space (0: the box)
   // Volume used for the average stress: SET volume, else the periodic cell or START box.
   double stress_volume() const;
@@ -182,6 +193,7 @@ class Session {
                               const std::function<void(std::int64_t, std::int64_t)>& progress,
                               const std::function<bool()>& stop);
   std::uint64_t changes_ = 0, centres_changes_ = ~std::uint64_t{0};
+  mutable bool unsaved_ = false;   // (SAVE is const: it changes nothing in the model)
 };
 
 }  // namespace trubal

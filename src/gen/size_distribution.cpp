@@ -198,4 +198,13 @@ std::vector<GradingRow> compare_grading(const SizeDistribution& d, const std::ve
   return rows;
 }
 
+std::string radius_unit_hint(double rlo, double rhi, const std::array<double, 3>& extent) {
+  const double narrowest = std::min({extent[0], extent[1], extent[2]});
+  if (!(rlo > narrowest)) return {};
+  const std::string radii = rlo == rhi ? fmt::format("{:g}", rlo) : fmt::format("{:g} to {:g}", rlo, rhi);
+  return fmt::format("; the radii ({}) are larger than the space ({:g} m wide): sizes in another unit? trubal's "
+                     "unit of length is the metre (a radius of 2 mm is 0.002)",
+                     radii, narrowest);
+}
+
 }  // namespace trubal

@@ -3,6 +3,7 @@
 // grading). Mass means solid volume: one grain density.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -59,5 +60,9 @@ std::vector<double> grading_diameters(const SizeDistribution& d);
 // The two gradings side by side at those diameters: percent passing asked and of the balls.
 struct GradingRow { double diameter, asked, sample; };
 std::vector<GradingRow> compare_grading(const SizeDistribution& d, const std::vector<double>& radii);
+
+// GEN's hint where the radii are larger than the space they are to fill (`extent`: its edges): the
+// sizes were likely typed in another unit (millimetres) than the space's (metres). "" otherwise.
+std::string radius_unit_hint(double rlo, double rhi, const std::array<double, 3>& extent);
 
 }  // namespace trubal

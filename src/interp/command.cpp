@@ -137,6 +137,9 @@ const Command& find_command(std::string_view keyword) {
         throw InputError(fmt::format("'{}' is too short: abbreviate a command to at least 3 letters ({}?)",
                                      printable(keyword), names[k]));
   }
+  if (const auto near = nearest_word(w, names))
+    throw InputError(fmt::format("unknown command '{}': did you mean {}? (HELP lists the commands)", printable(keyword),
+                                 names[*near]));
   throw InputError(fmt::format("unknown command '{}' (HELP lists the commands)", printable(keyword)));
 }
 

@@ -61,6 +61,7 @@ struct Command {
   std::string_view usage;                    // one line: "CYCLE n"
   std::string_view summary;                  // one line for HELP's table
   std::string_view help;                     // paragraphs for HELP name and the man page
+  std::string_view example;                  // a line as a deck would hold it: HELP's and the man page's "Example:"
   std::vector<std::string_view> words;       // argument keywords, for Tab completion
   void (*run)(Context&, Args&);
   // Ends within microseconds whatever the model (a deck may hold a million of it, as BALL lines):

@@ -315,13 +315,19 @@ void Interpreter::call_file(const std::string& path) {
     FileText f;
     // Relative names are looked up in the working directory, then beside the calling file.
     fs::path p(path);
+    std::error_code ec;
+    std::vector<fs::path> tried{fs::absolute(p, ec)};
     if (p.is_relative() && !fs::exists(p) && !caller.empty()) {
       fs::path beside = fs::path(caller).parent_path() / p;
+      if (beside.is_absolute() && tried.back() != beside) tried.push_back(beside);
       if (fs::exists(beside)) p = beside;
     }
-    std::error_code ec;
     if (!fs::is_regular_file(p, ec)) {
-      f.error = fmt::format("cannot open the file '{}' to CALL", printable(path));
+      std::string where;
+      for (const auto& t : tried) where += (where.empty() ? "" : " and ") + printable(t.string(), 400);
+      f.error = fmt::format("cannot open the file '{}' to CALL: {} {} (the current folder is {})", printable(path),
+                            fs::is_directory(p, ec) ? "it is a directory:" : "looked for", where,
+                            printable(fs::current_path(ec).string(), 400));
       return f;
     }
     f.canonical = fs::weakly_canonical(p, ec).string();

@@ -217,4 +217,36 @@ std::optional<std::size_t> match_keyword(std::string_view word, const std::vecto
   return hits[0];
 }
 
+// Optimal string alignment distance (Damerau's edits, no substring edited twice): a typed `cylce`
+// is one edit from `cycle`.
+static std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i)
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1])});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[a.size()][b.size()];
+}
+
+std::optional<std::size_t> nearest_word(std::string_view word, const std::vector<std::string_view>& candidates) {
+  const std::string w = to_lower(word);
+  if (w.empty() || w.size() > 64) return std::nullopt;   // (a long word is no slip; the table stays small)
+  const std::size_t allowed = w.size() <= 4 ? 1 : 2;
+  std::optional<std::size_t> best;
+  std::size_t best_distance = allowed + 1;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const std::string c = to_lower(candidates[k]);
+    if (c == w) return std::nullopt;
+    const std::size_t distance = edit_distance(w, c);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = k;
+    }
+  }
+  return best;
+}
+
 }  // namespace trubal

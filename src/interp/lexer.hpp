@@ -67,6 +67,12 @@ std::optional<std::int64_t> parse_integer(std::string_view word);
 std::optional<std::size_t> match_keyword(std::string_view word, const std::vector<std::string_view>& candidates,
                                          std::size_t min_prefix = 3);
 
+// "Did you mean": the candidate nearest to `word` (case-insensitive, by edit distance with a swap of
+// two neighbouring letters counting as one edit) where it is near enough to be a slip of the
+// keyboard: one edit for words of up to four letters, two for longer ones. The first such candidate
+// at the least distance; nullopt where none is near or the word is one of them.
+std::optional<std::size_t> nearest_word(std::string_view word, const std::vector<std::string_view>& candidates);
+
 std::string to_lower(std::string_view s);
 std::string to_upper(std::string_view s);
 // A word made safe to print: non-printable bytes as \xNN, long words cut.

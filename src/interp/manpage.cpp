@@ -21,6 +21,7 @@ std::string man_commands_section() {
   for (const Command* c : command_table()) {
     s += ".TP\n.B " + roff(c->usage) + "\n";
     s += roff(c->help) + "\n";
+    s += ".br\nExample: \\fB" + roff(c->example) + "\\fR\n";
     if (!c->aliases.empty()) {
       s += ".br\nAlso spelled";
       for (auto a : c->aliases) s += " \\fB" + roff(a) + "\\fR";

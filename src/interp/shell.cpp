@@ -18,6 +18,7 @@
 #include "interp/interpreter.hpp"
 #include "interp/lexer.hpp"
 #include "interp/signals.hpp"
+#include "session.hpp"
 
 namespace trubal {
 
@@ -69,6 +70,32 @@ char** complete(const char* text, int start, int) {
   }
   if (g_matches.empty()) return nullptr;
   return rl_completion_matches(text, match_generator);
+}
+
+constexpr const char* kNotSaved = "note: the session ends with the model not saved (it changed since the last SAVE)\n";
+
+// Ctrl-D at an empty prompt with the model changed since the last SAVE (or RESTART): whether to
+// leave. At a terminal the shell asks, as an editor does (no by default; Ctrl-D again leaves);
+// elsewhere (a deck piped in after -i) it leaves, saying what was not saved.
+bool leave_unsaved() {
+  if (!::isatty(STDIN_FILENO)) {
+    std::fputs(kNotSaved, stderr);
+    return true;
+  }
+  g_at_prompt = 1;
+  char* raw = readline("the model changed since the last SAVE; quit anyway? [y/N] ");
+  g_at_prompt = 0;
+  if (!raw) {   // (also where the terminal went away: no loop on a closed input)
+    std::fputs("\n", stdout);
+    std::fputs(kNotSaved, stderr);
+    return true;
+  }
+  std::string answer = to_lower(raw);
+  std::free(raw);
+  answer.erase(0, answer.find_first_not_of(" \t"));
+  const bool yes = answer.starts_with("y");
+  if (yes) std::fputs(kNotSaved, stderr);
+  return yes;
 }
 
 }  // namespace
@@ -176,6 +203,7 @@ int run_shell(Interpreter& interp) {
     }
     if (eof) {
       std::fputs("\n", stdout);
+      if (interp.session().unsaved() && !leave_unsaved()) continue;
       if (comm::size() > 1) {
         std::string end = "E";
         comm::broadcast(end);

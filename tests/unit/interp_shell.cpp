@@ -245,3 +245,39 @@ TEST_CASE("interp shell: Ctrl-C stops a running CYCLE and keeps the model", "[in
   REQUIRE(at != std::string::npos);
   CHECK(std::stol(screen.substr(at + 8)) > 0);
 }
+
+TEST_CASE("interp shell: Ctrl-D with the model changed since the last SAVE asks first", "[interp][shell][system]") {
+  REQUIRE_TMUX();
+  TempDir dir;
+  TmuxShell sh(dir, dir.str() + "/history");
+  REQUIRE(sh.started());
+  REQUIRE(sh.wait_for("trubal>"));
+  // Nothing changed yet: Ctrl-D would leave at once (tried at the end, after a SAVE).
+  sh.type("start box 0 1 0 1 0 1");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("new model in the box"));
+  sh.key("C-d");
+  CHECK_SCREEN(sh, sh.wait_for("the model changed since the last SAVE; quit anyway? [y/N]"));
+  sh.key("Enter");   // no, by default: back at the prompt with the model
+  sh.type("print counters");
+  sh.key("Enter");
+  CHECK_SCREEN(sh, sh.wait_for("balls 0"));
+  CHECK(sh.alive());
+  sh.key("C-d");
+  CHECK_SCREEN(sh, sh.wait_for("quit anyway? [y/N]"));
+  sh.type("y");
+  sh.key("Enter");
+  CHECK(sh.wait_exit());
+
+  // After a SAVE, Ctrl-D leaves without a question.
+  TmuxShell saved(dir, dir.str() + "/history");
+  REQUIRE(saved.started());
+  REQUIRE(saved.wait_for("trubal>"));
+  saved.type("start box 0 1 0 1 0 1");
+  saved.key("Enter");
+  saved.type("save run.sav");
+  saved.key("Enter");
+  CHECK_SCREEN(saved, saved.wait_for("run.sav"));
+  saved.key("C-d");
+  CHECK(saved.wait_exit());
+}

@@ -4,9 +4,13 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <map>
 #include <set>
 
+#include <fmt/format.h>
+
 #include "interp/command.hpp"
+#include "interp/lexer.hpp"
 #include "interp/manpage.hpp"
 #include "interp/shell.hpp"
 #include "interp_support.hpp"
@@ -141,10 +145,11 @@ TEST_CASE("interp table: Tab completion offers keywords and each command's words
   CHECK(completions("set ", "ec") == V{"echo"});
   CHECK(completions("", "zz").empty());
   CHECK(completions("frobnicate ", "x").empty());
-  CHECK(completions("cycle ", "").empty());                   // CYCLE takes a number only
+  CHECK(completions("cycle ", "unt") == V{"until"});           // CYCLE takes a number, or `until`
+  CHECK(completions("frac ", "").empty());                    // FRAC takes a number only
 
   auto s = completions("", "s");
-  for (const char* want : {"start", "solve", "save", "set", "stop", "strain", "servo"})
+  for (const char* want : {"start", "solve", "save", "set", "stop", "strain", "servo", "sample"})
     CHECK(std::find(s.begin(), s.end(), want) != s.end());
   for (const auto& w : s) CHECK(w.starts_with("s"));
 
@@ -163,4 +168,47 @@ TEST_CASE("interp table: Tab completion offers keywords and each command's words
         CHECK(std::find(got.begin(), got.end(), word) != got.end());
       }
     }
+}
+
+TEST_CASE("interp table: every command has an example that HELP and the man page show and a deck runs",
+          "[interp][table]") {
+  // Where the example runs: a small box of balls with a group, a material file to CALL and a save to
+  // RESTART; the periodic cell for STRAIN and SERVO; a lattice for MEMBRANE; a history for PLOT.
+  const std::string box = "start box 0 0.1 0 0.1 0 0.2\nprop kn 1e6 ks 1e6 fric 30 dens 2650\n"
+                          "gen 40 0.004 0.006 seed 3\ngroup platens range z 0 0.02\nsave dense.sav\n";
+  const std::map<std::string, std::string> scene = {
+      {"STRAIN", "start 0.1 0.1 0.1\nprop kn 1e6 ks 1e6 dens 2650\ngen 40 0.004 0.006\n"},
+      {"SERVO", "start 0.1 0.1 0.1\nprop kn 1e6 ks 1e6 dens 2650\ngen 40 0.004 0.006\n"},
+      {"MEMBRANE", "start box 0 0.1 0 0.1 0 0.1\nprop kn 1e6 dens 2650\nlattice fcc 0.01 4 4 4 origin 0.03 0.03 0.03\n"},
+      {"PLOT", box + "hist stress strain every 10 file tri.csv\ncycle 50\n"},
+      {"SAMPLE", box + "wall id 1 plane 0 0 0 0 0 1\nwall id 2 plane 0 0 0.2 0 0 -1\n"
+                       "wall id 3 cylinder 0.05 0.05 0 0 0 1 radius 0.05 length 0.2\n"},
+  };
+  for (const Command* c : command_table()) {
+    INFO(c->name << ": example '" << c->example << "'");
+    REQUIRE_FALSE(c->example.empty());
+    CHECK(c->example.find('\n') == std::string_view::npos);
+    // Its first word is this command's keyword (or an alias).
+    const auto words = split_words(c->example);
+    REQUIRE_FALSE(words.empty());
+    CHECK(&find_command(words[0]) == c);
+    Harness help;
+    REQUIRE(help.deck(fmt::format("help {}\n", c->name)));
+    CHECK_THAT(help.out.str(), Catch::EndsWith(fmt::format("Example:\n  {}\n", c->example)));
+    // And it runs as written.
+    trubal::test::TempDir dir;
+    dir.write("materials.dat", "prop kn 1e6 ks 1e6 fric 30 dens 2650\n");
+    trubal::test::WorkingDir in(dir.path());
+    Harness run;
+    const auto it = scene.find(std::string(c->name));
+    const bool ran = run.deck((it == scene.end() ? box : it->second) + std::string(c->example) + "\n");
+    INFO(run.err.str());
+    CHECK(ran);
+  }
+  // The man page's entries (made from the table, and checked to match man/trubal.1 above) show them.
+  const std::string section = man_commands_section();
+  std::size_t shown = 0;
+  for (auto at = section.find(".br\nExample: \\fB"); at != std::string::npos; at = section.find(".br\nExample: \\fB", at + 1))
+    ++shown;
+  CHECK(shown == command_table().size());
 }

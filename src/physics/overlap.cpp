@@ -1,0 +1,45 @@
+#include "physics/overlap.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "model/periodic_cell.hpp"
+#include "model/wall_shape.hpp"
+
+namespace trubal {
+
+LargestOverlap largest_overlap(const Model& model, double threshold) {
+  LargestOverlap out;
+  const Balls& b = model.balls;
+  const ContactTable& c = model.contacts;
+  const CellFrame frame = cell_frame(model.space);
+  const bool periodic = model.space.periodic && c.image_x.size() == c.size();
+  auto take = [&](double ratio, std::int64_t ball, std::int64_t other, bool wall) {
+    if (!(ratio > threshold)) return;   // (a NaN position is the instability guard's)
+    ++out.beyond;
+    if (ratio > out.ratio) out = {ratio, ball, other, wall, out.beyond};
+  };
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const std::size_t i = c.i[p], j = c.j[p];
+    if (i >= b.size() || j >= b.size()) continue;
+    double ox = 0, oy = 0, oz = 0;
+    if (periodic) image_offset(frame, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
+    const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
+                 dz = image_delta(b.z[j], b.z[i], oz);
+    const double overlap = b.rad[i] + b.rad[j] - std::sqrt(dx * dx + dy * dy + dz * dz);
+    const std::size_t small = b.rad[j] < b.rad[i] ? j : i;
+    take(overlap / b.rad[small], b.id[small], b.id[small == i ? j : i], false);
+  }
+  const WallContacts& w = model.wall_contacts;
+  for (std::size_t p = 0; p < w.ball.size(); ++p) {
+    const std::size_t k = w.ball[p], wall = w.wall[p];
+    // (The list of the last search: a ball deleted since is skipped.)
+    if (k >= b.size() || wall >= model.walls.size() || p >= w.ball_id.size() || b.id[k] != w.ball_id[p]) continue;
+    const WallTouch t = wall_touch(model.walls[wall], {b.x[k], b.y[k], b.z[k]});
+    if (!(t.gap > -b.rad[k])) continue;   // past a one-sided wall: no contact (physics/walls.hpp wall_lane)
+    take((b.rad[k] - t.gap) / b.rad[k], b.id[k], model.walls[wall].id, true);
+  }
+  return out;
+}
+
+}  // namespace trubal
