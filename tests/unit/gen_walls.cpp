@@ -1,6 +1,7 @@
 // GEN and BALL against walls: GEN places balls only where they touch no wall and lie on its side
 // (every mode: n balls, a size distribution, a porosity), a porosity in a cylinder region is met
-// against the cylinder's volume, and the region's volume is integrated to its stated accuracy.
+// against the cylinder's volume, the region's volume is integrated to its stated accuracy, and BALL
+// across a wall warns.
 #include <catch2/catch.hpp>
 
 #include <fmt/format.h>
@@ -171,6 +172,34 @@ TEST_CASE("gen walls: the region's volume, integrated, against closed forms", "[
   c.bounded = {true, true, true};
   c.cylinders = {{0, 0, 0.5}};   // half of it in the box
   CHECK(c.volume() == Approx(0.5 * kPi * 0.25 * 2).epsilon(1e-4));
+}
+
+TEST_CASE("gen walls: BALL across a wall or on its wrong side is placed with a warning naming the ball, wall and gap",
+          "[gen][walls]") {
+  Harness h;
+  REQUIRE(h.deck(std::string(kContainer) +
+                 "ball 0 0 0.005 0.004 id 1\n"          // clear: resting 0.001 above the floor
+                 "ball 0.005 0 0.002 0.004 id 2\n"      // across the floor
+                 "ball 0 0.005 -0.006 0.004 id 3\n"     // behind the floor
+                 "ball 0.019 0 0.05 0.002 id 4\n"       // across the cylinder
+                 "ball 0.03 0 0.05 0.002 id 5\n"        // outside the cylinder
+                 "ball 0 0 0.107 0.001 id 6\n"));       // past the cylinder's top end (and behind the lid)
+  CHECK(h.session.model().balls.size() == 6);            // all placed as asked
+  const std::string err = h.err.str();
+  INFO(err);
+  CHECK(err.find("ball 1 ") == std::string::npos);
+  CHECK_THAT(err, Catch::Contains("deck.dat:7: warning: BALL: ball 2 crosses wall 1 (plane): the gap from its surface "
+                                  "to the wall is -0.002 (radius 0.004); placed as asked"));
+  CHECK_THAT(err, Catch::Contains("deck.dat:8: warning: BALL: ball 3 lies behind wall 1 (plane; balls belong on the "
+                                  "side its normal points to): the gap from its surface to the wall is -0.01 (radius "
+                                  "0.004); placed as asked"));
+  CHECK_THAT(err, Catch::Contains("BALL: ball 4 crosses wall 3 (cylinder): the gap from its surface to the wall is "
+                                  "-0.001 (radius 0.002)"));
+  CHECK_THAT(err, Catch::Contains("BALL: ball 5 lies outside wall 3 (cylinder, balls inside): the gap from its "
+                                  "surface to the wall is -0.012 (radius 0.002)"));
+  CHECK_THAT(err, Catch::Contains("BALL: ball 6 lies behind wall 2 (plane"));
+  CHECK_THAT(err, Catch::Contains("BALL: ball 6 lies beyond an end of wall 3 (cylinder, balls inside), its centre "
+                                  "0.002 past it"));
 }
 
 TEST_CASE("gen walls: GEN between walls gives the same balls on every backend and thread count", "[gen][walls][threads]") {
