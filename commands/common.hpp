@@ -47,7 +47,7 @@ void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked)
 // One Command object per file in commands/.
 #define TRUBAL_COMMANDS(X)                                                                                   \
   X(start) X(gen) X(ball) X(lattice) X(delete) X(renumber) X(group) X(prop) X(damp) X(frac) X(tstep) X(grav) X(fix)    \
-  X(free) X(init) X(apply) X(wall) X(membrane) X(strain) X(servo) X(cycle) X(solve) X(print) X(hist) X(plot) X(dump) \
+  X(free) X(init) X(apply) X(wall) X(membrane) X(strain) X(servo) X(sample) X(cycle) X(solve) X(print) X(hist) X(plot) X(dump) \
   X(save) X(restart) X(backend) X(set) X(call) X(echo) X(title) X(help) X(stop)
 #define TRUBAL_DECLARE_COMMAND(name) extern const Command name##_command;
 TRUBAL_COMMANDS(TRUBAL_DECLARE_COMMAND)

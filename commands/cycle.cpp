@@ -1,10 +1,14 @@
 #include <chrono>
+#include <cmath>
+#include <functional>
 
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
 #include "interp/summary.hpp"
 #include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
+#include "physics/sample.hpp"
 #include "support/comm.hpp"
 
 namespace trubal {
@@ -26,8 +30,77 @@ static void finish_run(Context& ctx, ProgressReporter& progress, const CycleResu
                          m.cycle, m.time, m.dt, r.done, seconds, rate, split.empty() ? "" : "; ", split);
 }
 
+// What CYCLE ... until may read: the sample's measures (SAMPLE) where one is declared, else the
+// periodic cell's (its accumulated strain, compression positive, and its average stress with z
+// axial); and the time.
+static const std::vector<std::string_view> kUntilMeasures = {"axial", "volumetric", "q", "p", "sig1", "sig3", "time"};
+
+static std::function<double(const Model&)> until_measure(Context& ctx, Args& args, std::size_t which) {
+  if (which == 6) return [](const Model& m) { return m.time; };
+  const Model& now = ctx.session.state();
+  if (now.sample.declared())
+    return [which](const Model& m) {
+      const SampleMeasures s = sample_measures(m);
+      const double values[] = {s.axial, s.volumetric, s.q, s.p, s.sigma1, s.sigma3};
+      return values[which];
+    };
+  if (!now.space.periodic)
+    args.fail(fmt::format("`until {}` reads the sample between walls: declare it first (SAMPLE platens a b "
+                          "cylinder c), or run in a periodic cell",
+                          kUntilMeasures[which]));
+  if (which == 0) return [](const Model& m) { return m.space.strain[2]; };
+  if (which == 1) return [](const Model& m) { return volumetric_strain(m); };
+  Session& session = ctx.session;
+  return [which, &session](const Model& m) {
+    const Sym6 s = average_stress(m, session.stress_volume());
+    const double lateral = 0.5 * (s[0] + s[1]);
+    const double values[] = {s[2] - lateral, (s[0] + s[1] + s[2]) / 3, s[2], lateral};
+    return values[which - 2];
+  };
+}
+
+// CYCLE [n] until what value [every k]: n (default kUntilLimit) is the most it runs.
+constexpr std::int64_t kUntilLimit = 1000000;
+constexpr std::int64_t kUntilEvery = 100;
+
+static void run_cycle_until(Context& ctx, Args& args, std::int64_t limit) {
+  const auto which = args.expect(kUntilMeasures, "`until` measure");
+  const std::string name(kUntilMeasures[which]);
+  const double target = args.real("target value");
+  if (!std::isfinite(target)) args.fail("the target value must be finite");
+  std::int64_t every = kUntilEvery;
+  if (args.accept("every")) every = args.count("every (cycles between checks)", 1);
+  args.done();
+  ctx.session.require_started();
+  const auto measure = until_measure(ctx, args, which);
+  const auto start = std::chrono::steady_clock::now();
+  ProgressReporter progress(ctx, true);
+  const bool driven = which == 0 || which == 6;   // the axial strain and the time go one way
+  const auto r = ctx.session.cycle_until(limit, measure, target, driven, every, progress.callback());
+  finish_run(ctx, progress, r.run, limit, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (r.reached)
+    ctx.out << fmt::format("reached {} {:.6g} (target {:.6g}, from {:.6g}) at cycle {}\n", name, r.value, target, r.start,
+                           ctx.session.state().cycle);
+  else if (r.run.interrupted || r.run.unstable)
+    return;
+  else if (r.stalled)
+    ctx.warn(fmt::format("CYCLE stopped after {} cycles: {} stayed at {:.6g} (target {:.6g}); nothing moves it "
+                         "(are the platens moving, or the cell straining?)",
+                         r.run.done, name, r.value, target));
+  else if (r.receding)
+    ctx.warn(fmt::format("CYCLE stopped after {} cycles: {} went from {:.6g} to {:.6g}, away from the target {:.6g} "
+                         "(it was past it already?)",
+                         r.run.done, name, r.start, r.value, target));
+  else
+    ctx.warn(fmt::format("CYCLE stopped at the limit of {} cycles with {} {:.6g} (target {:.6g}, from {:.6g}): give "
+                         "a larger n (CYCLE n until ...)",
+                         limit, name, r.value, target, r.start));
+}
+
 static void run_cycle(Context& ctx, Args& args) {
+  if (args.accept("until")) return run_cycle_until(ctx, args, kUntilLimit);
   auto n = args.count("n (number of cycles)", 0);
+  if (args.accept("until")) return run_cycle_until(ctx, args, n);
   args.done();
   auto start = std::chrono::steady_clock::now();
   ProgressReporter progress(ctx);
@@ -36,8 +109,14 @@ static void run_cycle(Context& ctx, Args& args) {
 }
 
 const Command cycle_command = {
-    "CYCLE", {}, "CYCLE n", "n time steps",
-    "Runs n time steps. Ctrl-C stops at the end of the current step and keeps the model (in a batch run the "
+    "CYCLE", {}, "CYCLE n  |  CYCLE [n] until what value [every k]", "n time steps, or until a measure reaches a value",
+    "Runs n time steps. With `until`, runs until a measure reaches the value: at or above a positive "
+    "value, at or below a negative one, across 0 from the side it starts on; none where it is there already "
+    "(checked every k cycles, default 100; at most n cycles, default 1000000; a warning where the limit "
+    "came first, where the measure has not moved at all over ten checks, or where axial or time went farther "
+    "from the target at each of ten checks): axial, volumetric, q, p, sig1, sig3 (the sample's, SAMPLE; in a periodic cell without "
+    "one, the cell's accumulated strain and its average stress, z axial), or time. Example: "
+    "`cycle 400000 until axial 0.1` shears a triaxial sample to 10% axial strain. Ctrl-C stops at the end of the current step and keeps the model (in a batch run the "
     "deck then stops). Under mpirun, Ctrl-C ends the job (mpirun's way): the ranks stop together and rank 0 "
     "says at which cycle; SIGUSR1 sent to mpirun stops the CYCLE as Ctrl-C does without it. A run that goes unstable stops with a message naming the cycle, how much the energy "
     "balance grew over the last cycles (or that the velocities flip sign every cycle), the fastest ball and a "
@@ -54,7 +133,7 @@ const Command cycle_command = {
     "first command after it that reads them takes the last step again from a copy of the step before, to "
     "the same bits (unless HIST or DUMP recorded that step; on several ranks rank 0 alone takes it, for what it "
     "prints and writes, and the others leave the results unmade).",
-    {}, run_cycle};
+    {"until", "axial", "volumetric", "q", "p", "sig1", "sig3", "time", "every"}, run_cycle};
 
 static void run_solve(Context& ctx, Args& args) {
   double ratio = 1e-3;

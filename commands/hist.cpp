@@ -79,6 +79,12 @@ static void run_hist(Context& ctx, Args& args) {
     items.push_back(std::move(item));
   }
   if (items.empty()) args.fail("name at least one quantity to record");
+  if (std::find(items.begin(), items.end(), "sample") != items.end()) {
+    if (!ctx.session.state().sample.declared())
+      args.fail("`sample` records the sample between walls: declare it first (SAMPLE platens a b cylinder c)");
+    if (std::find(items.begin(), items.end(), "pq") != items.end())
+      args.fail("`sample` and `pq` would both make columns p and q: give them to two HISTs");
+  }
   if (mode != HistoryFileMode::Default && file.empty()) args.fail("`new` and `append` go with `file f.csv`");
   Range range = read_range(args);
   auto has = [&](const char* item) { return std::find(items.begin(), items.end(), item) != items.end(); };
@@ -124,9 +130,11 @@ static void run_hist(Context& ctx, Args& args) {
 
 const Command hist_command = {
     "HIST", {},
-    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: stress pq strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, ball id x y z vx vy vz wx wy wz fx fy fz, measure sphere x y z r [id n]",
+    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: sample stress pq strain volumetric ratio sratio axial platen energy unbal contacts porosity time, wall n, ball id x y z vx vy vz wx wy wz fx fy fz, measure sphere x y z r [id n]",
     "record quantities every n cycles",
-    "Records quantities every n cycles (default 10): stress (s11 s22 s33 s12 s13 s23), pq (p = (s11 + s22 + s33) / 3 "
+    "Records quantities every n cycles (default 10): sample (ea ev sig1 sig3 q p: the axial and volumetric "
+    "strains, sigma1, sigma3, the deviator and the mean stress of the sample between walls that SAMPLE "
+    "declares, compression positive; NaN once it is gone), stress (s11 s22 s33 s12 s13 s23), pq (p = (s11 + s22 + s33) / 3 "
     "and q = s33 - (s11 + s22) / 2, the mean stress and the deviator of a triaxial test with z the axial direction, "
     "compression positive; in a dry sample the effective stresses p' and q), strain (e11 e22 e33 e12 e13 e23), "
     "volumetric (evol = 1 - V/V0, the cell's loss of volume over its volume V0 at START or the last STRAIN reset, "
@@ -169,7 +177,7 @@ const Command hist_command = {
     "history is refused, unless it asks for the same quantities every the same period: then that history goes "
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",
-    {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall", "ball",
+    {"sample", "stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "unbal", "contacts", "time", "wall", "ball",
      "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "fx", "fy", "fz",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},
     run_hist};

@@ -20,9 +20,12 @@
 
 namespace trubal {
 
+void print_sample(Context& ctx);   // commands/sample.cpp
+
 static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
                                                      "energy", "fabric", "coordination", "prop", "damp",
-                                                     "history", "walls", "psd", "porosity", "measure", "counters"};
+                                                     "history", "walls", "psd", "porosity", "measure", "counters",
+                                                     "sample"};
 
 // The region of PRINT stress, fabric, coordination, porosity and measure: a measurement sphere,
 // given as the range element `sphere x y z r` (nothing else, since the measurement needs a volume).
@@ -344,6 +347,7 @@ static void run_print(Context& ctx, Args& args) {
   const Model& m = ctx.session.model();
   switch (item) {
     case 0: args.done(); print_info(ctx); return;
+    case 16: args.done(); print_sample(ctx); return;
     case 15: args.done(); print_counters(ctx, file); return;
     case 1: print_balls(ctx, read_range(args), file); return;
     case 2: print_contacts(ctx, read_range(args), file); return;
@@ -469,7 +473,7 @@ static void run_print(Context& ctx, Args& args) {
 }
 
 const Command print_command = {
-    "PRINT", {}, "PRINT info|counters|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure [file f] [range ...]",
+    "PRINT", {}, "PRINT info|counters|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure|sample [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
@@ -514,8 +518,10 @@ const Command print_command = {
     "include the wall contacts (a wall contact's branch vector runs from the ball's centre to the contact "
     "point). psd: the grading of the balls the last GEN made (those still there), percent passing by mass "
     "(solid volume) at the sieve diameters of a sieve curve or at 21 diameters evenly spaced in log d, next to "
-    "the grading asked for, and the largest difference; with `file f.csv`: diameter,passing_asked,passing_sample.",
-    {"info", "counters", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
+    "the grading asked for, and the largest difference; with `file f.csv`: diameter,passing_asked,passing_sample. "
+    "sample: the measures of the sample between walls (SAMPLE): height, cross-section and volume, the axial and "
+    "volumetric strains, sigma1, sigma3, q and p.",
+    {"sample", "info", "counters", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
      "history", "walls", "psd", "porosity", "measure", "file", "volume", "range"},
     run_print};
 

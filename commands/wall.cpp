@@ -58,6 +58,10 @@ static void run_wall(Context& ctx, Args& args) {
     m.walls.clear();
     m.wall_contacts = WallContacts{};
     ctx.out << fmt::format("{} walls deleted\n", n);
+    if (m.sample.declared()) {
+      m.sample = Sample{};
+      ctx.out << "the sample (SAMPLE) went with its walls\n";
+    }
     return;
   }
   std::int64_t id = 0;
@@ -70,7 +74,21 @@ static void run_wall(Context& ctx, Args& args) {
     if (found == now.walls.end()) args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
     if (args.accept("delete")) {
       args.done();
+      for (const Wall& other : now.walls)
+        if (other.servo_on && (other.area_walls[0] == id || other.area_walls[1] == id))
+          args.fail(fmt::format("wall {}'s servo takes its area from wall {}: SERVO wall {} off first", other.id, id,
+                                other.id));
+      const Sample& s = now.sample;
+      const bool in_sample = s.declared() && (std::find(s.platens.begin(), s.platens.end(), id) != s.platens.end() ||
+                                              std::find(s.sides.begin(), s.sides.end(), id) != s.sides.end());
       Model& m = ctx.session.edit();
+      if (in_sample) {
+        m.sample = Sample{};
+        ctx.out << fmt::format("the sample (SAMPLE) is gone: wall {} was one of its walls\n", id);
+      }
+      for (Wall& other : m.walls)   // a servo that is off keeps no claim on the wall
+        for (auto& a : other.area_walls)
+          if (a == id) other.area_walls = {0, 0};
       m.walls.erase(m.walls.begin() + (found - now.walls.begin()));
       reindex_wall_contacts(m);
       ctx.out << fmt::format("wall {} deleted\n", id);

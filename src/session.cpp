@@ -395,38 +395,78 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
   dumps_->write(model_);
 }
 
-Session::SolveResult Session::solve(double ratio, std::int64_t limit,
-                                    const std::function<void(std::int64_t, std::int64_t)>& progress) {
-  SolveResult out;
+CycleResult Session::cycle_in_chunks(std::int64_t limit, std::int64_t chunk,
+                                     const std::function<void(std::int64_t, std::int64_t)>& progress,
+                                     const std::function<bool()>& stop) {
+  CycleResult out;
   std::int64_t done = 0;
-  const std::int64_t chunk = 100;
-  CycleResult worst;   // the chunk whose energy balance was off the most (its warning is SOLVE's, once)
+  CycleResult worst;   // the chunk whose energy balance was off the most (its warning is the run's, once)
   while (done < limit) {
     std::int64_t n = std::min(chunk, limit - done);
     CycleResult r = cycle(n, progress ? [&](std::int64_t d, std::int64_t) { progress(done + d, limit); }
                                       : std::function<void(std::int64_t, std::int64_t)>{});
     done += r.done;
-    const double seconds = out.run.seconds + r.seconds;
-    PhaseTimes times = out.run.times;
+    const double seconds = out.seconds + r.seconds;
+    PhaseTimes times = out.times;
     times.add(r.times);
     if (r.energy_scale > 0 && !(r.balance_error * worst.energy_scale <= worst.balance_error * r.energy_scale))
       worst = r;
-    out.run = r;
-    out.run.done = done;
-    out.run.seconds = seconds;
-    out.run.times = times;
-    out.run.balance_error = worst.balance_error;
-    out.run.energy_scale = worst.energy_scale;
-    out.run.energy_warning = worst.energy_warning;
+    out = r;
+    out.done = done;
+    out.seconds = seconds;
+    out.times = times;
+    out.balance_error = worst.balance_error;
+    out.energy_scale = worst.energy_scale;
+    out.energy_warning = worst.energy_warning;
     // A chunk is often shorter than the engine's progress period: report between chunks too.
     if (progress) progress(done, limit);
-    if (r.interrupted || r.unstable) return out;
-    out.ratio = unbalanced_force(model_).mean_ratio;
-    if (out.ratio < ratio) {
-      out.converged = true;
-      return out;
-    }
+    if (r.interrupted || r.unstable || r.left_box) return out;
+    // Every rank takes rank 0's answer, so that all stop at the same cycle.
+    std::int64_t stopping = stop() ? 1 : 0;
+    comm::broadcast(stopping);
+    if (stopping) return out;
   }
+  return out;
+}
+
+Session::SolveResult Session::solve(double ratio, std::int64_t limit,
+                                    const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  SolveResult out;
+  out.run = cycle_in_chunks(limit, 100, progress, [&] {
+    out.ratio = unbalanced_force(model_).mean_ratio;
+    return out.converged = out.ratio < ratio;
+  });
+  return out;
+}
+
+Session::UntilResult Session::cycle_until(std::int64_t limit, const std::function<double(const Model&)>& measure,
+                                          double target, bool driven, std::int64_t every,
+                                          const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  UntilResult out;
+  out.start = out.value = measure(model_);
+  // A positive target is reached at or above it, a negative one at or below; 0 from the side the
+  // measure starts on.
+  const bool rising = target > 0 || (target == 0 && !(out.start > 0));
+  auto reached = [&] { return rising ? out.value >= target : out.value <= target; };
+  if (reached()) {
+    out.reached = true;
+    return out;
+  }
+  // A measure that has not moved at all over kChecks checks has nothing driving it (platens that do
+  // not move, a cell that does not strain); a driven one (an axial strain, the time) that went
+  // farther from the target at each of kChecks checks is driven the other way. Either way the run
+  // stops there rather than cycling to the limit.
+  constexpr int kChecks = 10;
+  int still = 0, away = 0;
+  out.run = cycle_in_chunks(limit, every, progress, [&] {
+    const double before = out.value;
+    out.value = measure(model_);
+    still = out.value == out.start ? still + 1 : 0;
+    away = driven && std::abs(out.value - target) > std::abs(before - target) ? away + 1 : 0;
+    out.stalled = still >= kChecks;
+    out.receding = away >= kChecks;
+    return (out.reached = reached()) || out.stalled || out.receding;
+  });
   return out;
 }
 

@@ -50,6 +50,8 @@ class Session {
   // of the last step (Model::energy_at_step) are no longer the state's.
   Model& edit();
   void set_title(const std::string& title) { model_.title = title; }
+  // SAMPLE: the specimen's walls and reference (no change to the balls or the step).
+  Sample& edit_sample() { return model_.sample; }
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
   // estimated afresh, and PRINT energy takes the state as it is until the next step.
   Settings& settings() {
@@ -114,6 +116,19 @@ class Session {
   struct SolveResult { CycleResult run; double ratio = 0; bool converged = false; };
   SolveResult solve(double ratio, std::int64_t limit,
                     const std::function<void(std::int64_t, std::int64_t)>& progress = {});
+  // CYCLE ... until: at most `limit` cycles, checking `measure` every `every` cycles, until it reaches
+  // `target` (a positive target at or above it, a negative one at or below, 0 from the side it
+  // starts on; at once where it is there already); or until it has not
+  // moved from where it started over ten checks (stalled), or, for a measure `driven` one way (an
+  // axial strain, the time), has gone farther from the target at each of ten checks (receding).
+  struct UntilResult {
+    CycleResult run;
+    double start = 0, value = 0;
+    bool reached = false, stalled = false, receding = false;
+  };
+  UntilResult cycle_until(std::int64_t limit, const std::function<double(const Model&)>& measure, double target,
+                          bool driven, std::int64_t every,
+                          const std::function<void(std::int64_t, std::int64_t)>& progress = {});
 
   History& history() { return *history_; }
   const History& history() const { return *history_; }
@@ -161,6 +176,11 @@ class Session {
     std::size_t operator()(const std::array<double, 3>& c) const;
   };
   std::unordered_map<std::array<double, 3>, std::int64_t, CentreHash> centres_;
+  // Cycles in chunks of `chunk` until `limit`, an interruption or instability, or `stop()` (asked
+  // after each chunk; every rank takes rank 0's answer): SOLVE's and CYCLE ... until's loop.
+  CycleResult cycle_in_chunks(std::int64_t limit, std::int64_t chunk,
+                              const std::function<void(std::int64_t, std::int64_t)>& progress,
+                              const std::function<bool()>& stop);
   std::uint64_t changes_ = 0, centres_changes_ = ~std::uint64_t{0};
 };
 

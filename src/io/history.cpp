@@ -23,6 +23,7 @@
 #include "model/edit.hpp"
 #include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
+#include "physics/sample.hpp"
 #include "physics/walls.hpp"
 
 namespace trubal {
@@ -30,7 +31,7 @@ namespace trubal {
 const std::vector<std::string_view>& History::item_names() {
   static const std::vector<std::string_view> names = {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial",
                                                       "platen", "energy", "unbal", "contacts", "time", "wall",
-                                                      "porosity", "measure", "ball"};
+                                                      "porosity", "measure", "ball", "sample"};
   return names;
 }
 
@@ -68,6 +69,7 @@ const std::vector<double>& ball_array(const Balls& b, const std::string& quantit
 static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "stress") return {"s11", "s22", "s33", "s12", "s13", "s23"};
   if (item == "pq") return {"p", "q"};
+  if (item == "sample") return {"ea", "ev", "sig1", "sig3", "q", "p"};
   if (item == "strain") return {"e11", "e22", "e33", "e12", "e13", "e23"};
   if (item == "volumetric") return {"evol"};
   if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work", "potential"};
@@ -355,6 +357,9 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       const Sym6& s = get_stress();
       row.push_back((s[0] + s[1] + s[2]) / 3);
       row.push_back(s[2] - 0.5 * (s[0] + s[1]));
+    } else if (item == "sample") {   // the sample between walls (physics/sample.hpp), NaN without one
+      const SampleMeasures m = sample_measures(model);
+      for (double v : {m.axial, m.volumetric, m.sigma1, m.sigma3, m.q, m.p}) row.push_back(v);
     } else if (item == "strain") {
       for (int a = 0; a < 6; ++a) row.push_back(model.space.strain[a]);
     } else if (item == "volumetric") {   // 1 - V / V0 since START or STRAIN reset, compression positive

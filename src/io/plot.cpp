@@ -124,7 +124,9 @@ std::string find_gnuplot() {
 std::string column_label(const std::string& c) {
   static const std::pair<const char*, const char*> known[] = {
       {"cycle", "cycle"}, {"time", "time"},
-      {"p", "mean stress p (compression +)"}, {"q", "deviator stress q = s33 - (s11 + s22) / 2"},
+      {"p", "mean stress p (compression +)"}, {"q", "deviator stress q (sigma1 - sigma3)"},
+      {"ea", "axial strain (compression +)"}, {"ev", "volumetric strain (compression +)"},
+      {"sig1", "axial stress sigma1 (compression +)"}, {"sig3", "confining stress sigma3 (compression +)"},
       {"s11", "stress s11 (compression +)"}, {"s22", "stress s22 (compression +)"}, {"s33", "stress s33 (compression +)"},
       {"s12", "stress s12"}, {"s13", "stress s13"}, {"s23", "stress s23"},
       {"e11", "strain e11 (compression +)"}, {"e22", "strain e22 (compression +)"}, {"e33", "axial strain e33 (compression +)"},

@@ -20,6 +20,8 @@
 #include "model/wall_shape.hpp"
 
 #include "io/atomic_file.hpp"
+#include "physics/sample.hpp"
+#include "physics/walls.hpp"
 
 namespace trubal {
 
@@ -36,8 +38,9 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // each table's items, period, file, platen range and balls, and the rows it holds in memory, so
 // that RESTART resumes them; older files restart with none. 7: the energy terms of the last step
 // at its force pass (Model::energy_at_step), so that PRINT energy after RESTART is the saved run's;
-// older files print the state as it is until the next step.
-constexpr std::uint32_t kVersion = 7;
+// older files print the state as it is until the next step. 8: the walls a servo's area comes from
+// (Wall::area_walls; older files keep the servo's own area) and the sample (SAMPLE).
+constexpr std::uint32_t kVersion = 8;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -227,6 +230,11 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
                       &e.boundary_ahead})
       io.pod(*v);
   }
+  if (version >= 8) {
+    for (Wall& w : m.walls) io.pod(w.area_walls);
+    Sample& s = m.sample;
+    io.pod(s.platens); io.pod(s.sides); io.pod(s.height0); io.pod(s.area0);
+  }
 }
 
 // The histories: what each HIST asked for and the rows it holds (a file's window; every row of a
@@ -364,6 +372,17 @@ std::string invalid_model(const Model& m) {
     for (double v : {w.velocity[0], w.velocity[1], w.velocity[2], w.spin[0], w.spin[1], w.spin[2], w.radius_rate,
                      w.servo_target, w.servo_integral, w.work})
       if (!finite(v)) return fmt::format("wall {} has a motion or load that is not a number", w.id);
+  }
+  for (const Wall& w : m.walls)
+    for (std::int64_t id : w.area_walls)
+      if (id != 0 && !find_wall(m, id)) return fmt::format("wall {}'s servo area names no wall", w.id);
+  if (m.sample.declared()) {
+    const std::string problem = check_sample(m, m.sample);
+    if (!problem.empty()) return "the sample: " + problem;
+    if (!(m.sample.height0 > 0) || !(m.sample.area0 > 0) || !finite(m.sample.height0) || !finite(m.sample.area0))
+      return "the sample's reference is not a size";
+  } else if (m.sample.platens[1] != 0 || m.sample.sides != std::array<std::int64_t, 4>{}) {
+    return "the sample's walls do not match";
   }
   const WallContacts& wc = m.wall_contacts;
   bool sizes = true;

@@ -311,6 +311,17 @@ struct Membrane {
   std::vector<double> layer_cells;         // per loaded layer: its cells, times d^2 its area
 };
 
+// SAMPLE: a specimen held by walls, as in a triaxial or an oedometer test between platens. Its
+// measures (physics/sample.hpp) are referred to the sample as it stood when declared or reset.
+struct Sample {
+  std::array<std::int64_t, 2> platens{0, 0};   // the walls across the axial direction; 0: no sample
+  // The lateral walls: a cylinder (sides[0], the rest 0), or two pairs of facing planes or polygons
+  // (sides[0] and [1] across one direction, [2] and [3] across the other).
+  std::array<std::int64_t, 4> sides{0, 0, 0, 0};
+  double height0 = 0, area0 = 0;               // the platens' distance and the cross-section then
+  bool declared() const { return platens[0] != 0; }
+};
+
 struct Model {
   Space space;
   std::map<int, Material> materials;      // by type number
@@ -322,6 +333,7 @@ struct Model {
   Energy energy;
   EnergyAtStep energy_at_step;
   Membrane membrane;
+  Sample sample;
   std::map<std::string, std::vector<std::int64_t>> groups;   // GROUP name -> ball ids
   std::int64_t cycle = 0;
   double time = 0;
