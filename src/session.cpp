@@ -15,6 +15,7 @@
 
 #include "interp/signals.hpp"
 #include "gen/placement_grid.hpp"
+#include "gen/region.hpp"
 #include "io/save.hpp"
 #include "model/edit.hpp"
 #include "physics/measure.hpp"
@@ -149,6 +150,7 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
     const auto L = s.length();
     double volume = 1;
     for (int a = 0; a < 3; ++a) volume *= s.periodic ? L[a] : std::max(0.0, L[a]);
+    volume = room_for_centres(s, range, model_.walls, rhi);   // the part the range and the walls leave
     const double most = 0.7405 * volume / (4.0 / 3.0 * M_PI * rlo * rlo * rlo);
     if (static_cast<double>(n) > most)
       throw std::runtime_error(fmt::format(
@@ -178,7 +180,8 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
       if (hi < lo) throw std::runtime_error("GEN: the balls do not fit in the START box");
       p[a] = lo + (hi - lo) * unit(rng);
     }
-    if (!holds(model_, range, {0, type, p[0], p[1], p[2]}) || grid.overlaps(p[0], p[1], p[2], r)) {
+    if (!holds(model_, range, {0, type, p[0], p[1], p[2]}) || !clear_of_walls(model_.walls, {p[0], p[1], p[2]}, r) ||
+        grid.overlaps(p[0], p[1], p[2], r)) {
       ++failures;
       continue;
     }

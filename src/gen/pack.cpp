@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "gen/placement_grid.hpp"
+#include "gen/region.hpp"
 #include "gen/relaxation.hpp"
 #include "interp/signals.hpp"
 
@@ -25,30 +26,6 @@ constexpr double kStartFraction = 0.25;
 // The densest packing of equal spheres, pi / sqrt(18) (Hales).
 constexpr double kDensestEqual = 0.74048;
 
-Region region_of(const Space& s, const Range& range, bool box_only) {
-  Region g;
-  g.lo = s.lo;
-  g.hi = s.hi;
-  for (int a = 0; a < 3; ++a) g.bounded[a] = !s.wraps(a);
-  for (const auto& e : range) {
-    using K = RangeElement::Kind;
-    const int a = e.kind == K::X ? 0 : e.kind == K::Y ? 1 : e.kind == K::Z ? 2 : -1;
-    if (a < 0 || e.negate) {
-      if (box_only)
-        throw std::runtime_error("GEN porosity: the region must be a box, given by `range x x0 x1 y y0 y1 z z0 z1` "
-                                 "(or the whole space); other range kinds have no volume to fill");
-      continue;
-    }
-    g.lo[a] = std::max(g.lo[a], e.v[0]);
-    g.hi[a] = std::min(g.hi[a], e.v[1]);
-    g.bounded[a] = true;
-  }
-  for (int a = 0; a < 3; ++a)
-    if (!(g.hi[a] > g.lo[a]))
-      throw std::runtime_error(fmt::format("GEN: the range leaves no room along {} ([{:g}, {:g}])", "xyz"[a], g.lo[a], g.hi[a]));
-  return g;
-}
-
 // n radii, one from each of n equal slices of the number distribution (stratified: the sample's
 // grading follows the distribution far closer than n independent draws), largest first.
 std::vector<double> draw_radii(const SizeTable& table, std::size_t n, std::mt19937_64& rng) {
@@ -57,13 +34,6 @@ std::vector<double> draw_radii(const SizeTable& table, std::size_t n, std::mt199
   for (std::size_t k = 0; k < n; ++k)
     r[n - 1 - k] = table.radius((static_cast<double>(k) + unit(rng)) / static_cast<double>(n));
   return r;
-}
-
-bool is_inside(const Region& g, const Model& m, std::size_t k) {
-  const double p[3] = {m.balls.x[k], m.balls.y[k], m.balls.z[k]};
-  for (int a = 0; a < 3; ++a)
-    if (g.bounded[a] && (p[a] < g.lo[a] || p[a] > g.hi[a])) return false;
-  return true;
 }
 
 // Places balls of radii scale * r (largest first) at random where they overlap nothing in the grid
@@ -86,7 +56,9 @@ std::size_t place(const Model& model, const Region& g, const PackRequest& q, Pla
         const double lo = g.lo[a] + (g.bounded[a] ? r : 0), hi = g.hi[a] - (g.bounded[a] ? r : 0);
         p[a] = lo + (hi - lo) * unit(rng);
       }
-      if (!holds(model, q.range, {0, q.type, p[0], p[1], p[2]}) || grid.overlaps(p[0], p[1], p[2], r)) continue;
+      if (!holds(model, q.range, {0, q.type, p[0], p[1], p[2]}) || !g.admits({p[0], p[1], p[2]}, r) ||
+          grid.overlaps(p[0], p[1], p[2], r))
+        continue;
       grid.insert(p[0], p[1], p[2], r);
       balls[k][0] = p[0];
       balls[k][1] = p[1];
@@ -108,12 +80,12 @@ PackResult pack(const Model& model, const PackRequest& q) {
   std::mt19937_64 rng(q.seed);
   const Space& s = model.space;
   const bool target = q.count == 0;
-  const Region g = region_of(s, q.range, target);
+  const Region g = region_of(s, q.range, model.walls, target);
   double fixed_volume = 0;   // of the model's balls in the region
   double rmax_fixed = 0;
   for (std::size_t k = 0; k < model.balls.size(); ++k) {
     rmax_fixed = std::max(rmax_fixed, model.balls.rad[k]);
-    if (is_inside(g, model, k)) fixed_volume += kFourThirdsPi * std::pow(model.balls.rad[k], 3);
+    if (g.holds_centre({model.balls.x[k], model.balls.y[k], model.balls.z[k]})) fixed_volume += kFourThirdsPi * std::pow(model.balls.rad[k], 3);
   }
   std::size_t n = q.count;
   double solid = 0;   // volume the new balls must have (porosity)
@@ -121,6 +93,9 @@ PackResult pack(const Model& model, const PackRequest& q) {
     if (!(q.porosity > 0 && q.porosity < 1))
       throw std::runtime_error(fmt::format("GEN: porosity {:g} is not between 0 and 1", q.porosity));
     out.volume = g.volume();
+    if (!(out.volume > 0))
+      throw std::runtime_error("GEN: the region has no volume on the walls' side (the balls' side of every plane, "
+                               "inside a container cylinder, outside an outside one)");
     solid = (1 - q.porosity) * out.volume - fixed_volume;
     if (!(solid > 0))
       throw std::runtime_error(fmt::format("GEN: the region's balls already leave a porosity of {:.4g}, below {:g}",
@@ -148,10 +123,12 @@ PackResult pack(const Model& model, const PackRequest& q) {
   } else {
     double sum = 0;
     for (double r : radii) sum += kFourThirdsPi * r * r * r;
-    if (sum > kDensestEqual * g.volume())
+    const double volume = g.volume();
+    if (sum > kDensestEqual * volume)
       throw std::runtime_error(fmt::format("GEN: {} balls of these sizes (solid volume {:.4g}) cannot fit in the region "
-                                           "(volume {:.4g}): their porosity would be {:.4g}",
-                                           n, sum, g.volume(), 1 - sum / g.volume()));
+                                           "(volume {:.4g}{}): their porosity would be {:.4g}",
+                                           n, sum, volume, g.walls.empty() ? "" : ", on the walls' side",
+                                           1 - sum / volume));
   }
   const double rmax = radii.front();
   for (int a = 0; a < 3; ++a) {
@@ -163,6 +140,14 @@ PackResult pack(const Model& model, const PackRequest& q) {
       throw std::runtime_error(fmt::format("GEN: the periodic edge {} = {:g} is less than twice the largest diameter "
                                            "{:g} (CYCLE would refuse the cell)", "xyz"[a], L, 2 * rmax));
   }
+  for (const auto& c : g.cylinders)
+    if (rmax > c[2])
+      throw std::runtime_error(fmt::format("GEN: a ball of diameter {:g} does not fit in the range's cylinder (diameter "
+                                           "{:g})", 2 * rmax, 2 * c[2]));
+  for (const Wall& w : g.walls)
+    if (w.kind == WallKind::Cylinder && w.inside && rmax > w.radius)
+      throw std::runtime_error(fmt::format("GEN: a ball of diameter {:g} does not fit in cylinder wall {} (diameter {:g})",
+                                           2 * rmax, w.id, 2 * w.radius));
   out.balls.resize(n);
   for (std::size_t k = 0; k < n; ++k) out.balls[k] = {0, 0, 0, radii[k]};
 
@@ -248,6 +233,11 @@ PackResult pack(const Model& model, const PackRequest& q) {
     b[3] *= scale;
     new_volume += kFourThirdsPi * b[3] * b[3] * b[3];
   }
+  // The last stage left a ball across a cylinder or wall by at most kOverlapTolerance of its radius:
+  // moved clear, a hair inside, so that none starts across one.
+  if (g.curved())
+    for (auto& b : out.balls)
+      for (int k = 0; k < 100 && g.excess(b, b[3]) > 0; ++k) g.push_inside(b, b[3] * (1 + 1e-9), 1.0);
   out.porosity = 1 - (fixed_volume + new_volume) / out.volume;
   return out;
 }

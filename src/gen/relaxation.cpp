@@ -211,6 +211,10 @@ struct Relaxation::Impl {
         else if (b[a] > hi) b[a] = hi - (kPush - 1) * (b[a] - hi);
         b[a] = std::clamp(b[a], lo, hi);
       }
+      if (g_.curved()) {   // the range's cylinders and the walls, over-relaxed as the faces
+        g_.push_inside(b, r, kPush);
+        worst = std::max(worst, g_.excess(b, r));
+      }
     }
     return worst;
   }

@@ -6,26 +6,19 @@
 #include <memory>
 #include <vector>
 
+#include "gen/region.hpp"
 #include "model/model.hpp"
 
 namespace trubal {
-
-// Where the balls go: the START box or periodic space cut by the range's x, y, z intervals. On a
-// bounded axis (the box's, or one the range cuts) balls lie wholly inside; on a periodic one the
-// centres anywhere in the period.
-struct Region {
-  std::array<double, 3> lo{}, hi{};
-  std::array<bool, 3> bounded{};
-  double volume() const { return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]); }
-};
 
 // Relaxation limits: a stage's overlaps must fall to this fraction of the smaller radius.
 constexpr double kOverlapTolerance = 0.01;
 
 // Radius expansion's relaxation: the new balls (radii scale * r) are moved apart, pair by pair in a
 // fixed order (Gauss-Seidel: each pair's overlap removed, shared in inverse proportion to the
-// balls' volumes; the model's balls do not move), until no overlap is more than kOverlapTolerance
-// of the smaller radius. Returns the sweeps taken, or -1 if the stage did not relax in `most`.
+// balls' volumes; the model's balls do not move), each ball then moved back inside the region (its
+// faces, cylinders and walls), until no overlap is more than kOverlapTolerance of the smaller radius
+// and no ball crosses the region's bounds by more than that of its radius. Returns the sweeps taken, or -1 if the stage did not relax in `most`.
 class Relaxation {
  public:
   // balls: x y z r (r the final radius), moved in place; g and model outlive this.

@@ -132,6 +132,33 @@ WallTouch wall_touch(const Wall& w, const Vec3& c) {
   return {};
 }
 
+WallClearance wall_clearance(const Wall& w, const Vec3& c, double r) {
+  WallClearance out;
+  if (w.kind == WallKind::Cylinder && w.inside) {
+    // A container: centres within its length, whole balls within its radius (the open ends hold no
+    // ball in, so one past an end is outside it, whatever its distance to the rim).
+    const double s = dot(sub(c, w.point), w.normal);
+    out.beyond_end = s < 0 ? -s : s > w.length ? s - w.length : 0;
+    if (out.beyond_end > 0) {
+      out.wrong_side = true;
+      out.gap = -out.beyond_end - r;
+      return out;
+    }
+  }
+  const double centre_gap = wall_touch(w, c).gap;
+  out.gap = centre_gap - r;
+  switch (w.kind) {
+    case WallKind::Plane: out.wrong_side = centre_gap < 0; break;
+    case WallKind::Polygon: break;
+    case WallKind::Cylinder: {
+      const double s = dot(sub(c, w.point), w.normal);
+      out.wrong_side = w.inside ? centre_gap < 0 : s >= 0 && s <= w.length && centre_gap < 0;
+      break;
+    }
+  }
+  return out;
+}
+
 Vec3 wall_surface_velocity(const Wall& w, const Vec3& p, const WallTouch& touch) {
   Vec3 v = add(w.velocity, cross(w.spin, sub(p, w.spin_point)));
   if (w.kind == WallKind::Cylinder) v = add(v, scale(touch.radial, w.radius_rate));

@@ -25,6 +25,20 @@ struct WallTouch {
 // The nearest point of the wall to centre c (any c, also NaN: then gap is NaN).
 WallTouch wall_touch(const Wall& wall, const Vec3& c);
 
+// How a ball of radius r centred at c lies against a wall, for placing balls (GEN places none that is
+// not clear; BALL warns). `gap`: from the ball's surface to the wall, negative where the ball crosses
+// the wall or lies on its wrong side; `wrong_side`: the centre is where the wall keeps balls out of
+// (behind a plane; outside a container cylinder's radius or beyond its ends; within an outside
+// cylinder's radius along its length); `beyond_end`: how far a container cylinder's ball centre lies
+// past one of its ends (0 within its length; there the gap is -beyond_end - r). A polygon has no wrong
+// side. A ball is clear of the wall when gap >= 0.
+struct WallClearance {
+  double gap = 0;
+  bool wrong_side = false;
+  double beyond_end = 0;
+};
+WallClearance wall_clearance(const Wall& wall, const Vec3& c, double r);
+
 // Velocity of the wall's surface at point p (translation, spin about spin_point, radius rate).
 Vec3 wall_surface_velocity(const Wall& wall, const Vec3& p, const WallTouch& touch);
 
