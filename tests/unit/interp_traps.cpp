@@ -156,7 +156,9 @@ TEST_CASE("traps: an overlap past a tenth of the smaller radius is warned of onc
   REQUIRE(w.deck("start box -1 1 -1 1 -1 1\nprop kn 1e5 dens 1000\nwall plane 0 0 -0.5 0 0 1\n"
                  "ball 0 0 -0.42 0.1\nfix vel\ntstep 0.01\ncycle 1\ninit zvel 2\ncycle 1\ninit zvel -2\ncycle 1\n"));
   const std::string werr = w.err.str();
-  CHECK(count_of(werr, "warning:") == 2);
+  // Three: BALL's own (the ball is placed across the wall), then the two overlaps.
+  CHECK(count_of(werr, "warning:") == 3);
+  CHECK_THAT(werr, Catch::Contains("deck.dat:4: warning: BALL: ball 1 crosses wall 1"));
   CHECK_THAT(werr, Catch::Contains("deck.dat:7: warning: at cycle 1 the overlap of ball 1 on wall 1 is 0.2 of ball 1's radius"));
   CHECK_THAT(werr, Catch::Contains("deck.dat:11: warning: at cycle 3 the overlap of ball 1 on wall 1 is 0.2"));
 }
