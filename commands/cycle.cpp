@@ -117,8 +117,8 @@ const Command cycle_command = {
     "from the target at each of ten checks): axial, volumetric, q, p, sig1, sig3 (the sample's, SAMPLE; in a periodic cell without "
     "one, the cell's accumulated strain and its average stress, z axial), or time. Example: "
     "`cycle 400000 until axial 0.1` shears a triaxial sample to 10% axial strain. Ctrl-C stops at the end of the current step and keeps the model (in a batch run the "
-    "deck then stops). Under mpirun, Ctrl-C ends the job (mpirun's way): the ranks stop together and rank 0 "
-    "says at which cycle; SIGUSR1 sent to mpirun stops the CYCLE as Ctrl-C does without it. A run that goes unstable stops with a message naming the cycle, how much the energy "
+    "deck then stops). Under mpirun, Ctrl-C ends the job (mpirun's way) and the output says at which cycle; "
+    "SIGUSR1 sent to mpirun stops the CYCLE as Ctrl-C does without it. A run that goes unstable stops with a message naming the cycle, how much the energy "
     "balance grew over the last cycles (or that the velocities flip sign every cycle), the fastest ball and a "
     "suggested FRAC (from the energy's growth where it grew exponentially, at most half the FRAC), and leaves the "
     "last good state to print or save. When the energy balance (PRINT energy) "
@@ -128,11 +128,7 @@ const Command cycle_command = {
     "for what happened, mostly contacts that form and break within a few steps (impacts). A long run shows its progress "
     "(cycles/s, time left): a bar redrawn in place at the interactive prompt, a plain line every 10 s "
     "otherwise (SET progress). At the end one line gives the cycle, time, step and speed, and in batch "
-    "where the time went (contact detection, forces, motion, output). A CYCLE keeps no per-contact results "
-    "(forces, normals, overlaps, the balls' unbalanced forces) in memory, two fifths of a dense model's: the "
-    "first command after it that reads them takes the last step again from a copy of the step before, to "
-    "the same bits (unless HIST or DUMP recorded that step; on several ranks rank 0 alone takes it, for what it "
-    "prints and writes, and the others leave the results unmade).",
+    "where the time went (contact detection, forces, motion, output).",
     "cycle 1000",
     {"until", "axial", "volumetric", "q", "p", "sig1", "sig3", "time", "every"}, run_cycle};
 

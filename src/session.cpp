@@ -148,13 +148,11 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   // More balls than the densest packing of the smallest could hold is no run at all: say so at once.
   {
     const auto L = s.length();
-    double volume = 1;
-    for (int a = 0; a < 3; ++a) volume *= s.periodic ? L[a] : std::max(0.0, L[a]);
-    volume = room_for_centres(s, range, model_.walls, rhi);   // the part the range and the walls leave
+    const double volume = room_for_centres(s, range, model_.walls, rhi);   // the part the range and the walls leave
     const double most = 0.7405 * volume / (4.0 / 3.0 * M_PI * rlo * rlo * rlo);
     if (static_cast<double>(n) > most)
       throw std::runtime_error(fmt::format(
-          "GEN: {} balls of radius {} or more cannot fit in the space (at most {:.3g} even packed as densely as "
+          "GEN: {} balls of radius {} or more cannot fit in the region (at most {:.3g} even packed as densely as "
           "spheres can be){}", n, rlo, most, radius_unit_hint(rlo, rhi, L)));
   }
   std::mt19937_64 rng(seed);

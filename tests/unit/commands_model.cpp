@@ -164,7 +164,7 @@ TEST_CASE("commands: GEN places non-overlapping balls reproducibly and says when
   // Far more than could ever fit is an error at once (it tried 2000 n times before).
   Harness d;
   CHECK_FALSE(d.deck("start box 0 10 0 10 0 10\ngen 1000 2 2 seed 1\n"));
-  CHECK(d.first_error_line().find("1000 balls of radius 2 or more cannot fit in the space (at most 22.1") != std::string::npos);
+  CHECK(d.first_error_line().find("1000 balls of radius 2 or more cannot fit in the region (at most 22.1") != std::string::npos);
 }
 
 TEST_CASE("commands: GEN numbers its balls in space order", "[commands][threads]") {

@@ -127,7 +127,7 @@ TEST_CASE("traps: GEN with radii larger than the box hints at the unit", "[inter
   Harness h;
   CHECK_FALSE(h.deck("start box 0 0.1 0 0.1 0 0.1\ngen 100 2 3\n"));
   CHECK(h.first_error_line() ==
-        "deck.dat:2: error: GEN: 100 balls of radius 2 or more cannot fit in the space (at most 2.21e-05 even packed as "
+        "deck.dat:2: error: GEN: 100 balls of radius 2 or more cannot fit in the region (at most 2.21e-05 even packed as "
         "densely as spheres can be); the radii (2 to 3) are larger than the space (0.1 m wide): sizes in another "
         "unit? trubal's unit of length is the metre (a radius of 2 mm is 0.002)");
   Harness fits;   // sizes of the space's unit that are merely too many: no hint
