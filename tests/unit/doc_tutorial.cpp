@@ -101,3 +101,41 @@ TEST_CASE("tutorial: the undrained test keeps the volume and climbs a stress pat
   CHECK(last[q] / last[p] < 1.6);
   CHECK(png(dir.path() / "undrained_path.png"));
 }
+
+TEST_CASE("examples: every file an example deck writes is one git ignores, run in examples/ or at the root", "[doc][examples]") {
+  // A user runs an example from the checkout (README's first command does, in examples/): what it
+  // writes must leave `git status` clean, and no committed file may be overwritten by a run.
+  if (!on_path("git")) TRUBAL_SKIP("git is not installed: the check asks git what it ignores");
+  const fs::path source(TRUBAL_SOURCE_DIR);
+  if (shell("git -C " + quote(source.string()) + " rev-parse --is-inside-work-tree > /dev/null 2>&1") != 0)
+    TRUBAL_SKIP("the source folder is not a git checkout");
+  std::size_t decks = 0, outputs = 0;
+  for (const auto& entry : fs::directory_iterator(source / "examples")) {
+    if (entry.path().extension() != ".dat") continue;
+    ++decks;
+    const std::string text = slurp(entry.path());
+    // Its header says how long it takes.
+    INFO(entry.path().filename().string());
+    CHECK((text.find("Run: trubal examples/") != std::string::npos));
+    CHECK((text.find("(about ") != std::string::npos || text.find("(under a second") != std::string::npos));
+    // The files it writes: `file NAME` on a HIST, PLOT, PRINT or DUMP line, and SAVE's.
+    for (const auto& line : lines_of(text)) {
+      std::istringstream in(line);
+      std::vector<std::string> words;
+      for (std::string w; in >> w;) words.push_back(w);
+      if (words.empty() || words[0][0] == '*' || words[0][0] == ';') continue;
+      std::vector<std::string> names;
+      if (words[0] == "save" && words.size() > 1) names.push_back(words[1]);
+      for (std::size_t k = 0; k + 1 < words.size(); ++k)
+        if (words[k] == "file" && words[0] != "call") names.push_back(words[k + 1]);
+      for (const auto& name : names) {
+        ++outputs;
+        INFO("writes " << name);
+        for (const std::string& where : {"examples/" + name, name})
+          CHECK(shell("cd " + quote(source.string()) + " && git check-ignore -q " + quote(where)) == 0);
+      }
+    }
+  }
+  CHECK(decks >= 10);
+  CHECK(outputs >= 20);
+}
