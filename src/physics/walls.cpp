@@ -50,6 +50,17 @@ void walls_before_step(Model& model, double dt) {
   for (Wall& w : model.walls) {
     if (!w.servo_on) { w.servo_integral = 0; continue; }
     const double area = wall_servo_area(model, w);
+    // No area (a save older than format 8 lost the wall it came from): the servo cannot measure a
+    // stress, and the wall stands until SERVO wall n is given again.
+    if (!(area > 0)) {
+      if (w.kind == WallKind::Cylinder) {
+        w.radius_rate = 0;
+      } else {
+        const double along = w.velocity[0] * w.normal[0] + w.velocity[1] * w.normal[1] + w.velocity[2] * w.normal[2];
+        for (int a = 0; a < 3; ++a) w.velocity[a] -= along * w.normal[a];
+      }
+      continue;
+    }
     if (fallback < 0) fallback = default_wall_speed(model, dt);
     const double most = w.servo_max_speed > 0 ? w.servo_max_speed : fallback;
     // The stress follows the wall's advance s as sum k_n s / A: G = f A / (sum k_n dt).
