@@ -70,6 +70,13 @@ SizeDistribution read_psd(Args& args) {
 
 }  // namespace
 
+// Ctrl-C stopped GEN, which keeps what it placed: at the shell a warning, in a batch deck an error
+// that stops it (exit 1), as Ctrl-C stops a CYCLE.
+static void interrupted(Context& ctx, const std::string& what) {
+  if (!ctx.interp.interactive) throw InputError(what);
+  ctx.warn(what);
+}
+
 static void run_gen(Context& ctx, Args& args) {
   Session::GenSpec spec;
   std::int64_t n = 0;
@@ -127,7 +134,7 @@ static void run_gen(Context& ctx, Args& args) {
   if (!target && !psd && !types) {   // as it always was: the same balls for the same seed
     auto placed = ctx.session.generate(static_cast<std::size_t>(n), spec.sizes.a, spec.sizes.b, type, spec.seed, spec.range);
     if (ctx.session.gen_interrupted)
-      ctx.warn(fmt::format("GEN interrupted by Ctrl-C: {} of {} balls placed (kept)", placed, n));
+      interrupted(ctx, fmt::format("GEN interrupted by Ctrl-C: {} of {} balls placed (kept)", placed, n));
     else if (placed < static_cast<std::size_t>(n))
       ctx.warn(fmt::format("GEN placed only {} of {} balls: no room for more without overlap", placed, n));
     ctx.out << fmt::format("{} balls generated (type {}, seed {})\n", placed, type, spec.seed);
@@ -141,7 +148,7 @@ static void run_gen(Context& ctx, Args& args) {
                                        spec.types.size() > 1 ? "s" : "", kinds, spec.seed, ctx.session.last_sizes()->describe());
   if (!target) {
     if (ctx.session.gen_interrupted)
-      ctx.warn(fmt::format("GEN interrupted by Ctrl-C: {} of {} balls placed (kept)", made.balls.size(), n));
+      interrupted(ctx, fmt::format("GEN interrupted by Ctrl-C: {} of {} balls placed (kept)", made.balls.size(), n));
     else if (made.balls.size() < static_cast<std::size_t>(n))
       ctx.warn(fmt::format("GEN placed only {} of {} balls: no room for more without overlap (the largest are "
                            "placed first)", made.balls.size(), n));
@@ -154,7 +161,7 @@ static void run_gen(Context& ctx, Args& args) {
   ctx.out << fmt::format("porosity {:.4f} ({}) in a volume of {:.6g}, asked {} {:g}; {} growth stages, {} relaxation "
                          "sweeps\n", reached, as_void, made.volume, target, target_value, made.stages, made.sweeps);
   if (ctx.session.gen_interrupted)
-    ctx.warn(fmt::format("GEN interrupted by Ctrl-C at porosity {:.4f} (the balls are kept there)", reached));
+    interrupted(ctx, fmt::format("GEN interrupted by Ctrl-C at porosity {:.4f} (the balls are kept there)", reached));
   else if (!made.reached)
     throw std::runtime_error(fmt::format(
         "GEN: porosity {:g} not reached: the balls stopped at porosity {:.4f} ({}), where growing them further left "
@@ -172,7 +179,9 @@ const Command gen_command = {
     "the walls. The same "
     "seed gives the same balls (default seed: SET seed) on every backend and thread count. More balls than the "
     "densest packing of spheres of radius rlo could hold is an error at once; if there is no room for all "
-    "(200,000 failed tries in a row), it says how many it placed, and Ctrl-C stops it keeping those placed. The "
+    "(200,000 failed tries in a row), it says how many it placed, and Ctrl-C stops it keeping those placed (a batch deck then stops, exit 1). In the periodic "
+    "space every periodic edge must be at least twice the largest diameter (CYCLE's rule); a larger radius is an "
+    "error at once. The "
     "new balls are numbered in space order (by cells of the largest diameter: z slowest, then y, then x), so that "
     "balls near in space are near in number, as the threaded backend needs. "
     "Walls bound every GEN: a ball goes only where it touches no wall and lies on the wall's side: on the side a "

@@ -118,6 +118,13 @@ static void run_servo(Context& ctx, Args& args) {
     }
   }
   options();
+  // STRAIN's bound on what a step may do to the cell, for the fastest rate the servo may choose:
+  // checked here where the step is known (TSTEP, or the last CYCLE's), else before the first step.
+  const double dt = now.settings.fixed_dt > 0 ? now.settings.fixed_dt : now.dt;
+  if (most > 0 && dt > 0 && !(most * dt <= kMostEdgeChangePerStep))
+    args.fail(fmt::format("max rate {:.4g} would change a cell edge by {:.3g} of its length in one step of {:.3g} (at "
+                          "most {}): give at most {:.3g}",
+                          most, most * dt, dt, kMostEdgeChangePerStep, kMostEdgeChangePerStep / dt));
   for (double t : target)
     if (!std::isfinite(t)) args.fail("target stresses must be finite");
   for (int a = 0; a < 3; ++a)
@@ -152,7 +159,9 @@ const Command servo_command = {
     "gain (gain 0 or absent) is recomputed every step from the last force pass: g = 0.15 / (M dt) with "
     "M = (1/V) sum k_n (l n_a)^2 over the touching contacts, so that the stress would close 15% of its error "
     "per step (PFC's gain rule in stress form). The default max rate is 1e-4 / dt (the cell changes by at "
-    "most 1e-4 of its size per step), which is also the rate used while nothing touches (I is then 0). "
+    "most 1e-4 of its size per step), which is also the rate used while nothing touches (I is then 0). As "
+    "for STRAIN, max times the step may not pass 0.5 (half an edge in one step): SERVO refuses a larger max "
+    "where the step is known (TSTEP, or after a CYCLE), and CYCLE before its first step. "
     "`SERVO off` stops the servo; its axes stop straining. The integral is state: SAVE keeps it. "
     "`SERVO wall n stress s` drives wall n instead (PFC's servo-controlled platen): its speed along its normal "
     "(toward the balls for a plane; the right-hand normal of a polygon's vertex order, so order them to face "

@@ -142,6 +142,12 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   const Space& s = model_.space;
   double rmax = rhi;
   for (double r : model_.balls.rad) rmax = std::max(rmax, r);
+  // The periodic cell's rule (CYCLE's): every periodic edge at least twice the largest diameter. A
+  // ball far larger than the cell was sought for ever among its own images.
+  for (int a = 0; a < 3; ++a)
+    if (s.wraps(a) && !(4 * rhi <= s.hi[a] - s.lo[a]))
+      throw std::runtime_error(fmt::format("GEN: the periodic edge {} = {:g} is less than twice the largest diameter "
+                                           "{:g} (CYCLE would refuse the cell)", "xyz"[a], s.hi[a] - s.lo[a], 2 * rhi));
   const Balls& b = model_.balls;
   PlacementGrid grid(s, rmax, b.size() + n);
   for (std::size_t k = 0; k < b.size(); ++k) grid.insert(b.x[k], b.y[k], b.z[k], b.rad[k]);

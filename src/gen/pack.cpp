@@ -136,7 +136,7 @@ PackResult pack(const Model& model, const PackRequest& q) {
     if (g.bounded[a] && 2 * rmax > L)
       throw std::runtime_error(fmt::format("GEN: a ball of diameter {:g} does not fit in the region along {} ({:g})",
                                            2 * rmax, "xyz"[a], L));
-    if (!g.bounded[a] && target && 4 * rmax > L)
+    if (!g.bounded[a] && 4 * rmax > L)
       throw std::runtime_error(fmt::format("GEN: the periodic edge {} = {:g} is less than twice the largest diameter "
                                            "{:g} (CYCLE would refuse the cell)", "xyz"[a], L, 2 * rmax));
   }

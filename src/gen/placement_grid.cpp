@@ -50,8 +50,9 @@ void PlacementGrid::cell_of(int a, double v, long& cell, long& wraps) const {
   if (wraps_[a]) {
     const double periods = std::floor(f / static_cast<double>(cells_[a]));
     wraps = static_cast<long>(std::clamp(periods, -1e9, 1e9));
-    cell = static_cast<long>(f - periods * static_cast<double>(cells_[a]));
-    cell = std::clamp(cell, 0L, cells_[a] - 1);
+    // (clamped as a double: far from the cell the difference is rounding, and may pass a long)
+    cell = static_cast<long>(std::clamp(f - periods * static_cast<double>(cells_[a]), 0.0,
+                                        static_cast<double>(cells_[a] - 1)));
   } else {
     cell = static_cast<long>(std::clamp(f, 0.0, static_cast<double>(cells_[a] - 1)));
   }

@@ -57,8 +57,11 @@ template <class F> bool PlacementGrid::visit(double x, double y, double z, doubl
   long c[3], w[3], k[3];
   for (int a = 0; a < 3; ++a) {
     cell_of(a, p[a], c[a], w[a]);
-    k[a] = static_cast<long>(std::ceil(reach / cell_[a]));
-    if (!wraps_[a]) k[a] = std::min(k[a], cells_[a]);
+    // Cells each way, at most the grid (a bounded axis) or one period and a cell (a periodic one,
+    // where GEN keeps reach within half an edge): a reach of 1e308 made it overflow a long.
+    const double need = std::ceil(reach / cell_[a]);
+    const double most = static_cast<double>(cells_[a]) + (wraps_[a] ? 1 : 0);
+    k[a] = need <= most ? static_cast<long>(need) : static_cast<long>(most);
   }
   for (long i = -k[2]; i <= k[2]; ++i) {
     long cz = c[2] + i, sz = 0;

@@ -195,35 +195,43 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
   return any;
 }
 
+// How many edges to take off a tilt to bring it within half an edge: the nearest whole number,
+// computed at once (a loop taking one edge at a time ran for ever on a tilt of 1e300 edges); 0 where
+// the quotient is not finite (a collapsed or infinite cell, which CYCLE refuses elsewhere).
+static double edges_off(double tilt, double edge) {
+  if (!(std::abs(tilt) > 0.5 * edge)) return 0;
+  const double n = std::round(tilt / edge);
+  return std::isfinite(n) ? n : 0;
+}
+
 bool reduce_cell_tilt(Model& model) {
   Space& s = model.space;
   if (!s.periodic) return false;
   ContactTable& c = model.contacts;
   const auto L = s.length();
-  // Replacing edge `from` by itself less `by` edges `other`: image n becomes n' with
-  // n'_other = n_other + by n_from (the same offset H n).
-  auto renumber = [&](std::vector<std::int8_t>& other, const std::vector<std::int8_t>& from, int by) {
+  // Replacing edge `from` by itself less n edges `other`: image m becomes m' with
+  // m'_other = m_other + n m_from (the same offset H m). Images are 8-bit, so n counts modulo 256,
+  // as n renamings one at a time would.
+  auto renumber = [&](std::vector<std::int8_t>& other, const std::vector<std::int8_t>& from, double n) {
+    const int by = static_cast<int>(std::fmod(n, 256.0));
     for (std::size_t p = 0; p < other.size() && p < from.size(); ++p)
       other[p] = static_cast<std::int8_t>(other[p] + by * from[p]);
   };
   bool any = false;
-  while (std::abs(s.tilt[2]) > 0.5 * L[1]) {   // yz: c -/+ b
-    const int by = s.tilt[2] > 0 ? 1 : -1;
-    s.tilt[2] -= by * L[1];
-    s.tilt[1] -= by * s.tilt[0];
-    renumber(c.image_y, c.image_z, by);
+  if (const double n = edges_off(s.tilt[2], L[1]); n != 0) {   // yz: c -/+ n b
+    s.tilt[2] -= n * L[1];
+    s.tilt[1] -= n * s.tilt[0];
+    renumber(c.image_y, c.image_z, n);
     any = true;
   }
-  while (std::abs(s.tilt[1]) > 0.5 * L[0]) {   // xz: c -/+ a
-    const int by = s.tilt[1] > 0 ? 1 : -1;
-    s.tilt[1] -= by * L[0];
-    renumber(c.image_x, c.image_z, by);
+  if (const double n = edges_off(s.tilt[1], L[0]); n != 0) {   // xz: c -/+ n a
+    s.tilt[1] -= n * L[0];
+    renumber(c.image_x, c.image_z, n);
     any = true;
   }
-  while (std::abs(s.tilt[0]) > 0.5 * L[0]) {   // xy: b -/+ a
-    const int by = s.tilt[0] > 0 ? 1 : -1;
-    s.tilt[0] -= by * L[0];
-    renumber(c.image_x, c.image_y, by);
+  if (const double n = edges_off(s.tilt[0], L[0]); n != 0) {   // xy: b -/+ n a
+    s.tilt[0] -= n * L[0];
+    renumber(c.image_x, c.image_y, n);
     any = true;
   }
   return any;

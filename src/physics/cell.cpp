@@ -136,6 +136,14 @@ void cell_before_step(Model& model, double dt, const ContactMoments* last, Field
     stress = average_stress(model, volume);
   std::array<double, 3> rates{s.strain_rate[0], s.strain_rate[1], s.strain_rate[2]};
   const double most = s.servo_max_rate > 0 ? s.servo_max_rate : default_servo_max_rate(dt);
+  // STRAIN's rule (check_cell_step) for the rates the servo may choose: a max rate that would let
+  // it change an edge by more than half in one step is refused before anything moves (1e9 made
+  // edges of zero or infinite length, and tilts no reduction could bring back).
+  if (!(most * dt <= kMostEdgeChangePerStep))
+    throw std::runtime_error(fmt::format(
+        "SERVO max rate {:.4g} would change a cell edge by {:.3g} of its length in one step of {:.3g} (at most {}): "
+        "lower SERVO max (at most {:.3g} at this step)",
+        most, most * dt, dt, kMostEdgeChangePerStep, kMostEdgeChangePerStep / dt));
   for (int a = 0; a < 3; ++a) {
     double& integral = s.servo_integral[a];
     if (!s.servo_on[a]) { integral = 0; continue; }
@@ -157,7 +165,7 @@ void check_cell_step(const Space& s, double dt) {
                             f.vxy * dt / f.lx, f.vxz * dt / f.lx, f.vyz * dt / f.ly};
   static const char* what[6] = {"x edge", "y edge", "z edge", "xy tilt", "xz tilt", "yz tilt"};
   for (int k = 0; k < 6; ++k)
-    if (!(std::abs(change[k]) <= 0.5))
+    if (!(std::abs(change[k]) <= kMostEdgeChangePerStep))
       throw std::runtime_error(fmt::format(
           "the strain rates would change the cell's {} by {:.3g} of an edge in one step (at most 0.5); "
           "STRAIN asked for more than any loading can be: lower the rate", what[k], change[k]));

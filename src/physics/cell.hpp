@@ -59,12 +59,16 @@ double servo_stiffness(const Model& model, int axis);
 // Default largest servo rate: rate dt <= 1e-4, the cell changes by at most 1e-4 of its size per step.
 double default_servo_max_rate(double dt);
 
+// The most a step may change an edge or a tilt of the periodic cell, as a fraction of an edge: a
+// rate beyond it is beyond any physical loading (STRAIN's rates, SERVO's max rate).
+inline constexpr double kMostEdgeChangePerStep = 0.5;
 // Throws std::runtime_error when the strain rates would change any edge or tilt of the periodic cell
-// by more than half an edge in one step of dt (a rate beyond any physical loading).
+// by more than kMostEdgeChangePerStep of an edge in one step of dt.
 void check_cell_step(const Space& space, double dt);
 
 // Before a step in a periodic space: the servo's new rates, from the last force pass's stress
-// (`last`, or the contact table's per-pair results when it is null).
+// (`last`, or the contact table's per-pair results when it is null). Throws std::runtime_error, before
+// it changes anything, when the servo's max rate times dt passes kMostEdgeChangePerStep.
 // With `defer`, the velocity change of the new rates is handed back, not applied (set_all_strain_rates).
 void cell_before_step(Model& model, double dt, const ContactMoments* last = nullptr, FieldChange* defer = nullptr);
 // After a step of dt: the work the cell did on the balls through image contacts (image_power: the
