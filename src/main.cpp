@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <iostream>
+#include <new>
 #include <sstream>
 #include <streambuf>
 
@@ -38,7 +39,17 @@ int run(int argc, char** argv);
 
 int main(int argc, char** argv) {
   trubal::comm::init(argc, argv);
-  const int status = run(argc, argv);
+  int status = 1;
+  // What the interpreter did not report (a deck that could not be read at all, a report that itself
+  // ran out of memory) is still a plain error and exit status 1, never std::terminate's abort. By
+  // here the session is gone and its memory free again; the out-of-memory text is fixed even so.
+  try {
+    status = run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fputs("trubal: error: out of memory: the system refused more memory\n", stderr);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "trubal: error: %s\n", e.what());
+  }
   trubal::comm::finalize();
   return status;
 }

@@ -1,6 +1,8 @@
 #include "interp/interpreter.hpp"
 
 #include <charconv>
+#include <cstdio>
+#include <new>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -12,6 +14,7 @@
 
 #include "interp/command.hpp"
 #include "interp/lexer.hpp"
+#include "interp/signals.hpp"
 #include "support/comm.hpp"
 
 namespace trubal {
@@ -47,7 +50,29 @@ FileText read_on_root(const std::function<FileText()>& read) {
   return out;
 }
 
-std::string read_all(std::istream& in) { return std::string(std::istreambuf_iterator<char>(in), {}); }
+// A deck's text, read to its end or to the first line longer than kMaxLineLength or holding a NUL
+// byte (kept: the LineReader reports it at its line; the rest is never read, so a file of zeros does
+// not fill the memory). Throws InputError when a read fails: never taken for the end of the file.
+std::string read_all(std::istream& in, const std::string& what) {
+  std::string text;
+  std::size_t line_length = 0;
+  std::vector<char> chunk(std::size_t{1} << 16);
+  while (in) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));   // (a read error: badbit)
+    const auto got = static_cast<std::size_t>(in.gcount());
+    for (std::size_t k = 0; k < got; ++k) {
+      if (chunk[k] == '\n') {
+        line_length = 0;
+      } else if (chunk[k] == '\0' || ++line_length > kMaxLineLength) {
+        text.append(chunk.data(), k + 1);
+        return text;
+      }
+    }
+    text.append(chunk.data(), got);
+  }
+  if (in.bad()) throw InputError(fmt::format("cannot read {}: a read error", what));
+  return text;
+}
 
 }  // namespace
 
@@ -56,7 +81,11 @@ std::optional<std::string> Interpreter::read_file_on_root(const std::string& pat
     FileText f;
     std::ifstream in(path);
     f.ok = static_cast<bool>(in);
-    if (f.ok) f.text = read_all(in);
+    try {
+      if (f.ok) f.text = read_all(in, fmt::format("'{}'", printable(path)));
+    } catch (const InputError&) {   // (on rank 0 alone: the others learn it from its answer)
+      f.ok = false;
+    }
     return f;
   });
   if (!file.ok) return std::nullopt;
@@ -64,10 +93,18 @@ std::optional<std::string> Interpreter::read_file_on_root(const std::string& pat
 }
 
 std::string Interpreter::read_stream_on_root(std::istream& in) {
-  std::string text;
-  if (comm::root()) text = read_all(in);
-  comm::broadcast(text);
-  return text;
+  FileText file = read_on_root([&] {
+    FileText f;
+    try {
+      f.text = read_all(in, "the standard input");
+      f.ok = true;
+    } catch (const InputError& e) {
+      f.error = e.what();
+    }
+    return f;
+  });
+  if (!file.ok) throw InputError(file.error);   // on every rank alike
+  return std::move(file.text);
 }
 
 void Interpreter::set_variable(const std::string& name, const std::string& value) { variables_[to_lower(name)] = value; }
@@ -97,6 +134,29 @@ void Interpreter::report(const std::string& raw_message, const LocatedError* at)
         err << fmt::format("{}:{}: note: called from here\n", f->name, f->line);
   }
   err.flush();
+}
+
+void Interpreter::report_out_of_memory() {
+  // Said with a fixed text and what is already allocated: formatting the usual message could itself
+  // fail (a model that fills the memory leaves nothing to report with). FILE:LINE as report's.
+  static constexpr char kText[] = ": error: out of memory: the system refused more memory for this command (the "
+                                  "model is as the command left it)\n";
+  try {
+    last_error_ = Error{here_file(), here_line(), "out of memory"};
+  } catch (...) {
+  }
+  if (!report_errors) return;
+  try {
+    output_.out().flush();
+    char line[24];
+    const auto [end, ec] = std::to_chars(line, line + sizeof line, here_line());
+    auto& err = output_.err();
+    if (!frames_.empty()) err << frames_.back().name << ':' << std::string_view(line, static_cast<std::size_t>(end - line));
+    else err << "trubal";
+    err << kText << std::flush;
+  } catch (...) {
+    std::fputs(kText + 2, stderr);
+  }
 }
 
 void Interpreter::warn(const std::string& raw_message) {
@@ -143,6 +203,14 @@ void Interpreter::execute(const std::string& line) {
   Context ctx{session_, *this, output_.out()};
   if (comm::size() == 1) command.run(ctx, args);
   else run_agreed(command, ctx, args, lazily);
+  // Ctrl-C during a command that does not look for it (RESTART, SAVE): a batch deck stops after it,
+  // as at a CYCLE (exit 1), rather than the next CYCLE clearing the request. Under mpirun the ranks
+  // agree (a collective call: after the commands every rank runs in step, the ones that are not quick).
+  if (!interactive && (comm::size() == 1 ? interrupt_requested().load() : !lazily && interrupt_now())) {
+    interrupt_requested() = false;
+    throw InputError(fmt::format("interrupted by {} (during {})",
+                                 comm::size() > 1 ? "a signal (Ctrl-C at mpirun, or SIGUSR1)" : "Ctrl-C", command.name));
+  }
   if (flush) output_.out().flush();
   const std::string log_failure = output_.take_log_failure();   // (with a log on, it flushes)
   if (!log_failure.empty()) output_.err() << "warning: " << log_failure << '\n';
@@ -228,6 +296,10 @@ bool Interpreter::run_frames(std::istream& in, const std::string& name, const st
     report(e.what(), &e);
     frames_.pop_back();
     throw ReportedError{};
+  } catch (const std::bad_alloc&) {
+    report_out_of_memory();
+    frames_.pop_back();
+    throw ReportedError{};
   } catch (const std::exception& e) {
     report(e.what());
     frames_.pop_back();
@@ -270,7 +342,12 @@ bool Interpreter::run_file(const std::string& path) {
     }
     std::error_code ec;
     f.canonical = fs::weakly_canonical(path, ec).string();
-    f.text = read_all(in);
+    try {
+      f.text = read_all(in, fmt::format("the deck '{}'", path));
+    } catch (const InputError& e) {
+      f.error = e.what();
+      return f;
+    }
     f.ok = true;
     return f;
   });
@@ -292,6 +369,10 @@ bool Interpreter::run_interactive_line(const std::string& line, int line_no) {
   try {
     execute(strip_comment(line));
   } catch (const ReportedError&) {
+    frames_.pop_back();
+    return false;
+  } catch (const std::bad_alloc&) {
+    report_out_of_memory();
     frames_.pop_back();
     return false;
   } catch (const std::exception& e) {
@@ -336,7 +417,12 @@ void Interpreter::call_file(const std::string& path) {
       f.error = fmt::format("cannot read the file '{}'", printable(path));
       return f;
     }
-    f.text = read_all(in);
+    try {
+      f.text = read_all(in, fmt::format("the file '{}' to CALL", printable(path)));
+    } catch (const InputError& e) {
+      f.error = e.what();
+      return f;
+    }
     f.ok = true;
     return f;
   });

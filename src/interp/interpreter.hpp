@@ -44,7 +44,8 @@ class Interpreter {
   // One line typed at the prompt: errors are reported, the session goes on. Returns false on error.
   bool run_interactive_line(const std::string& line, int line_no);
 
-  // A whole stream (a deck on standard input) as rank 0 read it, on every rank.
+  // A whole stream (a deck on standard input) as rank 0 read it, on every rank, to its first line
+  // over kMaxLineLength (the LineReader reports it). Throws InputError on every rank when it fails.
   static std::string read_stream_on_root(std::istream& in);
   // A data file's text as rank 0 read it, on every rank (a collective call); nothing where rank 0
   // could not open it.
@@ -103,6 +104,8 @@ class Interpreter {
   int here_line() const { return frames_.empty() ? 0 : frames_.back().line; }
   // `at`: the place another rank failed at, not this rank's.
   void report(const std::string& message, const LocatedError* at = nullptr);
+  // An out-of-memory error at the current line, reported without allocating.
+  void report_out_of_memory();
   // Runs a command on every rank and agrees whether it failed (comm::first_failure); `lazily`: a
   // success leaves the agreement pending (agree_lazily).
   void run_agreed(const Command& command, Context& ctx, Args& args, bool lazily);

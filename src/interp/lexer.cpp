@@ -54,11 +54,51 @@ static std::string_view trim_right(std::string_view s) {
   return s;
 }
 
+static std::string too_long(std::string_view what) {
+  return fmt::format("{} is longer than {} characters (1 MiB): not a deck? (a binary file?)", what, kMaxLineLength);
+}
+
+bool LineReader::read_physical(std::string& line) {
+  line.clear();
+  bool any = false;   // characters (or a newline) read for this line
+  char chunk[4096];
+  for (bool more = true; more;) {
+    // istream::getline stops at a full chunk (failbit) rather than growing a string without end, and
+    // turns a failed read into badbit (an exception from the stream buffer included).
+    in_.getline(chunk, sizeof chunk);
+    const auto got = static_cast<std::size_t>(in_.gcount());
+    if (in_.bad()) {
+      start_line_ = physical_ + 1;
+      throw InputError("cannot read the input: a read error (the rest of the deck is not run)");
+    }
+    more = false;
+    if (!in_.fail()) {   // a whole line (its newline extracted unless the input ended)
+      line.append(chunk, in_.eof() ? got : got - 1);
+      any = true;
+    } else if (got == sizeof chunk - 1 && !in_.eof()) {   // the line goes on past the chunk
+      line.append(chunk, got);
+      in_.clear();
+      any = more = true;
+    } else if (!any) {   // the end of the input
+      return false;
+    }
+    if (line.size() > kMaxLineLength) {
+      start_line_ = physical_ + 1;
+      throw InputError(too_long("the line"));
+    }
+  }
+  ++physical_;
+  if (line.find('\0') != std::string::npos) {
+    start_line_ = physical_;
+    throw InputError("a NUL byte in the line: not a deck? (a binary file?)");
+  }
+  return true;
+}
+
 std::optional<std::string> LineReader::next() {
   std::string logical, physical_line;
   bool continuing = false;
-  while (std::getline(in_, physical_line)) {
-    ++physical_;
+  while (read_physical(physical_line)) {
     if (physical_ == 1 && physical_line.starts_with("\xEF\xBB\xBF")) physical_line.erase(0, 3);   // UTF-8 BOM
     if (!continuing) start_line_ = physical_;
     const std::string stripped = strip_comment(physical_line);   // body views it: keep it alive
@@ -69,10 +109,12 @@ std::optional<std::string> LineReader::next() {
       body.remove_suffix(1);
       logical.append(body);
       logical.push_back(' ');
+      if (logical.size() > kMaxLineLength) throw InputError(too_long("the line joined by its continuations"));
       continuing = true;
       continue;
     }
     logical.append(body);
+    if (logical.size() > kMaxLineLength) throw InputError(too_long("the line joined by its continuations"));
     return logical;
   }
   if (continuing)
@@ -137,6 +179,11 @@ std::string expand_variables(std::string_view line,
     std::string name = to_lower(line.substr(start, end - start));
     auto value = lookup(name);
     if (!value) throw InputError(fmt::format("undefined variable ${} (define it with SET {} value)", name, name));
+    // A value is not expanded again (no depth to bound), but SET can double one line after line:
+    // the line's length is bounded before it is built.
+    if (value->size() > kMaxLineLength - std::min(kMaxLineLength, out.size() + (line.size() - end)))
+      throw InputError(fmt::format("the line with ${} replaced would be longer than {} characters (1 MiB)", name,
+                                   kMaxLineLength));
     out += *value;
     k = end - (braced ? 0 : 1);
   }

@@ -23,17 +23,26 @@ class InputError : public std::runtime_error {
 // is a comment as a whole and becomes empty.
 std::string strip_comment(std::string_view line);
 
+// The longest line a deck may have, physical or joined by continuations, and the longest a line
+// may become with its $variables replaced (doc/language.md "Limits"): a longer one is an error at
+// its FILE:LINE, found before more memory is taken (a file of zeros is one endless line).
+inline constexpr std::size_t kMaxLineLength = std::size_t{1} << 20;
+
 // Reads logical lines: comments stripped, `&`/`\` continuations joined. Tracks physical line
 // numbers; `line()` of the last logical line is the physical line it started on.
 class LineReader {
  public:
   explicit LineReader(std::istream& in) : in_(in) {}
   // Next logical line, or nullopt at end of input. Throws InputError for a continuation that runs
-  // into the end of the input.
+  // into the end of the input, a line longer than kMaxLineLength, a NUL byte (a binary file) and a
+  // failed read (never taken for the end of the input).
   std::optional<std::string> next();
   int line() const { return start_line_; }
 
  private:
+  // One physical line into `line`, without its newline; false at the end of the input.
+  bool read_physical(std::string& line);
+
   std::istream& in_;
   int physical_ = 0;
   int start_line_ = 0;

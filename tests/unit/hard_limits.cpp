@@ -1,11 +1,18 @@
-// Limits a deck from someone else cannot pass (issue 50): the servo's max rate and a radius beyond
-// the periodic cell. Each case hung before.
+// Limits a deck from someone else cannot pass (issue 50): the servo's max rate, a radius beyond the
+// periodic cell, the length of a line read or expanded, a failed read, Ctrl-C in a batch deck, and
+// an out-of-memory error reported rather than aborted on. Each case hung, grew the memory without
+// bound, ended the deck silently or went on after Ctrl-C before.
 #include "paths.hpp"
 #include <catch2/catch.hpp>
+
+#include <limits>
+#include <streambuf>
 
 #include <fmt/format.h>
 
 #include "gen/placement_grid.hpp"
+#include "interp/lexer.hpp"
+#include "interp/signals.hpp"
 #include "interp_support.hpp"
 #include "model/periodic_cell.hpp"
 
@@ -21,6 +28,12 @@ std::string deck_error(const std::string& deck) {
   CHECK_FALSE(ok);
   return h.first_error_line();
 }
+
+// A stream whose reads fail (an I/O error, as /proc/self/mem gives): the stream buffer throws.
+class FailingBuffer : public std::streambuf {
+ protected:
+  int_type underflow() override { throw std::ios_base::failure("read error"); }
+};
 
 }  // namespace
 
@@ -77,4 +90,112 @@ TEST_CASE("limits: GEN refuses balls the periodic cell cannot hold, and its grid
   CHECK(grid.overlaps(0.0051, 0.005, 0.005, 1e308));
   CHECK(grid.overlaps(0.0051, 0.005, 0.005, 1000));
   CHECK_FALSE(grid.overlaps(0.001, 0.001, 0.001, 0.0001));
+}
+
+TEST_CASE("limits: a line longer than 1 MiB or with a NUL byte is an error at its line", "[limits]") {
+  const std::string long_line(kMaxLineLength + 1, 'a');
+  CHECK(deck_error("echo one\n" + long_line + "\necho never\n")
+            .starts_with("deck.dat:2: error: the line is longer than 1048576 characters (1 MiB): not a deck?"));
+  // A line of exactly the limit is read (and is then an unknown command, not a read error).
+  CHECK(deck_error(std::string(kMaxLineLength, 'a') + "\n").find("longer than") == std::string::npos);
+  // Joined by continuations: each piece short, the whole too long.
+  std::string joined;
+  for (int k = 0; k < 3; ++k) joined += std::string(kMaxLineLength / 2, 'b') + " &\n";
+  CHECK(deck_error("echo one\n" + joined + "c\n")
+            .starts_with("deck.dat:2: error: the line joined by its continuations is longer than 1048576"));
+  CHECK(deck_error(std::string("echo one\necho t\0wo\n", 19))
+            .starts_with("deck.dat:2: error: a NUL byte in the line: not a deck? (a binary file?)"));
+}
+
+TEST_CASE("limits: a read that fails is an error, never the end of the deck", "[limits]") {
+  FailingBuffer failing;
+  std::istream in(&failing);
+  Harness h;
+  CHECK_FALSE(h.interp.run_deck(in, "broken.dat"));
+  CHECK(h.first_error_line().starts_with("broken.dat:1: error: cannot read the input: a read error"));
+}
+
+TEST_CASE("limits: a $variable expansion longer than 1 MiB is an error before it is built", "[limits]") {
+  // Each SET doubles the value: 2 characters, 2^19 at a18; a19's line would pass the limit.
+  std::string deck = "set a0 xx\n";
+  for (int k = 1; k <= 24; ++k) deck += fmt::format("set a{} $a{}$a{}\n", k, k - 1, k - 1);
+  const auto e = deck_error(deck);
+  CHECK(e.starts_with("deck.dat:20: error: the line with $a18 replaced would be longer than 1048576 characters"));
+  // Below the limit is fine.
+  Harness h;
+  REQUIRE(h.deck(deck.substr(0, deck.find("set a19"))));
+  CHECK(h.interp.variable("a18")->size() == (std::size_t{1} << 19));
+}
+
+TEST_CASE("limits: Ctrl-C during GEN or RESTART stops a batch deck, as during CYCLE", "[limits]") {
+  TempDir dir;
+  WorkingDir here(dir.path());
+  {
+    Harness h;
+    REQUIRE(h.deck("start box 0 20 0 20 0 20\nprop kn 1e5 dens 1000\nball 1 1 1 0.5\nsave m.sav\n"));
+  }
+  // GEN: it keeps what it placed, and the deck stops there (it went on to cycle and save).
+  Harness gen;
+  REQUIRE(gen.deck("start box 0 20 0 20 0 20\n"));
+  interrupt_requested() = true;
+  CHECK_FALSE(gen.deck("gen 100 0.5 0.5\necho never\n"));
+  CHECK(gen.first_error_line() == "deck.dat:1: error: GEN interrupted by Ctrl-C: 0 of 100 balls placed (kept)");
+  CHECK(gen.out.str().find("never") == std::string::npos);
+  CHECK_FALSE(interrupt_requested().load());
+  // At the shell it is a warning, and the shell goes on.
+  gen.interp.interactive = true;
+  interrupt_requested() = true;
+  CHECK(gen.line("gen 100 0.5 0.5"));
+  CHECK(gen.err.str().find("warning: GEN interrupted by Ctrl-C: 0 of 100 balls placed (kept)") != std::string::npos);
+  // RESTART does not look for Ctrl-C: the deck stops after it (the next CYCLE cleared the request).
+  Harness restart;
+  interrupt_requested() = true;
+  CHECK_FALSE(restart.deck("restart m.sav\necho never\n"));
+  CHECK(restart.first_error_line() == "deck.dat:1: error: interrupted by Ctrl-C (during RESTART)");
+  CHECK(restart.session.model().balls.size() == 1);   // what it did is kept
+  CHECK_FALSE(interrupt_requested().load());
+}
+
+TEST_CASE("limits: zeros, unreadable files and out of memory are plain errors with exit 1", "[limits][system]") {
+  TempDir dir;
+  const std::string exe = quote(TRUBAL_EXE);
+  auto run = [&](const std::string& command) {
+    const int status = shell("cd " + quote(dir.str()) + " && " + command + " >out.txt 2>&1");
+    return std::make_pair(status, slurp(dir.path() / "out.txt"));
+  };
+  // /dev/zero: one endless line (it was read to the end of the memory: std::bad_alloc, exit 134).
+  auto [zero_status, zero] = run("timeout 60 " + exe + " /dev/zero </dev/null");
+  INFO(zero);
+  CHECK(zero_status == 1);
+  CHECK(zero.find("/dev/zero:1: error: a NUL byte in the line: not a deck? (a binary file?)") != std::string::npos);
+  // From standard input (under a memory limit it took the failed read for the end: exit 0), read
+  // a line at a time: the endless line is stopped at 1 MiB.
+  auto [stdin_status, from_stdin] = run("timeout 60 " + exe + " - < /dev/zero");
+  INFO(from_stdin);
+  CHECK(stdin_status == 1);
+  CHECK(from_stdin.find("<stdin>:1: error: the line is longer than") != std::string::npos);
+  // A file whose reads fail (std::__ios_failure, exit 134).
+  auto [mem_status, mem] = run("timeout 60 " + exe + " /proc/self/mem </dev/null");
+  INFO(mem);
+  CHECK(mem_status == 1);
+  CHECK(mem.find("error: cannot read the deck '/proc/self/mem': a read error") != std::string::npos);
+  // CALL of a file of zeros stops the deck at that file's line (it skipped the file and went on).
+  dir.write("zeros.dat", std::string(3 << 20, '\0'));
+  dir.write("calls.dat", "echo first\ncall zeros.dat\necho never\n");
+  auto [call_status, call] = run("timeout 60 " + exe + " calls.dat </dev/null");
+  INFO(call);
+  CHECK(call_status == 1);
+  CHECK(call.find("zeros.dat:1: error: a NUL byte in the line") != std::string::npos);
+  CHECK(call.find("never\n") == std::string::npos);
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  SUCCEED("a sanitizer reserves more address space than a memory limit allows: the rest needs a plain build");
+#else
+  // Out of memory in a command: FILE:LINE and a fixed message, exit 1 (reporting one bad_alloc threw
+  // another, and the program aborted).
+  dir.write("big.dat", "start box 0 1000 0 1000 0 1000\ngen 20000000 0.5 0.5\necho never\n");
+  auto [big_status, big] = run("ulimit -v 400000; timeout 120 " + exe + " big.dat </dev/null");
+  INFO(big);
+  CHECK(big_status == 1);
+  CHECK(big.find("big.dat:2: error: out of memory") != std::string::npos);
+#endif
 }

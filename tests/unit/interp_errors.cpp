@@ -161,13 +161,17 @@ TEST_CASE("interp errors: an undefined variable", "[interp][errors]") {
 }
 
 TEST_CASE("interp errors: binary garbage is reported with its bytes escaped", "[interp][errors]") {
-  static const char raw[] = "\x01\x02\xff\xfe\x00zz\x7f\x80 more\x00junk\n";
+  static const char raw[] = "\x01\x02\xff\xfe\x1bzz\x7f\x80 more\x1bjunk\n";
   std::string garbage(raw, sizeof raw - 1);
   garbage += std::string("\x00\x00\x00\n", 4);
   Harness h;
   CHECK_FALSE(h.deck("set echo off\n" + garbage, "garbage.dat"));
   std::string err = h.err.str();
-  CHECK(err.starts_with("garbage.dat:2: error: unknown command '\\x01\\x02\\xff\\xfe\\x00zz\\x7f\\x80'"));
+  CHECK(err.starts_with("garbage.dat:2: error: unknown command '\\x01\\x02\\xff\\xfe\\x1bzz\\x7f\\x80'"));
+  // A NUL byte says the file is not text at all (hard_limits.cpp).
+  Harness nul;
+  CHECK_FALSE(nul.deck("set echo off\n" + std::string("\x00\x00\x00\n", 4), "garbage.dat"));
+  CHECK(nul.err.str().starts_with("garbage.dat:2: error: a NUL byte in the line: not a deck? (a binary file?)"));
   // Nothing unprintable reaches the terminal through an error message.
   for (char c : err) {
     auto u = static_cast<unsigned char>(c);
@@ -186,18 +190,19 @@ TEST_CASE("interp errors: binary garbage is reported with its bytes escaped", "[
 }
 
 TEST_CASE("interp errors: a one-megabyte line", "[interp][errors]") {
-  const std::string huge(1 << 20, 'x');
+  // A word as long as a line may be (1 MiB, kMaxLineLength, the line's other words included).
+  const std::string huge((1 << 20) - 16, 'x');
   // An unknown 1 MB word: one short message, the word cut.
   auto e = deck_error("set echo off\n" + huge + "\n");
   CHECK(e.starts_with("deck.dat:2: error: unknown command 'xxxx"));
-  CHECK_THAT(e, Catch::Contains("(1048576 characters)"));
+  CHECK_THAT(e, Catch::Contains("(1048560 characters)"));
   CHECK(e.size() < 300);
   // A 1 MB line that is a real command is accepted whole.
   Harness h;
   REQUIRE(h.deck("set echo off\nset big " + huge + "\necho ${big}y\n"));
   CHECK(h.out.str().size() == huge.size() + 2);
   // A 1 MB run of numbers after a command that takes one: the first extra word is named.
-  auto extra = deck_error("frac 0.5" + std::string(1 << 19, ' ') + std::string(1 << 19, '7') + "\n");
+  auto extra = deck_error("frac 0.5" + std::string(1 << 19, ' ') + std::string((1 << 19) - 16, '7') + "\n");
   CHECK(extra.starts_with("deck.dat:1: error: unexpected '7777"));
   CHECK(extra.size() < 400);
 }
