@@ -1,0 +1,100 @@
+// Files written where a careless or hostile deck, or a planted link, could make them go wrong
+// (issue 50): a PLOT name gnuplot would run, HIST and SET log through links and FIFOs, temporaries
+// planted or left behind, a log that cannot be written.
+#include "paths.hpp"
+
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
+
+#include <fmt/format.h>
+
+#include "io/atomic_file.hpp"
+#include "io_support.hpp"
+#include "skip.hpp"
+
+using namespace trubal;
+using namespace trubal::test;
+
+namespace {
+
+const std::string kRecorded = std::string(kPressedRow) + "hist energy every 2\ncycle 10\n";
+
+// The names in `dir` that hold ".tmp-" (temporaries, ours or planted).
+std::vector<std::string> temporaries_in(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace
+
+TEST_CASE("io files: a link planted where a temporary would go is never followed", "[io]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  // The temporaries were FILE.tmp-PID, opened without O_EXCL or O_NOFOLLOW: a link planted under
+  // that name was followed (its target replaced by the table or the save) and then renamed over FILE.
+  const std::string victim = dir.write("victim.txt", "keep me\n");
+  for (const std::string file : {"b.csv", "s.sav", "c.txt"}) {
+    INFO(file);
+    const std::string planted = fmt::format("{}.tmp-{}", file, ::getpid());
+    REQUIRE(::symlink(victim.c_str(), planted.c_str()) == 0);
+    Harness h;
+    const std::string command = file == "b.csv" ? "print balls file b.csv" : file == "s.sav" ? "save s.sav"
+                                                                                         : "print counters file c.txt";
+    REQUIRE(h.deck(std::string(kPressedRow) + command + "\n"));
+    INFO(h.err.str());
+    CHECK(slurp(victim) == "keep me\n");
+    CHECK(fs::is_regular_file(fs::symlink_status(file)));
+    CHECK(fs::file_size(file) > 0);
+    CHECK(fs::is_symlink(planted));   // (ours to ignore, not to remove: its process is this one)
+    fs::remove(planted);
+  }
+  CHECK(temporaries_in(dir.path()).empty());
+}
+
+TEST_CASE("io files: the temporaries a killed run left are removed by the next write of the same file", "[io]") {
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  // Pids above the largest Linux allows (2^22): no process has them. Only names of our pattern go;
+  // a file of the user's that merely looks alike stays.
+  for (const char* name : {"snap.pvd.tmp-999999999", "snap_000000.vtp.tmp-999999998-aB3xY9", "b.csv.tmp-999999997",
+                           "snap.pvd.tmp-notes", "snap.pvd.tmp-999999999-toolong1", "other.csv.tmp-999999996"})
+    dir.write(name, "left over\n");
+  Harness h;
+  REQUIRE(h.deck(std::string(kPressedRow) + "dump vtk snap\nprint balls file b.csv\n"));
+  CHECK(temporaries_in(dir.path()) ==
+        std::vector<std::string>{"other.csv.tmp-999999996", "snap.pvd.tmp-999999999-toolong1", "snap.pvd.tmp-notes"});
+}
+
+TEST_CASE("io files: SIGTERM during a write leaves no temporary", "[io]") {
+  TempDir dir;
+  const std::string target = (dir.path() / "t.csv").string();
+  // A child writes the file and is sent SIGTERM while the temporary is open (its default action,
+  // as for a run that a job scheduler stops). The temporary was left behind.
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    std::signal(SIGTERM, SIG_DFL);   // (the test runner's own handler, not the program's state)
+    try {
+      write_file_atomically(target, [](std::ostream& out) {
+        out << "half a table\n" << std::flush;
+        std::raise(SIGTERM);
+      });
+    } catch (...) {
+    }
+    ::_exit(3);
+  }
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  CHECK(WIFSIGNALED(status));
+  CHECK((WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM));
+  CHECK(temporaries_in(dir.path()).empty());
+  CHECK_FALSE(fs::exists(target));
+}
+
