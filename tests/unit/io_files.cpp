@@ -34,6 +34,37 @@ std::vector<std::string> temporaries_in(const fs::path& dir) {
 
 }  // namespace
 
+TEST_CASE("io files: a PLOT file name never reaches gnuplot, and one it would run is refused", "[io][plot][system]") {
+  if (!on_path("gnuplot")) TRUBAL_SKIP("gnuplot is not installed (Debian: gnuplot-nox)");
+  TempDir dir;
+  WorkingDir wd(dir.path());
+  // gnuplot's `set output '|cmd'` runs cmd through /bin/sh: the name (and the temporary made from
+  // it, NAME.tmp-PID, as before) went there as given, and PWNED was made.
+  for (const std::string name : {"|touch PWNED;.png", "<touch PWNED;.png"}) {
+    INFO(name);
+    Harness h;
+    REQUIRE(h.deck(kRecorded));
+    CHECK_FALSE(h.deck("plot ke vs cycle file \"" + name + "\"\n"));
+    CHECK_FALSE(fs::exists(dir.path() / "PWNED"));
+  }
+  Harness bar;
+  REQUIRE(bar.deck(kRecorded));
+  CHECK_FALSE(bar.deck("plot ke vs cycle file \"|touch PWNED;.png\"\n"));
+  CHECK_THAT(bar.first_error_line(),
+             Catch::Contains("PLOT: will not write '|touch PWNED;.png': a file name may not start with '|' or '<' or "
+                             "hold a control character"));
+  // Inside a name a bar or a quote is just a character: gnuplot draws into our own folder, and the
+  // picture is renamed into place (no temporary left beside it). A title's backquotes run nothing.
+  fs::create_directory(dir.path() / "a|b");
+  Harness ok;
+  REQUIRE(ok.deck(kRecorded + "plot ke vs cycle file \"a|b/it's |touch PWNED;.png\" title \"`touch PWNED`\"\n"));
+  INFO(ok.err.str());
+  CHECK(fs::file_size(dir.path() / "a|b" / "it's |touch PWNED;.png") > 0);
+  CHECK_FALSE(fs::exists(dir.path() / "PWNED"));
+  CHECK(temporaries_in(dir.path() / "a|b").empty());
+  CHECK(temporaries_in(dir.path()).empty());
+}
+
 TEST_CASE("io files: a link planted where a temporary would go is never followed", "[io]") {
   TempDir dir;
   WorkingDir wd(dir.path());
