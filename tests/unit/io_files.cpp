@@ -65,6 +65,43 @@ TEST_CASE("io files: a PLOT file name never reaches gnuplot, and one it would ru
   CHECK(temporaries_in(dir.path()).empty());
 }
 
+TEST_CASE("io files: HIST never writes through a link, and a FIFO is refused at once", "[io][system]") {
+  TempDir dir;
+  const std::string precious = dir.write("precious.txt", "keep me\n");
+  const std::string link = (dir.path() / "h.csv").string();
+  REQUIRE(::symlink(precious.c_str(), link.c_str()) == 0);
+  for (const std::string mode : {"", " new"}) {
+    INFO(mode);
+    Harness h;
+    CHECK_FALSE(h.deck(std::string(kPressedRow) + "hist energy every 1 file " + link + mode + "\ncycle 2\n"));
+    CHECK_THAT(h.first_error_line(), Catch::Contains("deck.dat:9: error: will not replace '" + link +
+                                                     "': it is a symbolic link (name a regular file, or a new one)"));
+    CHECK(slurp(precious) == "keep me\n");
+    CHECK(fs::is_symlink(link));
+  }
+  // A FIFO with no reader: opening it blocked for ever (and Ctrl-C could not stop it). HIST
+  // refuses it, as PRINT and SAVE do; SET log opens without waiting and fails. `timeout` ends the
+  // old hang (124).
+  const std::string fifo = (dir.path() / "p.csv").string();
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  struct Case {
+    std::string deck, said;
+  };
+  for (const Case& c : {Case{std::string(kPressedRow) + "hist energy every 1 file p.csv\ncycle 2\n",
+                             "deck.dat:9: error: will not replace 'p.csv': it is a FIFO (a named pipe: writing to it "
+                             "waits for a reader) (name a regular file, or a new one)"},
+                        Case{"set log p.csv\necho hello\n",
+                             "deck.dat:1: error: cannot open the log file 'p.csv': it is a FIFO (a named pipe) that no "
+                             "process reads; writing to it would wait for ever"}}) {
+    INFO(c.deck);
+    dir.write("deck.dat", c.deck);
+    const int status = shell("cd " + quote(dir.str()) + " && timeout 20 " + quote(TRUBAL_EXE) +
+                             " deck.dat </dev/null >out.txt 2>err.txt");
+    CHECK(status == 1);
+    CHECK_THAT(slurp(dir.path() / "err.txt"), Catch::Contains(c.said));
+  }
+}
+
 TEST_CASE("io files: a link planted where a temporary would go is never followed", "[io]") {
   TempDir dir;
   WorkingDir wd(dir.path());
@@ -129,3 +166,16 @@ TEST_CASE("io files: SIGTERM during a write leaves no temporary", "[io]") {
   CHECK_FALSE(fs::exists(target));
 }
 
+TEST_CASE("io files: a log that cannot be written ends the run with exit status 1", "[io][system]") {
+  if (!fs::exists("/dev/full")) TRUBAL_SKIP("no /dev/full");
+  TempDir dir;
+  dir.write("deck.dat", "set log /dev/full\necho one\necho two\n");
+  // It warned and the run went on, as it still does; the run then exited 0.
+  const int status = shell("cd " + quote(dir.str()) + " && " + quote(TRUBAL_EXE) + " deck.dat </dev/null >out.txt 2>err.txt");
+  CHECK(status == 1);
+  const std::string err = slurp(dir.path() / "err.txt");
+  CHECK_THAT(err, Catch::Contains("warning: the log file '/dev/full' could not be written (No space left on device); "
+                                  "logging stopped"));
+  CHECK_THAT(err, Catch::Contains("trubal: the log file '/dev/full' could not be written (No space left on device)"));
+  CHECK_THAT(slurp(dir.path() / "out.txt"), Catch::Contains("two"));
+}
