@@ -150,6 +150,12 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "trubal: cannot write the standard output: %s\n", std::strerror(err));
     return 1;
   }
+  // So is a log that could not be written (a full disk): warned when it happened, and the status.
+  output.take_log_failure();
+  if (!output.log_failure().empty()) {
+    std::fprintf(stderr, "trubal: %s\n", output.log_failure().c_str());
+    return 1;
+  }
   return status;
 }
 

@@ -1,6 +1,8 @@
 #include "interp/output.hpp"
 #include "support/comm.hpp"
 
+#include <fcntl.h>
+
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -41,7 +43,10 @@ std::string Output::take_log_failure() {
   if (!err) return "";
   const std::string path = log_path_;
   set_log("");
-  return "the log file '" + path + "' could not be written (" + std::strerror(err) + "); logging stopped";
+  const std::string failure =
+      "the log file '" + path + "' could not be written (" + std::strerror(err) + "); logging stopped";
+  if (log_failure_.empty()) log_failure_ = failure;
+  return failure;
 }
 
 int Output::screen_error() {
@@ -63,12 +68,23 @@ void Output::set_log(const std::string& path) {
   if (path.empty()) return;
   log_path_ = path;
   if (!comm::root()) return;   // rank 0 alone prints, and logs
-  auto file = std::make_unique<std::ofstream>(path, std::ios::app);
-  if (!*file) throw std::runtime_error("cannot open the log file '" + path + "' for writing");
+  // Opened without waiting: a FIFO with no reader fails at once (ENXIO) where a plain open would
+  // block for ever; then the writes wait as they would for the screen.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NONBLOCK | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    const int err = errno;
+    log_path_.clear();
+    if (err == ENXIO)
+      throw std::runtime_error("cannot open the log file '" + path +
+                               "': it is a FIFO (a named pipe) that no process reads; writing to it would wait for ever");
+    throw std::runtime_error("cannot open the log file '" + path + "' for writing (" + std::strerror(err) + ")");
+  }
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+  auto file = std::make_unique<FdOutput>(fd);
   log_ = std::move(file);
   log_path_ = path;
-  out_buf_.set_copy(log_->rdbuf());
-  err_buf_.set_copy(log_->rdbuf());
+  out_buf_.set_copy(log_.get());
+  err_buf_.set_copy(log_.get());
 }
 
 }  // namespace trubal

@@ -7,6 +7,8 @@
 #include <streambuf>
 #include <string>
 
+#include "support/fd_output.hpp"
+
 namespace trubal {
 
 class TeeBuffer : public std::streambuf {
@@ -33,11 +35,14 @@ class Output {
   Output(std::ostream& out, std::ostream& err);
   std::ostream& out() { return out_; }
   std::ostream& err() { return err_; }
-  // Starts (or, with an empty path, stops) copying everything shown to a log file.
+  // Starts (or, with an empty path, stops) copying everything shown to a log file, appending. A
+  // FIFO that no process reads is refused at once (opening it would wait for ever).
   void set_log(const std::string& path);
   const std::string& log_path() const { return log_path_; }
   // After a write to the log failed (a full disk): stops logging and says why, once; "" otherwise.
   std::string take_log_failure();
+  // The first such failure of the run ("" when none): the run then ends with exit status 1.
+  const std::string& log_failure() const { return log_failure_; }
   // The errno of the first failed write to the screen streams (0: none), after flushing them.
   int screen_error();
   // The screen stream is a terminal (main sets it; false for captured output): progress may
@@ -49,8 +54,8 @@ class Output {
  private:
   TeeBuffer out_buf_, err_buf_;
   std::ostream out_, err_;
-  std::unique_ptr<std::ofstream> log_;
-  std::string log_path_;
+  std::unique_ptr<FdOutput> log_;
+  std::string log_path_, log_failure_;
 };
 
 }  // namespace trubal

@@ -165,6 +165,7 @@ std::optional<FileRows> existing(const std::string& path, double cycle = std::nu
 }  // namespace
 
 std::string History::append_to_file(HistoryTable& t, std::int64_t cycle, bool resumed) {
+  check_replaceable(t.file, true);   // (written in place: a link would be followed, a FIFO would block)
   std::optional<FileRows> old;
   std::string why_afresh;
   try {
@@ -279,6 +280,9 @@ HistoryAdded History::add(std::vector<std::string> items, std::int64_t every, co
           note = fmt::format("{}: replaced its {} rows{} of an earlier run (HIST ... append keeps them; `new` replaces them without this note)", file,
                              old->kept, old->kept_cycles());
       }
+      // Written in place, row by row: a link would be followed (its target replaced), a FIFO
+      // with no reader would block for ever. A device (/dev/null, /dev/full) is written to.
+      check_replaceable(file, true);
       t->out = std::make_unique<std::ofstream>(file, std::ios::trunc);
       if (!*t->out)
         throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", file, std::strerror(errno)));

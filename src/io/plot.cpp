@@ -29,11 +29,21 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A gnuplot single-quoted string: nothing is special inside but the quote, which is doubled.
+// A gnuplot single-quoted string: nothing is special inside (no backquote substitution) but the
+// quote, which is doubled, and a line break, which would end the command: control characters
+// become spaces.
 std::string quoted(const std::string& text) {
   std::string q = "'";
-  for (char c : text) q += c == '\'' ? "''" : std::string(1, c);
+  for (char c : text) q += c == '\'' ? "''" : std::string(1, static_cast<unsigned char>(c) < 0x20 ? ' ' : c);
   return q + "'";
+}
+
+// A file name as an error shows it: control characters as \xNN.
+std::string printable_name(const std::string& name) {
+  std::string s;
+  for (char c : name)
+    s += static_cast<unsigned char>(c) < 0x20 ? fmt::format("\\x{:02x}", static_cast<unsigned char>(c)) : std::string(1, c);
+  return s;
 }
 
 std::string join(const std::vector<std::string>& words) {
@@ -157,6 +167,13 @@ void render_plot(const History& history, const PlotRequest& request) {
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (ext != ".png" && ext != ".svg")
     throw std::runtime_error(fmt::format("PLOT writes .png or .svg files, not '{}'", request.file));
+  // gnuplot never sees this name (it draws into our temporary folder), but one that gnuplot would
+  // read as a command, or that holds a line break, is a mistake or an attack: refused.
+  if (request.file[0] == '|' || request.file[0] == '<' ||
+      std::any_of(request.file.begin(), request.file.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
+    throw std::runtime_error(fmt::format(
+        "PLOT: will not write '{}': a file name may not start with '|' or '<' or hold a control character",
+        printable_name(request.file)));
   if (request.y.empty()) throw std::runtime_error("PLOT: name at least one history column to draw");
   const auto known = known_columns(history);
   if (known.empty()) throw std::runtime_error("PLOT: nothing is recorded yet (HIST what... first, then CYCLE)");
@@ -222,7 +239,10 @@ void render_plot(const History& history, const PlotRequest& request) {
   for (std::size_t at; (at = plots.find("title notitle")) != std::string::npos;) plots.replace(at, 13, "notitle");
 
   check_replaceable(request.file);
-  const std::string partial = fmt::format("{}.tmp-{}", request.file, ::getpid());
+  // gnuplot draws into our temporary folder, under a name we made: the file named in the deck is
+  // never handed to it (`set output '|cmd'` runs cmd). The picture is then copied beside its
+  // target and renamed over it (write_file_atomically).
+  const std::string partial = (temp.path() / ("picture" + ext)).string();
   std::string script;
   if (ext == ".png")
     script += fmt::format(
@@ -261,10 +281,10 @@ void render_plot(const History& history, const PlotRequest& request) {
     throw std::runtime_error(fmt::format("PLOT: gnuplot ({}) failed to draw '{}'{}{}", gnuplot, request.file,
                                          said.empty() ? "" : ": ", said));
   }
-  fs::rename(partial, request.file, ec);
-  if (ec) {
-    fs::remove(partial, ec);
-    throw std::runtime_error(fmt::format("PLOT: cannot write '{}': {}", request.file, ec.message()));
+  try {
+    write_file_atomically(request.file, slurp(partial));
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(fmt::format("PLOT: {}", e.what()));
   }
 }
 

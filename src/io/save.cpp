@@ -297,24 +297,6 @@ template <class IO> void transfer_histories(IO& io, History& history) {
   }
 }
 
-// PATH.tmp-PID files of SAVEs that were killed (kill -9) mid-write: nothing else removes them. Only
-// those whose process is gone.
-void remove_stale_temporaries(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const std::string prefix = target.filename().string() + ".tmp-";
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    const std::string pid_text = name.substr(prefix.size());
-    if (pid_text.empty() || pid_text.find_first_not_of("0123456789") != std::string::npos || pid_text.size() > 9) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(pid_text));
-    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove(entry.path(), ec);
-  }
-}
-
 // A bool inside a struct read whole: its byte must be 0 or 1 (read as bytes, which is allowed).
 bool valid_bool(const bool& b) { return *reinterpret_cast<const unsigned char*>(&b) <= 1; }
 
@@ -414,10 +396,8 @@ void save_model(const Model& model, const std::string& path, const History* hist
   header.append(reinterpret_cast<const char*>(&sum), sizeof sum);
 
   check_replaceable(path);
-  remove_stale_temporaries(path);
-  std::string tmp = fmt::format("{}.tmp-{}", path, ::getpid());
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) throw std::runtime_error(fmt::format("cannot write '{}': {}", path, std::strerror(errno)));
+  TemporaryFile tmp(path);   // (the stale temporaries of killed SAVEs go first)
+  const int fd = tmp.fd();
   auto write_all = [&](const std::string& s) {
     std::size_t done = 0;
     while (done < s.size()) {
@@ -432,12 +412,12 @@ void save_model(const Model& model, const std::string& path, const History* hist
   };
   bool ok = write_all(header) && write_all(w.buf) && ::fsync(fd) == 0;
   int err = errno;
-  ok = (::close(fd) == 0) && ok;
-  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    if (ok) err = errno;
-    std::remove(tmp.c_str());
-    throw std::runtime_error(fmt::format("cannot write '{}': {} (nothing was replaced)", path, std::strerror(err)));
+  if (!tmp.close() && ok) {
+    ok = false;
+    err = errno;
   }
+  if (!ok) throw std::runtime_error(fmt::format("cannot write '{}': {} (nothing was replaced)", path, std::strerror(err)));
+  tmp.rename_over_target(" (nothing was replaced)");
 }
 
 Model load_model(const std::string& path, History* history) {

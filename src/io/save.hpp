@@ -10,8 +10,8 @@
 
 namespace trubal {
 
-// Writes to PATH.tmp-PID, syncs, renames over PATH. Throws std::runtime_error on failure (the old
-// file, if any, is untouched).
+// Writes to a temporary beside PATH (TemporaryFile, io/atomic_file.hpp), syncs, renames over PATH.
+// Throws std::runtime_error on failure (the old file, if any, is untouched).
 // With `history`, its tables (settings and the rows in memory) are saved too. `version` 0 writes
 // the current format; an older one writes what that format held (for the tests that check that
 // older files still read).
