@@ -16,7 +16,7 @@ static void run_prop(Context& ctx, Args& args) {
   Material m = ctx.session.model().materials.count(type) ? ctx.session.model().materials.at(type) : Material{};
   static const std::vector<std::string_view> names = {"kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson",
                                                       "rest"};
-  std::optional<double> small_angle;   // a fric in (0, 1): a coefficient typed where an angle goes?
+  double small_angle = 0;   // a fric in (0, 1): a coefficient typed where an angle goes? (0: none)
   while (!args.empty()) {
     auto k = args.expect(names, "property");
     double v = args.real(names[k]);
@@ -27,9 +27,9 @@ static void run_prop(Context& ctx, Args& args) {
       case 2:
         if (v < 0 || v >= 90) args.fail("fric is a friction angle in degrees, in [0, 90)");
         m.friction = std::tan(v * std::numbers::pi / 180);
-        small_angle = v > 0 && v < 1 ? std::optional<double>(v) : std::nullopt;
+        small_angle = v > 0 && v < 1 ? v : 0;
         break;
-      case 3: nonneg(); m.friction = v; small_angle.reset(); break;
+      case 3: nonneg(); m.friction = v; small_angle = 0; break;
       case 4:
         if (!(v > 0)) args.fail("dens must be positive");
         m.density = v;
@@ -49,9 +49,9 @@ static void run_prop(Context& ctx, Args& args) {
   }
   ctx.session.edit().materials[type] = m;
   // PFC's `fric` is the coefficient: 0.5 typed here is half a degree, mu 0.0087.
-  if (small_angle)
+  if (small_angle > 0)
     ctx.warn(fmt::format("fric {0:g} is a friction angle in degrees: mu = tan({0:g} deg) = {1:.3g}; for a friction "
-                         "coefficient of {0:g} write `mu {0:g}`", *small_angle, m.friction));
+                         "coefficient of {0:g} write `mu {0:g}`", small_angle, m.friction));
 }
 
 const Command prop_command = {
