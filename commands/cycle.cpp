@@ -52,9 +52,8 @@ static std::function<double(const Model&)> until_measure(Context& ctx, Args& arg
   if (which == 1) return [](const Model& m) { return volumetric_strain(m); };
   Session& session = ctx.session;
   return [which, &session](const Model& m) {
-    const Sym6 s = average_stress(m, session.stress_volume());
-    const double lateral = 0.5 * (s[0] + s[1]);
-    const double values[] = {s[2] - lateral, (s[0] + s[1] + s[2]) / 3, s[2], lateral};
+    const TriaxialStress s = triaxial_stress(average_stress(m, session.stress_volume()));
+    const double values[] = {s.q, s.p, s.sigma1, s.sigma3};
     return values[which - 2];
   };
 }

@@ -27,12 +27,7 @@ static void servo_wall(Context& ctx, Args& args) {
     Model& m = ctx.session.edit();
     m.walls[k].servo_on = false;
     m.walls[k].servo_integral = 0;
-    // The servo's motion stops with it.
-    if (w.kind == WallKind::Cylinder) m.walls[k].radius_rate = 0;
-    else {
-      const double along = w.velocity[0] * w.normal[0] + w.velocity[1] * w.normal[1] + w.velocity[2] * w.normal[2];
-      for (int a = 0; a < 3; ++a) m.walls[k].velocity[a] -= along * w.normal[a];
-    }
+    stop_servo_motion(m.walls[k]);   // the servo's motion stops with it
     ctx.out << fmt::format("wall {}: servo off\n", id);
     return;
   }

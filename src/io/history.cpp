@@ -358,9 +358,9 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
     if (item == "stress") {
       for (double s : get_stress()) row.push_back(s);
     } else if (item == "pq") {   // mean stress and deviator, z axial (a triaxial test's p and q)
-      const Sym6& s = get_stress();
-      row.push_back((s[0] + s[1] + s[2]) / 3);
-      row.push_back(s[2] - 0.5 * (s[0] + s[1]));
+      const TriaxialStress t = triaxial_stress(get_stress());
+      row.push_back(t.p);
+      row.push_back(t.q);
     } else if (item == "sample") {   // the sample between walls (physics/sample.hpp), NaN without one
       const SampleMeasures m = sample_measures(model);
       for (double v : {m.axial, m.volumetric, m.sigma1, m.sigma3, m.q, m.p}) row.push_back(v);

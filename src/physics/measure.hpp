@@ -16,6 +16,17 @@ using Sym6 = std::array<double, 6>;   // xx yy zz xy xz yz
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz);
 Sym6 average_stress(const Model& model, double volume);
 
+// A triaxial test's stresses, compression positive: the deviator q = sigma1 - sigma3 and the mean
+// stress p = (sigma1 + 2 sigma3) / 3; from a stress tensor with z axial, sigma1 = s33 and sigma3 =
+// (s11 + s22) / 2 (then p is the trace over 3).
+struct TriaxialStress {
+  double sigma1 = 0, sigma3 = 0, q = 0, p = 0;
+};
+inline TriaxialStress triaxial_stress(double sigma1, double sigma3) {
+  return {sigma1, sigma3, sigma1 - sigma3, (sigma1 + 2 * sigma3) / 3};
+}
+inline TriaxialStress triaxial_stress(const Sym6& s) { return triaxial_stress(s[2], 0.5 * (s[0] + s[1])); }
+
 // The energy terms, all at one time: where the balls are as the last step left them, at t, the
 // time of its force pass (Model::energy_at_step: kinetic m v(t - dt/2).v(t + dt/2)/2, the springs
 // and gravity at x(t), the works up to t); otherwise (before the first step, after an edit of the

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "model/wall_shape.hpp"
+#include "physics/measure.hpp"
 #include "physics/walls.hpp"
 
 namespace trubal {
@@ -63,17 +64,21 @@ SampleMeasures sample_measures(const Model& model) {
   m.volume = m.area * m.height;
   m.axial = 1 - m.height / s.height0;
   m.volumetric = 1 - m.volume / (s.area0 * s.height0);
-  m.sigma1 = 0.5 * (w.platen[0]->normal_force + w.platen[1]->normal_force) / m.area;
+  const double sigma1 = 0.5 * (w.platen[0]->normal_force + w.platen[1]->normal_force) / m.area;
+  double sigma3 = 0;
   if (w.cylinder) {
-    m.sigma3 = w.side[0]->normal_force / (2 * std::numbers::pi * w.side[0]->radius * m.height);
+    sigma3 = w.side[0]->normal_force / (2 * std::numbers::pi * w.side[0]->radius * m.height);
   } else {
     const double across0 = distance(*w.side[0], *w.side[1]), across1 = distance(*w.side[2], *w.side[3]);
     const double s0 = 0.5 * (w.side[0]->normal_force + w.side[1]->normal_force) / (across1 * m.height);
     const double s1 = 0.5 * (w.side[2]->normal_force + w.side[3]->normal_force) / (across0 * m.height);
-    m.sigma3 = 0.5 * (s0 + s1);
+    sigma3 = 0.5 * (s0 + s1);
   }
-  m.q = m.sigma1 - m.sigma3;
-  m.p = (m.sigma1 + 2 * m.sigma3) / 3;
+  const TriaxialStress t = triaxial_stress(sigma1, sigma3);
+  m.sigma1 = t.sigma1;
+  m.sigma3 = t.sigma3;
+  m.q = t.q;
+  m.p = t.p;
   return m;
 }
 

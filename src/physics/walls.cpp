@@ -39,6 +39,15 @@ double wall_stress(const Model& model, const Wall& w) {
   return area > 0 ? w.normal_force / area : 0;
 }
 
+void stop_servo_motion(Wall& w) {
+  if (w.kind == WallKind::Cylinder) {
+    w.radius_rate = 0;
+    return;
+  }
+  const double along = w.velocity[0] * w.normal[0] + w.velocity[1] * w.normal[1] + w.velocity[2] * w.normal[2];
+  for (int a = 0; a < 3; ++a) w.velocity[a] -= along * w.normal[a];
+}
+
 double default_wall_speed(const Model& model, double dt) {
   double r = std::numeric_limits<double>::infinity();
   for (double v : model.balls.rad) r = std::min(r, v);
@@ -53,12 +62,7 @@ void walls_before_step(Model& model, double dt) {
     // No area (a save older than format 8 lost the wall it came from): the servo cannot measure a
     // stress, and the wall stands until SERVO wall n is given again.
     if (!(area > 0)) {
-      if (w.kind == WallKind::Cylinder) {
-        w.radius_rate = 0;
-      } else {
-        const double along = w.velocity[0] * w.normal[0] + w.velocity[1] * w.normal[1] + w.velocity[2] * w.normal[2];
-        for (int a = 0; a < 3; ++a) w.velocity[a] -= along * w.normal[a];
-      }
+      stop_servo_motion(w);
       continue;
     }
     if (fallback < 0) fallback = default_wall_speed(model, dt);

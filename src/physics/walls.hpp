@@ -58,6 +58,9 @@ const Wall* find_wall(const Model& model, std::int64_t id);
 // G = f A / (sum k_n dt) (PFC's rule); the speed is limited to the SERVO's max, by default
 // default_wall_speed (where nothing touches, the wall moves at that speed toward the balls).
 void walls_before_step(Model& model, double dt);
+// Stops the motion a wall servo drives: a cylinder's radius rate, or a plane's or polygon's velocity
+// along its normal (the other components stay as WALL set them).
+void stop_servo_motion(Wall& wall);
 // The default largest servo speed: 1e-4 of the smallest ball radius per step.
 double default_wall_speed(const Model& model, double dt);
 
