@@ -40,8 +40,9 @@ const Command restart_command = {
     "Reads a file written by SAVE; cycling then continues exactly (bitwise) as the saved run would have. A "
     "truncated, corrupted or foreign file is refused with an error and the current model is kept. The saved "
     "histories resume: each HIST file is appended to, after its rows past the saved cycle (of a later part of "
-    "the run that wrote it) are dropped; a file that is missing or holds other columns is started afresh with "
-    "the rows the save kept, and RESTART says so. A HIST given again with the same quantities, period and file "
+    "the run that wrote it) are dropped, and so is a last row cut short (a full disk or a killed run stopped "
+    "the writing inside it); rows the save holds that the file lacks are written again. A file that is missing "
+    "or holds other columns is started afresh with the rows the save kept. RESTART says what it did to each. A HIST given again with the same quantities, period and file "
     "(a deck that repeats its HIST after RESTART) goes on with the resumed history. A save of format 5 or older "
     "restarts with no histories.",
     "restart dense.sav",

@@ -131,6 +131,7 @@ struct FileRows {
   double first_kept = 0, last_kept = 0, first_dropped = 0, last_dropped = 0;
   std::deque<std::vector<double>> tail;   // the last kWindow rows kept
   std::uint64_t cut = 0;                  // where the first row dropped starts
+  bool torn = false;                      // the file ends inside a row (cut at `cut` with the rest)
 
   std::string kept_cycles() const { return kept ? span(first_kept, last_kept) : std::string(); }
   std::string dropped_cycles() const { return dropped ? span(first_dropped, last_dropped) : std::string(); }
@@ -146,6 +147,7 @@ std::optional<FileRows> existing(const std::string& path, double cycle = std::nu
   // is written to, never read (reading /dev/full never ends).
   if (!std::filesystem::is_regular_file(path, ec) || std::filesystem::file_size(path, ec) == 0 || ec) return std::nullopt;
   FileRows f;
+  std::uint64_t torn = std::numeric_limits<std::uint64_t>::max();
   scan_history_csv(
       path, [&](std::vector<std::string>& columns) { f.columns = std::move(columns); },
       [&](std::vector<double>& row, std::uint64_t offset) {
@@ -158,7 +160,12 @@ std::optional<FileRows> existing(const std::string& path, double cycle = std::nu
         }
         if (f.dropped++ == 0) { f.first_dropped = row[0]; f.cut = offset; }
         f.last_dropped = row[0];
-      });
+      },
+      &torn);
+  if (torn != std::numeric_limits<std::uint64_t>::max()) {
+    f.torn = true;
+    if (f.dropped == 0) f.cut = torn;
+  }
   return f;
 }
 
@@ -202,7 +209,7 @@ std::string History::append_to_file(HistoryTable& t, std::int64_t cycle, bool re
   // The file is cut where they start, its bytes before that copied as they are (through a
   // temporary and a rename: a failure leaves the file whole).
   std::string dropped_note;
-  if (old->dropped > 0) {
+  if (old->dropped > 0 || old->torn) {
     const std::uint64_t cut = old->cut;
     write_file_atomically(t.file, [&](std::ostream& to) {
       std::ifstream from(t.file, std::ios::binary);
@@ -215,8 +222,12 @@ std::string History::append_to_file(HistoryTable& t, std::int64_t cycle, bool re
         left -= static_cast<std::uint64_t>(n);
       }
     });
-    dropped_note = fmt::format("dropped its {} rows after cycle {}{}, of a later part of the run that wrote it",
-                               old->dropped, cycle, old->dropped_cycles());
+    if (old->dropped > 0)
+      dropped_note = fmt::format("dropped its {} rows after cycle {}{}, of a later part of the run that wrote it",
+                                 old->dropped, cycle, old->dropped_cycles());
+    if (old->torn)
+      dropped_note += fmt::format("{}dropped its last row, cut short where the writing stopped",
+                                  dropped_note.empty() ? "" : "; ");
   }
   std::string note;
   if (!resumed)
@@ -224,10 +235,28 @@ std::string History::append_to_file(HistoryTable& t, std::int64_t cycle, bool re
                        dropped_note.empty() ? "" : "; " + dropped_note);
   else if (!dropped_note.empty())
     note = fmt::format("{}: {}", t.file, dropped_note);
+  // Rows the save kept that the file lacks (the file stops short of the save's cycle: its last
+  // rows were torn or never written) are written again from the save.
+  std::vector<std::vector<double>> refill;
+  if (resumed)
+    for (auto& row : t.rows)
+      if (!row.empty() && (old->kept == 0 || row[0] > old->last_kept) && !(row[0] > static_cast<double>(cycle)))
+        refill.push_back(std::move(row));
   t.recorded = old->kept;
   t.rows.assign(std::make_move_iterator(old->tail.begin()), std::make_move_iterator(old->tail.end()));
   t.out = std::make_unique<std::ofstream>(t.file, std::ios::app);
   if (!*t.out) throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", t.file, std::strerror(errno)));
+  if (!refill.empty()) {
+    errno = 0;
+    for (const auto& row : refill) *t.out << csv_row(row);
+    *t.out << std::flush;
+    if (!*t.out)
+      throw std::runtime_error(fmt::format("cannot write the history file '{}' ({})", t.file,
+                                           errno ? std::strerror(errno) : "write failed"));
+    note += fmt::format("{}wrote {} rows{} again from the save", note.empty() ? t.file + ": " : "; ", refill.size(),
+                        FileRows::span(refill.front()[0], refill.back()[0]));
+    for (auto& row : refill) keep_row(t, std::move(row));
+  }
   return note;
 }
 
@@ -513,7 +542,8 @@ std::pair<const HistoryTable*, std::size_t> History::find_column(const std::stri
 }
 
 void scan_history_csv(const std::string& path, const std::function<void(std::vector<std::string>&)>& header,
-                      const std::function<void(std::vector<double>&, std::uint64_t offset)>& row_read) {
+                      const std::function<void(std::vector<double>&, std::uint64_t offset)>& row_read,
+                      std::uint64_t* torn) {
   std::error_code ec;
   if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
     throw std::runtime_error(fmt::format("the history file '{}' is not a regular file", path));
@@ -540,6 +570,10 @@ void scan_history_csv(const std::string& path, const std::function<void(std::vec
     next += line.size() + 1;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
+    if (torn && columns > 0 && in.eof()) {   // no newline after it: the writer stopped inside this row
+      *torn = offset;
+      break;
+    }
     auto cells = split(line);
     if (columns == 0) {
       columns = cells.size();

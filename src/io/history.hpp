@@ -118,8 +118,11 @@ MeasureSphere measure_item_sphere(const std::string& item);
 std::unique_ptr<HistoryTable> read_history_csv(const std::string& path);
 // The same file a row at a time, nothing kept (a long `every 1` run's file may hold millions of
 // rows): `header` gets the column names, then `row` each row of numbers and the byte offset where
-// its line starts. The same checks and messages as read_history_csv.
+// its line starts. The same checks and messages as read_history_csv. Given `torn`, a last line that
+// no newline ends (a row cut short when the disk filled or the run was killed) is not read: `torn`
+// is set to the byte it starts at (and left alone where the file ends in a newline).
 void scan_history_csv(const std::string& path, const std::function<void(std::vector<std::string>&)>& header,
-                      const std::function<void(std::vector<double>&, std::uint64_t offset)>& row);
+                      const std::function<void(std::vector<double>&, std::uint64_t offset)>& row,
+                      std::uint64_t* torn = nullptr);
 
 }  // namespace trubal

@@ -67,6 +67,65 @@ TEST_CASE("io history: RESTART resumes the saved histories and their files, byte
   CHECK(resumed == unbroken);
 }
 
+TEST_CASE("io history: a row torn when the writing stopped costs that row alone, and rows the save holds are "
+          "written again", "[io][history][restart]") {
+  TempDir dir;
+  WorkingDir cd(dir.path());
+  std::string unbroken;
+  {
+    Harness h;
+    REQUIRE(h.deck(kScene + "hist stress energy every 5 file u.csv\ncycle 80\n"));
+    unbroken = slurp(dir.path() / "u.csv");
+  }
+  // Cuts h.csv inside its row `from_end` rows before the last (half of that row's line is left,
+  // no newline after it), as a full disk or a kill leaves it.
+  auto tear = [&](std::size_t from_end) {
+    std::string text = slurp(dir.path() / "h.csv");
+    auto end = text.size() - 1;   // the last newline
+    for (std::size_t k = 0; k < from_end; ++k) end = text.rfind('\n', end - 1);
+    const auto start = text.rfind('\n', end - 1) + 1;
+    write_text(dir.path() / "h.csv", text.substr(0, start + (end - start) / 2));
+  };
+  SECTION("the torn row is past the save: the rows before it are kept, the later part dropped") {
+    Harness first;
+    REQUIRE(first.deck(kScene + "hist stress energy every 5 file h.csv\ncycle 50\nsave s.sav\ncycle 30\n"));
+    tear(0);   // the row of cycle 80
+    Harness second;
+    REQUIRE(second.deck("restart s.sav\n"));
+    INFO(second.err.str());
+    CHECK_THAT(second.err.str(), Catch::Contains("h.csv: dropped its 5 rows after cycle 50 (cycles 55 to 75), of a "
+                                                 "later part of the run that wrote it; dropped its last row, cut short where the writing stopped"));
+    CHECK_THAT(second.err.str(), !Catch::Contains("afresh"));
+    CHECK(data_rows(slurp(dir.path() / "h.csv")) == 10);
+    REQUIRE(second.deck("cycle 30\n"));
+    CHECK(slurp(dir.path() / "h.csv") == unbroken);
+  }
+  SECTION("the torn row is before the save's cycle: it and the rows after it come back from the save") {
+    Harness first;
+    REQUIRE(first.deck(kScene + "hist stress energy every 5 file h.csv\ncycle 50\nsave s.sav\n"));
+    tear(1);   // the row of cycle 45; the row of cycle 50 is gone with it
+    Harness second;
+    REQUIRE(second.deck("restart s.sav\n"));
+    INFO(second.err.str());
+    CHECK_THAT(second.err.str(), Catch::Contains("h.csv: dropped its last row, cut short where the writing stopped; "
+                                                 "wrote 2 rows (cycles 45 to 50) again from the save"));
+    CHECK(data_rows(slurp(dir.path() / "h.csv")) == 10);
+    REQUIRE(second.session.history().tables().size() == 1);
+    CHECK(second.session.history().tables()[0]->recorded == 10);
+    REQUIRE(second.deck("cycle 30\n"));
+    CHECK(slurp(dir.path() / "h.csv") == unbroken);
+  }
+  SECTION("HIST ... append to a file that ends in a torn row drops that row and appends after the rest") {
+    Harness first;
+    REQUIRE(first.deck(kScene + "hist stress energy every 5 file h.csv\ncycle 20\n"));
+    tear(0);
+    Harness second;
+    REQUIRE(second.deck(kScene + "cycle 20\nhist stress energy every 5 file h.csv append\n"));
+    CHECK_THAT(second.err.str(), Catch::Contains("appending to its 3 rows (cycles 5 to 15); dropped its last row"));
+    CHECK(data_rows(slurp(dir.path() / "h.csv")) == 3);
+  }
+}
+
 TEST_CASE("io history: a history in memory only keeps its rows through SAVE and RESTART", "[io][history][restart]") {
   TempDir dir;
   WorkingDir cd(dir.path());
