@@ -179,7 +179,7 @@ const Command gen_command = {
     "the walls. The same "
     "seed gives the same balls (default seed: SET seed) on every backend and thread count. More balls than the "
     "densest packing of spheres of radius rlo could hold is an error at once; if there is no room for all "
-    "(200,000 failed tries in a row), it says how many it placed, and Ctrl-C stops it keeping those placed (a batch deck then stops, exit 1). In the periodic "
+    "(200,000 failed tries in a row; a place drawn outside the range is no try, so a range in a corner of a large cell fills as well), it says how many it placed, and Ctrl-C stops it keeping those placed (a batch deck then stops, exit 1). In the periodic "
     "space every periodic edge must be at least twice the largest diameter (CYCLE's rule); a larger radius is an "
     "error at once. The "
     "new balls are numbered in space order (by cells of the largest diameter: z slowest, then y, then x), so that "

@@ -166,13 +166,17 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   std::size_t placed = 0;
   const std::size_t max_tries = 2000 * n + 10000;
   // Give up after this many failed tries in a row (the space is as full as random placing gets), and
-  // look at Ctrl-C now and then: GEN keeps what it placed and says how many.
+  // look at Ctrl-C now and then: GEN keeps what it placed and says how many. A place drawn outside
+  // the range is no try (a range in a corner of a large cell misses most draws, and the room left
+  // in it is not what they measure), up to kMostDraws draws in all.
   constexpr std::size_t kFailuresInARow = 200000;
-  std::size_t failures = 0;
+  constexpr std::size_t kMostDraws = 1000000000;
+  std::size_t failures = 0, tries = 0;
   gen_interrupted = false;
   std::vector<std::array<double, 4>> made;
-  for (std::size_t tries = 0; placed < n && tries < max_tries && failures < kFailuresInARow; ++tries) {
-    if ((tries & 4095) == 0 && interrupt_now()) {
+  for (std::size_t drawn = 0; placed < n && tries < max_tries && failures < kFailuresInARow && drawn < kMostDraws;
+       ++drawn) {
+    if ((drawn & 4095) == 0 && interrupt_now()) {
       interrupt_requested() = false;
       gen_interrupted = true;
       break;
@@ -184,8 +188,9 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
       if (hi < lo) throw std::runtime_error("GEN: the balls do not fit in the START box");
       p[a] = lo + (hi - lo) * unit(rng);
     }
-    if (!holds(model_, range, {0, type, p[0], p[1], p[2]}) || !clear_of_walls(model_.walls, {p[0], p[1], p[2]}, r) ||
-        grid.overlaps(p[0], p[1], p[2], r)) {
+    if (!holds(model_, range, {0, type, p[0], p[1], p[2]})) continue;
+    ++tries;
+    if (!clear_of_walls(model_.walls, {p[0], p[1], p[2]}, r) || grid.overlaps(p[0], p[1], p[2], r)) {
       ++failures;
       continue;
     }

@@ -37,8 +37,7 @@ class Backend {
   // to call from several threads at once: every pair of `part` as find_pairs gives them, the same
   // test on each pair, so a pair of two given balls is found, with the same image, in any model
   // that holds both. The default is the serial search.
-  // whole_balls: the whole model's ball count (the search's bins are sized as for it).
-  virtual void find_part_pairs(const Model& part, double skin, std::size_t whole_balls, PairCandidates& out);
+  virtual void find_part_pairs(const Model& part, double skin, PairCandidates& out);
   // Extra lines for PRINT info ("name: value").
   virtual std::vector<std::pair<std::string, std::string>> info() const { return {}; }
   // Candidate pairs tested so far, for tests and PRINT info (0 where the backend does not count).

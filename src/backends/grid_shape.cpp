@@ -15,20 +15,14 @@ void GridShape::fit(const Balls& balls, double min_size, const std::array<int, 3
     lo[a] = n ? *std::min_element(c.begin(), c.end()) : 0;
     hi[a] = n ? *std::max_element(c.begin(), c.end()) : 0;
   }
-  double side = std::max(min_size, std::numeric_limits<double>::min());
-  const double most = 2.0 * static_cast<double>(n) + 27;
-  for (;;) {
-    double boxes = 1;
-    for (int a = 0; a < 3; ++a) {
-      double d = std::max(1.0, std::floor((hi[a] - lo[a]) / side));
-      if (asked[a] > 0) d = std::min(d, static_cast<double>(asked[a]));
-      dims[a] = static_cast<int>(std::min(d, 1e6));
-      boxes *= dims[a];
-    }
-    if (!(boxes > most)) break;
-    side *= std::cbrt(boxes / most) * 1.01;
+  const double side = std::max(min_size, std::numeric_limits<double>::min());
+  for (int a = 0; a < 3; ++a) {
+    double d = std::floor((hi[a] - lo[a]) / side);
+    d = std::clamp(std::isfinite(d) ? d : 1.0, 1.0, 1e6);
+    if (asked[a] > 0) d = std::min(d, static_cast<double>(asked[a]));
+    dims[a] = static_cast<int>(d);
+    size[a] = std::max(side, (hi[a] - lo[a]) / dims[a]);
   }
-  for (int a = 0; a < 3; ++a) size[a] = std::max(side, (hi[a] - lo[a]) / dims[a]);
 }
 
 int GridShape::cell_of(double x, int axis) const {

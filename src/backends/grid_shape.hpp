@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 
 #include "model/model.hpp"
 
@@ -13,17 +14,22 @@ struct GridShape {
   std::array<double, 3> lo{0, 0, 0}, size{1, 1, 1};
   std::array<int, 3> dims{1, 1, 1};
 
-  // Boxes at least min_size wide, so touching candidates lie in neighbouring boxes; about two per
-  // ball at most, so one far ball cannot make the grid huge; `asked` (Space::boxes, 0: automatic)
-  // caps the count per axis.
+  // Boxes at least min_size wide, so touching candidates lie in neighbouring boxes, and as fine as
+  // that over the balls' extent, up to a million a side (BinIndex keeps only the boxes that hold
+  // a ball where they outnumber the balls); `asked` (Space::boxes, 0: automatic) caps the count
+  // per axis.
   void fit(const Balls& balls, double min_size, const std::array<int, 3>& asked);
   // The box index along one axis (outside or NaN: the nearest end).
   int cell_of(double x, int axis) const;
   // The linear box index of ball k (x fastest).
-  int box_of(const Balls& balls, std::size_t k) const {
-    return (cell_of(balls.z[k], 2) * dims[1] + cell_of(balls.y[k], 1)) * dims[0] + cell_of(balls.x[k], 0);
+  std::uint64_t box_of(const Balls& balls, std::size_t k) const {
+    return (static_cast<std::uint64_t>(cell_of(balls.z[k], 2)) * static_cast<std::uint64_t>(dims[1]) +
+            static_cast<std::uint64_t>(cell_of(balls.y[k], 1))) * static_cast<std::uint64_t>(dims[0]) +
+           static_cast<std::uint64_t>(cell_of(balls.x[k], 0));
   }
-  std::size_t count() const { return static_cast<std::size_t>(dims[0]) * dims[1] * dims[2]; }
+  std::uint64_t count() const {
+    return static_cast<std::uint64_t>(dims[0]) * static_cast<std::uint64_t>(dims[1]) * static_cast<std::uint64_t>(dims[2]);
+  }
 };
 
 }  // namespace trubal

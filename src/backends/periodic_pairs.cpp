@@ -1,8 +1,10 @@
 #include "backends/periodic_pairs.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <span>
 
+#include "backends/bin_index.hpp"
 #include "model/periodic_cell.hpp"
 
 namespace trubal {
@@ -14,7 +16,7 @@ constexpr std::size_t kParallelSearch = 4096;
 }  // namespace
 
 void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool, std::size_t i_begin,
-                         std::size_t i_end, std::size_t bins_balls) {
+                         std::size_t i_end) {
   out.clear();
   const Balls& b = model.balls;
   const Space& s = model.space;
@@ -24,18 +26,18 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
   const auto w = cell_widths(s);
   const double reach_max = 2 * b.max_radius() + skin;
   // Bins in the cell's fractional coordinates (parallelepipeds like the cell), at least reach_max
-  // wide across; fewer than 3 per axis: all are neighbours.
+  // wide across, up to 1000 a side; fewer than 3 per axis: all are neighbours. Where they outnumber
+  // the balls, only those holding a ball are kept (BinIndex), so balls crowded into a corner of a
+  // large cell meet bins as fine as where they fill it.
   std::array<int, 3> dims{};
   for (int a = 0; a < 3; ++a) {
     const double d = reach_max > 0 ? std::floor(w[a] / reach_max) : 1.0;
-    dims[a] = static_cast<int>(std::clamp(d, 1.0, 1000.0));
+    dims[a] = static_cast<int>(std::clamp(std::isfinite(d) ? d : 1.0, 1.0, 1000.0));
     if (s.boxes[a] > 0) dims[a] = std::min(dims[a], s.boxes[a]);   // START x y z nbx nby nbz: at most these
   }
-  const double sized_for = static_cast<double>(bins_balls > 0 ? bins_balls : n);
-  while (static_cast<double>(dims[0]) * dims[1] * dims[2] > 2.0 * sized_for + 27)
-    for (int a = 0; a < 3; ++a) dims[a] = std::max(1, dims[a] / 2);
-  const std::size_t cells = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
-  std::vector<std::uint32_t> cell(n), start(cells + 1, 0), order(n);
+  const std::uint64_t cells = static_cast<std::uint64_t>(dims[0]) * static_cast<std::uint64_t>(dims[1]) *
+                              static_cast<std::uint64_t>(dims[2]);
+  std::vector<std::uint64_t> cell(n);
   std::vector<std::array<int, 3>> where(n);
   for (std::size_t k = 0; k < n; ++k) {
     const double sz = (b.z[k] - s.lo[2]) / f.lz;
@@ -46,14 +48,11 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
       const double q = std::floor((t[a] - s.lo[a]) / L[a] * dims[a]);
       where[k][a] = !(q >= 0) ? 0 : (q >= dims[a] ? dims[a] - 1 : static_cast<int>(q));
     }
-    cell[k] = static_cast<std::uint32_t>((where[k][2] * dims[1] + where[k][1]) * dims[0] + where[k][0]);
-    ++start[cell[k] + 1];
+    cell[k] = static_cast<std::uint64_t>((where[k][2] * dims[1] + where[k][1]) * dims[0] + where[k][0]);
   }
-  for (std::size_t q = 0; q < cells; ++q) start[q + 1] += start[q];
-  {
-    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
-    for (std::size_t k = 0; k < n; ++k) order[next[cell[k]]++] = static_cast<std::uint32_t>(k);
-  }
+  BinIndex bins;
+  bins.build(cell, cells);
+  const std::vector<std::uint32_t>& order = bins.order();
   struct Hit { std::uint32_t j; std::int8_t ix, iy, iz; };
   const bool few_cells = dims[0] < 3 || dims[1] < 3 || dims[2] < 3;
   // Ball i's pairs, in ascending j.
@@ -83,7 +82,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
       near_cells.erase(std::unique(near_cells.begin(), near_cells.end()), near_cells.end());
       near.clear();
       for (std::uint32_t q : near_cells)
-        for (std::uint32_t e = start[q]; e < start[q + 1]; ++e) {
+        for (auto [e, e1] = bins.run(q, q); e < e1; ++e) {
           const std::uint32_t j = order[e];
           if (j <= i) continue;
           std::int8_t ix, iy, iz;
@@ -121,7 +120,7 @@ void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, T
           auto scan = [&](std::size_t q0, std::size_t q1, std::int8_t ix) {
             double ox, oy, oz;
             image_offset(f, ix, iy, iz, ox, oy, oz);
-            const std::uint32_t e0 = start[q0], e1 = start[q1 + 1];
+            const auto [e0, e1] = bins.run(q0, q1);
             if (near.size() < hits + (e1 - e0)) near.resize(2 * (hits + (e1 - e0)));
             for (std::uint32_t e = e0; e < e1; ++e) {
               const std::uint32_t j = order[e];

@@ -12,11 +12,8 @@ namespace trubal {
 // (i, j), with that image. skin 0 gives exactly the pairs the contact kernel gives a force.
 // With a pool, its threads search ranges of i and their lists are joined: the same list.
 // [i_begin, i_end): only the pairs whose lower ball i is in this range (the part of the list a rank
-// of BACKEND mpi searches; i_end beyond the balls: to the last). bins_balls: the ball count the
-// bins are sized for (at most about two bins a ball; 0: the model's), a whole model's where `model`
-// is one rank's part of it, so that its balls, crowded in a corner of the cell, meet the whole
-// model's bins, not bins made coarse enough for their fewer number.
+// of BACKEND mpi searches; i_end beyond the balls: to the last).
 void find_periodic_pairs(const Model& model, double skin, PairCandidates& out, ThreadPool* pool = nullptr,
-                         std::size_t i_begin = 0, std::size_t i_end = ~std::size_t{0}, std::size_t bins_balls = 0);
+                         std::size_t i_begin = 0, std::size_t i_end = ~std::size_t{0});
 
 }  // namespace trubal

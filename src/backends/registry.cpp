@@ -35,11 +35,11 @@ const Entry& entry(std::string_view name) {
 
 }  // namespace
 
-void Backend::find_part_pairs(const Model& part, double skin, std::size_t whole_balls, PairCandidates& out) {
+void Backend::find_part_pairs(const Model& part, double skin, PairCandidates& out) {
   // The serial search (every backend that keeps a list finds its pairs), with a grid of its own:
   // the threads of one process search their parts at once.
   BoxGrid grid;
-  find_serial_pairs(part, skin, grid, out, 0, ~std::size_t{0}, whole_balls);
+  find_serial_pairs(part, skin, grid, out);
 }
 
 std::vector<std::string> backend_names() {

@@ -796,7 +796,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
     // The search: the serial test on these balls (a pair's result depends on its two balls alone),
     // keeping the pairs of this rank's balls; their partners from elsewhere are the ghosts.
     PairCandidates found;
-    search.find_part_pairs(scan, skin, full_balls_, found);
+    search.find_part_pairs(scan, skin, found);
     std::vector<std::uint8_t> kind(count, 0);   // 1 this rank's, 2 a ghost
     for (std::size_t q = 0; q < count; ++q)
       if (entries[q].owner == me) kind[q] = 1;

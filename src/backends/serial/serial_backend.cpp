@@ -29,10 +29,10 @@ class SerialBackend final : public Backend {
 std::unique_ptr<Backend> make_serial_backend() { return std::make_unique<SerialBackend>(); }
 
 void find_serial_pairs(const Model& model, double skin, BoxGrid& grid, PairCandidates& out, std::size_t i_begin,
-                       std::size_t i_end, std::size_t bins_balls) {
+                       std::size_t i_end) {
   const Balls& b = model.balls;
   if (model.space.periodic) {
-    find_periodic_pairs(model, skin, out, nullptr, i_begin, i_end, bins_balls);
+    find_periodic_pairs(model, skin, out, nullptr, i_begin, i_end);
     return;
   }
   grid.fill(b, 2 * b.max_radius() + skin, model.space.boxes);

@@ -14,8 +14,7 @@ std::unique_ptr<Backend> make_serial_backend();
 // The serial backend's search: the periodic search in a periodic cell, else `grid` filled afresh
 // with boxes of the largest reach. Only the pairs whose lower ball i is in [i_begin, i_end) (the
 // part of the list a rank of BACKEND mpi searches; the defaults: every pair).
-// bins_balls: as find_periodic_pairs's (the boxes fit the balls' own extent).
 void find_serial_pairs(const Model& model, double skin, BoxGrid& grid, PairCandidates& out, std::size_t i_begin = 0,
-                       std::size_t i_end = ~std::size_t{0}, std::size_t bins_balls = 0);
+                       std::size_t i_end = ~std::size_t{0});
 
 }  // namespace trubal

@@ -22,7 +22,7 @@ class ThreadedBackend final : public Backend {
     grid_.find(pool, b, 2 * b.max_radius() + skin, model.space.boxes, skin, out);
   }
 
-  std::vector<std::pair<std::string, std::string>> info() const override { return box_info(grid_.dims(), grid_.cell_size(), periodic_bins_); }
+  std::vector<std::pair<std::string, std::string>> info() const override { return box_info(grid_.grid().dims(), grid_.grid().cell_size(), periodic_bins_); }
 
  private:
   CellPairs grid_;
