@@ -135,6 +135,9 @@ static void run_gen(Context& ctx, Args& args) {
     auto placed = ctx.session.generate(static_cast<std::size_t>(n), spec.sizes.a, spec.sizes.b, type, spec.seed, spec.range);
     if (ctx.session.gen_interrupted)
       interrupted(ctx, fmt::format("GEN interrupted by Ctrl-C: {} of {} balls placed (kept)", placed, n));
+    else if (placed < static_cast<std::size_t>(n) && ctx.session.gen_missed_range)
+      ctx.warn(fmt::format("GEN placed only {} of {} balls: the places drawn stopped falling in the range (a range "
+                           "by id or group holds no new ball; one by type only GEN's own type)", placed, n));
     else if (placed < static_cast<std::size_t>(n))
       ctx.warn(fmt::format("GEN placed only {} of {} balls: no room for more without overlap", placed, n));
     ctx.out << fmt::format("{} balls generated (type {}, seed {})\n", placed, type, spec.seed);

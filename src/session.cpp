@@ -152,9 +152,11 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   PlacementGrid grid(s, rmax, b.size() + n);
   for (std::size_t k = 0; k < b.size(); ++k) grid.insert(b.x[k], b.y[k], b.z[k], b.rad[k]);
   // More balls than the densest packing of the smallest could hold is no run at all: say so at once.
+  double share = 1;   // of the places drawn, about how many can fall in the range
   {
     const auto L = s.length();
     const double volume = room_for_centres(s, range, model_.walls, rhi);   // the part the range and the walls leave
+    share = std::clamp(volume / (L[0] * L[1] * L[2]), 0.0, 1.0);
     const double most = 0.7405 * volume / (4.0 / 3.0 * M_PI * rlo * rlo * rlo);
     if (static_cast<double>(n) > most)
       throw std::runtime_error(fmt::format(
@@ -168,13 +170,17 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
   // Give up after this many failed tries in a row (the space is as full as random placing gets), and
   // look at Ctrl-C now and then: GEN keeps what it placed and says how many. A place drawn outside
   // the range is no try (a range in a corner of a large cell misses most draws, and the room left
-  // in it is not what they measure), up to kMostDraws draws in all.
+  // in it is not what they measure), up to kMostDraws draws in all and as many misses in a row as
+  // kFailuresInARow tries would take at the range's share of the space (a range that holds no
+  // place, by id or type, gives up as soon as before).
   constexpr std::size_t kFailuresInARow = 200000;
   constexpr std::size_t kMostDraws = 1000000000;
-  std::size_t failures = 0, tries = 0;
+  const auto most_misses = static_cast<std::size_t>(static_cast<double>(kFailuresInARow) / std::max(share, 1e-3));
+  std::size_t failures = 0, tries = 0, misses = 0;
   gen_interrupted = false;
   std::vector<std::array<double, 4>> made;
-  for (std::size_t drawn = 0; placed < n && tries < max_tries && failures < kFailuresInARow && drawn < kMostDraws;
+  for (std::size_t drawn = 0; placed < n && tries < max_tries && failures < kFailuresInARow && drawn < kMostDraws &&
+                              misses < most_misses;
        ++drawn) {
     if ((drawn & 4095) == 0 && interrupt_now()) {
       interrupt_requested() = false;
@@ -188,7 +194,11 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
       if (hi < lo) throw std::runtime_error("GEN: the balls do not fit in the START box");
       p[a] = lo + (hi - lo) * unit(rng);
     }
-    if (!holds(model_, range, {0, type, p[0], p[1], p[2]})) continue;
+    if (!holds(model_, range, {0, type, p[0], p[1], p[2]})) {
+      ++misses;
+      continue;
+    }
+    misses = 0;
     ++tries;
     if (!clear_of_walls(model_.walls, {p[0], p[1], p[2]}, r) || grid.overlaps(p[0], p[1], p[2], r)) {
       ++failures;
@@ -199,6 +209,7 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
     made.push_back({p[0], p[1], p[2], r});
     ++placed;
   }
+  gen_missed_range = placed < n && !gen_interrupted && misses >= most_misses;
   // Numbered in space order: by cells of the largest diameter, z slowest, then y, then x (generation
   // order within a cell). Balls near in space are then near in number, which the pair lists' cache
   // use and the threaded backend's split (contiguous number ranges) depend on.

@@ -165,6 +165,7 @@ class Session {
 
   std::uint64_t seed = 12345;          // SET seed: default seed of GEN
   bool gen_interrupted = false;        // the last GEN was stopped by Ctrl-C
+  bool gen_missed_range = false;       // the last GEN n stopped since no place it drew was in the range
   double overlap_warned = 0;           // the largest overlap ratio a run last warned of (0: none outstanding)
   double volume = 0;                   // SET volume: volume for stress in free space (0: the box)
   // Volume used for the average stress: SET volume, else the periodic cell or START box.

@@ -138,4 +138,8 @@ TEST_CASE("clustered: GEN fills a range in a corner of a large periodic cell", "
   INFO(h.err.str());
   CHECK_THAT(h.out.str(), Catch::Contains("1500 balls generated"));
   CHECK(h.session.model().balls.size() == 1500);
+  // A range that no new ball can be in stops at once, saying why, not that the space is full.
+  Harness none;
+  REQUIRE(none.deck("start 10 10 10\nprop kn 1e5 dens 2650\ngen 10 0.006 0.009 range id 5 6\n"));
+  CHECK_THAT(none.err.str(), Catch::Contains("GEN placed only 0 of 10 balls: the places drawn stopped falling in the range"));
 }
