@@ -219,6 +219,14 @@ py::list walls(PySession& s) {
 
 }  // namespace
 
+void load_numpy() {
+  // pybind11 finds numpy's C API on first use, inside a C++ function-local static whose import of
+  // numpy can hand the GIL to another thread: a second thread making an array then waits for the
+  // static with the GIL held, and neither goes on. Found here, while Python imports trubal (one
+  // thread), no array call ever waits.
+  py::detail::npy_api::get();
+}
+
 void bind_arrays(py::class_<PySession>& cls) {
   const auto& B = [](PySession& s) -> const Balls& { return s.session().model().balls; };
   cls.def_property_readonly("num_balls", [B](PySession& s) { return B(s).size(); }, "How many balls there are.")
