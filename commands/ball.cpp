@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "model/edit.hpp"
 #include "model/wall_shape.hpp"
 
 namespace trubal {
@@ -27,7 +28,8 @@ static std::string against_wall(const Wall& w, const Vec3& c, double r) {
 static void run_ball(Context& ctx, Args& args) {
   auto p = read_xyz(args, "centre");
   double rad = args.real("rad");
-  if (!(rad > 0)) args.fail("the radius must be positive");
+  ctx.session.require_started();   // the radius is weighed against the START space
+  if (const std::string why = ball_radius_problem(ctx.session.state().space, rad); !why.empty()) args.fail(why);
   std::int64_t id = 0;
   int type = 1;
   while (!args.empty()) {
@@ -47,7 +49,8 @@ static void run_ball(Context& ctx, Args& args) {
 const Command ball_command = {
     "BALL", {"CREATE"}, "BALL x y z rad [id i] [type t]",
     "one ball",
-    "Creates one ball at (x, y, z) with radius rad, at rest. Without `id` it takes one more than the largest "
+    "Creates one ball at (x, y, z) with radius rad, at rest; the radius must be positive and at most the START "
+    "space's diagonal (a larger ball would cover all of it). Without `id` it takes one more than the largest "
     "id; an id already taken is an error, and so is a centre another ball has (the two would have no normal "
     "between them and fly apart; the message names the ball). Type defaults to 1. A ball that crosses a wall "
     "or lies on its wrong side (behind a plane, outside a container cylinder or past its end, inside an "

@@ -16,6 +16,7 @@ PYBIND11_MODULE(trubal, m) {
       "    x = s.positions          # (n, 3) numpy, ordered by ball id\n\n"
       "Arrays read are read-only copies; assign a whole array to change the model. See doc/python.md.";
   m.attr("__version__") = TRUBAL_VERSION;
+  trubal::python::load_numpy();
   trubal::python::make_error_type(m);
   trubal::python::remember_main_thread();
 

@@ -12,6 +12,7 @@
 #include <pybind11/stl.h>
 
 #include "io/history.hpp"
+#include "model/edit.hpp"
 #include "physics/measure.hpp"
 #include "physics/walls.hpp"
 #include "py_session.hpp"
@@ -21,6 +22,8 @@ namespace trubal::python {
 namespace {
 
 using Column = std::vector<double>;
+
+PyObject* g_masked_array_type = nullptr;   // numpy.ma.MaskedArray, found at import; lives as long as numpy
 
 template <class T> py::array_t<T> read_only(py::array_t<T> a) {
   a.attr("flags").attr("writeable") = false;
@@ -62,10 +65,31 @@ py::array_t<double> sym_matrix(const std::array<double, 6>& s) {   // xx yy zz x
 
 using InArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-// A new (n, 3) or (n,) array for the balls, its numbers finite: the shape names what was wrong.
+// A new (n, 3) or (n,) array for the balls, its numbers real and finite: the message names what
+// was wrong. What numpy's cast would lose silently is refused before it: a mask (numpy.asarray
+// drops it, the masked entries' numbers would go in) and imaginary parts (a ComplexWarning only).
 InArray checked(const py::object& value, const Model& m, int width, const char* what) {
-  InArray a = InArray::ensure(value);
-  if (!a) throw py::type_error(fmt::format("{}: a numpy array (or nested lists) of numbers is needed", what));
+  const auto wrong_type = [what] {
+    return py::type_error(fmt::format("{}: a numpy array (or nested lists) of numbers is needed", what));
+  };
+  const int masked = PyObject_IsInstance(value.ptr(), g_masked_array_type);
+  if (masked < 0) throw py::error_already_set();
+  if (masked)
+    throw py::type_error(fmt::format("{}: a masked array is refused (its mask would be ignored): give a plain array, "
+                                     "such as a.filled(x) with the number x meant for the masked entries",
+                                     what));
+  const py::array given = py::array::ensure(value);   // numpy's own dtype for it, nothing cast yet
+  if (!given) throw wrong_type();
+  const char kind = given.dtype().kind();
+  if (kind == 'c')
+    throw py::type_error(fmt::format("{}: complex numbers given (dtype {}): real numbers are needed (the imaginary "
+                                     "parts would be dropped)",
+                                     what, py::str(given.dtype()).cast<std::string>()));
+  if (std::string_view("biufO").find(kind) == std::string_view::npos)   // strings, dates, records
+    throw py::type_error(fmt::format("{}: numbers are needed, dtype {} given", what,
+                                     py::str(given.dtype()).cast<std::string>()));
+  InArray a = InArray::ensure(given);
+  if (!a) throw wrong_type();
   const auto n = static_cast<py::ssize_t>(m.balls.size());
   const bool ok =
       width == 1 ? a.ndim() == 1 && a.shape(0) == n : a.ndim() == 2 && a.shape(0) == n && a.shape(1) == width;
@@ -123,9 +147,9 @@ void set_radii(PySession& s, const py::object& value) {
   const Model& m = s.session().model();
   const InArray in = checked(value, m, 1, "radii");
   auto v = in.unchecked<1>();
-  for (std::size_t k = 0; k < m.balls.size(); ++k)
-    if (!(v(k) > 0))
-      raise_error("", 0, fmt::format("radii: ball {} is given radius {}: radii must be positive", m.balls.id[k], v(k)));
+  for (std::size_t k = 0; k < m.balls.size(); ++k)   // BALL's rule
+    if (const std::string why = ball_radius_problem(m.space, v(k)); !why.empty())
+      raise_error("", 0, fmt::format("radii: ball {} is given radius {}: {}", m.balls.id[k], v(k), why));
   Balls& balls = s.session().edit().balls;   // masses follow at the next step (update_mass)
   for (std::size_t k = 0; k < balls.size(); ++k) balls.rad[k] = v(k);
 }
@@ -218,6 +242,15 @@ py::list walls(PySession& s) {
 }
 
 }  // namespace
+
+void load_numpy() {
+  // pybind11 finds numpy's C API on first use, inside a C++ function-local static whose import of
+  // numpy can hand the GIL to another thread: a second thread making an array then waits for the
+  // static with the GIL held, and neither goes on. Found here, while Python imports trubal (one
+  // thread), no array call ever waits.
+  py::detail::npy_api::get();
+  g_masked_array_type = py::object(py::module_::import("numpy.ma").attr("MaskedArray")).release().ptr();
+}
 
 void bind_arrays(py::class_<PySession>& cls) {
   const auto& B = [](PySession& s) -> const Balls& { return s.session().model().balls; };

@@ -81,7 +81,9 @@ class PySession {
   bool stop_requested_ = false;
 };
 
-// The numpy side (py_arrays.cpp): ball arrays, contacts, measurements, histories.
+// The numpy side (py_arrays.cpp): ball arrays, contacts, measurements, histories. load_numpy,
+// called first at import, makes numpy ready for every thread.
+void load_numpy();
 void bind_arrays(py::class_<PySession>& cls);
 
 }  // namespace trubal::python

@@ -8,12 +8,24 @@
 #include <stdexcept>
 #include <string>
 
+#include <fmt/format.h>
+
 namespace trubal {
 
 std::int64_t find_ball(const Model& model, std::int64_t id) {
   const auto& ids = model.balls.id;
   auto it = std::lower_bound(ids.begin(), ids.end(), id);
   return (it != ids.end() && *it == id) ? it - ids.begin() : -1;
+}
+
+std::string ball_radius_problem(const Space& space, double rad) {
+  if (!(rad > 0)) return "the radius must be positive";
+  const auto L = space.length();
+  const double diagonal = std::hypot(L[0], L[1], L[2]);
+  if (!(rad <= diagonal))
+    return fmt::format("the radius must be at most the START space's diagonal, {:.6g} (a larger ball would cover all "
+                       "of it)", diagonal);
+  return "";
 }
 
 std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y, double z, double rad) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "model/model.hpp"
@@ -11,6 +12,13 @@ namespace trubal {
 // Adds a ball at rest with no applied loads; returns its index. id <= 0 takes the next free id
 // (one more than the largest). Throws std::invalid_argument if the id is taken or rad <= 0.
 std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y, double z, double rad);
+
+// What is wrong with a ball's radius in this space, or "" where nothing is: the radius of a new
+// ball (BALL) and of one changed (the Python module's radii) must be positive and at most the
+// space's diagonal. A ball larger than that would cover the whole START region, every other
+// centre inside it; and far larger ones overflow their mass (r^3) and inertia (r^5), which CYCLE
+// could then only report as an unstable step.
+std::string ball_radius_problem(const Space& space, double rad);
 
 // Removes the balls whose flag is set, and the pairs that involve them; group lists keep only
 // surviving ids. Returns how many were removed.

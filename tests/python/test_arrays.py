@@ -1,5 +1,6 @@
 """Ball arrays: the copy rule, and that setting them then cycling is the deck that builds the same
 state with BALL and INIT."""
+import re
 import unittest
 
 import numpy as np
@@ -118,9 +119,71 @@ class SetArrays(unittest.TestCase):
         twin[9] = twin[4]
         with self.assertRaisesRegex(trubal.Error, "ball 10 is given the centre of another ball"):
             s.positions = twin
-        with self.assertRaisesRegex(trubal.Error, "radii must be positive"):
+        with self.assertRaisesRegex(trubal.Error, "radius must be positive"):
             s.radii = np.zeros(s.num_balls)
         self.assertTrue(support.same_bits(before, s.positions))
+
+    # What numpy's cast would take in silently (a complex part dropped with only a warning, a mask
+    # ignored, a string read as a number), and a radius whose mass overflows (CYCLE then blamed the
+    # step): each is refused by name, and the model is unchanged and runs on.
+    SETTABLE = ("positions", "velocities", "spins", "radii")
+
+    def assert_refused_and_unchanged(self, s, cases):
+        before = {name: getattr(s, name) for name in self.SETTABLE}
+        for name, value, error, pattern in cases:
+            with self.assertRaisesRegex(error, pattern, msg=name):
+                setattr(s, name, value)
+        for name, value in before.items():
+            self.assertTrue(support.same_bits(value, getattr(s, name)), name)
+        s.cycle(10)
+
+    def test_complex_numbers_are_refused(self):
+        s = trubal.Session(quiet=True)
+        s.run_deck(support.COMPRESS)
+        cases = []
+        for name in self.SETTABLE:
+            value = getattr(s, name)
+            one = [1j] if value.ndim == 1 else [[1j, 0, 0]]
+            cases += [(name, value.astype(complex), TypeError, rf"^{name}: complex numbers given \(dtype complex128\)"),
+                      (name, value.tolist()[:-1] + one, TypeError, rf"^{name}: complex numbers given")]   # lists too
+        self.assert_refused_and_unchanged(s, cases)
+
+    def test_masked_arrays_are_refused(self):
+        s = trubal.Session(quiet=True)
+        s.run_deck(support.COMPRESS)
+        cases = []
+        for name in self.SETTABLE:
+            value = getattr(s, name)
+            masked = np.ma.masked_array(value.copy(), mask=np.zeros(value.shape, bool))
+            masked[3] = np.ma.masked
+            cases.append((name, masked, TypeError, rf"^{name}: a masked array is refused"))
+        self.assert_refused_and_unchanged(s, cases)
+
+    def test_strings_and_non_finite_numbers_are_refused(self):
+        s = trubal.Session(quiet=True)
+        s.run_deck(support.COMPRESS)
+        cases = []
+        for name in self.SETTABLE:
+            value = getattr(s, name)
+            cases.append((name, value.astype(str), TypeError, rf"^{name}: numbers are needed, dtype <U"))
+            for bad in (np.inf, -np.inf, np.nan):
+                wrong = value.copy()
+                wrong.flat[5] = bad
+                cases.append((name, wrong, ValueError, rf"^{name}: row \d+ holds {bad}"))
+        self.assert_refused_and_unchanged(s, cases)
+
+    def test_a_radius_beyond_the_space_is_refused(self):
+        # At most the START space's diagonal, as BALL: here the periodic cell's, 0.01 * sqrt(3).
+        s = trubal.Session(quiet=True)
+        s.run_deck(support.COMPRESS)
+        cases = []
+        for huge in (1e300, 0.02):
+            big = s.radii.copy()
+            big[3] = huge
+            given = re.escape(f"{huge:g}")
+            cases.append(("radii", big, trubal.Error, rf"^radii: ball 4 is given radius {given}: the radius must be at "
+                                                      r"most the START space's diagonal, 0.0173205"))
+        self.assert_refused_and_unchanged(s, cases)
 
     def test_box_bounds_are_checked(self):
         s = trubal.Session(quiet=True)

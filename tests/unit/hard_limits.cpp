@@ -1,7 +1,7 @@
 // Limits a deck from someone else cannot pass (issue 50): the servo's max rate, a radius beyond the
-// periodic cell, the length of a line read or expanded, a failed read, Ctrl-C in a batch deck, and
-// an out-of-memory error reported rather than aborted on. Each case hung, grew the memory without
-// bound, ended the deck silently or went on after Ctrl-C before.
+// periodic cell or the START space, the length of a line read or expanded, a failed read, Ctrl-C in
+// a batch deck, and an out-of-memory error reported rather than aborted on. Each case hung, grew the
+// memory without bound, ended the deck silently or went on after Ctrl-C before.
 #include "paths.hpp"
 #include <catch2/catch.hpp>
 
@@ -90,6 +90,20 @@ TEST_CASE("limits: GEN refuses balls the periodic cell cannot hold, and its grid
   CHECK(grid.overlaps(0.0051, 0.005, 0.005, 1e308));
   CHECK(grid.overlaps(0.0051, 0.005, 0.005, 1000));
   CHECK_FALSE(grid.overlaps(0.001, 0.001, 0.001, 0.0001));
+}
+
+TEST_CASE("limits: BALL refuses a radius beyond the START space's diagonal", "[limits]") {
+  // 1e300 was taken, its mass overflowed, and the first CYCLE blamed the step ("try FRAC").
+  for (const char* radius : {"1e300", "3.47"}) {
+    const auto e = deck_error(fmt::format("start box -1 1 -1 1 -1 1\nball 0 0 0 {}\n", radius));
+    CHECK(e.starts_with("deck.dat:2: error: the radius must be at most the START space's diagonal, 3.4641 (a larger "
+                        "ball would cover all of it)"));
+  }
+  CHECK(deck_error("start box -1 1 -1 1 -1 1\nball 0 0 0 0\n")
+            .starts_with("deck.dat:2: error: the radius must be positive"));
+  // Up to the diagonal a ball is made and runs (sqrt(12) = 3.4641...).
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nprop kn 1e5 dens 1000\nball 0 0 0 3.46\ncycle 10\n"));
 }
 
 TEST_CASE("limits: a line longer than 1 MiB or with a NUL byte is an error at its line", "[limits]") {
