@@ -69,11 +69,15 @@ void Output::set_log(const std::string& path) {
   log_path_ = path;
   if (!comm::root()) return;   // rank 0 alone prints, and logs
   // Opened without waiting: a FIFO with no reader fails at once (ENXIO) where a plain open would
-  // block for ever; then the writes wait as they would for the screen.
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NONBLOCK | O_CLOEXEC, 0666);
+  // block for ever; then the writes wait as they would for the screen. Not through a symbolic link
+  // (ELOOP), as no output of ours is: one planted at the name would send the log elsewhere.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW, 0666);
   if (fd < 0) {
     const int err = errno;
     log_path_.clear();
+    if (err == ELOOP)
+      throw std::runtime_error("will not append to the log file '" + path +
+                               "': it is a symbolic link (name a regular file, or a new one)");
     if (err == ENXIO)
       throw std::runtime_error("cannot open the log file '" + path +
                                "': it is a FIFO (a named pipe) that no process reads; writing to it would wait for ever");

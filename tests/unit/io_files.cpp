@@ -79,6 +79,13 @@ TEST_CASE("io files: HIST never writes through a link, and a FIFO is refused at 
     CHECK(slurp(precious) == "keep me\n");
     CHECK(fs::is_symlink(link));
   }
+  {   // SET log appends, but not through a link either
+    Harness h;
+    CHECK_FALSE(h.deck("set log " + link + "\necho hello\n"));
+    CHECK_THAT(h.first_error_line(), Catch::Contains("deck.dat:1: error: will not append to the log file '" + link +
+                                                     "': it is a symbolic link (name a regular file, or a new one)"));
+    CHECK(slurp(precious) == "keep me\n");
+  }
   // A FIFO with no reader: opening it blocked for ever (and Ctrl-C could not stop it). HIST
   // refuses it, as PRINT and SAVE do; SET log opens without waiting and fails. `timeout` ends the
   // old hang (124).
