@@ -177,6 +177,11 @@ py::dict contacts(PySession& s) {
   d["shear_force"] = columns3(c.fsx, c.fsy, c.fsz, &rows);
   d["force"] = columns3(c.fx, c.fy, c.fz, &rows);
   d["sliding"] = column<bool>(sliding);
+  // Every part of the contacts' history the contact law declares (ContactTable::for_each_history),
+  // by the name SAVE gives it.
+  py::dict history;
+  c.for_each_history([&](const auto& v, const HistoryPart& part) { history[part.name] = column<double>(v, &rows); });
+  d["history"] = history;
   d["cycle"] = c.results_cycle;
   return d;
 }

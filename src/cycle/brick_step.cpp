@@ -29,7 +29,8 @@ namespace {
 
 constexpr std::uint32_t kAbsent = ~std::uint32_t{0};
 constexpr std::size_t kHalo = 9;   // a ghost's state each step: position, velocity, spin
-constexpr std::size_t kPairWords = 8;   // a moving ball's pair: i, j (whole model's), image, shear history
+// A moving ball's pair: i, j (the whole model's), its image, then its history.
+const std::size_t kPairWords = 5 + ContactTable::history_count();
 
 // Owners by recursive coordinate bisection: the balls of a box are cut across its longest extent
 // at the count that gives each side the sum of its ranks' shares. Ties and non-finite coordinates
@@ -100,7 +101,8 @@ const auto visit_balls = [](void* p, auto&& f) { static_cast<Balls*>(p)->for_eac
 // write them (ParallelStep::run keeps them there), so a whole table without results cuts alike.
 const auto visit_pairs = [](void* p, auto&& f) {
   ContactTable& c = *static_cast<ContactTable*>(p);
-  f(c.i); f(c.j); f(c.image_x); f(c.image_y); f(c.image_z); f(c.fsx); f(c.fsy); f(c.fsz);
+  f(c.i); f(c.j); f(c.image_x); f(c.image_y); f(c.image_z);
+  c.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
 };
 const auto visit_walls = [](void* p, auto&& f) { static_cast<WallContacts*>(p)->for_each_array(f); };
 
@@ -132,13 +134,11 @@ template <class F> void each_moving_ball_array(Balls& b, F&& f) {
     f(*v);
 }
 template <class F> void each_history_array(ContactTable& c, F&& f) {
-  for (auto* v : {&c.fsx, &c.fsy, &c.fsz}) f(*v);
+  c.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
 }
 template <class F> void each_moving_wall_array(WallContacts& w, F&& f) {
-  f(w.state);
-  for (auto* v : {&w.fsx, &w.fsy, &w.fsz, &w.nx, &w.ny, &w.nz, &w.overlap, &w.fn, &w.fx, &w.fy, &w.fz, &w.kn_eff,
-                  &w.ks_eff})
-    f(*v);
+  w.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
+  w.for_each_result_array(f);
 }
 
 // The cycle's kernels with the part's own pair laws (per ball of the part): every field but `laws`.
@@ -656,8 +656,9 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
           auto& o = pair_out[d];
           for (double v : {static_cast<double>(global_ball_[c.i[p]]), static_cast<double>(global_ball_[c.j[p]]),
                            static_cast<double>(c.image_x[p]), static_cast<double>(c.image_y[p]),
-                           static_cast<double>(c.image_z[p]), c.fsx[p], c.fsy[p], c.fsz[p]})
+                           static_cast<double>(c.image_z[p])})
             o.push_back(v);
+          c.for_each_history([&](const auto& v, const HistoryPart&) { o.push_back(v[p]); });
         }
       }
       WallContacts& w = part_.wall_contacts;
@@ -780,9 +781,8 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
         arrived_pairs.image_x.push_back(static_cast<std::int8_t>(rec[2]));
         arrived_pairs.image_y.push_back(static_cast<std::int8_t>(rec[3]));
         arrived_pairs.image_z.push_back(static_cast<std::int8_t>(rec[4]));
-        arrived_pairs.fsx.push_back(rec[5]);
-        arrived_pairs.fsy.push_back(rec[6]);
-        arrived_pairs.fsz.push_back(rec[7]);
+        std::size_t word = 5;
+        arrived_pairs.for_each_history([&](auto& v, const HistoryPart&) { v.push_back(rec[word++]); });
       }
       for (std::size_t t = 0; t < in_walls[r]; ++t, rec += wall_words) {
         std::size_t word = 0;

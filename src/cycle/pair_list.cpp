@@ -15,7 +15,8 @@ bool same(const ContactTable& t, std::size_t p, const PairCandidates& c, std::si
 
 // The arrays of the list and its history (for_each_pair_array's less the results).
 template <class F> void for_each_state_array(ContactTable& t, F&& f) {
-  f(t.i); f(t.j); f(t.image_x); f(t.image_y); f(t.image_z); f(t.fsx); f(t.fsy); f(t.fsz);
+  f(t.i); f(t.j); f(t.image_x); f(t.image_y); f(t.image_z);
+  t.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
 }
 
 }  // namespace

@@ -130,10 +130,14 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
       std::vector<double>& h = cross_history_[t];
       const std::vector<std::uint32_t>& list = cross_[t];
       const std::size_t n = kernels.features.friction ? list.size() : 0;
-      h.resize(3 * n);
-      for (std::size_t q = 0; q < n; ++q) {
-        h[q] = c.fsx[list[q]]; h[n + q] = c.fsy[list[q]]; h[2 * n + q] = c.fsz[list[q]];
-      }
+      // Every history array's values of these pairs, one array after another (for_each_history's
+      // order: the kernel reads each part's at its place).
+      h.resize(ContactTable::history_count() * n);
+      std::size_t at = 0;
+      c.for_each_history([&](const auto& v, const HistoryPart&) {
+        for (std::size_t q = 0; q < n; ++q) h[at + q] = v[list[q]];
+        at += n;
+      });
     }
     pool.run([&](int t) {
       if (t >= parts) return;

@@ -2,7 +2,7 @@
 // hundred steps. The pipeline keeps it between CYCLEs, so that each CYCLE does not fault in fresh
 // pages for it.
 //
-// Of the contact table it copies the state alone (the pair list, the shear history and whether
+// Of the contact table it copies the state alone (the pair list, the history and whether
 // each pair touched), not the results of the last force pass (normal, overlap, forces, stiffness,
 // work: 16 of the 22 values of a pair), which would make the copy as large as the model. The
 // results come back otherwise: the copies on a multiple of 500 steps are taken a step before, and
@@ -25,9 +25,10 @@ namespace trubal {
 
 struct Snapshot {
   Balls balls;   // all but the unbalanced forces and moments (results: restore)
-  // The contact table's state: its pair list, the shear history.
+  // The contact table's state: its pair list, the history (ContactTable::for_each_history's arrays,
+  // in its order).
   PairCandidates pairs;
-  std::vector<double> fsx, fsy, fsz;
+  std::vector<std::vector<double>> history;
   std::vector<std::uint8_t> state;   // whether each pair touched (restore: a pair the list lost since)
   std::int64_t results_cycle = -1;
   std::vector<Wall> walls;
@@ -44,7 +45,8 @@ struct Snapshot {
     copy_balls(balls, m.balls);
     const ContactTable& c = m.contacts;
     pairs = pair_list_of(c);
-    fsx = c.fsx; fsy = c.fsy; fsz = c.fsz;
+    history.clear();
+    c.for_each_history([&](const auto& v, const HistoryPart&) { history.push_back(v); });
     state = c.state;
     wall_contacts = m.wall_contacts;
     take_rest(m);
@@ -56,7 +58,7 @@ struct Snapshot {
     auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
     balls = Balls{};
     pairs = PairCandidates{};
-    free(fsx); free(fsy); free(fsz); free(state);
+    free(history); free(state);
     wall_contacts = WallContacts{};
     take_rest(m);
   }
@@ -78,7 +80,8 @@ struct Snapshot {
     ContactTable& c = m.contacts;
     const bool same_step = c.results_cycle == results_cycle && m.balls.id == balls.id;
     if (!holds_pairs(c, pairs)) install_pairs(c, pairs);   // the same list keeps its index
-    c.fsx = fsx; c.fsy = fsy; c.fsz = fsz;
+    std::size_t h = 0;
+    c.for_each_history([&](auto& v, const HistoryPart&) { v = history[h++]; });
     const bool current = same_step && results_cycle == cycle && c.state == state;
     if (!current) {
       c.for_each_result_array([&](auto& v) { v.assign(v.size(), {}); });

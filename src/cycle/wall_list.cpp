@@ -45,15 +45,16 @@ void find_wall_contacts(Model& model, double reach, ThreadPool& pool) {
       next.wall_id.push_back(model.walls[part[k + 1]].id);
     }
   const std::size_t size = next.ball.size();
-  for (auto* v : {&next.fsx, &next.fsy, &next.fsz, &next.nx, &next.ny, &next.nz, &next.overlap, &next.fn, &next.fx,
-                  &next.fy, &next.fz, &next.kn_eff, &next.ks_eff})
-    v->assign(size, 0.0);
-  next.state.assign(size, 0);
+  next.for_each_history([&](auto& v, const HistoryPart&) { v.assign(size, 0.0); });
+  next.for_each_result_array([&](auto& v) { v.assign(size, {}); });
   // The history by (ball id, wall id): both lists are in that order (ball index order is id order,
   // walls are kept by ascending id).
   const std::size_t old = table.ball_id.size();
-  bool consistent = table.wall_id.size() == old && table.fsx.size() == old && table.fsy.size() == old &&
-                    table.fsz.size() == old && table.state.size() == old;
+  bool consistent = table.wall_id.size() == old && table.state.size() == old;
+  table.for_each_history([&](const auto& v, const HistoryPart&) { consistent = consistent && v.size() == old; });
+  // The arrays of the old table, in the order the new one lists them (to copy an entry across).
+  std::vector<const std::vector<double>*> old_history;
+  table.for_each_history([&](const auto& v, const HistoryPart&) { old_history.push_back(&v); });
   if (consistent) {
     std::size_t p = 0;
     for (std::size_t q = 0; q < size; ++q) {
@@ -61,7 +62,8 @@ void find_wall_contacts(Model& model, double reach, ThreadPool& pool) {
                          (table.ball_id[p] == next.ball_id[q] && table.wall_id[p] < next.wall_id[q])))
         ++p;
       if (p < old && table.ball_id[p] == next.ball_id[q] && table.wall_id[p] == next.wall_id[q]) {
-        next.fsx[q] = table.fsx[p]; next.fsy[q] = table.fsy[p]; next.fsz[q] = table.fsz[p];
+        std::size_t h = 0;
+        next.for_each_history([&](auto& v, const HistoryPart&) { v[q] = (*old_history[h++])[p]; });
         if (table.nx.size() == old) {   // the last results stay readable until the next pass
           next.nx[q] = table.nx[p]; next.ny[q] = table.ny[p]; next.nz[q] = table.nz[p];
           next.overlap[q] = table.overlap[p]; next.fn[q] = table.fn[p];

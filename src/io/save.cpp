@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <array>
 #include <cstdio>
@@ -39,8 +40,10 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // that RESTART resumes them; older files restart with none. 7: the energy terms of the last step
 // at its force pass (Model::energy_at_step), so that PRINT energy after RESTART is the saved run's;
 // older files print the state as it is until the next step. 8: the walls a servo's area comes from
-// (Wall::area_walls; older files keep the servo's own area) and the sample (SAMPLE).
-constexpr std::uint32_t kVersion = 8;
+// (Wall::area_walls; older files keep the servo's own area) and the sample (SAMPLE). 9: the
+// contacts' history by name (transfer_contacts), so that a contact law part added later reads
+// older files.
+constexpr std::uint32_t kVersion = 9;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -106,6 +109,7 @@ class Reader {
     pos_ += n;
   }
   bool at_end() const { return pos_ == data_.size(); }
+  const std::string& path() const { return path_; }
   [[noreturn]] void corrupt() const {
     throw std::runtime_error(fmt::format("'{}' is damaged: its contents do not add up (not restarted)", path_));
   }
@@ -118,6 +122,92 @@ class Reader {
   std::string path_;
   std::size_t pos_ = 0;
 };
+
+// A contact table's arrays: its list, its history and its results. From format 9 the history goes
+// by name (the table's for_each_history), so that a law part added later reads older saves (its
+// history starting at zero) and a save holding a part this build lacks is refused by name; before,
+// the shear spring's three arrays stood after the state, in place. `put` writes or reads one array.
+template <class IO, class Table, class Put>
+void transfer_contacts(IO& io, Table& t, std::uint32_t version, Put&& put) {
+  constexpr bool kReading = std::is_same_v<IO, Reader>;
+  std::vector<std::string> read;   // the parts the file held
+  t.for_each_list_array(put);
+  if (version < 9) {
+    put(t.state);
+    for (const char* name : {"fsx", "fsy", "fsz"})
+      t.for_each_history([&](auto& v, const HistoryPart& part) {
+        if (name == std::string(part.name)) {
+          put(v);
+          read.emplace_back(name);
+        }
+      });
+    t.for_each_result_array([&](auto& v) {
+      if (static_cast<const void*>(&v) != static_cast<const void*>(&t.state)) put(v);
+    });
+  } else {
+    std::uint64_t parts = 0;
+    if constexpr (!kReading) t.for_each_history([&](const auto&, const HistoryPart&) { ++parts; });
+    io.pod(parts);
+    if constexpr (kReading) {
+      if (parts > 64) io.corrupt();
+      for (std::uint64_t k = 0; k < parts; ++k) {
+        std::string name;
+        io.str(name);
+        // A name is a few letters and digits, said once.
+        if (name.empty() || name.size() > 32 || std::find(read.begin(), read.end(), name) != read.end() ||
+            name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
+          io.corrupt();
+        bool known = false;
+        t.for_each_history([&](auto& v, const HistoryPart& part) {
+          if (!known && name == part.name) {
+            known = true;
+            put(v);
+          }
+        });
+        if (!known)
+          throw std::runtime_error(fmt::format("'{}' holds a contact history '{}' that this trubal does not know "
+                                               "(saved by a later version?): not restarted", io.path(), name));
+        read.push_back(name);
+      }
+    } else {
+      t.for_each_history([&](auto& v, const HistoryPart& part) {
+        io.str(std::string(part.name));
+        put(v);
+      });
+    }
+    t.for_each_result_array(put);
+  }
+  if constexpr (kReading)   // a part the save did not know starts with no history
+    t.for_each_history([&](auto& v, const HistoryPart& part) {
+      if (std::find(read.begin(), read.end(), part.name) == read.end()) v.assign(t.size(), 0.0);
+    });
+}
+
+// The pair table: on writing, only the pairs that carry something (touching, or a history): the
+// others are the search's spare candidates, all zero, which depend on when the list was last made
+// (a cut run, a rank count, results made again when read) while the state does not. The next step
+// finds them. (Results not kept, ContactTable::results_kept, are written as zero.)
+template <class IO> void transfer_pairs(IO& io, ContactTable& c, std::uint32_t version) {
+  if constexpr (std::is_same_v<IO, Reader>) {
+    transfer_contacts(io, c, version, [&](auto& v) { io.vec(v); });
+  } else {
+    const bool results = c.results_kept();
+    std::vector<std::uint8_t> keep(c.size(), 1);
+    std::size_t count = 0;
+    for (std::size_t p = 0; p < c.size(); ++p) {
+      keep[p] = (results && c.state[p] != 0) || c.has_history(p);
+      count += keep[p];
+    }
+    transfer_contacts(io, c, version, [&](const auto& v) {
+      if (count == c.size() && v.size() == c.size()) return io.vec(v);
+      std::decay_t<decltype(v)> kept(count);
+      if (v.size() == c.size())
+        for (std::size_t p = 0, q = 0; p < v.size(); ++p)
+          if (keep[p]) kept[q++] = v[p];
+      io.vec(kept);
+    });
+  }
+}
 
 // One description of the layout serves both directions, so save and load cannot drift apart.
 template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
@@ -150,30 +240,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     }
   }
   m.balls.for_each_array([&](auto& v) { io.vec(v); });
-  if constexpr (std::is_same_v<IO, Reader>) {
-    m.contacts.for_each_pair_array([&](auto& v) { io.vec(v); });
-  } else {
-    // The pairs that carry something (touching, or a shear history): the others are the search's
-    // spare candidates, all zero, which depend on when the list was last made (a cut run, a rank
-    // count, results made again when read) while the state does not. The next step finds them.
-    const ContactTable& c = m.contacts;
-    // (Results not kept, ContactTable::results_kept, are written as zero.)
-    const bool results = c.results_kept();
-    std::vector<std::uint8_t> keep(c.size(), 1);
-    std::size_t count = 0;
-    for (std::size_t p = 0; p < c.size(); ++p) {
-      keep[p] = (results && c.state[p] != 0) || c.fsx[p] != 0 || c.fsy[p] != 0 || c.fsz[p] != 0;
-      count += keep[p];
-    }
-    m.contacts.for_each_pair_array([&](const auto& v) {
-      if (count == c.size() && v.size() == c.size()) return io.vec(v);
-      std::decay_t<decltype(v)> kept(count);
-      if (v.size() == c.size())
-        for (std::size_t p = 0, q = 0; p < v.size(); ++p)
-          if (keep[p]) kept[q++] = v[p];
-      io.vec(kept);
-    });
-  }
+  transfer_pairs(io, m.contacts, version);
   if (version >= 4) io.pod(m.contacts.results_cycle);
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
   io.pod(m.settings.damping);
@@ -219,7 +286,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
       io.pod(w.force); io.pod(w.moment); io.pod(w.normal_force); io.pod(w.stiffness); io.pod(w.contacts);
       io.pod(w.work);
     }
-    m.wall_contacts.for_each_array([&](auto& v) { io.vec(v); });
+    transfer_contacts(io, m.wall_contacts, version, [&](auto& v) { io.vec(v); });
     io.pod(m.space.periodic_axis);
   }
   if (version >= 6) io.pod(m.space.reference_volume);

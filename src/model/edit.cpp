@@ -206,8 +206,9 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
   for (std::size_t k = 0; k < n; ++k) b.id[k] = static_cast<std::int64_t>(k) + 1;
 
   // The pair list: each pair in the new indices, turned round where its balls changed order (the
-  // shear force on j, the normal from i to j, the force on j and j's image all change sign; the
-  // moment term n x shear force does not), then sorted as a list is (pair_before's order).
+  // history as each part declares (OnSwap: the shear force on j changes sign), the normal from i to
+  // j, the force on j and j's image change sign; the moment term n x shear force does not), then
+  // sorted as a list is (pair_before's order).
   ContactTable& c = model.contacts;
   const bool results = c.results_kept();
   for (std::size_t p = 0; p < c.size(); ++p) {
@@ -215,7 +216,9 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
     if (i > j) {
       std::swap(i, j);
       for (auto* v : {&c.image_x, &c.image_y, &c.image_z}) (*v)[p] = static_cast<std::int8_t>(-(*v)[p]);
-      for (auto* v : {&c.fsx, &c.fsy, &c.fsz}) (*v)[p] = -(*v)[p];
+      c.for_each_history([&](auto& v, const HistoryPart& part) {
+        if (part.swap == OnSwap::Negate) v[p] = -v[p];
+      });
       if (results)
         for (auto* v : {&c.nx, &c.ny, &c.nz, &c.fx, &c.fy, &c.fz}) (*v)[p] = -(*v)[p];
     }

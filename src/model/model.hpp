@@ -67,9 +67,25 @@ struct Balls {
   }
 };
 
+// What a contact keeps from one step to the next, its history, is declared once: each part of a
+// contact law that keeps state lists its arrays in ContactTable::for_each_history (and, where a
+// ball meets a wall, WallContacts::for_each_history), with what a value does when i and j trade
+// places. Every place that moves contact state goes through those lists: the pair list's
+// carry-over (cycle/pair_list.cpp, cycle/wall_list.cpp), the rescue snapshot (cycle/snapshot.hpp),
+// SAVE and RESTART, RENUMBER (model/edit.cpp), and the step shared among threads and ranks
+// (cycle/parallel_step.cpp, cycle/brick_step.cpp).
+enum class OnSwap : std::uint8_t {
+  Keep,     // a value of the pair as a whole (a count, a flag, a length)
+  Negate,   // a vector on j from i (the shear force on j): on i it is minus this
+};
+struct HistoryPart {
+  const char* name;   // as SAVE names it (a save is read by these names, so a new part reads old saves)
+  OnSwap swap;
+};
+
 // Pairs of balls that may touch, i < j as ball indices, sorted by (i, j). Only pairs with positive
-// overlap are contacts; the rest carry zero history. The shear force is history and survives
-// rebuilds because it is carried over by the pair of ball ids.
+// overlap are contacts; the rest carry zero history. The history survives rebuilds because it is
+// carried over by the pair of ball ids.
 struct ContactTable {
   std::vector<std::uint32_t> i, j;
   std::vector<std::int8_t> image_x, image_y, image_z;   // periodic image of j as seen from i
@@ -116,10 +132,36 @@ struct ContactTable {
     for_each_result_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
     results_cycle = -1;
   }
+  // The history, each array with its name and what its value does when i and j trade places.
+  template <class F> void for_each_history(F&& f) {
+    f(fsx, HistoryPart{"fsx", OnSwap::Negate});   // the shear spring
+    f(fsy, HistoryPart{"fsy", OnSwap::Negate});
+    f(fsz, HistoryPart{"fsz", OnSwap::Negate});
+  }
+  template <class F> void for_each_history(F&& f) const {
+    const_cast<ContactTable*>(this)->for_each_history(
+        [&](auto& v, const HistoryPart& part) { f(static_cast<const decltype(v)&>(v), part); });
+  }
+  // How many doubles of history a pair carries.
+  static std::size_t history_count() {
+    std::size_t n = 0;
+    ContactTable().for_each_history([&](const auto&, const HistoryPart&) { ++n; });
+    return n;
+  }
+  // Whether pair p carries any history.
+  bool has_history(std::size_t p) const {
+    bool any = false;
+    for_each_history([&](const auto& v, const HistoryPart&) { any = any || (p < v.size() && v[p] != 0); });
+    return any;
+  }
+  // The pair list's arrays (the pairs and their images).
+  template <class F> void for_each_list_array(F&& f) { f(i); f(j); f(image_x); f(image_y); f(image_z); }
   template <class F> void for_each_pair_array(F&& f) {
-    f(i); f(j); f(image_x); f(image_y); f(image_z); f(state);
-    for (auto* v : {&fsx, &fsy, &fsz, &nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &tx, &ty, &tz,
-                    &kn_eff, &ks_eff, &cn_eff, &work_friction, &work_damping})
+    for_each_list_array(f);
+    f(state);
+    for_each_history([&](auto& v, const HistoryPart&) { f(v); });
+    for (auto* v : {&nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &tx, &ty, &tz, &kn_eff, &ks_eff, &cn_eff,
+                    &work_friction, &work_damping})
       f(*v);
   }
   template <class F> void for_each_pair_array(F&& f) const {
@@ -252,9 +294,24 @@ struct WallContacts {
   // Unique to each list installed (as ContactTable::list_version); not saved.
   std::uint64_t list_version = 0;
   std::size_t size() const { return ball.size(); }
+  // The history, each array with its name (a wall contact's ball never trades places with its wall).
+  template <class F> void for_each_history(F&& f) {
+    f(fsx, HistoryPart{"fsx", OnSwap::Negate});   // the shear spring
+    f(fsy, HistoryPart{"fsy", OnSwap::Negate});
+    f(fsz, HistoryPart{"fsz", OnSwap::Negate});
+  }
+  // The list's arrays (which ball meets which wall).
+  template <class F> void for_each_list_array(F&& f) { f(ball); f(wall); f(ball_id); f(wall_id); }
+  // The results of the last force pass (every array but the list's and the history).
+  template <class F> void for_each_result_array(F&& f) {
+    f(state);
+    for (auto* v : {&nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &kn_eff, &ks_eff}) f(*v);
+  }
   template <class F> void for_each_array(F&& f) {
-    f(ball); f(wall); f(ball_id); f(wall_id); f(state);
-    for (auto* v : {&fsx, &fsy, &fsz, &nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &kn_eff, &ks_eff}) f(*v);
+    for_each_list_array(f);
+    f(state);
+    for_each_history([&](auto& v, const HistoryPart&) { f(v); });
+    for (auto* v : {&nx, &ny, &nz, &overlap, &fn, &fx, &fy, &fz, &kn_eff, &ks_eff}) f(*v);
   }
 };
 

@@ -35,5 +35,11 @@ def assert_same_state(case, s1, s2, same_step=True):
     case.assertGreater(len(c1["i"]), 0, "the scene should have contacts")
     for name in ("i", "j", "normal", "overlap", "normal_force", "shear_force", "force", "sliding"):
         case.assertTrue(same_bits(c1[name], c2[name]), f"contacts' {name} differ")
+    # Every part of the history the contact law declares, by name; the shear spring's is shear_force.
+    case.assertEqual(sorted(c1["history"]), sorted(c2["history"]))
+    for name in c1["history"]:
+        case.assertTrue(same_bits(c1["history"][name], c2["history"][name]), f"contacts' history {name} differ")
+    for k, name in enumerate(("fsx", "fsy", "fsz")):
+        case.assertTrue(same_bits(c1["history"][name], c1["shear_force"][:, k]), f"history {name} is not shear_force")
     if same_step:
         case.assertEqual(s1.step, s2.step)
