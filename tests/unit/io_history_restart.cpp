@@ -23,6 +23,13 @@ std::size_t data_rows(const std::string& csv) {
   return lines.empty() ? 0 : lines.size() - 1;
 }
 
+// The file of a history every 5 cycles of an unbroken 80-cycle run, made in `dir` (u.csv).
+std::string unbroken_history(const TempDir& dir) {
+  Harness h;
+  REQUIRE(h.deck(kScene + "hist stress energy every 5 file u.csv\ncycle 80\n"));
+  return slurp(dir.path() / "u.csv");
+}
+
 void write_text(const fs::path& p, const std::string& text) {
   std::ofstream f(p, std::ios::binary | std::ios::trunc);
   f << text;
@@ -35,12 +42,7 @@ TEST_CASE("io history: RESTART resumes the saved histories and their files, byte
           "[io][history][restart]") {
   TempDir dir;
   WorkingDir cd(dir.path());
-  std::string unbroken;
-  {
-    Harness h;
-    REQUIRE(h.deck(kScene + "hist stress energy every 5 file u.csv\ncycle 80\n"));
-    unbroken = slurp(dir.path() / "u.csv");
-  }
+  const std::string unbroken = unbroken_history(dir);
   REQUIRE(data_rows(unbroken) == 16);
   Harness first;
   // A run that saves at 50 and goes on to 80, so that h.csv has 6 rows past the save.
@@ -71,12 +73,7 @@ TEST_CASE("io history: a row torn when the writing stopped costs that row alone,
           "written again", "[io][history][restart]") {
   TempDir dir;
   WorkingDir cd(dir.path());
-  std::string unbroken;
-  {
-    Harness h;
-    REQUIRE(h.deck(kScene + "hist stress energy every 5 file u.csv\ncycle 80\n"));
-    unbroken = slurp(dir.path() / "u.csv");
-  }
+  const std::string unbroken = unbroken_history(dir);
   // Cuts h.csv inside its row `from_end` rows before the last (half of that row's line is left,
   // no newline after it), as a full disk or a kill leaves it.
   auto tear = [&](std::size_t from_end) {
