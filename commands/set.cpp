@@ -53,7 +53,7 @@ const Command set_command = {
     "a variable or a setting",
     "`SET name value` defines a variable: $name (or ${name}) in later lines is replaced by the value. Settings: "
     "echo (echo each command in batch mode), seed (default seed of GEN), log (copy everything shown to a "
-    "file, appending, never through a symbolic link; `SET log off` stops; while a log is on, progress comes as plain lines), progress (seconds "
+    "file, appending, never through a symbolic link to a file (/dev/stderr and a link to a device or pipe are followed); `SET log off` stops; while a log is on, progress comes as plain lines), progress (seconds "
     "between the plain progress lines of a long CYCLE or SOLVE, default 10; 0: none), volume (the volume for the average stress in free space; 0 uses the START "
     "box).",
     "set seed 42",

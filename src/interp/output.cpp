@@ -2,6 +2,7 @@
 #include "support/comm.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 
 #include <cerrno>
 #include <cstring>
@@ -68,16 +69,23 @@ void Output::set_log(const std::string& path) {
   if (path.empty()) return;
   log_path_ = path;
   if (!comm::root()) return;   // rank 0 alone prints, and logs
+  // Not through a symbolic link to a file (or to nothing), as no output of ours is: one planted at
+  // the name would send the log into another file. The system's own links (/dev/stderr, /proc/self/
+  // fd/N) and a link to a device or a pipe are followed.
+  struct stat link {}, target {};
+  const bool system_name = path.rfind("/dev/", 0) == 0 || path.rfind("/proc/", 0) == 0;
+  if (!system_name && ::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode) &&
+      !(::stat(path.c_str(), &target) == 0 && (S_ISCHR(target.st_mode) || S_ISFIFO(target.st_mode)))) {
+    log_path_.clear();
+    throw std::runtime_error("will not append to the log file '" + path +
+                             "': it is a symbolic link (name a regular file, or a new one)");
+  }
   // Opened without waiting: a FIFO with no reader fails at once (ENXIO) where a plain open would
-  // block for ever; then the writes wait as they would for the screen. Not through a symbolic link
-  // (ELOOP), as no output of ours is: one planted at the name would send the log elsewhere.
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW, 0666);
+  // block for ever; then the writes wait as they would for the screen.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_NONBLOCK | O_CLOEXEC, 0666);
   if (fd < 0) {
     const int err = errno;
     log_path_.clear();
-    if (err == ELOOP)
-      throw std::runtime_error("will not append to the log file '" + path +
-                               "': it is a symbolic link (name a regular file, or a new one)");
     if (err == ENXIO)
       throw std::runtime_error("cannot open the log file '" + path +
                                "': it is a FIFO (a named pipe) that no process reads; writing to it would wait for ever");

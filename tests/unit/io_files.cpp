@@ -85,6 +85,8 @@ TEST_CASE("io files: HIST never writes through a link, and a FIFO is refused at 
     CHECK_THAT(h.first_error_line(), Catch::Contains("deck.dat:1: error: will not append to the log file '" + link +
                                                      "': it is a symbolic link (name a regular file, or a new one)"));
     CHECK(slurp(precious) == "keep me\n");
+    Harness device;   // a link to a device is followed, as /dev/stderr is one
+    CHECK(device.deck("set log /dev/stderr\necho hello\nset log off\n"));
   }
   // A FIFO with no reader: opening it blocked for ever (and Ctrl-C could not stop it). HIST
   // refuses it, as PRINT and SAVE do; SET log opens without waiting and fails. `timeout` ends the
