@@ -72,22 +72,24 @@ const char* const kExtremes[] = {"1e308", "-1e308", "1.7976931348623157e308", "4
                                  "9223372036854775807", "9223372036854775808", "-9223372036854775808",
                                  "18446744073709551616", "-1", "-1e9", "1e19", "1e-30", "2147483648"};
 
-// '#' is an argument: an extreme, or now and then an ordinary value.
+// '#' is an argument: an extreme, or now and then an ordinary value; '!' an extreme always. GEN
+// porosity's radii and LATTICE's counts are '!': ordinary ones in a large START box ask for
+// millions of balls, a legal run far past a mutant's time and memory.
 const char* const kExtremeTemplates[] = {
     "servo # # #", "servo # # # gain # max #", "servo xx # yy # zz # gain # max #", "servo xx # gain #",
     "servo zz # max #", "servo wall 1 stress # gain # max # area #", "servo wall 2 stress # max #",
     "servo wall # stress # in #", "servo wall 3 stress # between 1 2 max #", "gen # # #", "gen # # # seed #",
-    "gen # # # type #", "gen # 0.0004 0.0006 seed 7", "gen 20 # #", "gen porosity # psd uniform # #",
-    "gen porosity 0.4 psd normal # # cut # #", "gen # # # range sphere # # # #", "strain # # #",
+    "gen # # # type #", "gen # 0.0004 0.0006 seed 7", "gen 20 # #", "gen porosity # psd uniform ! !",
+    "gen porosity 0.4 psd normal ! ! cut ! !", "gen # # # range sphere # # # #", "strain # # #",
     "strain # # # # # #", "strain xx #", "strain xy #", "strain zz # xy #", "start # # #", "start # # # # # #",
     "start box # # # # # #", "start box -1 1 -1 1 # #", "prop kn # ks # dens #", "prop kn # ks # fric # dens #",
     "prop type # kn # dens #", "prop shear # poisson # dens # rest #", "prop coh # mu #", "prop dens #",
-    "lattice fcc # # # #", "ball # # # #", "ball 0 0 0 # id #", "wall plane # # # # # #",
+    "lattice fcc # ! ! !", "ball # # # #", "ball 0 0 0 # id #", "wall plane # # # # # #",
     "wall id 9 cylinder 0 0 0 0 0 1 radius # length #", "tstep #", "frac #", "grav # # #", "damp local #",
     "damp # #", "damp mass # stiff #", "membrane # follow every #", "init xvel # yspin #", "apply zforce #",
     "hist stress every # file x.csv", "set progress #", "set volume #", "backend threaded threads #",
     "backend serial maxmem #", "dump vtk v every #", "sample platens # # cylinder #"};
-const char* const kOrdinary[] = {"1", "2", "0.5", "1e-3", "1e5", "100", "3"};
+const char* const kOrdinary[] = {"1", "2", "0.5", "1e-3", "1e4", "100", "3"};
 
 // Lines that read or write a file named p.*, for a deck that names none where a FIFO or a link can
 // be planted.
@@ -251,7 +253,9 @@ class Mutator {
     }
     std::string line;
     for (const char* c = pick(kExtremeTemplates); *c; ++c)
-      line += *c == '#' ? std::string(below(4) ? pick(kExtremes) : pick(kOrdinary)) : std::string(1, *c);
+      line += *c == '#'   ? std::string(below(4) ? pick(kExtremes) : pick(kOrdinary))
+              : *c == '!' ? std::string(pick(kExtremes))
+                          : std::string(1, *c);
     std::vector<std::string> added{line};
     if (below(2)) added.push_back(fmt::format("cycle {}", 1 + below(20)));
     const std::size_t at = place_with_model(m);
@@ -414,13 +418,15 @@ class Mutator {
   }
 
   // One line many times over. Commands that do work (cycling, generating, writing files) are
-  // repeated a few times: a longer run is a legal run, not a finding. The deck stays under about
-  // 16 MiB: a program that reads a deck whole needs memory in proportion to it.
+  // repeated a few times: a longer run is a legal run, not a finding. So is a line naming a
+  // variable (it may expand to 1 MiB: 10,000 of them take minutes of copying). The deck stays
+  // under about 16 MiB: a program that reads a deck whole needs memory in proportion to it.
   void duplicated_line(Mutant& m) {
     const std::size_t at = any_line(m);
     const std::string key = keyword(m.lines[at]);
     const bool heavy = is_one_of(key, {"cyc", "sol", "gen", "lat", "plo", "dum", "sav", "res", "pri", "his", "cal",
-                                       "inc", "ren", "bac", "mem", "sam", "del", "wal", "bal", "cre", "ser"});
+                                       "inc", "ren", "bac", "mem", "sam", "del", "wal", "bal", "cre", "ser"}) ||
+                       m.lines[at].find('$') != std::string::npos;
     static const std::size_t many[] = {100, 1000, 10000};
     const std::size_t times = std::min(heavy ? 2 + below(9) : many[below(3)],
                                        std::max<std::size_t>(2, (kMaxLine << 4) / (m.lines[at].size() + 1)));
