@@ -17,7 +17,8 @@ bool next_is_number(const Args& args) { return !args.empty() && parse_real(args.
 // Under mpirun rank 0 alone reads it and hands its text to the others, as with every input file.
 void read_sieve_file(Args& args, const std::string& path, SizeDistribution& d) {
   const std::optional<std::string> text = Interpreter::read_file_on_root(path);
-  if (!text) args.fail(fmt::format("cannot read the sieve curve file '{}'", path));
+  if (!text)
+    args.fail(fmt::format("cannot read the sieve curve file '{}' (missing, unreadable, or not a regular file)", path));
   std::istringstream in(*text);
   std::string line;
   int number = 0;

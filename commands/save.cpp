@@ -38,7 +38,8 @@ static void run_restart(Context& ctx, Args& args) {
 const Command restart_command = {
     "RESTART", {"RESTORE"}, "RESTART file", "read a saved state",
     "Reads a file written by SAVE; cycling then continues exactly (bitwise) as the saved run would have. A "
-    "truncated, corrupted or foreign file is refused with an error and the current model is kept. The saved "
+    "truncated, corrupted or foreign file is refused with an error and the current model is kept, as is a FIFO "
+    "or a device (reading one would wait for a writer, or never end). The saved "
     "histories resume: each HIST file is appended to, after its rows past the saved cycle (of a later part of "
     "the run that wrote it) are dropped, and so is a last row cut short (a full disk or a killed run stopped "
     "the writing inside it); rows the save holds that the file lacks are written again. A file that is missing "

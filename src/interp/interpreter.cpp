@@ -79,6 +79,9 @@ std::string read_all(std::istream& in, const std::string& what) {
 std::optional<std::string> Interpreter::read_file_on_root(const std::string& path) {
   FileText file = read_on_root([&] {
     FileText f;
+    // A regular file only (through a link): opening a FIFO waits for a writer for ever.
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return f;
     std::ifstream in(path);
     f.ok = static_cast<bool>(in);
     try {

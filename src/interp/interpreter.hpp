@@ -48,7 +48,7 @@ class Interpreter {
   // over kMaxLineLength (the LineReader reports it). Throws InputError on every rank when it fails.
   static std::string read_stream_on_root(std::istream& in);
   // A data file's text as rank 0 read it, on every rank (a collective call); nothing where rank 0
-  // could not open it.
+  // could not open it or it is not a regular file.
   static std::optional<std::string> read_file_on_root(const std::string& path);
 
   // For CALL: runs a file as part of the current command. Throws ReportedError after reporting

@@ -491,11 +491,23 @@ Model load_model(const std::string& path, History* history) {
   // Rank 0 reads the file, every rank restarts from its bytes (an error travels as "E" + message).
   std::string data;
   if (comm::root()) {
+    // Looked at before it is opened (through a link: a link to a save is a save): opening a FIFO
+    // waits for a writer for ever, and a device such as /dev/zero never ends.
+    namespace fs = std::filesystem;
     std::error_code ec;
-    std::ifstream in(path, std::ios::binary);
-    if (std::filesystem::is_directory(path, ec)) data = fmt::format("E'{}' is a directory, not a save file", path);
-    else if (!in) data = fmt::format("Ecannot open the save file '{}'", path);
-    else data = "D" + std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const fs::file_type kind = fs::status(path, ec).type();
+    if (kind == fs::file_type::directory) {
+      data = fmt::format("E'{}' is a directory, not a save file", path);
+    } else if (kind == fs::file_type::fifo || kind == fs::file_type::character || kind == fs::file_type::block ||
+               kind == fs::file_type::socket) {
+      data = fmt::format("E'{}' is {}, not a save file", path,
+                         kind == fs::file_type::fifo ? "a FIFO (a named pipe: reading it waits for a writer)"
+                                                     : "a device or a socket");
+    } else {
+      std::ifstream in(path, std::ios::binary);
+      if (!in) data = fmt::format("Ecannot open the save file '{}'", path);
+      else data = "D" + std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    }
   }
   comm::broadcast(data);
   if (data.empty() || data[0] == 'E') throw std::runtime_error(data.empty() ? "cannot read the save file" : data.substr(1));
