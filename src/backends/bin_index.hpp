@@ -33,7 +33,7 @@ class BinIndex {
     return {begin, end};
   }
   const std::vector<std::uint32_t>& order() const { return order_; }
-  // Whether only the occupied bins are kept (PRINT info says so).
+  // Whether only the occupied bins are kept.
   bool sparse() const { return sparse_; }
 
  private:

@@ -28,7 +28,6 @@ class BoxGrid {
 
   const std::array<int, 3>& dims() const { return shape_.dims; }
   double cell_size() const { return shape_.size[0]; }
-  bool sparse() const { return bins_.sparse(); }
 
  private:
   GridShape shape_;
