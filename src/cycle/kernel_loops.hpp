@@ -61,6 +61,7 @@ struct PairInputs {
       B.sz[q] = rad[i] * wz[i] + rad[j] * wz[j];
     }
     if constexpr (F.dashpot) B.mstar[q] = pair_mstar(mass[i], mass[j], velocity_held(fixed[i]), velocity_held(fixed[j]));
+    if constexpr (F.rolling) { B.wx[q] = wx[j] - wx[i]; B.wy[q] = wy[j] - wy[i]; B.wz[q] = wz[j] - wz[i]; }
   }
 };
 
@@ -88,9 +89,11 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   ContactTable& c = model.contacts;
   TRUBAL_PTR(pi, c.i); TRUBAL_PTR(pj, c.j);
   TRUBAL_PTR(fsx, c.fsx); TRUBAL_PTR(fsy, c.fsy); TRUBAL_PTR(fsz, c.fsz);
+  TRUBAL_PTR(mrx, c.mrx); TRUBAL_PTR(mry, c.mry); TRUBAL_PTR(mrz, c.mrz);
   TRUBAL_PTR(state, c.state);
   TRUBAL_PTR(ball_sum, scratch.ball_force); TRUBAL_PTR(cn_sum, scratch.ball_cn);
   DashpotForce* __restrict dash_sum = kLaw.dashpot ? scratch.ball_dashpot.data() : nullptr;
+  RollingMoment* __restrict roll_sum = kLaw.rolling ? scratch.ball_rolling.data() : nullptr;
   const PairInputs in(model);
   const double dt = k.dt_prev, dt_work = k.dt_mean, beta = k.beta;
   const PairLaw& one_law = k.laws.ball_law();
@@ -100,7 +103,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const bool cell_moving = in.cell_moving;
   // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
   // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
-  double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
+  double work_friction = 0, work_damping = 0, strain = 0, image_power = 0, work_rolling = 0;
   std::array<double, 9> moments{};   // force_moment (6), then stiffness_moment (3)
   BallParts* __restrict parts = scratch.ball_parts.data();
   ContactBatch B;
@@ -108,18 +111,21 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   // The new history of a batch is made here, then copied over the old (the cross pairs another
   // thread computes read a copy of it: CrossLoop).
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
+  alignas(64) double rx[kBatch], ry[kBatch], rz[kBatch];   // (F.rolling: the rolling moments)
   // The running sum of the ball whose pairs the list is on.
   constexpr std::size_t kNone = ~std::size_t{0};
   std::size_t acc_ball = kNone;
   PairForce acc{};
   double acc_cn = 0;
   DashpotForce acc_dash{};
+  RollingMoment acc_roll{};
   auto flush = [&] {
     if (acc_ball == kNone) return;
     ball_sum[acc_ball] = acc;
     if constexpr (kLaw.dashpot) { cn_sum[acc_ball] = acc_cn; dash_sum[acc_ball] = acc_dash; }
-    parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0, kDashpotAhead * work_damping, 0.0};
-    work_friction = work_damping = strain = image_power = 0;
+    if constexpr (kLaw.rolling) roll_sum[acc_ball] = acc_roll;
+    parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0, kDashpotAhead * work_damping, 0.0, work_rolling};
+    work_friction = work_damping = strain = image_power = work_rolling = 0;
     if (k.moments) [[unlikely]] {
       scratch.ball_moments[acc_ball] = moments;
       moments = {};
@@ -131,11 +137,18 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
       const std::size_t p = p0 + q;
       in.gather<kLaw, kOneLaw>(B, q, k, p, pi[p], pj[p]);
     }
-    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, dt_work, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz, &clean_run);
+    const RollingLanes roll{{mrx + p0, mry + p0, mrz + p0}, {rx, ry, rz}};
+    contact_forces<kLaw, kOneLaw>(B, count, one_law, dt, dt_work, beta, fsx + p0, fsy + p0, fsz + p0, hx, hy, hz, &clean_run,
+                                  &roll);
     if constexpr (kLaw.shear) {   // the batch's new history goes back where it was read
       std::copy(hx, hx + count, fsx + p0);
       std::copy(hy, hy + count, fsy + p0);
       std::copy(hz, hz + count, fsz + p0);
+    }
+    if constexpr (kLaw.rolling) {
+      std::copy(rx, rx + count, mrx + p0);
+      std::copy(ry, ry + count, mry + p0);
+      std::copy(rz, rz + count, mrz + p0);
     }
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q;
@@ -150,23 +163,35 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
         acc_ball = pi[p];
         acc = ball_sum[acc_ball];
         if constexpr (kLaw.dashpot) { acc_cn = cn_sum[acc_ball]; acc_dash = dash_sum[acc_ball]; }
+        if constexpr (kLaw.rolling) acc_roll = roll_sum[acc_ball];
       }
       acc.fx -= B.fx[q]; acc.fy -= B.fy[q]; acc.fz -= B.fz[q];
       if constexpr (kLaw.rotation) { acc.tx += B.tx[q]; acc.ty += B.ty[q]; acc.tz += B.tz[q]; }
-      if (sum_stiffness) { acc.kmax += kmax; acc.ks += B.ks[q]; }
+      if (sum_stiffness) {
+        acc.kmax += kmax; acc.ks += B.ks[q];
+        if constexpr (kLaw.rolling) acc.ks += rolling_ks(B.ks[q], B.rj[q] / (B.ri[q] + B.rj[q]));
+      }
       if constexpr (kLaw.dashpot) {
         acc_cn += B.cn[q];
         acc_dash.fx -= B.dfx[q]; acc_dash.fy -= B.dfy[q]; acc_dash.fz -= B.dfz[q];
         acc_dash.tx += B.dtx[q]; acc_dash.ty += B.dty[q]; acc_dash.tz += B.dtz[q];
       }
+      if constexpr (kLaw.rolling) { acc_roll.mx -= rx[q]; acc_roll.my -= ry[q]; acc_roll.mz -= rz[q]; work_rolling += B.work_rolling[q]; }
       if (pj[p] < own_end) {
         PairForce& fj = ball_sum[pj[p]];
         fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
         if constexpr (kLaw.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
-        if (sum_stiffness) { fj.kmax += kmax; fj.ks += B.ks[q]; }
+        if (sum_stiffness) {
+          fj.kmax += kmax; fj.ks += B.ks[q];
+          if constexpr (kLaw.rolling) fj.ks += rolling_ks(B.ks[q], B.ri[q] / (B.ri[q] + B.rj[q]));
+        }
         if constexpr (kLaw.dashpot) {
           cn_sum[pj[p]] += B.cn[q];
           add_dashpot(dash_sum[pj[p]], B, q);
+        }
+        if constexpr (kLaw.rolling) {
+          RollingMoment& mj = roll_sum[pj[p]];
+          mj.mx += rx[q]; mj.my += ry[q]; mj.mz += rz[q];
         }
       }
       if (cell_moving) image_power -= B.fx[q] * B.ivx[q] + B.fy[q] * B.ivy[q] + B.fz[q] * B.ivz[q];
@@ -217,6 +242,8 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   std::fill(scratch.ball_cn.begin() + ball_begin, scratch.ball_cn.begin() + ball_end, 0.0);
   if constexpr (F.dashpot)
     std::fill(scratch.ball_dashpot.begin() + ball_begin, scratch.ball_dashpot.begin() + ball_end, DashpotForce{});
+  if constexpr (F.rolling)
+    std::fill(scratch.ball_rolling.begin() + ball_begin, scratch.ball_rolling.begin() + ball_end, RollingMoment{});
   std::fill(scratch.ball_parts.begin() + ball_begin, scratch.ball_parts.begin() + ball_end, BallParts{});
   if (k.moments) std::fill(scratch.ball_moments.begin() + ball_begin, scratch.ball_moments.begin() + ball_end, std::array<double, 9>{});
   if (pair_count == 0) return;
@@ -227,6 +254,9 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   ContactBatch B;
   int clean_run = 0;   // batches in a row without a sliding contact (contact_forces)
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
+  alignas(64) double rx[kBatch], ry[kBatch], rz[kBatch], mx[kBatch], my[kBatch], mz[kBatch];
+  const RollingLanes roll{{rx, ry, rz}, {mx, my, mz}};
+  const double* rolling_history = history + ContactTable::kRollingHistory * pair_count;
   for (std::size_t q0 = 0; q0 < pair_count; q0 += kBatch) {
     const std::size_t count = std::min(kBatch, pair_count - q0);
     for (std::size_t q = 0; q < count; ++q) {
@@ -236,19 +266,30 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
       if constexpr (F.shear) {
         hx[q] = history[q0 + q]; hy[q] = history[pair_count + q0 + q]; hz[q] = history[2 * pair_count + q0 + q];
       }
+      if constexpr (F.rolling) {
+        rx[q] = rolling_history[q0 + q]; ry[q] = rolling_history[pair_count + q0 + q];
+        rz[q] = rolling_history[2 * pair_count + q0 + q];
+      }
     }
     // The new history is the owner's to write: here it goes to a scratch copy, unread.
-    if (one_law) contact_forces<F, true>(B, count, law, k.dt_prev, k.dt_mean, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
-    else contact_forces<F, false>(B, count, law, k.dt_prev, k.dt_mean, k.beta, hx, hy, hz, ox, oy, oz, &clean_run);
+    if (one_law) contact_forces<F, true>(B, count, law, k.dt_prev, k.dt_mean, k.beta, hx, hy, hz, ox, oy, oz, &clean_run, &roll);
+    else contact_forces<F, false>(B, count, law, k.dt_prev, k.dt_mean, k.beta, hx, hy, hz, ox, oy, oz, &clean_run, &roll);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t j = pj[pairs[q0 + q]];
       PairForce& fj = scratch.ball_force[j];
       fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];
       if constexpr (F.rotation) { fj.tx += B.tx[q]; fj.ty += B.ty[q]; fj.tz += B.tz[q]; }
-      if (k.sums_stiffness()) { fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q]; }
+      if (k.sums_stiffness()) {
+        fj.kmax += std::max(B.kn[q], B.ks[q]); fj.ks += B.ks[q];
+        if constexpr (F.rolling) fj.ks += rolling_ks(B.ks[q], B.ri[q] / (B.ri[q] + B.rj[q]));
+      }
       if constexpr (F.dashpot) {
         scratch.ball_cn[j] += B.cn[q];
         add_dashpot(scratch.ball_dashpot[j], B, q);
+      }
+      if constexpr (F.rolling) {
+        RollingMoment& mj = scratch.ball_rolling[j];
+        mj.mx += mx[q]; mj.my += my[q]; mj.mz += mz[q];
       }
     }
   }
@@ -267,7 +308,7 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
   const Balls& b = model.balls;
   const std::vector<Wall>& walls = model.walls;
   ContactBatch B;
-  alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch];
+  alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], rx[kBatch], ry[kBatch], rz[kBatch];
   Vec3 point[kBatch], surface[kBatch];
   for (std::size_t p0 = begin; p0 < end; p0 += kBatch) {
     const std::size_t count = std::min(kBatch, end - p0);
@@ -282,18 +323,31 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
         B.sx[q] = b.rad[i] * b.wx[i]; B.sy[q] = b.rad[i] * b.wy[i]; B.sz[q] = b.rad[i] * b.wz[i];
       }
       if constexpr (kLaw.dashpot) B.mstar[q] = b.mass[i];
+      if constexpr (kLaw.rolling) {   // the wall's spin against the ball's
+        const Wall& w = walls[c.wall[p]];
+        B.wx[q] = w.spin[0] - b.wx[i]; B.wy[q] = w.spin[1] - b.wy[i]; B.wz[q] = w.spin[2] - b.wz[i];
+      }
       point[q] = lane.point;
       surface[q] = lane.velocity;
     }
+    const RollingLanes roll{{c.mrx.data() + p0, c.mry.data() + p0, c.mrz.data() + p0}, {rx, ry, rz}};
     contact_forces<kLaw, false>(B, count, k.laws.table[0], k.dt_prev, k.dt_mean, k.beta, c.fsx.data() + p0, c.fsy.data() + p0,
-                                c.fsz.data() + p0, hx, hy, hz);
+                                c.fsz.data() + p0, hx, hy, hz, nullptr, &roll);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t p = p0 + q, i = c.ball[p];
       if constexpr (kLaw.shear) { c.fsx[p] = hx[q]; c.fsy[p] = hy[q]; c.fsz[p] = hz[q]; }
+      if constexpr (kLaw.rolling) {
+        c.mrx[p] = rx[q]; c.mry[p] = ry[q]; c.mrz[p] = rz[q];
+        RollingMoment& mi = scratch.ball_rolling[i];
+        mi.mx -= rx[q]; mi.my -= ry[q]; mi.mz -= rz[q];
+      }
       PairForce& fi = scratch.ball_force[i];
       fi.fx -= B.fx[q]; fi.fy -= B.fy[q]; fi.fz -= B.fz[q];
       if constexpr (kLaw.rotation) { fi.tx += B.tx[q]; fi.ty += B.ty[q]; fi.tz += B.tz[q]; }
-      if (k.sums_stiffness()) { fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q]; }
+      if (k.sums_stiffness()) {
+        fi.kmax += std::max(B.kn[q], B.ks[q]); fi.ks += B.ks[q];
+        if constexpr (kLaw.rolling) fi.ks += rolling_ks(B.ks[q], 1.0);   // (the wall does not turn with it)
+      }
       if constexpr (kLaw.dashpot) {
         scratch.ball_cn[i] += B.cn[q];
         DashpotForce& d = scratch.ball_dashpot[i];
@@ -316,6 +370,7 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       part.boundary += power * k.dt_mean;
       part.boundary_ahead += power * (0.5 * k.dt_mean);   // the wall moves on with the balls: half after t
       part.friction += B.work_friction[q];
+      if constexpr (kLaw.rolling) part.rolling += B.work_rolling[q];
       part.damping += B.work_damping[q];
       part.damping_ahead += kDashpotAhead * B.work_damping[q];
       part.strain += B.strain[q];
@@ -448,6 +503,15 @@ void motion_block(Balls& b, const StepScratch& scratch, const StepKernels& k, st
     fixed[q] = fixed_bytes[q];
     if constexpr (kGhosts) ghost[q] = ghost_bytes[q];
   }
+  // Scenes with rolling resistance: the rolling springs' moment M joins the shear forces' -R t as
+  // t - M / R, so that the loop below makes the moment from one sum.
+  if (k.features.rolling) {
+    const RollingMoment* __restrict roll = scratch.ball_rolling.data() + b0;
+    const double* __restrict r = b.rad.data() + b0;
+    for (std::size_t q = 0; q < n; ++q) {
+      cf[3][q] -= roll[q].mx / r[q]; cf[4][q] -= roll[q].my / r[q]; cf[5][q] -= roll[q].mz / r[q];
+    }
+  }
   // Scenes with dashpots: each ball's dashpot power at v(t - dt/2), to take from the same at
   // v(t + dt/2) after the step (kDashpotAhead).
   const DashpotForce* __restrict dash = k.features.stiffness_damping ? scratch.ball_dashpot.data() + b0 : nullptr;
@@ -542,7 +606,8 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
   ExactSum::Stream kinetic_sum(sums.kinetic_translation), spin_sum(sums.kinetic_rotation),
       boundary_sum(sums.boundary_work), potential_sum(sums.potential), damping_sum(sums.damping_work),
       friction_sum(sums.friction_work), strain_sum(sums.strain), image_sum(sums.image_power),
-      boundary_ahead_sum(sums.boundary_ahead), damping_ahead_sum(sums.damping_ahead);
+      boundary_ahead_sum(sums.boundary_ahead), damping_ahead_sum(sums.damping_ahead), rolling_sum(sums.rolling_work);
+  const bool rolling = k.features.rolling;
   // Each block's terms go to the streams a block at a time (ExactSum::Stream::add_block: vector
   // arithmetic where the block fits the window). The sums are exact, so when a term goes in (and
   // the ghosts' zeros) changes no bit.
@@ -567,6 +632,12 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     damping_sum.add_block(terms[kDamping], n);
     boundary_ahead_sum.add_block(terms[kBoundaryAhead], n);
     damping_ahead_sum.add_block(terms[kDampingAhead], n);
+    if (rolling) {   // the rolling springs' work, beside the block's terms (only scenes with rr_fric have it)
+      alignas(64) double work[kTermBlock];
+      for (std::size_t q = 0; q < n; ++q)
+        work[q] = ghosts && scratch.ghost[b0 + q] ? 0.0 : scratch.ball_parts[b0 + q].rolling;
+      rolling_sum.add_block(work, n);
+    }
     // The fastest ball: the first of the largest, a NaN before any number.
     for (std::size_t q = 0; q < n; ++q)
       if (speed2[q] > fastest2 || (std::isnan(speed2[q]) && !std::isnan(fastest2))) { fastest2 = speed2[q]; fastest = b0 + q; }
