@@ -168,11 +168,13 @@ TEST_CASE("traps: leaving with the model not saved is said where stdin is no ter
   dir.write("changed.dat", "start box 0 1 0 1 0 1\nball 0.5 0.5 0.5 0.1\n");
   dir.write("saved.dat", "start box 0 1 0 1 0 1\nball 0.5 0.5 0.5 0.1\nsave run.sav\nprint info\n");
   dir.write("restarted.dat", "restart run.sav\n");
-  auto run = [&](const std::string& deck) {
+  // The shell reads `typed` (nothing: the end of its input, as Ctrl-D) after the deck.
+  auto run = [&](const std::string& deck, const std::string& typed = "") {
+    dir.write("typed.txt", typed);
     const int status = trubal::test::shell("cd " + trubal::test::quote(dir.str()) + " && env TRUBAL_HISTORY=" +
                                            trubal::test::quote(dir.str() + "/history") + " timeout 60 " +
                                            trubal::test::quote(TRUBAL_EXE) + " -i " + deck +
-                                           " </dev/null >stdout.txt 2>stderr.txt");
+                                           " <typed.txt >stdout.txt 2>stderr.txt");
     CHECK(status == 0);
     return trubal::test::slurp(dir.path() / "stderr.txt");
   };
@@ -180,4 +182,9 @@ TEST_CASE("traps: leaving with the model not saved is said where stdin is no ter
   CHECK(run("changed.dat") == notice);
   CHECK(run("saved.dat").empty());       // PRINT after SAVE changes nothing
   CHECK(run("restarted.dat").empty());   // the model is the file's
+  // STOP (or QUIT) typed at the prompt leaves as the end of the input does.
+  CHECK(run("changed.dat", "stop\n") == notice);
+  CHECK(run("changed.dat", "quit\necho after\n") == notice);
+  CHECK(trubal::test::slurp(dir.path() / "stdout.txt").find("after") == std::string::npos);
+  CHECK(run("saved.dat", "stop\n").empty());
 }
