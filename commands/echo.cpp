@@ -31,6 +31,8 @@ static void run_stop(Context& ctx, Args& args) {
 
 const Command stop_command = {
     "STOP", {"QUIT", "END", "EXIT"}, "STOP", "end the session",
-    "Ends the session (a batch deck also ends at the end of its file).", "stop", {}, run_stop};
+    "Ends the session (a batch deck also ends at the end of its file). Typed at the shell's prompt with the "
+    "model changed since the last SAVE, it asks first, as Ctrl-D does.",
+    "stop", {}, run_stop};
 
 }  // namespace trubal

@@ -219,10 +219,11 @@ const Command gen_command = {
     "that does not relax in 150 sweeps is taken back and tried again with half the growth; when the growth falls "
     "below 0.1% of the volume (or after 2000 sweeps in all) GEN stops with an error giving the porosity reached, "
     "the balls kept there: a sand's grading reaches about 0.35, equal balls about 0.37 (random close packing, "
-    "0.36, is the limit of moving balls apart without shaking them). The porosity reached is "
-    "printed. The region's volume is exact for a box; cut by a cylinder or a wall other than a plane across an "
+    "0.36, is the limit of moving balls apart without shaking them), and walls and the region's edges loosen the "
+    "balls next to them, so a small region stops higher: about 0.43 in a cylinder ten diameters across. The "
+    "porosity reached is printed. The region's volume is exact for a box; cut by a cylinder or a wall other than a plane across an "
     "axis it is integrated (2048 x 2048 lines, each cut exactly), to a relative 1e-4 or better. Example: `GEN "
-    "porosity 0.4 0.002 0.003 range cylinder 0 0 0.02 z 0 0.1`. The balls come out at rest with their small overlaps (a slight prestress at the first CYCLE). A "
+    "porosity 0.45 0.002 0.003 range cylinder 0 0 0.02 z 0 0.1`. The balls come out at rest with their small overlaps (a slight prestress at the first CYCLE). A "
     "porosity outside (0, 1), below 0.2595 with balls of one size (the densest packing), or a region too small "
     "for the balls is an error at once. Generation is the same on every backend and thread count.",
     "gen 500 0.002 0.003 seed 7",

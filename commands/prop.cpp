@@ -59,7 +59,8 @@ const Command prop_command = {
     "PROP", {}, "PROP [type t] kn v ks v fric deg|mu v dens v [coh v] [shear G poisson nu] [rest e] [rr_fric mu_r]",
     "material properties of a ball type",
     "Sets material properties of a type (default type 1); properties not named keep their value (0 at "
-    "first). The units are SI (N, m, kg, s), as everywhere in trubal. kn, ks: normal and shear spring "
+    "first). trubal has no units of its own (any consistent set will do); here they are SI (N, m, kg, s), "
+    "as in the examples. kn, ks: normal and shear spring "
     "stiffness of the linear law, in N/m (force per metre of overlap or of shear displacement); "
     "fric: friction angle in degrees, mu = tan(fric) (a value between 0 and 1 gets a warning: a friction "
     "coefficient typed as an angle, as PFC's `fric` is the coefficient); mu: the friction coefficient itself, "

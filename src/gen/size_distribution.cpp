@@ -202,8 +202,8 @@ std::string radius_unit_hint(double rlo, double rhi, const std::array<double, 3>
   const double narrowest = std::min({extent[0], extent[1], extent[2]});
   if (!(rlo > narrowest)) return {};
   const std::string radii = rlo == rhi ? fmt::format("{:g}", rlo) : fmt::format("{:g} to {:g}", rlo, rhi);
-  return fmt::format("; the radii ({}) are larger than the space ({:g} m wide): sizes in another unit? trubal's "
-                     "unit of length is the metre (a radius of 2 mm is 0.002)",
+  return fmt::format("; the radii ({}) are larger than the space ({:g} wide): sizes in another unit? trubal "
+                     "has no units of its own; in SI, as in the examples, a radius of 2 mm is 0.002",
                      radii, narrowest);
 }
 

@@ -74,7 +74,7 @@ char** complete(const char* text, int start, int) {
 
 constexpr const char* kNotSaved = "note: the session ends with the model not saved (it changed since the last SAVE)\n";
 
-// Ctrl-D at an empty prompt with the model changed since the last SAVE (or RESTART): whether to
+// Ctrl-D at an empty prompt, or STOP typed there, with the model changed since the last SAVE (or RESTART): whether to
 // leave. At a terminal the shell asks, as an editor does (no by default; Ctrl-D again leaves);
 // elsewhere (a deck piped in after -i) it leaves, saying what was not saved.
 bool leave_unsaved() {
@@ -96,6 +96,17 @@ bool leave_unsaved() {
   const bool yes = answer.starts_with("y");
   if (yes) std::fputs(kNotSaved, stderr);
   return yes;
+}
+
+// A line that is STOP alone (or QUIT, END, EXIT, or a shortening): the shell leaves by it as by Ctrl-D.
+bool is_stop(const std::string& line) {
+  const auto words = split_words(line);
+  if (words.size() != 1) return false;
+  try {
+    return find_command(words[0]).name == "STOP";
+  } catch (const InputError&) {
+    return false;
+  }
 }
 
 }  // namespace
@@ -210,6 +221,9 @@ int run_shell(Interpreter& interp) {
       }
       break;
     }
+    // STOP typed at the prompt asks as Ctrl-D does; a no leaves the line unrun (the other ranks never
+    // see it).
+    if (is_stop(logical) && interp.session().unsaved() && !leave_unsaved()) continue;
     if (comm::size() > 1) {
       std::string packed = fmt::format("L{}\n{}", line_no, logical);
       comm::broadcast(packed);

@@ -246,7 +246,7 @@ TEST_CASE("interp shell: Ctrl-C stops a running CYCLE and keeps the model", "[in
   CHECK(std::stol(screen.substr(at + 8)) > 0);
 }
 
-TEST_CASE("interp shell: Ctrl-D with the model changed since the last SAVE asks first", "[interp][shell][system]") {
+TEST_CASE("interp shell: Ctrl-D or STOP with the model changed since the last SAVE asks first", "[interp][shell][system]") {
   REQUIRE_TMUX();
   TempDir dir;
   TmuxShell sh(dir, dir.str() + "/history");
@@ -268,6 +268,37 @@ TEST_CASE("interp shell: Ctrl-D with the model changed since the last SAVE asks 
   sh.type("y");
   sh.key("Enter");
   CHECK(sh.wait_exit());
+
+  // STOP typed at the prompt asks as Ctrl-D does; no keeps the session.
+  TmuxShell stop(dir, dir.str() + "/history");
+  REQUIRE(stop.started());
+  REQUIRE(stop.wait_for("trubal>"));
+  stop.type("start box 0 1 0 1 0 1");
+  stop.key("Enter");
+  CHECK_SCREEN(stop, stop.wait_for("new model in the box"));
+  stop.type("quit");
+  stop.key("Enter");
+  CHECK_SCREEN(stop, stop.wait_for("the model changed since the last SAVE; quit anyway? [y/N]"));
+  stop.type("n");
+  stop.key("Enter");
+  stop.type("print counters");
+  stop.key("Enter");
+  CHECK_SCREEN(stop, stop.wait_for("balls 0"));
+  CHECK(stop.alive());
+  stop.type("stop");
+  stop.key("Enter");
+  auto asked_again = [&] {   // the second question on the screen
+    for (int k = 0; k < 300; ++k) {
+      const std::string screen = stop.screen();
+      if (screen.find("quit anyway") != screen.rfind("quit anyway")) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  };
+  CHECK_SCREEN(stop, asked_again());
+  stop.type("y");
+  stop.key("Enter");
+  CHECK(stop.wait_exit());
 
   // After a SAVE, Ctrl-D leaves without a question.
   TmuxShell saved(dir, dir.str() + "/history");

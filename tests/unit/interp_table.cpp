@@ -212,3 +212,13 @@ TEST_CASE("interp table: every command has an example that HELP and the man page
     ++shown;
   CHECK(shown == command_table().size());
 }
+
+TEST_CASE("interp table: HELP speaks of what a user does, not of the program's insides", "[interp][table]") {
+  // How a run is spread over processes, and the copy a failed step is taken back to, are the
+  // program's business (doc/distributed.md, doc/developer.md), not a command's description.
+  for (const Command* c : command_table()) {
+    const std::string text = to_lower(std::string(c->summary) + "\n" + std::string(c->help));
+    INFO(c->name << ": " << text);
+    for (const char* word : {" rank", "rescue", "snapshot"}) CHECK(text.find(word) == std::string::npos);
+  }
+}

@@ -5,6 +5,7 @@
 #include "paths.hpp"
 #include <catch2/catch.hpp>
 
+#include <cctype>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -60,8 +61,15 @@ TEST_CASE("traps: PROP fric between 0 and 1 warns once that it is degrees and po
 TEST_CASE("traps: PROP's HELP gives the unit of every property", "[interp][traps]") {
   Harness h;
   REQUIRE(h.deck("help prop\n"));
-  const std::string help = h.out.str();
-  for (const char* unit : {"N/m", "degrees", "kg/m^3", "cohesion in N", "(Pa)", "mu: the friction coefficient"})
+  // Read as one line: where HELP wraps its text is no part of what it says.
+  std::string help;
+  for (const char c : h.out.str())
+    if (!std::isspace(static_cast<unsigned char>(c)))
+      help.push_back(c);
+    else if (!help.empty() && help.back() != ' ')
+      help.push_back(' ');
+  for (const char* unit : {"N/m", "degrees", "kg/m^3", "cohesion in N", "(Pa)", "mu: the friction coefficient",
+                           "no units of its own"})
     CHECK_THAT(help, Catch::Contains(unit));
 }
 
@@ -128,8 +136,8 @@ TEST_CASE("traps: GEN with radii larger than the box hints at the unit", "[inter
   CHECK_FALSE(h.deck("start box 0 0.1 0 0.1 0 0.1\ngen 100 2 3\n"));
   CHECK(h.first_error_line() ==
         "deck.dat:2: error: GEN: 100 balls of radius 2 or more cannot fit in the region (at most 2.21e-05 even packed as "
-        "densely as spheres can be); the radii (2 to 3) are larger than the space (0.1 m wide): sizes in another "
-        "unit? trubal's unit of length is the metre (a radius of 2 mm is 0.002)");
+        "densely as spheres can be); the radii (2 to 3) are larger than the space (0.1 wide): sizes in another "
+        "unit? trubal has no units of its own; in SI, as in the examples, a radius of 2 mm is 0.002");
   Harness fits;   // sizes of the space's unit that are merely too many: no hint
   CHECK_FALSE(fits.deck("start box 0 0.1 0 0.1 0 0.1\ngen 100000 0.01 0.02\n"));
   CHECK(fits.first_error_line().find("unit") == std::string::npos);
@@ -168,11 +176,13 @@ TEST_CASE("traps: leaving with the model not saved is said where stdin is no ter
   dir.write("changed.dat", "start box 0 1 0 1 0 1\nball 0.5 0.5 0.5 0.1\n");
   dir.write("saved.dat", "start box 0 1 0 1 0 1\nball 0.5 0.5 0.5 0.1\nsave run.sav\nprint info\n");
   dir.write("restarted.dat", "restart run.sav\n");
-  auto run = [&](const std::string& deck) {
+  // The shell reads `typed` (nothing: the end of its input, as Ctrl-D) after the deck.
+  auto run = [&](const std::string& deck, const std::string& typed = "") {
+    dir.write("typed.txt", typed);
     const int status = trubal::test::shell("cd " + trubal::test::quote(dir.str()) + " && env TRUBAL_HISTORY=" +
                                            trubal::test::quote(dir.str() + "/history") + " timeout 60 " +
                                            trubal::test::quote(TRUBAL_EXE) + " -i " + deck +
-                                           " </dev/null >stdout.txt 2>stderr.txt");
+                                           " <typed.txt >stdout.txt 2>stderr.txt");
     CHECK(status == 0);
     return trubal::test::slurp(dir.path() / "stderr.txt");
   };
@@ -180,4 +190,9 @@ TEST_CASE("traps: leaving with the model not saved is said where stdin is no ter
   CHECK(run("changed.dat") == notice);
   CHECK(run("saved.dat").empty());       // PRINT after SAVE changes nothing
   CHECK(run("restarted.dat").empty());   // the model is the file's
+  // STOP (or QUIT) typed at the prompt leaves as the end of the input does.
+  CHECK(run("changed.dat", "stop\n") == notice);
+  CHECK(run("changed.dat", "quit\necho after\n") == notice);
+  CHECK(trubal::test::slurp(dir.path() / "stdout.txt").find("after") == std::string::npos);
+  CHECK(run("saved.dat", "stop\n").empty());
 }
