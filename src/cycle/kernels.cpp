@@ -1,5 +1,5 @@
 // make_kernels: the loops of one CYCLE, picked from the kernel tables (kernels_*.cpp, the templates
-// in kernel_loops.hpp) for the features the scene uses.
+// in kernel_contacts.hpp, kernel_walls.hpp and kernel_motion.hpp) for the features the scene uses.
 #include "cycle/kernels.hpp"
 
 #include "cycle/kernel_tables.hpp"

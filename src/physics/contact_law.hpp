@@ -69,7 +69,7 @@ struct ContactBatch {
   alignas(64) double work_friction[kBatch], work_damping[kBatch], strain[kBatch], state[kBatch];
   alignas(64) double work_rolling[kBatch];   // F.rolling only
   // F.dashpot only: the dashpots' part of the force on j and of t (the law of motion books their
-  // work per ball: cycle/kernel_loops.hpp, DashpotForce).
+  // work per ball: cycle/kernel_motion.hpp, DashpotForce).
   alignas(64) double dfx[kBatch], dfy[kBatch], dfz[kBatch], dtx[kBatch], dty[kBatch], dtz[kBatch];
 
   void set_law(std::size_t q, const PairLaw& law) {
