@@ -95,11 +95,15 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
 [[gnu::noinline]] void contact_lanes(ContactBatch& B, std::size_t lane, std::size_t count, const PairLaw& law, double dt,
                                      double dt_work, double beta, const double* __restrict hx_in, const double* __restrict hy_in,
                                      const double* __restrict hz_in, double* __restrict hx_out,
-                                     double* __restrict hy_out, double* __restrict hz_out, const RollingLanes* roll) {
+                                     double* __restrict hy_out, double* __restrict hz_out, const double* __restrict rx_in,
+                                     const double* __restrict ry_in, const double* __restrict rz_in,
+                                     double* __restrict rx_out, double* __restrict ry_out, double* __restrict rz_out) {
   if constexpr (F.dashpot && kOneLaw && kRest == kRestPerLane) {
     if (law.rest_xi > 0)
-      return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out, roll);
-    return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out, roll);
+      return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out,
+                                                            hy_out, hz_out, rx_in, ry_in, rz_in, rx_out, ry_out, rz_out);
+    return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out,
+                                                           hy_out, hz_out, rx_in, ry_in, rz_in, rx_out, ry_out, rz_out);
   }
   using Model = ContactModel<F.law()>;
   using Normal = typename Model::Normal;
@@ -160,11 +164,11 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
       const double wx = B.wx[q], wy = B.wy[q], wz = B.wz[q];
       const double wn = wx * nx + wy * ny + wz * nz;
       ShearState r;
-      CoulombSpring::force<true>(roll->in[0][q], roll->in[1][q], roll->in[2][q], nx, ny, nz, wx, wy, wz, wn,
-                                 k.ks * rbar * rbar, dt, L.rolling * rbar * k.fn, r);
-      roll->out[0][q] = touching ? r.fsx : 0.0;
-      roll->out[1][q] = touching ? r.fsy : 0.0;
-      roll->out[2][q] = touching ? r.fsz : 0.0;
+      CoulombSpring::force<true>(rx_in[q], ry_in[q], rz_in[q], nx, ny, nz, wx, wy, wz, wn, k.ks * rbar * rbar, dt,
+                                 L.rolling * rbar * k.fn, r);
+      rx_out[q] = touching ? r.fsx : 0.0;
+      ry_out[q] = touching ? r.fsy : 0.0;
+      rz_out[q] = touching ? r.fsz : 0.0;
       B.work_rolling[q] = touching ? r.work_friction : 0.0;
       strain_rolling = r.strain;
     }
@@ -228,9 +232,17 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
                            const double* __restrict hx_in, const double* __restrict hy_in,
                            const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
                            double* __restrict hz_out, int* clean_run = nullptr, const RollingLanes* roll = nullptr) {
+  // (The rolling springs' history as plain restrict arguments, as the shear spring's: read through
+  // a struct, g++ 12 could not tell them from the batch and did not vectorise the loop.)
+  double unused[6] = {};   // (distinct places for the rolling arguments of a law without them: never read)
   auto lanes = [&]<bool kCap, bool kOne>(std::size_t lane) {
-    contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out,
-                                          roll);
+    if constexpr (F.rolling)
+      contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out,
+                                            hz_out, roll->in[0], roll->in[1], roll->in[2], roll->out[0], roll->out[1],
+                                            roll->out[2]);
+    else
+      contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out,
+                                            hz_out, unused, unused + 1, unused + 2, unused + 3, unused + 4, unused + 5);
   };
   if constexpr (ContactModel<F.law()>::Tangential::kOn) {
     if (clean_run && *clean_run >= kCleanRun) {
