@@ -17,6 +17,7 @@
 #include "io/csv.hpp"
 #include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
+#include "physics/scene.hpp"
 
 namespace trubal {
 
@@ -220,24 +221,30 @@ static void print_contacts(Context& ctx, const Range& range, const std::string& 
   for (std::size_t p = 0; p < c.size(); ++p)
     if (c.touching(p) && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
   const auto& id = m.balls.id;
+  const bool rolling = has_rolling(m);   // (the rolling moment on j: columns only where a material has it)
   if (!file.empty()) {
     write_file_atomically(file, [&](std::ostream& csv) {
-      csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding\n";
+      csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding\n";
       for (auto p : rows) {
         csv << id[c.i[p]] << ',' << id[c.j[p]];
         for (const auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real((*v)[p]);
+        if (rolling)
+          for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real((*v)[p]);
         csv << ',' << (c.state[p] == 2 ? 1 : 0) << '\n';
       }
     });
     ctx.out << fmt::format("{} contacts written to {}\n", rows.size(), file);
     return;
   }
-  ctx.out << fmt::format("{:>8} {:>8} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11} {:>7}\n", "i", "j", "nx", "ny", "nz",
-                         "overlap", "fn", "|fs|", "sliding");
+  ctx.out << fmt::format("{:>8} {:>8} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11} {}{:>7}\n", "i", "j", "nx", "ny", "nz",
+                         "overlap", "fn", "|fs|", rolling ? fmt::format("{:>11} ", "|mr|") : "", "sliding");
   for (auto p : rows)
-    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {:>7}\n", id[c.i[p]],
+    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}\n", id[c.i[p]],
                            id[c.j[p]], c.nx[p], c.ny[p], c.nz[p], c.overlap[p], c.fn[p],
                            std::sqrt(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]),
+                           rolling ? fmt::format("{:>11.4g} ", std::sqrt(c.mrx[p] * c.mrx[p] + c.mry[p] * c.mry[p] +
+                                                                         c.mrz[p] * c.mrz[p]))
+                                   : "",
                            c.state[p] == 2 ? "yes" : "no");
 }
 
@@ -384,10 +391,11 @@ static void run_print(Context& ctx, Args& args) {
         ctx.out << "of the state as it is (no step since the balls or the settings last changed):\n";
       ctx.out << fmt::format(
           "kinetic (translation): {:.8g}\nkinetic (rotation): {:.8g}\nstrain: {:.8g}\npotential (gravity): "
-          "{:.8g}\nfriction work: {:.8g}\ndamping work: {:.8g}\nboundary work: {:.8g}\nbalance (should stay "
+          "{:.8g}\nfriction work: {:.8g}\n{}damping work: {:.8g}\nboundary work: {:.8g}\nbalance (should stay "
           "constant): {:.8g}\n",
-          e.kinetic_translation, e.kinetic_rotation, e.strain, e.potential, e.friction_work, e.damping_work,
-          e.boundary_work, e.total());
+          e.kinetic_translation, e.kinetic_rotation, e.strain, e.potential, e.friction_work,
+          has_rolling(m) || e.rolling_work != 0 ? fmt::format("rolling work: {:.8g}\n", e.rolling_work) : "",
+          e.damping_work, e.boundary_work, e.total());
       return;
     }
     case 6: {
@@ -418,13 +426,14 @@ static void run_print(Context& ctx, Args& args) {
       args.done();
       if (m.materials.empty()) ctx.out << "no materials (PROP sets them)\n";
       for (const auto& [t, p] : m.materials)
-        ctx.out << fmt::format("type {}: kn {:.6g} ks {:.6g} mu {:.6g} (fric {:.4g} deg) dens {:.6g} coh {:.6g}{}{}\n", t,
+        ctx.out << fmt::format("type {}: kn {:.6g} ks {:.6g} mu {:.6g} (fric {:.4g} deg) dens {:.6g} coh {:.6g}{}{}{}\n", t,
                                p.kn, p.ks, p.friction, std::atan(p.friction) * 180 / std::numbers::pi, p.density,
                                p.cohesion,
                                p.hertz() ? fmt::format(" shear {:.6g} poisson {:.4g} (Hertz-Mindlin)", p.shear_modulus,
                                                        p.poisson)
                                          : "",
-                               p.has_restitution ? fmt::format(" rest {:.4g}", p.restitution) : "");
+                               p.has_restitution ? fmt::format(" rest {:.4g}", p.restitution) : "",
+                               p.rolling_friction > 0 ? fmt::format(" rr_fric {:.4g}", p.rolling_friction) : "");
       return;
     }
     case 9: {
@@ -483,7 +492,9 @@ const Command print_command = {
     "pair_list_rebuilds, ...; doc/language.md lists them all and what each counts). "
     "balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
-    "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j)), optionally for a range. stress [volume "
+    "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j), with mrx,mry,mrz, the rolling moment on "
+    "j, before sliding where a material has rr_fric; the table then shows |mr|), optionally for a range. "
+    "stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
     "compression positive. stress, fabric, coordination and porosity with `range sphere x y z r`: those of a "
     "measurement sphere (PFC's; man page, CONVENTIONS): the stress from the contacts of the balls whose centres "
@@ -495,7 +506,8 @@ const Command print_command = {
     "energy: the energy terms and "
     "their balance, all at the time of the last step's force pass (the model's time less dt; the step's "
     "own sums, man page CONVENTIONS): kinetic m v(t-dt/2).v(t+dt/2)/2 and I w(t-dt/2).w(t+dt/2)/2, the "
-    "springs' energy and gravity's potential at the positions of that pass, and the works up to it (the "
+    "springs' energy and gravity's potential at the positions of that pass, and the works up to it (friction, "
+    "rolling where a material has rr_fric, damping, boundary; the "
     "step's works less their part after it); central differences keep that sum for linear springs, so the "
     "balance moves only by the integration's error. Before the first CYCLE, and after a command that "
     "changes the balls or the settings, the terms are of the state as it is (velocities now, positions now, "

@@ -12,10 +12,10 @@ static void run_prop(Context& ctx, Args& args) {
   ctx.session.require_started();
   int type = 1;
   if (args.accept("type")) type = static_cast<int>(args.count("type", 1, 1000000));
-  if (args.empty()) args.fail("PROP needs at least one property (kn, ks, fric, mu, dens, coh, shear, poisson, rest)");
+  if (args.empty()) args.fail("PROP needs at least one property (kn, ks, fric, mu, dens, coh, shear, poisson, rest, rr_fric)");
   Material m = ctx.session.model().materials.count(type) ? ctx.session.model().materials.at(type) : Material{};
   static const std::vector<std::string_view> names = {"kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson",
-                                                      "rest"};
+                                                      "rest", "rr_fric"};
   double small_angle = 0;   // a fric in (0, 1): a coefficient typed where an angle goes? (0: none)
   while (!args.empty()) {
     auto k = args.expect(names, "property");
@@ -45,6 +45,7 @@ static void run_prop(Context& ctx, Args& args) {
         m.restitution = v;
         m.has_restitution = v < 1;
         break;
+      case 9: nonneg(); m.rolling_friction = v; break;
     }
   }
   ctx.session.edit().materials[type] = m;
@@ -55,7 +56,7 @@ static void run_prop(Context& ctx, Args& args) {
 }
 
 const Command prop_command = {
-    "PROP", {}, "PROP [type t] kn v ks v fric deg|mu v dens v [coh v] [shear G poisson nu] [rest e]",
+    "PROP", {}, "PROP [type t] kn v ks v fric deg|mu v dens v [coh v] [shear G poisson nu] [rest e] [rr_fric mu_r]",
     "material properties of a ball type",
     "Sets material properties of a type (default type 1); properties not named keep their value (0 at "
     "first). trubal has no units of its own (any consistent set will do); here they are SI (N, m, kg, s), "
@@ -67,10 +68,14 @@ const Command prop_command = {
     "in N, a force added to the Coulomb limit; shear G (Pa) and poisson nu (no unit, in (-1, 0.5)) select the "
     "Hertz-Mindlin law for the type, whose stiffness then follows from G, nu, the radii and the overlap (kn "
     "and ks are not used between two Hertz types); rest e (no unit, in (0, 1]) adds a contact dashpot giving "
-    "restitution e in a head-on impact. kn and ks are the stiffness of a contact between two balls of this "
+    "restitution e in a head-on impact; rr_fric mu_r (no unit) adds rolling resistance, PFC's linear "
+    "rolling-resistance model: a rolling spring of stiffness ks R^2 on the rolling part of the balls' "
+    "relative rotation, its moment capped at mu_r R Fn, R = R1 R2 / (R1 + R2) between balls and the ball's "
+    "radius at a wall (mu_r is a length ratio: a ball rolls when the moment about its contact exceeds mu_r R "
+    "Fn; PRINT energy books the work lost as `rolling`). kn and ks are the stiffness of a contact between two balls of this "
     "type; two types meet with k = 2 k1 k2 / (k1 + k2) (each ball a spring of stiffness 2k in series), the "
-    "smaller friction and the smaller cohesion.",
+    "smaller friction, cohesion and rr_fric.",
     "prop kn 1e6 ks 1e6 fric 30 dens 2650",
-    {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest"}, run_prop, true};
+    {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest", "rr_fric"}, run_prop, true};
 
 }  // namespace trubal

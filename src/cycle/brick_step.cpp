@@ -971,6 +971,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   const std::size_t m = b.size();
   if (kernels_.moments) scratch_.ball_moments.resize(m);
   if (kernels_.features.stiffness_damping) scratch_.ball_dashpot.resize(m);
+  if (kernels_.features.rolling) scratch_.ball_rolling.resize(m);
   StepSums mine;
   const auto t0 = std::chrono::steady_clock::now();
   step_.run(pool, part_, scratch_, kernels_, mine, times, ref_.x.size() == m ? &ref_ : nullptr);

@@ -1,5 +1,5 @@
 // make_kernels: the loops of one CYCLE, picked from the kernel tables (kernels_*.cpp, the templates
-// in kernel_loops.hpp) for the features the scene uses.
+// in kernel_contacts.hpp, kernel_walls.hpp and kernel_motion.hpp) for the features the scene uses.
 #include "cycle/kernels.hpp"
 
 #include "cycle/kernel_tables.hpp"
@@ -20,7 +20,7 @@ StepKernels make_kernels(const Model& model) {
   if (model.settings.fixed_dt > 0) k.estimate = StepEstimate::None;
   else k.estimate = f.stiffness_damping ? StepEstimate::Damped : StepEstimate::Undamped;
 
-  ContactFeatures contact{f.rotation, f.friction, f.hertz, f.stiffness_damping, false};
+  ContactFeatures contact{f.rotation, f.friction, f.hertz, f.stiffness_damping, false, f.rolling};
   k.contacts_lean = loops::contact_loop_lean(contact.index());
   k.cross = loops::cross_loop_at(contact.index());
   k.walls_lean = loops::wall_loop_at(contact.index());

@@ -1,5 +1,5 @@
 // The contact loops with details (what measurements read: normal, overlap, forces, state).
-#include "cycle/kernel_loops.hpp"
+#include "cycle/kernel_contacts.hpp"
 
 namespace trubal::loops {
 namespace {

@@ -1,5 +1,5 @@
 // The contact loops without details (what a plain step computes).
-#include "cycle/kernel_loops.hpp"
+#include "cycle/kernel_contacts.hpp"
 
 namespace trubal::loops {
 namespace {

@@ -1,5 +1,5 @@
 // The cross loops (pairs whose lower ball another thread owns); never with details.
-#include "cycle/kernel_loops.hpp"
+#include "cycle/kernel_contacts.hpp"
 
 namespace trubal::loops {
 namespace {

@@ -1,5 +1,5 @@
 // The law-of-motion loops that write each ball's forces (what measurements read).
-#include "cycle/kernel_loops.hpp"
+#include "cycle/kernel_motion.hpp"
 
 namespace trubal::loops {
 namespace {

@@ -1,5 +1,5 @@
 // The law-of-motion loops that leave the forces unwritten (a plain step).
-#include "cycle/kernel_loops.hpp"
+#include "cycle/kernel_motion.hpp"
 
 namespace trubal::loops {
 namespace {

@@ -1,5 +1,5 @@
 // The wall-contact loops, with and without details.
-#include "cycle/kernel_loops.hpp"
+#include "cycle/kernel_walls.hpp"
 
 namespace trubal::loops {
 namespace {

@@ -95,6 +95,21 @@ void ParallelStep::cross_lists(const ContactTable& c, std::size_t balls, int par
   }
 }
 
+// Scenes with rolling resistance (Features::rolling), before the law of motion of balls [begin, end):
+// each ball's rolling moment M joins its shear forces' -R t as t - M / R (the motion loop makes the
+// moment from that one sum), and its rolling work goes to the step's sum (a ghost's is its owner's).
+// Out of the motion loops' templates, which scenes without it then do not carry.
+static void add_rolling(const Balls& b, StepScratch& scratch, std::size_t begin, std::size_t end, StepSums& sums) {
+  const bool ghosts = !scratch.ghost.empty();
+  ExactSum::Stream work(sums.rolling_work);
+  for (std::size_t i = begin; i < end; ++i) {
+    const RollingMoment& m = scratch.ball_rolling[i];
+    PairForce& f = scratch.ball_force[i];
+    f.tx -= m.mx / b.rad[i]; f.ty -= m.my / b.rad[i]; f.tz -= m.mz / b.rad[i];
+    if (!ghosts || !scratch.ghost[i]) work.add(scratch.ball_parts[i].rolling);
+  }
+}
+
 void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, const StepKernels& kernels, StepSums& sums,
                        PhaseTimes& times, const VerletReference* moved) {
   using Clock = std::chrono::steady_clock;
@@ -164,6 +179,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     if (t >= motion_parts) return;
     const std::size_t first = split_point(motion_blocks, motion_parts, t), last = split_point(motion_blocks, motion_parts, t + 1);
     const std::size_t ball0 = std::min(balls, first * kReduceBlock), ball1 = std::min(balls, last * kReduceBlock);
+    if (kernels.features.rolling) add_rolling(model.balls, scratch, ball0, ball1, thread_sums_[t]);
     kernels.motion(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
     if (moved) moved_[t] = moved->max_displacement2(model.balls, ball0, ball1);
   }, motion_parts > 1);

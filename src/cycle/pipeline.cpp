@@ -493,6 +493,7 @@ void Pipeline::whole_step(Model& model, const StepKernels& kernels, StepSums& su
   const bool measure = backend_->keeps_list() && ref_.x.size() == model.balls.size();
   if (kernels.moments) scratch_.ball_moments.resize(model.balls.size());   // the contact loops zero their balls'
   if (kernels.features.stiffness_damping) scratch_.ball_dashpot.resize(model.balls.size());   // (and these)
+  if (kernels.features.rolling) scratch_.ball_rolling.resize(model.balls.size());
   step_.run(pool_now(), model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
   moved_known_ = measure;
 }

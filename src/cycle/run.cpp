@@ -170,7 +170,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // bounded size. So the run also stops where the kinetic term stays negative for kFlippingSteps
   // steps running (for a stable step it is negative only near the turning points of the fastest
   // vibrations, a few steps of each period).
-  const double friction0 = model.energy.friction_work, damping0 = model.energy.damping_work;
+  const double friction0 = model.energy.friction_work + model.energy.rolling_work, damping0 = model.energy.damping_work;
   const double boundary0 = model.energy.boundary_work, gross0 = model.space.gross_work;
   double balance_ref = 0, potential_ref = 0, scale_max = 0;
   int flipping = 0;   // steps running with the kinetic term negative
@@ -264,6 +264,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     model.time += dt;
     model.dt = dt;
     model.energy.friction_work += sums.friction_work;
+    model.energy.rolling_work += sums.rolling_work;
     model.energy.damping_work += sums.damping_work;
     model.energy.boundary_work += sums.boundary_work;
     if (kernels.estimate != StepEstimate::None) {
@@ -369,7 +370,8 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     const EnergyAtStep& now = model.energy_at_step;
     const double kinetic = now.kinetic_translation + now.kinetic_rotation;
     const double dissipated =
-        model.energy.friction_work - friction0 + model.energy.damping_work - damping0 - now.damping_ahead;
+        model.energy.friction_work + model.energy.rolling_work - friction0 + model.energy.damping_work - damping0 -
+        now.damping_ahead;
     const double boundary = model.energy.boundary_work - boundary0 - now.boundary_ahead;
     if (s == 1) potential_ref = sums.potential;
     const double potential = sums.potential - potential_ref;

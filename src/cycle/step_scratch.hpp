@@ -27,12 +27,19 @@ struct DashpotForce {
   double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
 };
 
+// A ball's sum of the rolling springs' moments (scenes with rolling resistance): a moment, not a
+// force at the ball's surface, so it is summed apart from PairForce's t (whose moment is -R t).
+struct RollingMoment {
+  double mx = 0, my = 0, mz = 0;
+};
+
 // One ball's parts of the step's global sums from its contacts: its run of pairs (those with
 // higher partners, in list order), then its wall contacts in order. The motion loop adds its own
 // and hands them to the exact sums (StepSums), ball by ball.
 struct BallParts {
   double friction = 0, damping = 0, strain = 0, image = 0, boundary = 0;
   double damping_ahead = 0, boundary_ahead = 0;   // the parts after t (StepSums)
+  double rolling = 0;                              // dissipated by the rolling springs' limit
 };
 
 struct StepScratch {
@@ -44,6 +51,8 @@ struct StepScratch {
   std::vector<double> ball_cn;            // the dashpot coefficients' sum (time step with dashpots)
   // Features::stiffness_damping only (sized by the pipeline, as ball_moments): DashpotForce.
   std::vector<DashpotForce> ball_dashpot;
+  // Features::rolling only (sized as ball_dashpot): RollingMoment.
+  std::vector<RollingMoment> ball_rolling;
   std::vector<BallParts> ball_parts;
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.

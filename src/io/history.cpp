@@ -30,7 +30,7 @@ namespace trubal {
 
 const std::vector<std::string_view>& History::item_names() {
   static const std::vector<std::string_view> names = {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial",
-                                                      "platen", "energy", "unbal", "contacts", "time", "wall",
+                                                      "platen", "energy", "rolling", "unbal", "contacts", "time", "wall",
                                                       "porosity", "measure", "ball", "sample"};
   return names;
 }
@@ -73,6 +73,7 @@ static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "strain") return {"e11", "e22", "e33", "e12", "e13", "e23"};
   if (item == "volumetric") return {"evol"};
   if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work", "potential"};
+  if (item == "rolling") return {"rolling_work"};
   if (item == "porosity") return {"porosity", "void_ratio"};
   if (item == "contacts") return {"contacts", "sliding", "coordination"};
   if (item == "time") return {};   // cycle and time lead every row
@@ -427,6 +428,8 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       for (double v : {e.kinetic_translation + e.kinetic_rotation, e.strain, e.friction_work, e.damping_work,
                        e.boundary_work, e.potential})
         row.push_back(v);
+    } else if (item == "rolling") {
+      row.push_back(energy(model).rolling_work);
     } else if (item == "porosity") {
       const Porosity p = space_porosity(model, volume);
       row.push_back(p.porosity);

@@ -42,8 +42,9 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // older files print the state as it is until the next step. 8: the walls a servo's area comes from
 // (Wall::area_walls; older files keep the servo's own area) and the sample (SAMPLE). 9: the
 // contacts' history by name (transfer_contacts), so that a contact law part added later reads
-// older files.
-constexpr std::uint32_t kVersion = 9;
+// older files. 10: the materials' rolling resistance (Material::rolling_friction) and the work the
+// rolling springs dissipated (Energy::rolling_work); older files have none.
+constexpr std::uint32_t kVersion = 10;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -54,7 +55,15 @@ std::uint64_t fnv1a(const std::string& data) {
 }
 
 static_assert(sizeof(Damping) == sizeof(DampKind) + sizeof(std::uint32_t) + 5 * sizeof(double), "Damping has hidden padding");
-static_assert(sizeof(Material) == 8 * sizeof(double) + 8, "Material has hidden padding");
+static_assert(sizeof(Material) == 9 * sizeof(double) + 8, "Material has hidden padding");
+
+// A material as formats 2 to 9 wrote it (Material before the rolling resistance).
+struct MaterialV9 {
+  double kn, ks, friction, cohesion, density, shear_modulus, poisson, restitution;
+  std::uint8_t has_restitution;   // (a byte: a damaged file's other values are refused, not read as a bool)
+  std::uint8_t unused[7];
+};
+static_assert(sizeof(MaterialV9) == 8 * sizeof(double) + 8, "MaterialV9 has hidden padding");
 
 class Writer {
  public:
@@ -229,14 +238,30 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
       int type = 0;
       Material mat;
       io.pod(type);
-      io.pod(mat);
+      if (version >= 10) {
+        io.pod(mat);
+      } else {
+        MaterialV9 old{};
+        io.pod(old);
+        mat.kn = old.kn; mat.ks = old.ks; mat.friction = old.friction; mat.cohesion = old.cohesion;
+        mat.density = old.density; mat.shear_modulus = old.shear_modulus; mat.poisson = old.poisson;
+        mat.restitution = old.restitution;
+        if (old.has_restitution > 1) io.corrupt();
+        mat.has_restitution = old.has_restitution != 0;
+      }
       m.materials[type] = mat;
     }
   } else {
     for (auto& [type, mat] : m.materials) {
       int t = type;
       io.pod(t);
-      io.pod(mat);
+      if (version >= 10) {
+        io.pod(mat);
+      } else {   // (an older format asked for: its layout, without the rolling resistance)
+        const MaterialV9 old{mat.kn, mat.ks, mat.friction, mat.cohesion, mat.density, mat.shear_modulus, mat.poisson,
+                             mat.restitution, static_cast<std::uint8_t>(mat.has_restitution ? 1 : 0), {}};
+        io.pod(old);
+      }
     }
   }
   m.balls.for_each_array([&](auto& v) { io.vec(v); });
@@ -244,7 +269,8 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   if (version >= 4) io.pod(m.contacts.results_cycle);
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
   io.pod(m.settings.damping);
-  io.pod(m.energy);
+  io.pod(m.energy.friction_work); io.pod(m.energy.damping_work); io.pod(m.energy.boundary_work);
+  if (version >= 10) io.pod(m.energy.rolling_work);
   io.pod(m.membrane.pressure); io.pod(m.membrane.area);
   if (version >= 4) {
     io.pod(m.membrane.follow_every); io.pod(m.membrane.cell);
@@ -396,7 +422,8 @@ std::string invalid_model(const Model& m) {
   for (double v : s.tilt) if (!finite(v)) return "the cell's tilts are not numbers";
   for (double v : s.strain_rate) if (!finite(v)) return "the strain rates are not numbers";
   for (const auto& [type, mat] : m.materials)
-    if (!valid_bool(mat.has_restitution) || !finite(mat.kn) || !finite(mat.ks) || !finite(mat.density))
+    if (!valid_bool(mat.has_restitution) || !finite(mat.kn) || !finite(mat.ks) || !finite(mat.density) ||
+        !(mat.rolling_friction >= 0) || !finite(mat.rolling_friction))
       return fmt::format("type {} has properties that are not numbers", type);
   const Settings& st = m.settings;
   if (!(st.frac > 0) || !finite(st.frac)) return fmt::format("FRAC is {}", st.frac);

@@ -28,6 +28,7 @@ struct Material {
   double shear_modulus = 0;       // > 0 selects Hertz-Mindlin (with poisson)
   double poisson = 0;
   double restitution = 0;         // used when has_restitution (contact dashpot)
+  double rolling_friction = 0;    // rolling resistance coefficient mu_r (PROP rr_fric; 0: none)
   bool has_restitution = false;
   std::uint8_t unused[7] = {};    // the padding SAVE writes with the struct, made explicit so its bytes are 0
   bool hertz() const { return shear_modulus > 0; }
@@ -90,6 +91,7 @@ struct ContactTable {
   std::vector<std::uint32_t> i, j;
   std::vector<std::int8_t> image_x, image_y, image_z;   // periodic image of j as seen from i
   std::vector<double> fsx, fsy, fsz;                    // shear force on j (history)
+  std::vector<double> mrx, mry, mrz;                    // rolling moment on j (history; on i: minus this)
   // Results of the last force computation, per pair:
   std::vector<double> nx, ny, nz;                       // unit normal from i to j
   std::vector<double> overlap, fn;                      // overlap U, normal force (spring + dashpot)
@@ -137,7 +139,13 @@ struct ContactTable {
     f(fsx, HistoryPart{"fsx", OnSwap::Negate});   // the shear spring
     f(fsy, HistoryPart{"fsy", OnSwap::Negate});
     f(fsz, HistoryPart{"fsz", OnSwap::Negate});
+    f(mrx, HistoryPart{"mrx", OnSwap::Negate});   // the rolling spring
+    f(mry, HistoryPart{"mry", OnSwap::Negate});
+    f(mrz, HistoryPart{"mrz", OnSwap::Negate});
   }
+  // Where each part's arrays start in for_each_history's order (the cross pairs' copy of the
+  // history, cycle/parallel_step.cpp, holds them in that order).
+  static constexpr std::size_t kShearHistory = 0, kRollingHistory = 3;
   template <class F> void for_each_history(F&& f) const {
     const_cast<ContactTable*>(this)->for_each_history(
         [&](auto& v, const HistoryPart& part) { f(static_cast<const decltype(v)&>(v), part); });
@@ -286,6 +294,7 @@ struct WallContacts {
   std::vector<std::uint32_t> ball, wall;        // ball index, index into Model::walls
   std::vector<std::int64_t> ball_id, wall_id;   // what the history is keyed by
   std::vector<double> fsx, fsy, fsz;            // shear force on the wall (history)
+  std::vector<double> mrx, mry, mrz;            // rolling moment on the wall (history; on the ball: minus this)
   // Results of the last force pass that wrote details (ContactTable::results_cycle says which):
   std::vector<double> nx, ny, nz;               // unit normal, ball -> wall
   std::vector<double> overlap, fn, fx, fy, fz;  // fx..: force on the wall (on the ball: minus this)
@@ -299,6 +308,9 @@ struct WallContacts {
     f(fsx, HistoryPart{"fsx", OnSwap::Negate});   // the shear spring
     f(fsy, HistoryPart{"fsy", OnSwap::Negate});
     f(fsz, HistoryPart{"fsz", OnSwap::Negate});
+    f(mrx, HistoryPart{"mrx", OnSwap::Negate});   // the rolling spring
+    f(mry, HistoryPart{"mry", OnSwap::Negate});
+    f(mrz, HistoryPart{"mrz", OnSwap::Negate});
   }
   // The list's arrays (which ball meets which wall).
   template <class F> void for_each_list_array(F&& f) { f(ball); f(wall); f(ball_id); f(wall_id); }
@@ -337,6 +349,7 @@ struct Energy {
   double friction_work = 0;        // dissipated by sliding
   double damping_work = 0;         // dissipated by all damping
   double boundary_work = 0;        // done by fixed velocities and applied forces (gravity: potential)
+  double rolling_work = 0;         // dissipated by the rolling springs' limit (PROP rr_fric)
 };
 
 // The energy terms at the time t of the last step's force pass (cycle/run.cpp): the positions were

@@ -19,6 +19,7 @@ struct PairLaw {
   double hertz_n = 0;             // Hertz: F_n = hertz_n sqrt(R*) U^1.5, hertz_n = 4/3 E*
   double hertz_s = 0;             // Mindlin: k_s = hertz_s sqrt(R* U), hertz_s = 8 G*
   double rest_xi = 0;             // restitution dashpot damping ratio (0: none)
+  double rolling = 0;             // rolling resistance coefficient mu_r (0: none)
 };
 
 // What the kernel needs of one pair, gathered from the ball arrays.
@@ -29,6 +30,8 @@ struct ContactInput {
   double sx, sy, sz;              // R_i w_i + R_j w_j (kRotation only)
   double mstar;                   // pair_mstar (restitution only)
   double fsx, fsy, fsz;           // shear force on j from the last step (history)
+  double wx = 0, wy = 0, wz = 0;  // w_j - w_i (rolling only)
+  double mrx = 0, mry = 0, mrz = 0;   // rolling moment on j from the last step (history)
 };
 
 struct ContactResult {
@@ -38,7 +41,8 @@ struct ContactResult {
   double tx = 0, ty = 0, tz = 0;  // n x (total shear force): moment on ball b is -R_b t
   double kn = 0, ks = 0, cn = 0;  // stiffness and restitution dashpot now (time step)
   double fsx = 0, fsy = 0, fsz = 0;   // shear spring force, the new history
-  double work_friction = 0, work_damping = 0, strain = 0;
+  double mrx = 0, mry = 0, mrz = 0;   // rolling moment on j (on i: minus this), the new history
+  double work_friction = 0, work_damping = 0, work_rolling = 0, strain = 0;
   std::uint8_t state = 0;         // 0 apart, 1 touching, 2 sliding
 };
 
@@ -53,23 +57,32 @@ struct ContactBatch {
   alignas(64) double dx[kBatch], dy[kBatch], dz[kBatch], ri[kBatch], rj[kBatch];
   alignas(64) double vx[kBatch], vy[kBatch], vz[kBatch], sx[kBatch], sy[kBatch], sz[kBatch];
   alignas(64) double mstar[kBatch];
+  alignas(64) double wx[kBatch], wy[kBatch], wz[kBatch];      // F.rolling only: w_j - w_i
   alignas(64) double ivx[kBatch], ivy[kBatch], ivz[kBatch];   // periodic: velocity of j's image offset
   // The pair law per lane (only when the scene has several materials).
   alignas(64) double kn_law[kBatch], ks_law[kBatch], friction[kBatch], cohesion[kBatch];
-  alignas(64) double hertz_n[kBatch], hertz_s[kBatch], rest_xi[kBatch];
+  alignas(64) double hertz_n[kBatch], hertz_s[kBatch], rest_xi[kBatch], rolling[kBatch];
   // Results (as ContactResult; state 0, 1, 2 as a double).
   alignas(64) double nx[kBatch], ny[kBatch], nz[kBatch], overlap[kBatch], fn[kBatch];
   alignas(64) double fx[kBatch], fy[kBatch], fz[kBatch], tx[kBatch], ty[kBatch], tz[kBatch];
   alignas(64) double kn[kBatch], ks[kBatch], cn[kBatch];
   alignas(64) double work_friction[kBatch], work_damping[kBatch], strain[kBatch], state[kBatch];
+  alignas(64) double work_rolling[kBatch];   // F.rolling only
   // F.dashpot only: the dashpots' part of the force on j and of t (the law of motion books their
-  // work per ball: cycle/kernel_loops.hpp, DashpotForce).
+  // work per ball: cycle/kernel_motion.hpp, DashpotForce).
   alignas(64) double dfx[kBatch], dfy[kBatch], dfz[kBatch], dtx[kBatch], dty[kBatch], dtz[kBatch];
 
   void set_law(std::size_t q, const PairLaw& law) {
     kn_law[q] = law.kn; ks_law[q] = law.ks; friction[q] = law.friction; cohesion[q] = law.cohesion;
-    hertz_n[q] = law.hertz_n; hertz_s[q] = law.hertz_s; rest_xi[q] = law.rest_xi;
+    hertz_n[q] = law.hertz_n; hertz_s[q] = law.hertz_s; rest_xi[q] = law.rest_xi; rolling[q] = law.rolling;
   }
+};
+
+// The rolling springs' history of a batch's lanes (F.rolling): the moment on j from the last step,
+// and where the new one goes, per component.
+struct RollingLanes {
+  const double* in[3];
+  double* out[3];
 };
 
 // The lanes of a batch (contact_forces below): [0, count), or lane `lane` alone (kOne). kCap false
@@ -82,11 +95,15 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
 [[gnu::noinline]] void contact_lanes(ContactBatch& B, std::size_t lane, std::size_t count, const PairLaw& law, double dt,
                                      double dt_work, double beta, const double* __restrict hx_in, const double* __restrict hy_in,
                                      const double* __restrict hz_in, double* __restrict hx_out,
-                                     double* __restrict hy_out, double* __restrict hz_out) {
+                                     double* __restrict hy_out, double* __restrict hz_out, const double* __restrict rx_in,
+                                     const double* __restrict ry_in, const double* __restrict rz_in,
+                                     double* __restrict rx_out, double* __restrict ry_out, double* __restrict rz_out) {
   if constexpr (F.dashpot && kOneLaw && kRest == kRestPerLane) {
     if (law.rest_xi > 0)
-      return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
-    return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+      return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out,
+                                                            hy_out, hz_out, rx_in, ry_in, rz_in, rx_out, ry_out, rz_out);
+    return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out,
+                                                           hy_out, hz_out, rx_in, ry_in, rz_in, rx_out, ry_out, rz_out);
   }
   using Model = ContactModel<F.law()>;
   using Normal = typename Model::Normal;
@@ -94,9 +111,10 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
   using Damping = typename Model::Damping;
   const std::size_t first = kOne ? lane : 0, last = kOne ? lane + 1 : count;
   for (std::size_t q = first; q < last; ++q) {
-    const LaneLaw L = kOneLaw ? LaneLaw{law.kn, law.ks, law.friction, law.cohesion, law.hertz_n, law.hertz_s, law.rest_xi}
+    const LaneLaw L = kOneLaw ? LaneLaw{law.kn, law.ks, law.friction, law.cohesion, law.hertz_n, law.hertz_s, law.rest_xi,
+                                        law.rolling}
                               : LaneLaw{B.kn_law[q], B.ks_law[q], B.friction[q], B.cohesion[q], B.hertz_n[q],
-                                        B.hertz_s[q], B.rest_xi[q]};
+                                        B.hertz_s[q], B.rest_xi[q], F.rolling ? B.rolling[q] : 0.0};
     const double dx = B.dx[q], dy = B.dy[q], dz = B.dz[q], ri = B.ri[q], rj = B.rj[q];
     const double d2 = dx * dx + dy * dy + dz * dz;
     const double rsum = ri + rj;
@@ -137,7 +155,25 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
       Damping::shear(beta, k.ks, s.vsx, s.vsy, s.vsz, sx, sy, sz, work_damping, dt_work);
     }
 
-    const double strain = normal_spring_energy<Normal>(k.fn, u) + strain_shear;
+    // The rolling spring (PROP rr_fric, doc/physics.md "Rolling resistance"): the shear spring's
+    // arithmetic on the relative rotation, a moment on j of stiffness k_r = k_s Rbar^2 against the
+    // rolling (bending) part of w_j - w_i, capped at mu_r Rbar F_n, Rbar = R_i R_j / (R_i + R_j).
+    double strain_rolling = 0;
+    if constexpr (F.rolling) {
+      const double rbar = ri * rj / rsum;
+      const double wx = B.wx[q], wy = B.wy[q], wz = B.wz[q];
+      const double wn = wx * nx + wy * ny + wz * nz;
+      ShearState r;
+      CoulombSpring::force<true>(rx_in[q], ry_in[q], rz_in[q], nx, ny, nz, wx, wy, wz, wn, k.ks * rbar * rbar, dt,
+                                 L.rolling * rbar * k.fn, r);
+      rx_out[q] = touching ? r.fsx : 0.0;
+      ry_out[q] = touching ? r.fsy : 0.0;
+      rz_out[q] = touching ? r.fsz : 0.0;
+      B.work_rolling[q] = touching ? r.work_friction : 0.0;
+      strain_rolling = r.strain;
+    }
+
+    const double strain = normal_spring_energy<Normal>(k.fn, u) + strain_shear + strain_rolling;
     B.nx[q] = touching ? nx : 0.0; B.ny[q] = touching ? ny : 0.0; B.nz[q] = touching ? nz : 0.0;
     B.overlap[q] = touching ? u : 0.0;
     B.fn[q] = touching ? fn : 0.0;
@@ -195,9 +231,18 @@ template <ContactFeatures F, bool kOneLaw>
 inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& law, double dt, double dt_work, double beta,
                            const double* __restrict hx_in, const double* __restrict hy_in,
                            const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
-                           double* __restrict hz_out, int* clean_run = nullptr) {
+                           double* __restrict hz_out, int* clean_run = nullptr, const RollingLanes* roll = nullptr) {
+  // (The rolling springs' history as plain restrict arguments, as the shear spring's: read through
+  // a struct, g++ 12 could not tell them from the batch and did not vectorise the loop.)
+  double unused[6] = {};   // (distinct places for the rolling arguments of a law without them: never read)
   auto lanes = [&]<bool kCap, bool kOne>(std::size_t lane) {
-    contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out, hz_out);
+    if constexpr (F.rolling)
+      contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out,
+                                            hz_out, roll->in[0], roll->in[1], roll->in[2], roll->out[0], roll->out[1],
+                                            roll->out[2]);
+    else
+      contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out,
+                                            hz_out, unused, unused + 1, unused + 2, unused + 3, unused + 4, unused + 5);
   };
   if constexpr (ContactModel<F.law()>::Tangential::kOn) {
     if (clean_run && *clean_run >= kCleanRun) {
@@ -225,14 +270,17 @@ inline ContactResult contact_force(const PairLaw& law, const ContactInput& in, d
   B.dx[0] = in.dx; B.dy[0] = in.dy; B.dz[0] = in.dz; B.ri[0] = in.ri; B.rj[0] = in.rj;
   B.vx[0] = in.vx; B.vy[0] = in.vy; B.vz[0] = in.vz; B.sx[0] = in.sx; B.sy[0] = in.sy; B.sz[0] = in.sz;
   B.mstar[0] = in.mstar;
+  B.wx[0] = in.wx; B.wy[0] = in.wy; B.wz[0] = in.wz;
   double hx = 0, hy = 0, hz = 0;
-  contact_forces<F, true>(B, 1, law, dt, dt, beta, &in.fsx, &in.fsy, &in.fsz, &hx, &hy, &hz);
   ContactResult r;
+  const RollingLanes roll{{&in.mrx, &in.mry, &in.mrz}, {&r.mrx, &r.mry, &r.mrz}};
+  contact_forces<F, true>(B, 1, law, dt, dt, beta, &in.fsx, &in.fsy, &in.fsz, &hx, &hy, &hz, nullptr, &roll);
   r.nx = B.nx[0]; r.ny = B.ny[0]; r.nz = B.nz[0]; r.overlap = B.overlap[0]; r.fn = B.fn[0];
   r.fx = B.fx[0]; r.fy = B.fy[0]; r.fz = B.fz[0]; r.tx = B.tx[0]; r.ty = B.ty[0]; r.tz = B.tz[0];
   r.kn = B.kn[0]; r.ks = B.ks[0]; r.cn = B.cn[0];
   if constexpr (F.shear) { r.fsx = hx; r.fsy = hy; r.fsz = hz; }
   r.work_friction = B.work_friction[0]; r.work_damping = B.work_damping[0]; r.strain = B.strain[0];
+  if constexpr (F.rolling) r.work_rolling = B.work_rolling[0];
   r.state = static_cast<std::uint8_t>(B.state[0]);
   return r;
 }

@@ -58,12 +58,14 @@ Sym6 average_stress(const Model& model, double volume) {
 }
 
 double EnergyReport::total() const {
-  return kinetic_translation + kinetic_rotation + strain + potential + friction_work + damping_work - boundary_work;
+  return kinetic_translation + kinetic_rotation + strain + potential + friction_work + rolling_work + damping_work -
+         boundary_work;
 }
 
 EnergyReport energy(const Model& model) {
   EnergyReport e;
   e.friction_work = model.energy.friction_work;
+  e.rolling_work = model.energy.rolling_work;
   e.damping_work = model.energy.damping_work;
   e.boundary_work = model.energy.boundary_work;
   const EnergyAtStep& now = model.energy_at_step;
@@ -90,6 +92,8 @@ EnergyReport energy(const Model& model) {
     if (!c.touching(p)) continue;
     add_contact_strain(e.strain, is_hertz(model, c.i[p]), c.kn_eff[p], c.overlap[p], c.fsx[p], c.fsy[p], c.fsz[p],
                        c.ks_eff[p]);
+    const double ri = b.rad[c.i[p]], rj = b.rad[c.j[p]], rbar = ri * rj / (ri + rj);
+    e.strain += shear_spring_energy(c.mrx[p] * c.mrx[p] + c.mry[p] * c.mry[p] + c.mrz[p] * c.mrz[p], c.ks_eff[p] * rbar * rbar);
   }
   const WallContacts& w = model.wall_contacts;
   if (w.kn_eff.size() == w.size() && w.overlap.size() == w.size())
@@ -97,6 +101,8 @@ EnergyReport energy(const Model& model) {
       if (w.state[p] == 0 || w.ball[p] >= b.size()) continue;
       add_contact_strain(e.strain, is_hertz(model, w.ball[p]), w.kn_eff[p], w.overlap[p], w.fsx[p], w.fsy[p],
                          w.fsz[p], w.ks_eff[p]);
+      const double r = b.rad[w.ball[p]];   // (Rbar of a ball on a wall: its radius)
+      e.strain += shear_spring_energy(w.mrx[p] * w.mrx[p] + w.mry[p] * w.mry[p] + w.mrz[p] * w.mrz[p], w.ks_eff[p] * r * r);
     }
   return e;
 }

@@ -34,6 +34,7 @@ inline TriaxialStress triaxial_stress(const Sym6& s) { return triaxial_stress(s[
 struct EnergyReport {
   double kinetic_translation = 0, kinetic_rotation = 0, strain = 0;
   double friction_work = 0, damping_work = 0, boundary_work = 0;
+  double rolling_work = 0;         // dissipated by the rolling springs' limit
   double potential = 0;            // gravity, relative to x = 0
   bool at_step = false;            // taken at the last step's t (else from the state as it is)
   double total() const;            // kinetic + strain + potential + dissipated - boundary

@@ -45,6 +45,7 @@ PairLaw mix(const Material& a, const Material& b) {
   law.ks = 2 * series(a.ks, b.ks);
   law.friction = std::min(a.friction, b.friction);
   law.cohesion = std::min(a.cohesion, b.cohesion);
+  law.rolling = std::min(a.rolling_friction, b.rolling_friction);
   if (a.hertz() && b.hertz()) {
     // 1/E* = (1 - nu_a)/(2 G_a) + (1 - nu_b)/(2 G_b);  1/G* = (2 - nu_a)/G_a + (2 - nu_b)/G_b.
     law.hertz_n = 4.0 / 3.0 * series(2 * a.shear_modulus / (1 - a.poisson), 2 * b.shear_modulus / (1 - b.poisson));

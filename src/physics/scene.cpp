@@ -35,7 +35,7 @@ Features scene_features(const Model& model) {
   Features f;
   const Balls& b = model.balls;
   const Damping& damping = model.settings.damping;
-  bool restitution = false;
+  bool restitution = false, rolling = false;
   f.friction = f.hertz = false;
   for (int type : used_types(model)) {
     const auto it = model.materials.find(type);
@@ -44,6 +44,7 @@ Features scene_features(const Model& model) {
     f.hertz = f.hertz || m.hertz();
     f.friction = f.friction || m.ks > 0 || m.hertz();
     restitution = restitution || m.has_restitution;
+    rolling = rolling || m.rolling_friction > 0;
   }
   f.stiffness_damping = restitution || (damping.kind == DampKind::Rayleigh && damping.beta > 0);
   if (damping.kind == DampKind::Rayleigh && damping.alpha > 0) f.mass_damping = DampKind::Rayleigh;
@@ -59,8 +60,15 @@ Features scene_features(const Model& model) {
     f.applied = f.applied || moments || b.ax[i] != 0 || b.ay[i] != 0 || b.az[i] != 0;
   }
   f.rotation = (f.friction && free_spin) || spinning || moments;
+  f.rolling = rolling && f.friction && f.rotation;
   f.periodic = model.space.periodic;
   return f;
+}
+
+bool has_rolling(const Model& model) {
+  for (const auto& [type, m] : model.materials)
+    if (m.rolling_friction > 0) return true;
+  return false;
 }
 
 void check_ready(const Model& model) {

@@ -13,6 +13,7 @@ struct Features {
   bool rotation = true;     // some ball has a free spin component and shear forces exist
   bool friction = true;     // some material has ks > 0 (shear forces at all)
   bool hertz = false;
+  bool rolling = false;     // some material has rolling resistance (rr_fric), with shear and spins
   bool stiffness_damping = false;   // Rayleigh beta or restitution dashpots
   DampKind mass_damping = DampKind::None;
   bool gravity = false;
@@ -22,6 +23,8 @@ struct Features {
 };
 
 Features scene_features(const Model& model);
+// Whether some material has rolling resistance (PROP rr_fric): output then shows the rolling moments.
+bool has_rolling(const Model& model);
 
 // Checks that every ball's type has density and stiffness; throws std::runtime_error naming the type.
 void check_ready(const Model& model);

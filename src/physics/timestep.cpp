@@ -75,6 +75,11 @@ double balls_critical_step(const Model& model, const Features& features, bool an
     for (std::size_t ball : balls) {
       sums[ball].kmax += std::max(r.kn, r.ks);
       sums[ball].ks += r.ks;
+      // (the kernels' order: the rolling spring's share after the shear spring's)
+      if (features.rolling) {
+        const double share = balls.size() == 1 ? 1.0 : (ball == *balls.begin() ? in.rj : in.ri) / (in.ri + in.rj);
+        sums[ball].ks += rolling_ks(r.ks, share);
+      }
       sums[ball].cn += r.cn;
     }
   };

@@ -49,6 +49,12 @@ double hertz_step_cap(const Model& model);
 // eigenvalues alone); c = 2.5 balances the rows when k_n = k_s: 7 sum k / m, exact for the slip mode
 // of two equal balls (7 k_s / m), against 10 sum k / m with c = 1.
 inline constexpr double kSpinScale = 2.5;
+// Rolling springs (PROP rr_fric) couple spins too: k_r = k_s Rbar^2 on a ball of radius R_b and its
+// partner's spin gives the spin row k_s (Rbar / R_b) / (2/5) per contact (Rbar / R_b = R_p / (R_b + R_p);
+// 1 at a wall). The contact loops add it to the ball's k_s sum divided by the spin row's (2 + 2 / c)
+// (which over-counts it in the translation row: a step a little smaller, on the safe side).
+inline constexpr double kRollingSpinShare = 1.0 / (2 + 2 / kSpinScale);
+inline double rolling_ks(double ks, double partner_share) { return ks * partner_share * kRollingSpinShare; }
 inline double ball_omega2(double mass, double sum_kmax, double sum_ks, bool rotation) {
   const double row = rotation ? std::max(2 * sum_kmax + 2 * kSpinScale * sum_ks, (2 + 2 / kSpinScale) / 0.4 * sum_ks)
                               : 2 * sum_kmax;

@@ -11,9 +11,10 @@ bin=$1
 [ "$(uname -m)" = x86_64 ] || { echo "skipped: not x86-64"; exit 77; }
 command -v objdump >/dev/null || { echo "skipped: objdump missing (binutils)"; exit 77; }
 # Left out: one lane alone (kOne, the third bool), and the one-law dashpot loops' entry, which only
-# picks the loop of its restitution (kRest 0 with a dashpot and one law; contact_law.hpp).
+# picks the loop of its restitution (kRest 0 with a dashpot and one law; contact_law.hpp). The
+# features print as far as their last true member (details, rolling after dashpot).
 objdump -d -C --no-show-raw-insn "$bin" | awk -v one=', (true|false), (true|false), true(, [0-9])?>\\(' \
-    -v dispatch='ContactFeatures\\{[a-z]+, [a-z]+, [a-z]+, true\\}, true, (true|false), (true|false), 0>\\(' '
+    -v dispatch='ContactFeatures\\{[a-z]+, [a-z]+, [a-z]+, true(, [a-z]+)*\\}, true, (true|false), (true|false), 0>\\(' '
   /^[0-9a-f]+ <.*>:$/ { name = $0; inside = (name ~ /contact_lanes</ && name !~ one && name !~ dispatch); if (inside) { count++; packed[name] = 0 } next }
   inside && /(add|sub|mul|div|sqrt)pd/ { packed[name]++ }
   END {

@@ -95,10 +95,11 @@ wall id 4 polygon -0.01 -0.01 0.05  0.01 -0.01 0.05  0.01 0.01 0.05 velocity 0 0
 )", "hist wall 3 wall 2 energy every 7 file h.csv\n", 3000};
 
 // A shear box: periodic in x and y, bounded in z by a rough floor and a servo platen that moves
-// along x and drags the balls (mixed periodicity with walls).
+// along x and drags the balls (mixed periodicity with walls); rolling resistance between the balls
+// and, smaller, against the walls (the rolling springs' history carried, saved and moved).
 const Scene kShearBox = {"shear_box", R"(start box 0 0.04 0 0.03 -0.01 0.05 destroy x periodic y periodic
-prop kn 1e5 ks 1e5 fric 25 dens 2650 rest 0.4
-prop type 2 kn 1e5 ks 1e5 fric 40
+prop kn 1e5 ks 1e5 fric 25 dens 2650 rest 0.4 rr_fric 0.3
+prop type 2 kn 1e5 ks 1e5 fric 40 rr_fric 0.1
 wall id 1 plane 0 0 0 0 0 1 type 2
 gen 150 0.0018 0.0025 seed 9 range z 0.003 0.03
 grav 0 0 -9.81
@@ -108,7 +109,7 @@ wall id 2 plane 0 0 0.0195 0 0 -1 type 2
 servo wall 2 stress 300 area 0.0012 max 0.1
 cycle 9000
 wall id 2 velocity 0.05 0 0
-)", "hist wall 2 contacts every 7 file h.csv\n", 2000};
+)", "hist wall 2 contacts rolling every 7 file h.csv\n", 2000};
 
 struct Result {
   std::string balls, contacts, history, walls;
@@ -467,7 +468,8 @@ TEST_CASE("cycle cuts: walls of every kind, moving and servo-driven", "[cuts][ba
   check_scene(kWalls);
 }
 
-TEST_CASE("cycle cuts: a shear box, periodic in x and y between walls across z", "[cuts][backends][walls][system][threads]") {
+TEST_CASE("cycle cuts: a shear box with rolling resistance, periodic in x and y between walls across z",
+          "[cuts][backends][walls][system][threads]") {
   check_scene(kShearBox);
 }
 

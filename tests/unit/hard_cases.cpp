@@ -378,7 +378,9 @@ TEST_CASE("hard: the contact table's arrays are the pair list, the history and t
   int all = 0, results = 0;
   c.for_each_pair_array([&](auto&) { ++all; });
   c.for_each_result_array([&](auto&) { ++results; });
-  CHECK(all == 5 + 3 + results);   // i, j, the image, and the shear force's three components
+  // i, j and the image (5 arrays), every declared part of the history, the results.
+  CHECK(all == 5 + static_cast<int>(ContactTable::history_count()) + results);
+  CHECK(ContactTable::history_count() == 6);   // the shear force's three components, the rolling moment's three
 }
 
 // A run that fails before its first copy on a multiple of 500 goes back to where the CYCLE started,
