@@ -75,6 +75,10 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       load.stiffness.add(B.kn[q]);
       load.work.add(power * k.dt_mean);
       load.contacts += B.state[q] != 0;
+      // A moving surface: the touching ball's kinetic energy in the wall's frame (Wall::relative_kinetic).
+      const double ux = surface[q][0] - b.vx[i], uy = surface[q][1] - b.vy[i], uz = surface[q][2] - b.vz[i];
+      if (B.state[q] != 0 && (surface[q][0] != 0 || surface[q][1] != 0 || surface[q][2] != 0))
+        load.relative_kinetic.add(0.5 * b.mass[i] * (ux * ux + uy * uy + uz * uz));
       BallParts& part = scratch.ball_parts[i];
       part.boundary += power * k.dt_mean;
       part.boundary_ahead += power * (0.5 * k.dt_mean);   // the wall moves on with the balls: half after t

@@ -129,10 +129,11 @@ struct WallLoad {
   ExactSum fx, fy, fz;                // force on the wall
   ExactSum mx, my, mz;                // its moment about the wall's spin point
   ExactSum normal_force, stiffness, work;
+  ExactSum relative_kinetic;          // Wall::relative_kinetic
   std::int64_t contacts = 0;
   template <class F>
   void each_sum(F&& f) {
-    for (ExactSum* s : {&fx, &fy, &fz, &mx, &my, &mz, &normal_force, &stiffness, &work}) f(*s);
+    for (ExactSum* s : {&fx, &fy, &fz, &mx, &my, &mz, &normal_force, &stiffness, &work, &relative_kinetic}) f(*s);
   }
   void add(WallLoad& o) {
     merge_exact_sums(*this, o);

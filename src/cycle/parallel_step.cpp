@@ -63,6 +63,7 @@ void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals) {
     wall.stiffness = total.stiffness.value();
     wall.contacts = total.contacts;
     wall.work += total.work.value();
+    wall.relative_kinetic = total.relative_kinetic.value();
   }
 }
 

@@ -285,6 +285,10 @@ struct Wall {
   double stiffness = 0;                         // sum of the touching contacts' k_n
   std::int64_t contacts = 0;                    // touching
   double work = 0;
+  // Where its surface moves: sum over the touching balls of m |v_wall(c) - v|^2 / 2, their kinetic
+  // energy in the wall's frame (v at t - dt/2). The instability guard counts it as energy in play
+  // (cycle/run.cpp); not saved (every step makes it again before the guard reads it).
+  double relative_kinetic = 0;
 };
 
 // Ball-wall contacts that may touch, sorted by (ball, wall): candidates within the pair-list skin.
