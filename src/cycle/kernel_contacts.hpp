@@ -30,7 +30,7 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
   const bool cell_moving = in.cell_moving;
   // The global sums of the ball whose run of pairs the list is on (in list order), kept as the
   // ball's parts when the run ends (StepScratch::ball_parts): the motion loop hands them on.
-  double work_friction = 0, work_damping = 0, strain = 0, image_power = 0, work_rolling = 0;
+  double work_friction = 0, work_damping = 0, strain = 0, image_power = 0;
   std::array<double, 9> moments{};   // force_moment (6), then stiffness_moment (3)
   BallParts* __restrict parts = scratch.ball_parts.data();
   ContactBatch B;
@@ -51,8 +51,8 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
     ball_sum[acc_ball] = acc;
     if constexpr (kLaw.dashpot) { cn_sum[acc_ball] = acc_cn; dash_sum[acc_ball] = acc_dash; }
     if constexpr (kLaw.rolling) roll_sum[acc_ball] = acc_roll;
-    parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0, kDashpotAhead * work_damping, 0.0, work_rolling};
-    work_friction = work_damping = strain = image_power = work_rolling = 0;
+    parts[acc_ball] = {work_friction, work_damping, strain, image_power, 0.0, kDashpotAhead * work_damping, 0.0};
+    work_friction = work_damping = strain = image_power = 0;
     if (k.moments) [[unlikely]] {
       scratch.ball_moments[acc_ball] = moments;
       moments = {};
@@ -103,7 +103,10 @@ void contact_range(Model& model, StepScratch& scratch, const StepKernels& k, std
         acc_dash.fx -= B.dfx[q]; acc_dash.fy -= B.dfy[q]; acc_dash.fz -= B.dfz[q];
         acc_dash.tx += B.dtx[q]; acc_dash.ty += B.dty[q]; acc_dash.tz += B.dtz[q];
       }
-      if constexpr (kLaw.rolling) { acc_roll.mx -= rx[q]; acc_roll.my -= ry[q]; acc_roll.mz -= rz[q]; work_rolling += B.work_rolling[q]; }
+      if constexpr (kLaw.rolling) {
+        acc_roll.mx -= rx[q]; acc_roll.my -= ry[q]; acc_roll.mz -= rz[q];
+        acc_roll.work += B.work_rolling[q];
+      }
       if (pj[p] < own_end) {
         PairForce& fj = ball_sum[pj[p]];
         fj.fx += B.fx[q]; fj.fy += B.fy[q]; fj.fz += B.fz[q];

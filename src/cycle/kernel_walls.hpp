@@ -83,7 +83,7 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       part.boundary += power * k.dt_mean;
       part.boundary_ahead += power * (0.5 * k.dt_mean);   // the wall moves on with the balls: half after t
       part.friction += B.work_friction[q];
-      if constexpr (kLaw.rolling) part.rolling += B.work_rolling[q];
+      if constexpr (kLaw.rolling) scratch.ball_rolling[i].work += B.work_rolling[q];
       part.damping += B.work_damping[q];
       part.damping_ahead += kDashpotAhead * B.work_damping[q];
       part.strain += B.strain[q];

@@ -107,7 +107,7 @@ static void add_rolling(const Balls& b, StepScratch& scratch, std::size_t begin,
     const RollingMoment& m = scratch.ball_rolling[i];
     PairForce& f = scratch.ball_force[i];
     f.tx -= m.mx / b.rad[i]; f.ty -= m.my / b.rad[i]; f.tz -= m.mz / b.rad[i];
-    if (!ghosts || !scratch.ghost[i]) work.add(scratch.ball_parts[i].rolling);
+    if (!ghosts || !scratch.ghost[i]) work.add(m.work);
   }
 }
 

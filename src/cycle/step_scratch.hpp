@@ -28,9 +28,12 @@ struct DashpotForce {
 };
 
 // A ball's sum of the rolling springs' moments (scenes with rolling resistance): a moment, not a
-// force at the ball's surface, so it is summed apart from PairForce's t (whose moment is -R t).
+// force at the ball's surface, so it is summed apart from PairForce's t (whose moment is -R t); and
+// the work they dissipated in its run of pairs and its wall contacts (kept here, not in BallParts,
+// whose seven doubles the motion loop reads with a stride it vectorises compactly).
 struct RollingMoment {
   double mx = 0, my = 0, mz = 0;
+  double work = 0;
 };
 
 // One ball's parts of the step's global sums from its contacts: its run of pairs (those with
@@ -39,7 +42,6 @@ struct RollingMoment {
 struct BallParts {
   double friction = 0, damping = 0, strain = 0, image = 0, boundary = 0;
   double damping_ahead = 0, boundary_ahead = 0;   // the parts after t (StepSums)
-  double rolling = 0;                              // dissipated by the rolling springs' limit
 };
 
 struct StepScratch {
