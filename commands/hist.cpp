@@ -130,7 +130,7 @@ static void run_hist(Context& ctx, Args& args) {
 
 const Command hist_command = {
     "HIST", {},
-    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: sample stress pq strain volumetric ratio sratio axial platen energy rolling unbal contacts porosity time, wall n, ball id x y z vx vy vz wx wy wz fx fy fz, measure sphere x y z r [id n]",
+    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: sample stress pq strain volumetric ratio sratio axial platen energy rolling bridges unbal contacts porosity time, wall n, ball id x y z vx vy vz wx wy wz fx fy fz, measure sphere x y z r [id n]",
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): sample (ea ev sig1 sig3 q p: the axial and volumetric "
     "strains, sigma1, sigma3, the deviator and the mean stress of the sample between walls that SAMPLE "
@@ -152,7 +152,9 @@ const Command hist_command = {
     "given; the ball is found by its id at each record, so after RENUMBER it is the ball that has that id "
     "then, and NaN is recorded once no ball has it, after DELETE or an escape from the START box), energy (ke "
     "strain_energy friction_work damping_work boundary_work potential; potential is gravity's, as PRINT energy "
-    "shows it), rolling (rolling_work: the work the rolling springs' limit dissipated, PROP rr_fric), unbal (mean "
+    "shows it), rolling (rolling_work: the work the rolling springs' limit dissipated, PROP rr_fric), bridges "
+    "(bridges capillary_work: the capillary bridges intact, between balls and to walls, and the work they did "
+    "on the balls, PROP bridge), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
     "range holding the top and bottom platens (the balls above and below the middle of its height): ratio "
@@ -179,7 +181,7 @@ const Command hist_command = {
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",
     "hist stress strain every 100 file tri.csv",
-    {"sample", "stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "rolling", "unbal", "contacts", "time", "wall", "ball",
+    {"sample", "stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "rolling", "bridges", "unbal", "contacts", "time", "wall", "ball",
      "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "fx", "fy", "fz",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},
     run_hist};

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "physics/bridge.hpp"
 #include "cycle/pipeline.hpp"
 #include "support/comm.hpp"
 #include "support/peak_memory.hpp"
@@ -99,6 +100,9 @@ static void print_info(Context& ctx) {
     for (auto st : m.wall_contacts.state) touching += st != 0;
     o << fmt::format("walls: {} ({} ball-wall contacts)\n", m.walls.size(), touching);
   }
+  if (has_bridges(m))
+    o << fmt::format("bridges intact: {} between balls, {} to walls\n", count_bridges(m.contacts),
+                     count_bridges(m.wall_contacts));
   o << fmt::format("cycle: {}\n", m.cycle);
   o << fmt::format("time: {}\n", m.time);
   o << fmt::format("timestep: {}\n", m.dt);
@@ -218,34 +222,41 @@ static void print_contacts(Context& ctx, const Range& range, const std::string& 
     for (auto k : ctx.session.select(range)) in[k] = true;
   if (!comm::root()) return;   // (as print_balls)
   std::vector<std::size_t> rows;
+  // (Capillary bridges: the pairs they hold apart too, and a column saying which hold one.)
+  const bool bridges = has_bridges(m) && c.bridge.size() == c.size();
   for (std::size_t p = 0; p < c.size(); ++p)
-    if (c.touching(p) && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
+    if ((c.touching(p) || (bridges && c.bridge[p] != 0)) && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
   const auto& id = m.balls.id;
   const bool rolling = has_rolling(m);   // (the rolling moment on j: columns only where a material has it)
   if (!file.empty()) {
     write_file_atomically(file, [&](std::ostream& csv) {
-      csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding\n";
+      csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding"
+          << (bridges ? ",bridge\n" : "\n");
       for (auto p : rows) {
         csv << id[c.i[p]] << ',' << id[c.j[p]];
         for (const auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real((*v)[p]);
         if (rolling)
           for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real((*v)[p]);
-        csv << ',' << (c.state[p] == 2 ? 1 : 0) << '\n';
+        csv << ',' << (c.state[p] == 2 ? 1 : 0);
+        if (bridges) csv << ',' << (c.bridge[p] != 0 ? 1 : 0);
+        csv << '\n';
       }
     });
     ctx.out << fmt::format("{} contacts written to {}\n", rows.size(), file);
     return;
   }
-  ctx.out << fmt::format("{:>8} {:>8} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11} {}{:>7}\n", "i", "j", "nx", "ny", "nz",
-                         "overlap", "fn", "|fs|", rolling ? fmt::format("{:>11} ", "|mr|") : "", "sliding");
+  ctx.out << fmt::format("{:>8} {:>8} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11} {}{:>7}{}\n", "i", "j", "nx", "ny", "nz",
+                         "overlap", "fn", "|fs|", rolling ? fmt::format("{:>11} ", "|mr|") : "", "sliding",
+                         bridges ? "  bridge" : "");
   for (auto p : rows)
-    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}\n", id[c.i[p]],
+    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", id[c.i[p]],
                            id[c.j[p]], c.nx[p], c.ny[p], c.nz[p], c.overlap[p], c.fn[p],
                            std::sqrt(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]),
                            rolling ? fmt::format("{:>11.4g} ", std::sqrt(c.mrx[p] * c.mrx[p] + c.mry[p] * c.mry[p] +
                                                                          c.mrz[p] * c.mrz[p]))
                                    : "",
-                           c.state[p] == 2 ? "yes" : "no");
+                           c.state[p] == 2 ? "yes" : "no",
+                           bridges ? (c.bridge[p] != 0 ? "     yes" : "      no") : "");
 }
 
 static void print_sym(Context& ctx, const char* what, const Sym6& s) {
@@ -391,11 +402,13 @@ static void run_print(Context& ctx, Args& args) {
         ctx.out << "of the state as it is (no step since the balls or the settings last changed):\n";
       ctx.out << fmt::format(
           "kinetic (translation): {:.8g}\nkinetic (rotation): {:.8g}\nstrain: {:.8g}\npotential (gravity): "
-          "{:.8g}\nfriction work: {:.8g}\n{}damping work: {:.8g}\nboundary work: {:.8g}\nbalance (should stay "
+          "{:.8g}\nfriction work: {:.8g}\n{}damping work: {:.8g}\nboundary work: {:.8g}\n{}balance (should stay "
           "constant): {:.8g}\n",
           e.kinetic_translation, e.kinetic_rotation, e.strain, e.potential, e.friction_work,
           has_rolling(m) || e.rolling_work != 0 ? fmt::format("rolling work: {:.8g}\n", e.rolling_work) : "",
-          e.damping_work, e.boundary_work, e.total());
+          e.damping_work, e.boundary_work,
+          has_bridges(m) || e.capillary_work != 0 ? fmt::format("capillary work: {:.8g}\n", e.capillary_work) : "",
+          e.total());
       return;
     }
     case 6: {
@@ -426,14 +439,17 @@ static void run_print(Context& ctx, Args& args) {
       args.done();
       if (m.materials.empty()) ctx.out << "no materials (PROP sets them)\n";
       for (const auto& [t, p] : m.materials)
-        ctx.out << fmt::format("type {}: kn {:.6g} ks {:.6g} mu {:.6g} (fric {:.4g} deg) dens {:.6g} coh {:.6g}{}{}{}\n", t,
+        ctx.out << fmt::format("type {}: kn {:.6g} ks {:.6g} mu {:.6g} (fric {:.4g} deg) dens {:.6g} coh {:.6g}{}{}{}{}\n", t,
                                p.kn, p.ks, p.friction, std::atan(p.friction) * 180 / std::numbers::pi, p.density,
                                p.cohesion,
                                p.hertz() ? fmt::format(" shear {:.6g} poisson {:.4g} (Hertz-Mindlin)", p.shear_modulus,
                                                        p.poisson)
                                          : "",
                                p.has_restitution ? fmt::format(" rest {:.4g}", p.restitution) : "",
-                               p.rolling_friction > 0 ? fmt::format(" rr_fric {:.4g}", p.rolling_friction) : "");
+                               p.rolling_friction > 0 ? fmt::format(" rr_fric {:.4g}", p.rolling_friction) : "",
+                               p.bridge_volume > 0 ? fmt::format(" bridge {:.6g} tension {:.6g} angle {:.4g}", p.bridge_volume,
+                                                                 p.surface_tension, p.contact_angle * 180 / std::numbers::pi)
+                                                   : "");
       return;
     }
     case 9: {
@@ -486,14 +502,16 @@ const Command print_command = {
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
-    "order, more than 3 suggests RENUMBER); the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
+    "order, more than 3 suggests RENUMBER); the capillary bridges intact where a material has them; the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
     "processes under mpirun; the peak memory so far). counters [file f]: the counts for scripts, one `name value` "
     "line each, under names that stay (cycle, balls, contacts, wall_contacts, balls_destroyed, threads, "
     "pair_list_rebuilds, ...; doc/language.md lists them all and what each counts). "
     "balls, contacts: tables; with `file f.csv` a CSV file with every real in round-trip precision "
     "(balls: id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz sorted by id; contacts: "
     "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding sorted by (i, j), with mrx,mry,mrz, the rolling moment on "
-    "j, before sliding where a material has rr_fric; the table then shows |mr|), optionally for a range. "
+    "j, before sliding where a material has rr_fric; the table then shows |mr|; where a material has a capillary "
+    "bridge, the pairs a bridge holds apart too (their overlap and normal 0) and a last column bridge, 1 where "
+    "one holds), optionally for a range. "
     "stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
     "compression positive. stress, fabric, coordination and porosity with `range sphere x y z r`: those of a "
@@ -507,7 +525,8 @@ const Command print_command = {
     "their balance, all at the time of the last step's force pass (the model's time less dt; the step's "
     "own sums, man page CONVENTIONS): kinetic m v(t-dt/2).v(t+dt/2)/2 and I w(t-dt/2).w(t+dt/2)/2, the "
     "springs' energy and gravity's potential at the positions of that pass, and the works up to it (friction, "
-    "rolling where a material has rr_fric, damping, boundary; the "
+    "rolling where a material has rr_fric, damping, boundary, and capillary, the work the capillary bridges did "
+    "on the balls, energy in as the boundary's, where a material has a bridge; the "
     "step's works less their part after it); central differences keep that sum for linear springs, so the "
     "balance moves only by the integration's error. Before the first CYCLE, and after a command that "
     "changes the balls or the settings, the terms are of the state as it is (velocities now, positions now, "

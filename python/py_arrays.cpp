@@ -195,6 +195,7 @@ py::dict energy(PySession& s) {
   d["potential"] = e.potential;
   d["friction_work"] = e.friction_work;
   d["rolling_work"] = e.rolling_work;
+  d["capillary_work"] = e.capillary_work;
   d["damping_work"] = e.damping_work;
   d["boundary_work"] = e.boundary_work;
   d["balance"] = e.total();
@@ -317,7 +318,7 @@ void bind_arrays(py::class_<PySession>& cls) {
            "rate times step, a logarithmic strain (an edge is about its START length times exp(-strain)).")
       .def("energy", energy,
            "The energy terms (PRINT energy) as a dict: kinetic_translation, kinetic_rotation, strain, potential, "
-           "friction_work, rolling_work, damping_work, boundary_work, balance.")
+           "friction_work, rolling_work, damping_work, boundary_work, capillary_work, balance.")
       .def("history", histories,
            "The HIST tables, in the order given: a list with one dict per table, column name -> array "
            "(cycle, time, then the items' columns, as PRINT history names them).")

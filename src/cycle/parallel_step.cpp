@@ -1,5 +1,7 @@
 #include "cycle/parallel_step.hpp"
 
+#include "cycle/bridge_pass.hpp"
+
 #include <algorithm>
 #include <chrono>
 
@@ -169,6 +171,17 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     for (std::size_t k = 0; k < blocks; ++k) kernels.contacts(model, scratch, kernels, block_pair(k), block_pair(k + 1), balls);
     walls(0, blocks, 0);
   }
+  // Scenes with capillary bridges: each pair's and wall contact's bridge, by the owner of its
+  // block (cycle/bridge_pass.hpp), once every contact loop is done.
+  if (kernels.features.bridges) {
+    prepare_bridges(model, scratch);
+    auto bridges = [&](std::size_t first, std::size_t last, int t) {
+      bridge_pairs(model, scratch, kernels, block_pair(first), block_pair(last), thread_sums_[t]);
+      if (wall_count) bridge_walls(model, scratch, kernels, block_wall(first), block_wall(last), &wall_loads_[t * wall_count]);
+    };
+    if (parallel) pool.run([&](int t) { if (t < parts) bridges(first_block_[t], first_block_[t + 1], t); });
+    else bridges(0, blocks, 0);
+  }
   if (wall_count) add_wall_loads(model, threads);
   const auto t1 = Clock::now();
 
@@ -181,7 +194,9 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     const std::size_t first = split_point(motion_blocks, motion_parts, t), last = split_point(motion_blocks, motion_parts, t + 1);
     const std::size_t ball0 = std::min(balls, first * kReduceBlock), ball1 = std::min(balls, last * kReduceBlock);
     if (kernels.features.rolling) add_rolling(model.balls, scratch, ball0, ball1, thread_sums_[t]);
+    if (kernels.features.bridges) add_bridges(model, scratch, ball0, ball1);
     kernels.motion(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
+    if (kernels.features.bridges) bridge_work(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
     if (moved) moved_[t] = moved->max_displacement2(model.balls, ball0, ball1);
   }, motion_parts > 1);
   moved2_ = 0;

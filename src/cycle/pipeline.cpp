@@ -1,6 +1,7 @@
 #include "cycle/pipeline.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <bit>
 #include <chrono>
 #include <cstdint>
@@ -15,6 +16,7 @@
 #include "support/comm.hpp"
 #include "model/wall_shape.hpp"
 #include "model/periodic_cell.hpp"
+#include "physics/bridge.hpp"
 #include "physics/timestep.hpp"
 #include "support/format_number.hpp"
 #include "support/peak_memory.hpp"
@@ -180,14 +182,15 @@ void Pipeline::rebuild(Model& model) {
   double skin = 0;   // (none for a backend that keeps no list)
   if (backend_->keeps_list()) skin = list_skin(model);
   else check_periodic_cell(model);
+  const double reach = list_reach(model, skin);
   search_parts_ = false;
   list_from_parts_ = false;
-  backend_->find_pairs(model, skin, pool_now(), pairs_);
+  backend_->find_pairs(model, reach, pool_now(), pairs_);
   auto install = [&] {
     // A backend asked every step mostly finds the list it found before: nothing to carry over then.
     if (backend_->keeps_list() || model_ != &model || !holds_pairs(model.contacts, pairs_)) install_pairs(model.contacts, pairs_);
     if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
-    if (!model.walls.empty() || model.wall_contacts.size() > 0) find_wall_contacts(model, skin, pool_now());
+    if (!model.walls.empty() || model.wall_contacts.size() > 0) find_wall_contacts(model, reach, pool_now());
     if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
   };
   // (Ranks: one that fails alone, out of memory, must not leave the others in the next collective call.)
@@ -330,7 +333,7 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
     // A stale list alone: the members rebuild it on their parts where they can.
     if (whole && !outside) {
       const double skin = list_skin(model);
-      if (rebuild_parts(model, skin)) {
+      if (rebuild_parts(model, list_reach(model, skin))) {
         ref_.record_cell(model, skin);
         wall_travel_ = 0;
         whole = false;
@@ -377,7 +380,7 @@ void Pipeline::split_parts(Model& model) {
     if (!comm::root()) hollow(model);
     for (auto& part : bricks_) part->whole_freed();   // (on every rank: share() is collective)
   }
-  const bool rebuilt = rebuild_parts(model, skin);
+  const bool rebuilt = rebuild_parts(model, list_reach(model, skin));
   search_parts_ = false;
   if (rebuilt) return;
   // They could not (the same answer on every rank; not after a split but in tests): through the
@@ -386,6 +389,22 @@ void Pipeline::split_parts(Model& model) {
   if (distributed_) broadcast_arrays(model);
   rebuild(model);
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
+}
+
+double Pipeline::list_reach(const Model& model, double skin) const {
+  const double bridge = bridge_reach(model);
+  if (bridge == 0) return skin;
+  if (model.space.periodic) {   // (one image of a ball within its reach, as periodic_skin keeps the skin's)
+    const auto w = cell_widths(model.space);
+    const double d = 2 * model.balls.max_radius();
+    for (int a = 0; a < 3; ++a)
+      if (model.space.periodic_axis[a] && !(d + skin + bridge < 0.5 * w[a]))
+        throw std::runtime_error(fmt::format(
+            "periodic cell too small for the capillary bridges: its {} width {:.6g} is not more than twice the "
+            "largest diameter, the pair list's skin and the bridges' rupture gap ({:.6g}); use a larger cell",
+            "xyz"[a], w[a], d + skin + bridge));
+  }
+  return skin + bridge;
 }
 
 double Pipeline::list_skin(const Model& model) const {

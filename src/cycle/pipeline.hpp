@@ -158,6 +158,10 @@ class Pipeline {
   // by every part (BrickStep::rebuild_local) with it: whether they could (the same on every member;
   // where not, nothing changed).
   double list_skin(const Model& model) const;
+  // How far the pair search reaches: the skin, and beyond it the farthest gap a capillary bridge
+  // holds at (physics/bridge.hpp), so that the list holds every pair a bridge may pull before the
+  // next rebuild; the rebuild rule stays the skin's (a ball moved half the skin).
+  double list_reach(const Model& model, double skin) const;
   bool rebuild_parts(const Model& model, double skin);
   std::size_t held_whole_ = 0, held_part_ = 0;   // bytes of arrays in the last distributed step (PRINT info)
   std::vector<double> cycle_peaks_;              // per rank: peak MiB by the end of the last distributed CYCLE

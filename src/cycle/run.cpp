@@ -172,6 +172,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
   // vibrations, a few steps of each period).
   const double friction0 = model.energy.friction_work + model.energy.rolling_work, damping0 = model.energy.damping_work;
   const double boundary0 = model.energy.boundary_work, gross0 = model.space.gross_work;
+  const double capillary0 = model.energy.capillary_work;   // (energy in, as the boundary's)
   double balance_ref = 0, potential_ref = 0, scale_max = 0;
   double in_play_max = 0;   // scale_max and the balls' kinetic energy relative to moving walls (below)
   int flipping = 0;   // steps running with the kinetic term negative
@@ -268,6 +269,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     model.energy.rolling_work += sums.rolling_work;
     model.energy.damping_work += sums.damping_work;
     model.energy.boundary_work += sums.boundary_work;
+    model.energy.capillary_work += sums.capillary_work;
     if (kernels.estimate != StepEstimate::None) {
       const double estimate = std::min(sums.critical_dt, cap);
       if (std::isfinite(estimate))
@@ -282,6 +284,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     now.strain = sums.strain;
     now.potential = sums.potential;
     now.damping_ahead = sums.damping_ahead;
+    now.capillary_ahead = sums.capillary_ahead;
     now.boundary_ahead = sums.boundary_ahead + (model.space.periodic ? 0.5 * sums.image_power * kernels.dt_mean : 0.0);
     return sums;
   };
@@ -373,7 +376,8 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     const double dissipated =
         model.energy.friction_work + model.energy.rolling_work - friction0 + model.energy.damping_work - damping0 -
         now.damping_ahead;
-    const double boundary = model.energy.boundary_work - boundary0 - now.boundary_ahead;
+    const double boundary = model.energy.boundary_work - boundary0 - now.boundary_ahead +
+                            (model.energy.capillary_work - capillary0 - now.capillary_ahead);
     if (s == 1) potential_ref = sums.potential;
     const double potential = sums.potential - potential_ref;
     const double balance = kinetic + sums.strain + potential + dissipated - boundary;

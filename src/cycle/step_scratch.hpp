@@ -36,6 +36,12 @@ struct RollingMoment {
   double work = 0;
 };
 
+// A ball's sum of its capillary bridges' forces (scenes with bridges, cycle/bridge_pass.hpp), and
+// their power at v(t - dt/2), for the work the law of motion's rule charges them with.
+struct BridgeSum {
+  double fx = 0, fy = 0, fz = 0, power = 0;
+};
+
 // One ball's parts of the step's global sums from its contacts: its run of pairs (those with
 // higher partners, in list order), then its wall contacts in order. The motion loop adds its own
 // and hands them to the exact sums (StepSums), ball by ball.
@@ -56,6 +62,13 @@ struct StepScratch {
   // Features::rolling only (sized as ball_dashpot): RollingMoment.
   std::vector<RollingMoment> ball_rolling;
   std::vector<BallParts> ball_parts;
+  // Features::bridges only (cycle/bridge_pass.hpp, which sizes them): each pair's bridge force on j
+  // and each wall contact's on its ball, made by the pair's owner; each ball's pairs as partner j
+  // (ascending i: the first at partner_begin[b]), of the list partner_version; each ball's sum.
+  std::vector<std::array<double, 3>> pair_bridge, wall_bridge;
+  std::vector<std::uint32_t> partner_begin, partner_pairs;
+  std::uint64_t partner_version = 0;
+  std::vector<BridgeSum> ball_bridge;
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
   std::vector<std::array<double, 9>> ball_moments;

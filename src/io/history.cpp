@@ -1,4 +1,5 @@
 #include "io/history.hpp"
+#include "physics/bridge.hpp"
 #include "support/comm.hpp"
 
 #include <algorithm>
@@ -31,7 +32,7 @@ namespace trubal {
 const std::vector<std::string_view>& History::item_names() {
   static const std::vector<std::string_view> names = {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial",
                                                       "platen", "energy", "rolling", "unbal", "contacts", "time", "wall",
-                                                      "porosity", "measure", "ball", "sample"};
+                                                      "porosity", "measure", "ball", "sample", "bridges"};
   return names;
 }
 
@@ -74,6 +75,7 @@ static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "volumetric") return {"evol"};
   if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work", "potential"};
   if (item == "rolling") return {"rolling_work"};
+  if (item == "bridges") return {"bridges", "capillary_work"};
   if (item == "porosity") return {"porosity", "void_ratio"};
   if (item == "contacts") return {"contacts", "sliding", "coordination"};
   if (item == "time") return {};   // cycle and time lead every row
@@ -430,6 +432,9 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
         row.push_back(v);
     } else if (item == "rolling") {
       row.push_back(energy(model).rolling_work);
+    } else if (item == "bridges") {
+      row.push_back(static_cast<double>(count_bridges(model.contacts) + count_bridges(model.wall_contacts)));
+      row.push_back(energy(model).capillary_work);
     } else if (item == "porosity") {
       const Porosity p = space_porosity(model, volume);
       row.push_back(p.porosity);

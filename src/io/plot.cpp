@@ -143,7 +143,7 @@ std::string column_label(const std::string& c) {
       {"e12", "shear strain e12"}, {"e13", "shear strain e13"}, {"e23", "shear strain e23"},
       {"evol", "volumetric strain (compression +)"}, {"ratio", "stress ratio"}, {"sratio", "stress ratio sigma1/sigma3"},
       {"axial", "axial strain"}, {"platen", "platen force"}, {"ke", "kinetic energy"},
-      {"strain_energy", "strain energy"}, {"friction_work", "friction work"}, {"damping_work", "damping work"}, {"rolling_work", "rolling work"},
+      {"strain_energy", "strain energy"}, {"friction_work", "friction work"}, {"damping_work", "damping work"}, {"rolling_work", "rolling work"}, {"capillary_work", "capillary work"}, {"bridges", "capillary bridges"},
       {"boundary_work", "boundary work"}, {"unbal", "unbalanced-force ratio"}, {"contacts", "contacts"},
       {"sliding", "sliding fraction"}, {"coordination", "coordination number"}};
   for (const auto& [name, label] : known)

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 #include <stdexcept>
 #include <type_traits>
 
@@ -43,8 +44,11 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // (Wall::area_walls; older files keep the servo's own area) and the sample (SAMPLE). 9: the
 // contacts' history by name (transfer_contacts), so that a contact law part added later reads
 // older files. 10: the materials' rolling resistance (Material::rolling_friction) and the work the
-// rolling springs dissipated (Energy::rolling_work); older files have none.
-constexpr std::uint32_t kVersion = 10;
+// rolling springs dissipated (Energy::rolling_work); older files have none. 11: the materials'
+// capillary bridges (Material::bridge_volume, surface_tension, contact_angle) and the work the
+// bridges did (Energy::capillary_work, EnergyAtStep::capillary_ahead); older files have none (the
+// bridges' state is history, by name).
+constexpr std::uint32_t kVersion = 11;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.
@@ -55,7 +59,15 @@ std::uint64_t fnv1a(const std::string& data) {
 }
 
 static_assert(sizeof(Damping) == sizeof(DampKind) + sizeof(std::uint32_t) + 5 * sizeof(double), "Damping has hidden padding");
-static_assert(sizeof(Material) == 9 * sizeof(double) + 8, "Material has hidden padding");
+static_assert(sizeof(Material) == 12 * sizeof(double) + 8, "Material has hidden padding");
+
+// A material as format 10 wrote it (Material before the capillary bridges).
+struct MaterialV10 {
+  double kn, ks, friction, cohesion, density, shear_modulus, poisson, restitution, rolling_friction;
+  std::uint8_t has_restitution;
+  std::uint8_t unused[7];
+};
+static_assert(sizeof(MaterialV10) == 9 * sizeof(double) + 8, "MaterialV10 has hidden padding");
 
 // A material as formats 2 to 9 wrote it (Material before the rolling resistance).
 struct MaterialV9 {
@@ -238,8 +250,16 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
       int type = 0;
       Material mat;
       io.pod(type);
-      if (version >= 10) {
+      if (version >= 11) {
         io.pod(mat);
+      } else if (version == 10) {
+        MaterialV10 old{};
+        io.pod(old);
+        mat.kn = old.kn; mat.ks = old.ks; mat.friction = old.friction; mat.cohesion = old.cohesion;
+        mat.density = old.density; mat.shear_modulus = old.shear_modulus; mat.poisson = old.poisson;
+        mat.restitution = old.restitution; mat.rolling_friction = old.rolling_friction;
+        if (old.has_restitution > 1) io.corrupt();
+        mat.has_restitution = old.has_restitution != 0;
       } else {
         MaterialV9 old{};
         io.pod(old);
@@ -255,9 +275,14 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     for (auto& [type, mat] : m.materials) {
       int t = type;
       io.pod(t);
-      if (version >= 10) {
+      if (version >= 11) {
         io.pod(mat);
-      } else {   // (an older format asked for: its layout, without the rolling resistance)
+      } else if (version == 10) {   // (an older format asked for: its layout, without the bridges)
+        const MaterialV10 old{mat.kn, mat.ks, mat.friction, mat.cohesion, mat.density, mat.shear_modulus, mat.poisson,
+                              mat.restitution, mat.rolling_friction, static_cast<std::uint8_t>(mat.has_restitution ? 1 : 0),
+                              {}};
+        io.pod(old);
+      } else {   // (its layout, without the rolling resistance)
         const MaterialV9 old{mat.kn, mat.ks, mat.friction, mat.cohesion, mat.density, mat.shear_modulus, mat.poisson,
                              mat.restitution, static_cast<std::uint8_t>(mat.has_restitution ? 1 : 0), {}};
         io.pod(old);
@@ -271,6 +296,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
   io.pod(m.settings.damping);
   io.pod(m.energy.friction_work); io.pod(m.energy.damping_work); io.pod(m.energy.boundary_work);
   if (version >= 10) io.pod(m.energy.rolling_work);
+  if (version >= 11) io.pod(m.energy.capillary_work);
   io.pod(m.membrane.pressure); io.pod(m.membrane.area);
   if (version >= 4) {
     io.pod(m.membrane.follow_every); io.pod(m.membrane.cell);
@@ -322,6 +348,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     for (double* v : {&e.kinetic_translation, &e.kinetic_rotation, &e.strain, &e.potential, &e.damping_ahead,
                       &e.boundary_ahead})
       io.pod(*v);
+    if (version >= 11) io.pod(e.capillary_ahead);
   }
   if (version >= 8) {
     for (Wall& w : m.walls) io.pod(w.area_walls);
@@ -423,7 +450,9 @@ std::string invalid_model(const Model& m) {
   for (double v : s.strain_rate) if (!finite(v)) return "the strain rates are not numbers";
   for (const auto& [type, mat] : m.materials)
     if (!valid_bool(mat.has_restitution) || !finite(mat.kn) || !finite(mat.ks) || !finite(mat.density) ||
-        !(mat.rolling_friction >= 0) || !finite(mat.rolling_friction))
+        !(mat.rolling_friction >= 0) || !finite(mat.rolling_friction) || !(mat.bridge_volume >= 0) ||
+        !finite(mat.bridge_volume) || !(mat.surface_tension >= 0) || !finite(mat.surface_tension) ||
+        !(mat.contact_angle >= 0) || !(mat.contact_angle < std::numbers::pi / 2))
       return fmt::format("type {} has properties that are not numbers", type);
   const Settings& st = m.settings;
   if (!(st.frac > 0) || !finite(st.frac)) return fmt::format("FRAC is {}", st.frac);

@@ -29,6 +29,9 @@ struct Material {
   double poisson = 0;
   double restitution = 0;         // used when has_restitution (contact dashpot)
   double rolling_friction = 0;    // rolling resistance coefficient mu_r (PROP rr_fric; 0: none)
+  // Capillary bridges (PROP bridge V tension gamma angle deg; physics/bridge.hpp): the liquid volume
+  // of one bridge (0: dry), the liquid's surface tension and its contact angle in radians.
+  double bridge_volume = 0, surface_tension = 0, contact_angle = 0;
   bool has_restitution = false;
   std::uint8_t unused[7] = {};    // the padding SAVE writes with the struct, made explicit so its bytes are 0
   bool hertz() const { return shear_modulus > 0; }
@@ -92,6 +95,7 @@ struct ContactTable {
   std::vector<std::int8_t> image_x, image_y, image_z;   // periodic image of j as seen from i
   std::vector<double> fsx, fsy, fsz;                    // shear force on j (history)
   std::vector<double> mrx, mry, mrz;                    // rolling moment on j (history; on i: minus this)
+  std::vector<double> bridge;                           // 1: a capillary bridge holds the pair (history)
   // Results of the last force computation, per pair:
   std::vector<double> nx, ny, nz;                       // unit normal from i to j
   std::vector<double> overlap, fn;                      // overlap U, normal force (spring + dashpot)
@@ -142,10 +146,11 @@ struct ContactTable {
     f(mrx, HistoryPart{"mrx", OnSwap::Negate});   // the rolling spring
     f(mry, HistoryPart{"mry", OnSwap::Negate});
     f(mrz, HistoryPart{"mrz", OnSwap::Negate});
+    f(bridge, HistoryPart{"bridge", OnSwap::Keep});   // the capillary bridge (cycle/bridge_pass.hpp)
   }
   // Where each part's arrays start in for_each_history's order (the cross pairs' copy of the
   // history, cycle/parallel_step.cpp, holds them in that order).
-  static constexpr std::size_t kShearHistory = 0, kRollingHistory = 3;
+  static constexpr std::size_t kShearHistory = 0, kRollingHistory = 3, kBridgeHistory = 6;
   template <class F> void for_each_history(F&& f) const {
     const_cast<ContactTable*>(this)->for_each_history(
         [&](auto& v, const HistoryPart& part) { f(static_cast<const decltype(v)&>(v), part); });
@@ -299,6 +304,7 @@ struct WallContacts {
   std::vector<std::int64_t> ball_id, wall_id;   // what the history is keyed by
   std::vector<double> fsx, fsy, fsz;            // shear force on the wall (history)
   std::vector<double> mrx, mry, mrz;            // rolling moment on the wall (history; on the ball: minus this)
+  std::vector<double> bridge;                   // 1: a capillary bridge holds the ball to the wall (history)
   // Results of the last force pass that wrote details (ContactTable::results_cycle says which):
   std::vector<double> nx, ny, nz;               // unit normal, ball -> wall
   std::vector<double> overlap, fn, fx, fy, fz;  // fx..: force on the wall (on the ball: minus this)
@@ -315,6 +321,7 @@ struct WallContacts {
     f(mrx, HistoryPart{"mrx", OnSwap::Negate});   // the rolling spring
     f(mry, HistoryPart{"mry", OnSwap::Negate});
     f(mrz, HistoryPart{"mrz", OnSwap::Negate});
+    f(bridge, HistoryPart{"bridge", OnSwap::Keep});   // the capillary bridge
   }
   // The list's arrays (which ball meets which wall).
   template <class F> void for_each_list_array(F&& f) { f(ball); f(wall); f(ball_id); f(wall_id); }
@@ -354,6 +361,7 @@ struct Energy {
   double damping_work = 0;         // dissipated by all damping
   double boundary_work = 0;        // done by fixed velocities and applied forces (gravity: potential)
   double rolling_work = 0;         // dissipated by the rolling springs' limit (PROP rr_fric)
+  double capillary_work = 0;       // done on the balls by the capillary bridges (PROP bridge)
 };
 
 // The energy terms at the time t of the last step's force pass (cycle/run.cpp): the positions were
@@ -364,7 +372,7 @@ struct Energy {
 struct EnergyAtStep {
   bool valid = false;
   double kinetic_translation = 0, kinetic_rotation = 0, strain = 0, potential = 0;
-  double damping_ahead = 0, boundary_ahead = 0;
+  double damping_ahead = 0, boundary_ahead = 0, capillary_ahead = 0;
 };
 
 // MEMBRANE: its pressure and the cross-section area its forces are consistent with (the union of

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <limits>
 
+#include "model/periodic_cell.hpp"
+#include "physics/bridge.hpp"
+#include "physics/walls.hpp"
 #include "physics/contact/energy.hpp"
 #include "physics/contact/normal_hertz.hpp"
 #include "physics/contact/normal_linear.hpp"
@@ -27,6 +30,41 @@ void add_contact_strain(double& sum, bool hertz, double kn, double u, double fsx
 
 }  // namespace
 
+// The capillary bridges' part of the stress: each bridge the last force pass left (the state it
+// pulled with), its force on j, -F n, times the branch vector i -> j; at a wall, the force on the
+// wall times the branch from the ball's centre to the wall. The pass's gaps are not kept (a pair
+// apart has no results), so the gaps are the positions' now, one step on from that pass.
+static void add_bridge_stress(const Model& model, Sym6& s) {
+  const ContactTable& c = model.contacts;
+  const Balls& b = model.balls;
+  if (!has_bridges(model)) return;
+  const CellFrame cell = cell_frame(model.space);
+  for (std::size_t p = 0; p < c.size() && c.bridge.size() == c.size(); ++p) {
+    if (c.bridge[p] == 0) continue;
+    const std::size_t i = c.i[p], j = c.j[p];
+    double ox = 0, oy = 0, oz = 0;
+    if (model.space.periodic) image_offset(cell, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
+    const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
+                 dz = image_delta(b.z[j], b.z[i], oz);
+    const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(d > 0)) continue;
+    const double f = -bridge_force(pair_bridge(model, i, j), b.rad[i], b.rad[j], d - b.rad[i] - b.rad[j]) / d;
+    add_dyad(s, f * dx, f * dy, f * dz, dx, dy, dz);
+  }
+  const WallContacts& w = model.wall_contacts;
+  for (std::size_t p = 0; p < w.size() && w.bridge.size() == w.size(); ++p) {
+    if (w.bridge[p] == 0 || w.ball[p] >= b.size() || w.wall[p] >= model.walls.size()) continue;
+    const std::size_t i = w.ball[p];
+    const Vec3 centre{b.x[i], b.y[i], b.z[i]};
+    const WallLane lane = wall_lane(model.walls[w.wall[p]], centre, b.rad[i]);
+    const double d = std::sqrt(lane.dx * lane.dx + lane.dy * lane.dy + lane.dz * lane.dz);
+    if (!(d > 0)) continue;
+    const double f = -bridge_force(wall_bridge(model, i, w.wall[p]), lane.r, lane.r, d - 2 * lane.r) / d;
+    add_dyad(s, f * lane.dx, f * lane.dy, f * lane.dz, lane.point[0] - centre[0], lane.point[1] - centre[1],
+             lane.point[2] - centre[2]);
+  }
+}
+
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz) {
   s[0] += ax * bx; s[1] += ay * by; s[2] += az * bz;
   s[3] += 0.5 * (ax * by + ay * bx);
@@ -45,6 +83,7 @@ Sym6 average_stress(const Model& model, double volume) {
     const double d = b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p];
     add_dyad(s, c.fx[p], c.fy[p], c.fz[p], d * c.nx[p], d * c.ny[p], d * c.nz[p]);
   }
+  add_bridge_stress(model, s);
   // Ball-wall contacts: the force on the wall and the branch from the ball's centre to the contact point.
   const WallContacts& w = model.wall_contacts;
   if (w.fx.size() == w.size() && w.overlap.size() == w.size())
@@ -59,7 +98,7 @@ Sym6 average_stress(const Model& model, double volume) {
 
 double EnergyReport::total() const {
   return kinetic_translation + kinetic_rotation + strain + potential + friction_work + rolling_work + damping_work -
-         boundary_work;
+         boundary_work - capillary_work;
 }
 
 EnergyReport energy(const Model& model) {
@@ -68,6 +107,7 @@ EnergyReport energy(const Model& model) {
   e.rolling_work = model.energy.rolling_work;
   e.damping_work = model.energy.damping_work;
   e.boundary_work = model.energy.boundary_work;
+  e.capillary_work = model.energy.capillary_work;
   const EnergyAtStep& now = model.energy_at_step;
   if (now.valid) {   // all at t, the time of the last force pass (the step's own sums)
     e.at_step = true;
@@ -77,6 +117,7 @@ EnergyReport energy(const Model& model) {
     e.potential = now.potential;
     e.damping_work -= now.damping_ahead;
     e.boundary_work -= now.boundary_ahead;
+    e.capillary_work -= now.capillary_ahead;
     return e;
   }
   // No step since the balls last changed (or none yet): the state as it is.

@@ -74,6 +74,9 @@ PairLaws make_pair_laws(const Model& model) {
     k.wall_type[w] = static_cast<std::uint16_t>(std::lower_bound(types.begin(), types.end(), model.walls[w].type) - types.begin());
   for (int ta : types)
     for (int tb : types) k.table.push_back(mix(model.materials.at(ta), model.materials.at(tb)));
+  for (int ta : types)
+    for (int tb : types) k.bridges.push_back(mix_bridge(model.materials.at(ta), model.materials.at(tb)));
+  if (std::none_of(k.bridges.begin(), k.bridges.end(), [](const BridgeLaw& b) { return b.on(); })) k.bridges.clear();
   for (int t : types) {
     const Material& m = model.materials.at(t);
     k.alone_kn.push_back(m.hertz() ? 0 : m.kn);

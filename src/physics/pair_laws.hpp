@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "model/model.hpp"
+#include "physics/bridge.hpp"
 #include "physics/contact_law.hpp"
 
 namespace trubal {
@@ -31,6 +32,14 @@ struct PairLaws {
   // Ball `ball` against wall `wall` (an index into Model::walls).
   const PairLaw& wall_law(std::size_t ball, std::size_t wall) const {
     return type_count == 1 ? table[0] : table[ball_type[ball] * type_count + wall_type[wall]];
+  }
+  // The capillary bridges by pair of compact indices (as `table`), where some pair has one; else empty.
+  std::vector<BridgeLaw> bridges;
+  const BridgeLaw& bridge(std::size_t i, std::size_t j) const {
+    return type_count == 1 ? bridges[0] : bridges[ball_type[i] * type_count + ball_type[j]];
+  }
+  const BridgeLaw& wall_bridge(std::size_t ball, std::size_t wall) const {
+    return type_count == 1 ? bridges[0] : bridges[ball_type[ball] * type_count + wall_type[wall]];
   }
 };
 

@@ -1,5 +1,7 @@
 #include "physics/scene.hpp"
 
+#include "physics/bridge.hpp"
+
 #include <cmath>
 #include <algorithm>
 #include <set>
@@ -28,6 +30,7 @@ std::string Features::describe() const {
   if (gravity) s += " gravity";
   if (applied) s += " applied-loads";
   if (periodic) s += " periodic";
+  if (bridges) s += " capillary-bridges";
   return s;
 }
 
@@ -62,6 +65,7 @@ Features scene_features(const Model& model) {
   f.rotation = (f.friction && free_spin) || spinning || moments;
   f.rolling = rolling && f.friction && f.rotation;
   f.periodic = model.space.periodic;
+  f.bridges = bridge_reach(model) > 0;
   return f;
 }
 

@@ -111,6 +111,24 @@ cycle 9000
 wall id 2 velocity 0.05 0 0
 )", "hist wall 2 contacts rolling every 7 file h.csv\n", 2000};
 
+// A wet bed: balls with capillary bridges settle on a wet floor, periodic in x and y; a servo platen
+// presses them, then lifts away dragging sideways, the bridges to it and among the balls stretched
+// and broken (the bridges' state carried, saved and moved; their reach beyond the skin searched).
+const Scene kWetBox = {"wet_box", R"(start box 0 0.03 0 0.03 -0.01 0.05 destroy x periodic y periodic
+prop kn 1e5 ks 1e5 fric 25 dens 2650 bridge 2e-10 tension 0.072 angle 20
+prop type 2 kn 1e5 ks 1e5 fric 30 bridge 1e-10 tension 0.072
+wall id 1 plane 0 0 0 0 0 1 type 2
+gen 120 0.0018 0.0025 seed 4 range z 0.003 0.025
+grav 0 0 -9.81
+damp local 0.6
+cycle 6000
+wall id 2 plane 0 0 0.016 0 0 -1 type 2
+servo wall 2 stress 300 area 0.0009 max 0.1
+cycle 5000
+servo wall 2 off
+wall id 2 velocity 0.01 0 0.02
+)", "hist wall 2 bridges every 7 file h.csv\n", 2000};
+
 struct Result {
   std::string balls, contacts, history, walls;
   std::string info = {};   // PRINT info at the end
@@ -473,16 +491,21 @@ TEST_CASE("cycle cuts: a shear box with rolling resistance, periodic in x and y 
   check_scene(kShearBox);
 }
 
+TEST_CASE("cycle cuts: a wet bed with capillary bridges between balls and to walls, pressed and pulled apart",
+          "[cuts][backends][walls][system][threads]") {
+  check_scene(kWetBox);
+}
+
 TEST_CASE("cycle cuts: threads sharing the step in space on 2 and 3 threads give the serial bits, every scene",
           "[cuts][backends][system][threads]") {
-  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox}) {
+  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox, &kWetBox}) {
     check_scene(*scene, true);   // (and every run's PRINT info says the threads shared it in space)
   }
 }
 
 TEST_CASE("cycle cuts: BACKEND mpi on 2 and 3 ranks gives the serial bits, every scene", "[cuts][mpi][system][threads]") {
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
-  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox}) check_scene_mpi(*scene);
+  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox, &kWetBox}) check_scene_mpi(*scene);
 }
 
 TEST_CASE("cycle cuts: random GEN packings under the servo, cut 1 + n and n + 1, switched to strain between the stages",

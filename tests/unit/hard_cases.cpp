@@ -380,7 +380,7 @@ TEST_CASE("hard: the contact table's arrays are the pair list, the history and t
   c.for_each_result_array([&](auto&) { ++results; });
   // i, j and the image (5 arrays), every declared part of the history, the results.
   CHECK(all == 5 + static_cast<int>(ContactTable::history_count()) + results);
-  CHECK(ContactTable::history_count() == 6);   // the shear force's three components, the rolling moment's three
+  CHECK(ContactTable::history_count() == 7);   // the shear force's three components, the rolling moment's three, the bridge
 }
 
 // A run that fails before its first copy on a multiple of 500 goes back to where the CYCLE started,
