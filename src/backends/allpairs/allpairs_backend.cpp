@@ -54,10 +54,11 @@ class AllPairsBackend final : public Backend {
   bool keeps_list() const override { return false; }
   std::uint64_t pair_tests() const override { return tests_; }
 
-  void find_pairs(const Model& model, double, ThreadPool& pool, PairCandidates& out) override {
+  // reach: 0 (no list is kept), or the capillary bridges' rupture gap (Pipeline::list_reach).
+  void find_pairs(const Model& model, double reach, ThreadPool& pool, PairCandidates& out) override {
     reserve(model.balls.size(), pool.size());
-    if (model.space.periodic) find_touching_periodic(model, pool, out);
-    else find_touching(model, pool, out);
+    if (model.space.periodic) find_touching_periodic(model, pool, out, reach);
+    else find_touching(model, pool, out, reach);
   }
 
   std::vector<std::pair<std::string, std::string>> info() const override {
@@ -103,7 +104,7 @@ class AllPairsBackend final : public Backend {
   }
 
   // Tests every pair; the touching ones, in (i, j) order, into pairs_.
-  void find_touching(const Model& model, ThreadPool& pool, PairCandidates& pairs) {
+  void find_touching(const Model& model, ThreadPool& pool, PairCandidates& pairs, double reach) {
     const Balls& b = model.balls;
     const std::size_t n = b.size();
     pool.run([&](int t) {
@@ -113,7 +114,7 @@ class AllPairsBackend final : public Backend {
         const std::size_t count = n - 1 - i;
         std::uint8_t* slot = slots_.data() + row_start(i, n);
         if (test_row(b.x[i], b.y[i], b.z[i], b.rad[i], b.x.data() + i + 1, b.y.data() + i + 1, b.z.data() + i + 1,
-                     b.rad.data() + i + 1, count, slot) == 0)
+                     b.rad.data() + i + 1, count, slot, reach) == 0)
           continue;
         std::size_t k = 0;
         for (; k + 8 <= count; k += 8) {   // skip eight empty slots at a time
@@ -136,7 +137,7 @@ class AllPairsBackend final : public Backend {
   // diameter no other image can touch), with find_periodic_pairs' arithmetic at skin 0. A row is
   // tested branch-free as in free space (test_row_periodic: nearest_image_within's arithmetic, which
   // the compiler vectorises); each pair it finds takes its image from nearest_image_within itself.
-  void find_touching_periodic(const Model& model, ThreadPool& pool, PairCandidates& pairs) {
+  void find_touching_periodic(const Model& model, ThreadPool& pool, PairCandidates& pairs, double reach) {
     const Balls& b = model.balls;
     const std::size_t n = b.size();
     const CellFrame f = cell_frame(model.space);
@@ -148,12 +149,12 @@ class AllPairsBackend final : public Backend {
         const std::size_t count = n - 1 - i;
         std::uint8_t* slot = slots_.data() + row_start(i, n);
         if (test_row_periodic(f, tilted, b.x[i], b.y[i], b.z[i], b.rad[i], b.x.data() + i + 1, b.y.data() + i + 1,
-                              b.z.data() + i + 1, b.rad.data() + i + 1, count, slot) == 0)
+                              b.z.data() + i + 1, b.rad.data() + i + 1, count, slot, reach) == 0)
           continue;
         for_each_set(slot, count, [&](std::size_t q) {
           const std::size_t j = i + 1 + q;
           std::int8_t ix, iy, iz;
-          if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + 0.0, ix, iy, iz)) {
+          if (nearest_image_within(f, b, i, j, b.rad[i] + b.rad[j] + reach, ix, iy, iz)) {
             out.i.push_back(static_cast<std::uint32_t>(i));
             out.j.push_back(static_cast<std::uint32_t>(j));
             out.image_x.push_back(ix);

@@ -7,11 +7,11 @@ namespace trubal {
 
 std::size_t test_row(double xi, double yi, double zi, double ri, const double* __restrict xj,
                      const double* __restrict yj, const double* __restrict zj, const double* __restrict rj,
-                     std::size_t count, std::uint8_t* __restrict slot) {
+                     std::size_t count, std::uint8_t* __restrict slot, double reach) {
   std::size_t touching = 0;
   for (std::size_t k = 0; k < count; ++k) {
     const double dx = xj[k] - xi, dy = yj[k] - yi, dz = zj[k] - zi;
-    const double rsum = ri + rj[k];
+    const double rsum = ri + rj[k] + reach;   // (+ 0.0 changes no bit)
     const bool overlap = dx * dx + dy * dy + dz * dz < rsum * rsum;
     slot[k] = overlap;
     touching += overlap;
@@ -27,7 +27,7 @@ inline double image_number(double t, double half) { return t > half ? -1.0 : (t 
 template <bool kTilted>
 std::size_t periodic_row(const CellFrame& f, double xi, double yi, double zi, double ri, const double* __restrict xj,
                          const double* __restrict yj, const double* __restrict zj, const double* __restrict rj,
-                         std::size_t count, std::uint8_t* __restrict slot) {
+                         std::size_t count, std::uint8_t* __restrict slot, double skin) {
   // The frame in locals: the slot stores (bytes) may alias anything, so f's fields would be read
   // again every pair.
   const double lx = f.lx, ly = f.ly, lz = f.lz, xy = f.xy, xz = f.xz, yz = f.yz;
@@ -55,7 +55,7 @@ std::size_t periodic_row(const CellFrame& f, double xi, double yi, double zi, do
       ey = std::min(std::fabs(dy), ly - std::fabs(dy));
       ez = std::min(std::fabs(dz), lz - std::fabs(dz));
     }
-    const double reach = ri + rj[k] + 0.0;
+    const double reach = ri + rj[k] + skin;
     const bool overlap = ex * ex + ey * ey + ez * ez < reach * reach;
     slot[k] = overlap;
     touching += overlap;
@@ -67,9 +67,10 @@ std::size_t periodic_row(const CellFrame& f, double xi, double yi, double zi, do
 
 std::size_t test_row_periodic(const CellFrame& f, bool tilted, double xi, double yi, double zi, double ri,
                               const double* __restrict xj, const double* __restrict yj, const double* __restrict zj,
-                              const double* __restrict rj, std::size_t count, std::uint8_t* __restrict slot) {
-  return tilted ? periodic_row<true>(f, xi, yi, zi, ri, xj, yj, zj, rj, count, slot)
-                : periodic_row<false>(f, xi, yi, zi, ri, xj, yj, zj, rj, count, slot);
+                              const double* __restrict rj, std::size_t count, std::uint8_t* __restrict slot,
+                              double reach) {
+  return tilted ? periodic_row<true>(f, xi, yi, zi, ri, xj, yj, zj, rj, count, slot, reach)
+                : periodic_row<false>(f, xi, yi, zi, ri, xj, yj, zj, rj, count, slot, reach);
 }
 
 }  // namespace trubal

@@ -14,8 +14,9 @@ namespace trubal {
 // that the compiler vectorises it. Returns how many slots are set.
 std::size_t test_row(double xi, double yi, double zi, double ri, const double* __restrict xj,
                      const double* __restrict yj, const double* __restrict zj, const double* __restrict rj,
-                     std::size_t count, std::uint8_t* __restrict slot);
+                     std::size_t count, std::uint8_t* __restrict slot, double reach = 0.0);
 
+// (reach: how far apart beyond contact a pair still counts, the capillary bridges' rupture gap; 0 without.)
 // The same in a periodic cell: slot[k] = 1 when j overlaps i at j's nearest image, with
 // nearest_image_within's arithmetic step for step (the image from nearest_image, its offset from
 // image_offset, the differences from image_delta, the same sum of squares), so that a slot is set
@@ -26,6 +27,7 @@ std::size_t test_row(double xi, double yi, double zi, double ri, const double* _
 // are set.
 std::size_t test_row_periodic(const CellFrame& f, bool tilted, double xi, double yi, double zi, double ri,
                               const double* __restrict xj, const double* __restrict yj, const double* __restrict zj,
-                              const double* __restrict rj, std::size_t count, std::uint8_t* __restrict slot);
+                              const double* __restrict rj, std::size_t count, std::uint8_t* __restrict slot,
+                              double reach = 0.0);
 
 }  // namespace trubal
