@@ -145,6 +145,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
           "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
   StepKernels kernels = make_kernels(model);
   const double cap = hertz_step_cap(model);
+  // The estimate between contact episodes, below which the held critical step is kept (the whole
+  // model's, before a distributed run's parts take their balls).
+  const double free_step = contact_free_step(model, kernels.features, cap);
   // A servo not yet run reads its first stress from the contact table (cell_before_step): the whole
   // model's list is then searched before the first step, where a distributed run's parts would
   // search it at their split.
@@ -271,7 +274,7 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     if (kernels.estimate != StepEstimate::None) {
       const double estimate = std::min(sums.critical_dt, cap);
       if (std::isfinite(estimate))
-        model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, cap, kernels.features.hertz);
+        model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, free_step);
     }
     // The energy terms at t, the time of this step's force pass: every term there (the works less
     // their parts after t; the cell moves on with the balls, so half its step's work is after t).
