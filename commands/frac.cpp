@@ -18,7 +18,7 @@ const Command frac_command = {
     "The time step is f times the critical step, estimated every cycle from the stiffest ball (default "
     "0.8). The critical step is held through contact episodes and renewed only between them (no ball stiffer than "
     "a lone ball), when stability needs it (f times the held step above 0.9 of the estimate) or when the estimate "
-    "has doubled, so a collision's rebound does not depend on contacts that form and break elsewhere (man page, "
+    "has doubled (linear contacts: grown max(0.9, f)/f times, 1.125 at 0.8), so a collision's rebound does not depend on contacts that form and break elsewhere (man page, "
     "CONVENTIONS). Where the step changes, the velocities move by F/m times the mean of the step before and this one "
     "(velocity Verlet with a changing step, as LAMMPS's fix dt/reset), so a collision in progress stays second "
     "order. The default is for stability, not for "

@@ -274,7 +274,8 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
     if (kernels.estimate != StepEstimate::None) {
       const double estimate = std::min(sums.critical_dt, cap);
       if (std::isfinite(estimate))
-        model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, free_step);
+        model.critical_dt = next_critical_step(model.critical_dt, estimate, model.settings.frac, free_step,
+                                               kernels.features.hertz);
     }
     // The energy terms at t, the time of this step's force pass: every term there (the works less
     // their parts after t; the cell moves on with the balls, so half its step's work is after t).

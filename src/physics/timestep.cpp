@@ -14,7 +14,8 @@ namespace {
 
 // The held critical step (see next_critical_step): shrunk only when the step would
 // exceed this fraction of the critical estimate (or FRAC itself, when FRAC is larger), and grown
-// within a contact episode only when the estimate has risen this many times above it.
+// within a contact episode only when the estimate has risen this many times above it (a linear
+// scene: at most, see held_growth).
 constexpr double kHeldStability = 0.9;
 constexpr double kHeldGrowth = 2.0;
 
@@ -33,15 +34,20 @@ double hertz_step_cap(const Model& model) {
   return cap;
 }
 
-double next_critical_step(double held, double estimate, double frac, double free_step) {
+double held_growth(double frac, bool hertz) {
+  return hertz ? kHeldGrowth : std::min(kHeldGrowth, std::max(kHeldStability, frac) / frac);
+}
+
+double next_critical_step(double held, double estimate, double frac, double free_step, bool hertz) {
   if (!(held > 0)) return estimate;
   // Between contact episodes (no ball stiffer than a lone ball, or than a lone Hertz ball's cap) the
   // step is free.
   if (!(estimate < free_step)) return estimate;
   // Stability: the step frac * held must stay below kHeldStability (or frac) times the estimate.
   if (frac * held > std::max(kHeldStability, frac) * estimate) return estimate;
-  // A much softer state (contacts unloaded): take the longer step, a bounded number of jumps.
-  if (estimate > kHeldGrowth * held) return estimate;
+  // A softer state (contacts unloaded, a sample dilating): take the longer step, a bounded number
+  // of jumps.
+  if (estimate > held_growth(frac, hertz) * held) return estimate;
   return held;
 }
 
