@@ -7,6 +7,7 @@
 #include <string>
 
 #include "interp/command.hpp"
+#include "support/format_number.hpp"
 #include "interp/interpreter.hpp"
 #include "model/range.hpp"
 #include "session.hpp"

@@ -124,7 +124,10 @@ const Command cycle_command = {
     "moved during the CYCLE by more than 1% of the energy that moved (the largest energy in play: kinetic, "
     "strain, and the changes of the potential and the works), a warning says so once at the end, with the "
     "FRAC (or TSTEP) that would hold it, from the error falling as the step squared: the step is too coarse "
-    "for what happened, mostly contacts that form and break within a few steps (impacts). A long run shows its progress "
+    "for what happened, mostly contacts that form and break within a few steps (impacts). At the end of each CYCLE "
+    "(and SOLVE) the overlaps are looked at once: where one is past 0.1 of the smaller radius, a warning names the "
+    "pair, the cycle and how many contacts are past it (said again only where the largest doubles; an overlap that "
+    "grew and came back within the CYCLE is not seen). A long run shows its progress "
     "(cycles/s, time left): a bar redrawn in place at the interactive prompt, a plain line every 10 s "
     "otherwise (SET progress). At the end one line gives the cycle, time, step and speed, and in batch "
     "where the time went (contact detection, forces, motion, output).",

@@ -8,7 +8,7 @@ static void run_delete(Context& ctx, Args& args) {
   Range range = read_range(args, ctx.session);
   auto n = ctx.session.delete_balls(range);
   if (n == 0 && !range.empty()) ctx.warn("the range holds for no ball");
-  ctx.out << fmt::format("{} balls deleted\n", n);
+  ctx.out << fmt::format("{} deleted\n", count_of(n, "ball"));
 }
 
 const Command delete_command = {

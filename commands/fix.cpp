@@ -23,7 +23,7 @@ static void set_fixed(Context& ctx, Args& args, bool fix) {
   Model& m = ctx.session.edit();
   for (auto k : sel) m.balls.fixed[k] = fix ? (m.balls.fixed[k] | mask) : (m.balls.fixed[k] & ~mask);
   if (sel.empty()) ctx.warn("the range holds for no ball");
-  ctx.out << fmt::format("{} balls {}\n", sel.size(), fix ? "fixed" : "freed");
+  ctx.out << fmt::format("{} {}\n", count_of(sel.size(), "ball"), fix ? "fixed" : "freed");
 }
 
 static void run_fix(Context& ctx, Args& args) { set_fixed(ctx, args, true); }

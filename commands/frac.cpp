@@ -16,10 +16,12 @@ static void run_frac(Context& ctx, Args& args) {
 const Command frac_command = {
     "FRAC", {}, "FRAC f", "time step as a fraction of the critical step",
     "The time step is f times the critical step, estimated every cycle from the stiffest ball (default "
-    "0.8). The step changes as balls gain and lose contacts; the velocities move by F/m times the mean of the step "
-    "before and this one (velocity Verlet with a changing step, as LAMMPS's fix dt/reset), so a collision in "
-    "progress when another collision changes the step stays second order. With Hertz contacts the critical step is held through a contact episode and renewed only "
-    "between episodes or when stability needs it (man page, CONVENTIONS). The default is for stability, not for "
+    "0.8). The critical step is held through contact episodes and renewed only between them (no ball stiffer than "
+    "a lone ball), when stability needs it (f times the held step above 0.9 of the estimate) or when the estimate "
+    "has doubled (linear contacts: grown max(0.9, f)/f times, 1.125 at 0.8), so a collision's rebound does not depend on contacts that form and break elsewhere (man page, "
+    "CONVENTIONS). Where the step changes, the velocities move by F/m times the mean of the step before and this one "
+    "(velocity Verlet with a changing step, as LAMMPS's fix dt/reset), so a collision in progress stays second "
+    "order. The default is for stability, not for "
     "resolving collisions: an impact's rebound is off by a few percent at 0.8 (CYCLE warns where the energy "
     "balance shows it; man page, CONVENTIONS, says why the default stays). Cancels a fixed TSTEP.",
     "frac 0.5",

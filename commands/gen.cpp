@@ -141,7 +141,7 @@ static void run_gen(Context& ctx, Args& args) {
                            "by id or group holds no new ball; one by type only GEN's own type)", placed, n));
     else if (placed < static_cast<std::size_t>(n))
       ctx.warn(fmt::format("GEN placed only {} of {} balls: no room for more without overlap", placed, n));
-    ctx.out << fmt::format("{} balls generated (type {}, seed {})\n", placed, type, spec.seed);
+    ctx.out << fmt::format("{} generated (type {}, seed {})\n", count_of(placed, "ball"), type, spec.seed);
     return;
   }
   spec.count = static_cast<std::size_t>(n);

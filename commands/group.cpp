@@ -10,7 +10,7 @@ static void run_group(Context& ctx, Args& args) {
   Range range = read_range(args, ctx.session);
   auto n = ctx.session.define_group(name, range);
   if (n == 0) ctx.warn(fmt::format("group {} holds no ball: its range holds for none", name));
-  ctx.out << fmt::format("group {}: {} balls\n", name, n);
+  ctx.out << fmt::format("group {}: {}\n", name, count_of(n, "ball"));
 }
 
 const Command group_command = {

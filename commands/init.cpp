@@ -20,7 +20,7 @@ static void run_init(Context& ctx, Args& args) {
   for (auto k : sel)
     for (auto [c, v] : values) (*arrays[c])[k] = v;
   if (sel.empty()) ctx.warn("the range holds for no ball");
-  ctx.out << fmt::format("{} balls set\n", sel.size());
+  ctx.out << fmt::format("{} set\n", count_of(sel.size(), "ball"));
 }
 
 const Command init_command = {
@@ -49,7 +49,7 @@ static void run_apply(Context& ctx, Args& args) {
     for (auto [c, v] : values) (*arrays[c])[k] = v;
   }
   if (sel.empty()) ctx.warn("the range holds for no ball");
-  ctx.out << fmt::format("{} balls {}\n", sel.size(), off ? "unloaded" : "loaded");
+  ctx.out << fmt::format("{} {}\n", count_of(sel.size(), "ball"), off ? "unloaded" : "loaded");
 }
 
 const Command apply_command = {

@@ -28,7 +28,7 @@ static void run_membrane(Context& ctx, Args& args) {
   for (auto k : sel) m.balls.ax[k] = m.balls.ay[k] = 0;
   if (pressure == 0) {
     m.membrane = {};
-    ctx.out << fmt::format("membrane removed from {} balls\n", sel.size());
+    ctx.out << fmt::format("membrane removed from {}\n", count_of(sel.size(), "ball"));
     return;
   }
   for (std::size_t q = 0; q < loads.balls.size(); ++q) {

@@ -202,7 +202,7 @@ static void print_balls(Context& ctx, const Range& range, const std::string& fil
         csv << '\n';
       }
     });
-    ctx.out << fmt::format("{} balls written to {}\n", sel.size(), file);
+    ctx.out << fmt::format("{} written to {}\n", count_of(sel.size(), "ball"), file);
     return;
   }
   ctx.out << fmt::format("{:>8} {:>4} {:>12} {:>12} {:>12} {:>10} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}\n", "id",

@@ -28,7 +28,7 @@ static void run_restart(Context& ctx, Args& args) {
   args.done();
   const auto notes = ctx.session.restart(file);
   const auto& m = ctx.session.model();
-  ctx.out << fmt::format("restarted from {}: {} balls, cycle {}\n", file, m.balls.size(), m.cycle);
+  ctx.out << fmt::format("restarted from {}: {}, cycle {}\n", file, count_of(m.balls.size(), "ball"), m.cycle);
   const auto& tables = ctx.session.history().tables();
   if (!tables.empty())
     ctx.out << fmt::format("  {} histories resumed (PRINT history lists them)\n", tables.size());

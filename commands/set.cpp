@@ -1,10 +1,24 @@
 #include <cctype>
+#include <utility>
 
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
 
 namespace trubal {
+
+// The command that sets what a word names, where a PFC user might SET it; null for other words.
+static const char* setting_command(const std::string& name) {
+  // (Only words PFC sets with its own `set`: property names, as `set kn 1e6` for `prop kn $kn`,
+  // are common variables.)
+  static const std::pair<const char*, const char*> known[] = {
+      {"gravity", "GRAV gx gy gz"}, {"grav", "GRAV gx gy gz"}, {"dt", "TSTEP dt (or FRAC f)"},
+      {"timestep", "TSTEP dt (or FRAC f)"}, {"damp", "DAMP"}, {"damping", "DAMP"},
+      {"backend", "BACKEND name [threads n]"}, {"threads", "BACKEND name threads n"}};
+  for (const auto& [word, setter] : known)
+    if (name == word) return setter;
+  return nullptr;
+}
 
 static void run_set(Context& ctx, Args& args) {
   std::string name = to_lower(args.word("name"));
@@ -45,6 +59,10 @@ static void run_set(Context& ctx, Args& args) {
       args.fail(fmt::format("a variable name has letters, digits and _ only, not '{}'", printable(name)));
   if (std::isdigit(static_cast<unsigned char>(name[0]))) args.fail("a variable name must not start with a digit");
   if (args.empty()) args.fail(fmt::format("missing the value of {}", name));
+  // A setting typed as PFC's `set` takes it (`set gravity 0 0 -9.81`) makes a variable here and
+  // changes nothing else: said once, with the command that sets it.
+  if (const char* setter = setting_command(name))
+    ctx.warn(fmt::format("SET {0} defines the variable ${0} and sets nothing else; {0} is set by {1}", name, setter));
   ctx.interp.set_variable(name, args.rest());
 }
 
@@ -55,7 +73,8 @@ const Command set_command = {
     "echo (echo each command in batch mode), seed (default seed of GEN), log (copy everything shown to a "
     "file, appending, never through a symbolic link to a file (/dev/stderr and a link to a device or pipe are followed); `SET log off` stops; while a log is on, progress comes as plain lines), progress (seconds "
     "between the plain progress lines of a long CYCLE or SOLVE, default 10; 0: none), volume (the volume for the average stress in free space; 0 uses the START "
-    "box).",
+    "box). PFC's settings are commands here: `SET gravity`, `dt`, `timestep`, `damp`, `damping`, `backend` or "
+    "`threads` makes a variable, with a warning naming the command that sets it (GRAV, TSTEP or FRAC, DAMP, BACKEND).",
     "set seed 42",
     {"echo", "seed", "log", "progress", "volume", "on", "off"}, run_set};
 

@@ -12,9 +12,10 @@
 namespace trubal {
 namespace {
 
-// The held critical step of a Hertz scene (see next_critical_step): shrunk only when the step would
+// The held critical step (see next_critical_step): shrunk only when the step would
 // exceed this fraction of the critical estimate (or FRAC itself, when FRAC is larger), and grown
-// within a contact episode only when the estimate has risen this many times above it.
+// within a contact episode only when the estimate has risen this many times above it (a linear
+// scene: at most, see held_growth).
 constexpr double kHeldStability = 0.9;
 constexpr double kHeldGrowth = 2.0;
 
@@ -33,14 +34,20 @@ double hertz_step_cap(const Model& model) {
   return cap;
 }
 
-double next_critical_step(double held, double estimate, double frac, double cap, bool hertz) {
-  if (!hertz || !(held > 0)) return estimate;
-  // Between contact episodes (nothing stiffer than a lone Hertz ball's cap) the step is free.
-  if (!(estimate < cap)) return estimate;
+double held_growth(double frac, bool hertz) {
+  return hertz ? kHeldGrowth : std::min(kHeldGrowth, std::max(kHeldStability, frac) / frac);
+}
+
+double next_critical_step(double held, double estimate, double frac, double free_step, bool hertz) {
+  if (!(held > 0)) return estimate;
+  // Between contact episodes (no ball stiffer than a lone ball, or than a lone Hertz ball's cap) the
+  // step is free.
+  if (!(estimate < free_step)) return estimate;
   // Stability: the step frac * held must stay below kHeldStability (or frac) times the estimate.
   if (frac * held > std::max(kHeldStability, frac) * estimate) return estimate;
-  // A much softer state (contacts unloaded): take the longer step, a bounded number of jumps.
-  if (estimate > kHeldGrowth * held) return estimate;
+  // A softer state (contacts unloaded, a sample dilating): take the longer step, a bounded number
+  // of jumps.
+  if (estimate > held_growth(frac, hertz) * held) return estimate;
   return held;
 }
 
@@ -126,6 +133,28 @@ double balls_critical_step(const Model& model, const Features& features, bool an
     step = std::min(step, damped_critical_step(omega, 0.5 * beta * omega + sum_cn / (b.mass[i] * omega)));
   }
   return step;
+}
+
+double contact_free_step(const Model& model, const Features& features, double cap) {
+  const PairLaws laws = make_pair_laws(model);
+  const Damping& damping = model.settings.damping;
+  const double beta = damping.kind == DampKind::Rayleigh ? damping.beta : 0;
+  const Balls& b = model.balls;
+  const bool rotation = features.rotation;
+  const bool any_free = any_ball_free(model, rotation, nullptr);
+  // The per-ball step of balls_critical_step for a ball without contacts, the same arithmetic: a
+  // state with no ball stiffer than a lone one estimates this step to the bit.
+  double step = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    if (any_free && ball_held(b.fixed[i], rotation)) continue;
+    double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
+    alone_sums(laws, i, b.mass[i], sum_kmax, sum_ks, &sum_cn);
+    const double omega2 = ball_omega2(b.mass[i], sum_kmax, sum_ks, rotation);
+    if (!(omega2 > 0)) continue;
+    const double omega = std::sqrt(omega2);
+    step = std::min(step, damped_critical_step(omega, 0.5 * beta * omega + sum_cn / (b.mass[i] * omega)));
+  }
+  return std::min(step, cap);
 }
 
 }  // namespace trubal

@@ -1,6 +1,6 @@
 // The time step, in one place (doc/physics.md "Time step"): the critical step of a state, the
-// per-ball frequency bound the motion loop also uses, the Hertz cap, and the rule that holds a
-// Hertz scene's step through a contact episode.
+// per-ball frequency bound the motion loop also uses, the Hertz cap, and the rule that holds the
+// step through contact episodes.
 #pragma once
 
 #include <algorithm>
@@ -26,16 +26,30 @@ double critical_timestep(const Model& model);
 // balls is free. The smallest over the parts is the whole model's (a min is exact in any order).
 bool any_ball_free(const Model& model, bool rotation, const std::uint8_t* skip);
 double balls_critical_step(const Model& model, const Features& features, bool any_free, const std::uint8_t* skip);
-// The critical step the next cycle uses (its step is FRAC times this), from the one held now and the
-// estimate of the state just computed (both capped by the Rayleigh step of the Hertz balls, `cap`).
-// Linear law: the estimate, every cycle. Hertz: the tangent stiffness, and so the estimate, changes
-// every step of a contact, and a step that follows it costs central differences their time symmetry
-// (first-order impacts). So the held step is kept through a contact episode and replaced by the
-// estimate only (1) between episodes, when no contact is stiffer than the cap; (2) when stability
-// needs it: FRAC times the held step above max(0.9, FRAC) times the estimate; (3) when the estimate
-// has grown to twice the held step. The step then changes a bounded number of times per contact,
-// whatever FRAC, and the rebound is second order in the step.
-double next_critical_step(double held, double estimate, double frac, double cap, bool hertz);
+// The critical step of the same balls with no contact, each as if touching one ball of its own type
+// (as a ball without contacts counts), capped by `cap`: the estimate between contact episodes. A
+// linear scene's own step before its first contact; a Hertz scene's, the cap (a lone Hertz ball
+// sets none).
+double contact_free_step(const Model& model, const Features& features, double cap);
+// The critical step the next cycle uses (its step is FRAC times this), from the one held now and
+// the estimate of the state just computed (both capped by the Rayleigh step of the Hertz balls).
+// Each change of the step while a collision is in progress leaves it an error (the two steps keep
+// different modified energies; a step that changed at every step of a contact, as a Hertz estimate
+// does with the tangent stiffness, would make impacts first order), and in a scene of many balls
+// the estimate changes whenever a ball anywhere gains or loses a contact. So the held step is kept
+// through contact episodes and replaced by the estimate only (1) between episodes, when the
+// estimate is no shorter than `free_step` (contact_free_step: no ball stiffer than a lone ball);
+// (2) when stability needs it: FRAC times the held step above max(0.9, FRAC) times the estimate;
+// (3) when the estimate has grown held_growth times above the held step. The step then changes a
+// bounded number of times per contact, whatever FRAC, and a collision's rebound does not depend on
+// contacts elsewhere unless stability does.
+double next_critical_step(double held, double estimate, double frac, double free_step, bool hertz);
+// The growth of the estimate over the held step that renews it: 2 for Hertz (its estimate follows
+// the tangent stiffness through every contact); in a linear scene, whose estimate moves only as
+// contacts form and break, also no more than max(0.9, FRAC) / FRAC, the stability rule's band, so
+// that at FRAC 0.8 the step stays between 0.71 and 0.9 of the estimate as a sample dilates (1.125;
+// at FRAC 0.45 and below, 2).
+double held_growth(double frac, bool hertz);
 // The Rayleigh-wave time of the smallest Hertz ball: a Hertz contact has no stiffness at first
 // touch, so this caps the step (infinite without Hertz balls).
 double hertz_step_cap(const Model& model);

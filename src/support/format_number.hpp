@@ -2,12 +2,18 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace trubal {
+
+// "1 ball", "2 balls": a count with its noun (a plural in s).
+inline std::string count_of(std::size_t n, const char* noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
 
 inline std::string format_number(double v) {
   char buf[32];

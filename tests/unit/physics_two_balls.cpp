@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 
 #include "physics_helpers.hpp"
 
@@ -144,22 +145,39 @@ TEST_CASE("physics: Hertz impact with the automatic step is time-symmetric and s
   CHECK(order > 1.6);
 }
 
-TEST_CASE("physics: the held Hertz step shrinks for stability and is free between contacts", "[physics]") {
-  const double cap = 1e-5;
-  // Linear law: the estimate, always.
-  CHECK(next_critical_step(1e-5, 3e-6, 0.8, cap, false) == 3e-6);
-  // Hertz, first step (nothing held): the estimate.
-  CHECK(next_critical_step(0, 7e-6, 0.2, cap, true) == 7e-6);
-  // Between contact episodes (nothing stiffer than the cap): the estimate.
-  CHECK(next_critical_step(4e-6, cap, 0.2, cap, true) == cap);
-  // In contact: held while FRAC * held <= 0.9 estimate ...
-  CHECK(next_critical_step(1e-5, 1.01 * 0.2 * 1e-5 / 0.9, 0.2, cap, true) == 1e-5);
-  CHECK(next_critical_step(1e-5, 9e-6, 0.8, 2e-5, true) == 1e-5);
-  // ... shrunk to the estimate beyond,
-  CHECK(next_critical_step(1e-5, 0.99 * 0.2 * 1e-5 / 0.9, 0.2, cap, true) == 0.99 * 0.2 * 1e-5 / 0.9);
-  CHECK(next_critical_step(1e-5, 8.8e-6, 0.8, 2e-5, true) == 8.8e-6);   // 0.8 held > 0.9 estimate
-  CHECK(next_critical_step(1e-5, 9.9e-6, 0.95, 2e-5, true) == 9.9e-6);   // FRAC above 0.9: no slack
-  // ... and grown only when the estimate is twice the held step.
-  CHECK(next_critical_step(2e-6, 3.9e-6, 0.5, cap, true) == 2e-6);
-  CHECK(next_critical_step(2e-6, 4.1e-6, 0.5, cap, true) == 4.1e-6);
+TEST_CASE("physics: the held step shrinks for stability and is free between contact episodes", "[physics]") {
+  // free: the estimate with no contact (Hertz: the cap; linear: a lone ball's step). Each rule for
+  // both laws (the last argument: Hertz) unless the growth band tells them apart.
+  const double free = 1e-5;
+  for (const bool hertz : {false, true}) {
+    // First step (nothing held): the estimate.
+    CHECK(next_critical_step(0, 7e-6, 0.2, free, hertz) == 7e-6);
+    // Between contact episodes (no ball stiffer than a lone one): the estimate.
+    CHECK(next_critical_step(4e-6, free, 0.2, free, hertz) == free);
+    CHECK(next_critical_step(4e-6, 1.2e-5, 0.2, free, hertz) == 1.2e-5);   // (a linear ball softer than its lone self)
+    // In contact: held while FRAC * held <= 0.9 estimate ...
+    CHECK(next_critical_step(1e-5, 1.01 * 0.2 * 1e-5 / 0.9, 0.2, free, hertz) == 1e-5);
+    CHECK(next_critical_step(1e-5, 9e-6, 0.8, 2e-5, hertz) == 1e-5);
+    CHECK(next_critical_step(1e-5, 1e-5 / std::sqrt(2.0), 0.1, free, hertz) == 1e-5);   // a ball with two contacts, FRAC 0.1
+    // ... shrunk to the estimate beyond,
+    CHECK(next_critical_step(1e-5, 0.99 * 0.2 * 1e-5 / 0.9, 0.2, free, hertz) == 0.99 * 0.2 * 1e-5 / 0.9);
+    CHECK(next_critical_step(1e-5, 8.8e-6, 0.8, 2e-5, hertz) == 8.8e-6);   // 0.8 held > 0.9 estimate
+    CHECK(next_critical_step(1e-5, 9.9e-6, 0.95, 2e-5, hertz) == 9.9e-6);   // FRAC above 0.9: no slack
+    // ... and grown when the estimate is twice the held step (at FRAC 0.45 and below, both laws).
+    CHECK(next_critical_step(2e-6, 3.9e-6, 0.1, free, hertz) == 2e-6);
+    CHECK(next_critical_step(2e-6, 4.1e-6, 0.1, free, hertz) == 4.1e-6);
+    CHECK(next_critical_step(2e-6, 3.9e-6, 0.45, free, hertz) == 2e-6);
+  }
+  // Above FRAC 0.45 a linear scene grows the held step at max(0.9, FRAC) / FRAC times it, the band
+  // the stability rule leaves (1.8 at FRAC 0.5, 1.125 at 0.8, 1 from 0.9); Hertz waits for twice.
+  CHECK(held_growth(0.5, false) == Approx(1.8).epsilon(1e-15));
+  CHECK(held_growth(0.8, false) == Approx(1.125).epsilon(1e-15));
+  CHECK(held_growth(0.95, false) == 1.0);
+  CHECK(held_growth(0.8, true) == 2.0);
+  CHECK(next_critical_step(2e-6, 3.5e-6, 0.5, free, false) == 2e-6);
+  CHECK(next_critical_step(2e-6, 3.7e-6, 0.5, free, false) == 3.7e-6);
+  CHECK(next_critical_step(2e-6, 3.7e-6, 0.5, free, true) == 2e-6);
+  CHECK(next_critical_step(2e-6, 2.2e-6, 0.8, free, false) == 2e-6);
+  CHECK(next_critical_step(2e-6, 2.3e-6, 0.8, free, false) == 2.3e-6);
+  CHECK(next_critical_step(2e-6, 3.9e-6, 0.8, free, true) == 2e-6);
 }
