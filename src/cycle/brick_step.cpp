@@ -528,387 +528,495 @@ int BrickStep::owner_at(double x, double y, double z, std::uint32_t k) const {
   return cuts_[node].owner;
 }
 
-bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool) {
-  // (Every test below reads what is the same on every rank, or is agreed on: every rank returns alike.)
-  if (policy_->local_rule < 0 || !live_ || model_ != &full) return false;
-  if (results_written_ && !current_) return false;   // (the parts hold results the whole model has not)
-  // The members' speeds have moved the shares by a tenth since the split (a core slowed, contacts
-  // crowding in a part): the parts are made afresh, balanced by them.
-  {
-    const std::vector<double> next = proposed_shares();   // (a collective call; the same on every member)
-    for (std::size_t r = 0; r < next.size(); ++r)
-      if (std::abs(next[r] - shares_[r]) > 0.1 * shares_[r]) return false;
-  }
-  const int ranks = team_->size(), me = team_->rank();
-  Balls& b = part_.balls;
-  const Space& space = full.space;
-  const double reach = 2 * max_radius_ + skin;   // the farthest any pair's balls may be apart
-
-  // Bins at least `reach` wide across (the periodic search's, in the cell's fractional coordinates;
-  // in a box, over the extent of every rank's balls): a pair's balls lie in neighbouring bins. Each
-  // rank marks the bins its balls are in, and sends a rank its balls next to a bin that rank marked.
-  const std::size_t words = ball_words() + 1;   // a ball's record: whole-model index, owner, its arrays
-  const std::size_t wall_words = [] { std::size_t n = 0; WallContacts().for_each_array([&](auto&) { ++n; }); return n; }();
-  std::vector<std::vector<std::uint32_t>> shell(ranks);
-  std::vector<std::vector<double>> out(ranks), in(ranks), pair_out(ranks), wall_out(ranks);
+// One rebuild of the pair list on the parts, handed from stage to stage (rebuild_local): each
+// stage reads what the ones before it left here. The new part is made beside the old one, which
+// stays whole for a sync where a stage fails, and takes its place at commit_rebuild.
+struct BrickStep::Rebuild {
+  int ranks = 0, me = 0;
+  double skin = 0;
+  double reach = 0;   // the farthest any pair's balls may be apart
+  // fit_shell_bins:
   ShellBins bins;
-  {
-    constexpr double kInf = std::numeric_limits<double>::infinity();
-    std::vector<double> box{kInf, kInf, kInf, -kInf, -kInf, -kInf}, boxes;
-    if (!space.periodic)
-      for (std::uint32_t k : owned_) {
-        const double p[3] = {b.x[k], b.y[k], b.z[k]};
-        for (int a = 0; a < 3; ++a) {
-          if (!std::isfinite(p[a])) continue;   // (a ball at NaN touches nothing, in the serial search too)
-          box[a] = std::min(box[a], p[a]);
-          box[3 + a] = std::max(box[3 + a], p[a]);
-        }
-      }
-    team_->allgather(box, boxes);   // (a collective call either way)
-    for (int r = 0; r < ranks; ++r)
-      for (int a = 0; a < 3; ++a) {
-        box[a] = std::min(box[a], boxes[6 * r + a]);
-        box[3 + a] = std::max(box[3 + a], boxes[6 * r + 3 + a]);
-      }
-    bins.fit(space, box, reach, full_balls_);
-  }
-  // The owners follow the balls: a ball of this rank's now in another rank's brick of the split goes
-  // to that rank, with the history of its pairs and wall contacts. Every rank learns every move (its
-  // ball, new owner and bin), so every rank knows every ball's owner and marks the bins of the balls
-  // it will own.
-  std::vector<int> dest(owned_.size(), me);
-  std::vector<std::uint32_t> bin_of(owned_.size());
-  std::vector<double> moves, all_moves;   // per ball changing owner: whole-model index, new owner, bin
-  together([&] {
-    for (std::size_t q = 0; q < owned_.size(); ++q) {
-      const std::uint32_t k = owned_[q];
-      bin_of[q] = bins.bin_of(b.x[k], b.y[k], b.z[k]);
-      if (bin_of[q] == ShellBins::kNone) continue;   // (a ball at no finite place stays where it is)
-      dest[q] = owner_at(b.x[k], b.y[k], b.z[k], global_ball_[k]);
-      if (dest[q] == me) continue;
-      moves.push_back(global_ball_[k]);
-      moves.push_back(dest[q]);
-      moves.push_back(bin_of[q]);
-    }
-  }, "finding the balls that change owner");
-  team_->allgather(moves, all_moves);
-  const std::size_t moved = all_moves.size() / 3;
-  // The counts after the moves, against the shares: a tenth off (and two balls), and the parts are
-  // made afresh from the whole model, balanced again.
-  std::vector<std::size_t> count(ranks);
-  for (int r = 0; r < ranks; ++r) count[r] = rank_balls_[r].size();
-  for (std::size_t t = 0; t < moved; ++t) {
-    --count[owner_[static_cast<std::size_t>(all_moves[3 * t])]];
-    ++count[static_cast<std::size_t>(all_moves[3 * t + 1])];
-  }
-  {
-    const double total = std::accumulate(shares_.begin(), shares_.end(), 0.0);
-    for (int r = 0; r < ranks; ++r) {
-      const double want = shares_[r] / total * static_cast<double>(full_balls_);
-      if (std::abs(static_cast<double>(count[r]) - want) > 0.1 * want + 2) return false;
-    }
-  }
-  std::vector<int> part_dest;   // per ball of the part: the rank it moves to (-1: none; empty: no moves)
+  // find_moves: per owned ball (in owned_'s order), the rank that owns it from now on and its bin;
+  // the balls that change owner, this rank's and every rank's (whole-model index, new owner, bin).
+  std::vector<int> dest;
+  std::vector<std::uint32_t> bin_of;
+  std::vector<double> moves, all_moves;
+  std::size_t moved = 0;
+  // balanced_after_moves: each rank's count of balls after the moves.
+  std::vector<std::size_t> count;
+  // mark_bins: the bins of the balls this rank will own, a bit each; every rank's, one row each.
   std::vector<std::uint8_t> marks, all_marks;
-  together([&] {
-    marks.assign((bins.count() + 7) / 8, 0);
-    auto mark = [&](std::uint32_t bin) { marks[bin / 8] |= static_cast<std::uint8_t>(1u << (bin % 8)); };
-    for (std::size_t q = 0; q < owned_.size(); ++q)
-      if (dest[q] == me && bin_of[q] != ShellBins::kNone) mark(bin_of[q]);
-    for (std::size_t t = 0; t < moved; ++t)
-      if (static_cast<int>(all_moves[3 * t + 1]) == me) mark(static_cast<std::uint32_t>(all_moves[3 * t + 2]));
-  }, "finding the balls its neighbours need for a new pair list");
-  team_->allgather(marks, all_marks);
-  together([&] {
-    const std::size_t stride = marks.size();
-    std::vector<std::uint32_t> near;
-    // The ranks 64 at a time (one chunk up to 64 ranks): each bin's other ranks of the chunk as the
-    // bits of a word, and a ball's as the OR of the words of its bins around, with its new owner's
-    // (which marked its bin). Each rank's shell lists its balls in this rank's order.
-    std::vector<std::uint64_t> others(bins.count());
-    for (int first = 0; first < ranks; first += 64) {
-      const int last = std::min(ranks, first + 64);
-      auto bit = [first](int r) { return std::uint64_t{1} << (r - first); };
-      std::fill(others.begin(), others.end(), 0);
-      for (int r = first; r < last; ++r) {
-        if (r == me) continue;
-        const std::uint8_t* row = all_marks.data() + static_cast<std::size_t>(r) * stride;
-        for (std::size_t byte = 0; byte < stride; ++byte)
-          for (unsigned set = row[byte]; set != 0; set &= set - 1) others[8 * byte + std::countr_zero(set)] |= bit(r);
-      }
-      for (std::size_t q = 0; q < owned_.size(); ++q) {
-        if (bin_of[q] == ShellBins::kNone) continue;
-        std::uint64_t m = bins.around(bin_of[q], others.data(), near);
-        if (dest[q] >= first && dest[q] < last && dest[q] != me) m |= bit(dest[q]);
-        for (; m != 0; m &= m - 1) shell[static_cast<std::size_t>(first + std::countr_zero(m))].push_back(owned_[q]);
-      }
-    }
-    // A moving ball's pairs and wall contacts (this rank's part holds all of them), to its new owner.
-    if (moved > 0) {
-      part_dest.assign(b.size(), -1);
-      for (std::size_t q = 0; q < owned_.size(); ++q)
-        if (dest[q] != me) part_dest[owned_[q]] = dest[q];
-      const ContactTable& c = part_.contacts;
-      for (std::size_t p = 0; p < c.size(); ++p) {
-        const int di = part_dest[c.i[p]], dj = part_dest[c.j[p]];
-        for (int d : {di, dj != di ? dj : -1}) {
-          if (d < 0) continue;
-          auto& o = pair_out[d];
-          for (double v : {static_cast<double>(global_ball_[c.i[p]]), static_cast<double>(global_ball_[c.j[p]]),
-                           static_cast<double>(c.image_x[p]), static_cast<double>(c.image_y[p]),
-                           static_cast<double>(c.image_z[p])})
-            o.push_back(v);
-          c.for_each_history([&](const auto& v, const HistoryPart&) { o.push_back(v[p]); });
-        }
-      }
-      WallContacts& w = part_.wall_contacts;
-      for (std::size_t q = 0; q < w.size(); ++q) {
-        const int d = part_dest[w.ball[q]];
-        if (d < 0) continue;
-        std::size_t word = 0;
-        w.for_each_array([&](auto& v) {
-          wall_out[d].push_back(word++ == 0 ? static_cast<double>(global_ball_[w.ball[q]])
-                                            : (q < v.size() ? to_word(v[q]) : 0.0));
-        });
-      }
-    }
-    for (int r = 0; r < ranks; ++r) {
-      out[r] = {static_cast<double>(shell[r].size()), static_cast<double>(pair_out[r].size() / kPairWords),
-                static_cast<double>(wall_out[r].size() / wall_words)};
-      in[r].assign(3, 0.0);
-    }
-  }, "finding the balls its neighbours need for a new pair list");
-  team_->exchange(out, in);
+  // find_shells: per rank, the balls of this part it sends there (in the part's order).
+  std::vector<std::vector<std::uint32_t>> shell;
+  // pack_leaving: per ball of the part, the rank it moves to (-1: none; empty: no moves); per rank,
+  // the records of the moving balls' pairs and wall contacts.
+  std::vector<int> part_dest;
+  std::vector<std::vector<double>> pair_out, wall_out;
+  // The messages, and what each rank sends this one (shells_within_bounds): its balls, the moving
+  // balls' pairs and wall contacts; the balls received over every rank.
+  std::vector<std::vector<double>> out, in;
+  std::vector<std::size_t> shell_in, in_pairs, in_walls;
   double received = 0;
-  std::vector<std::size_t> shell_in(ranks), in_pairs(ranks), in_walls(ranks);
-  for (int r = 0; r < ranks; ++r) {
-    received += in[r][0];
-    shell_in[r] = static_cast<std::size_t>(in[r][0]);
-    in_pairs[r] = static_cast<std::size_t>(in[r][1]);
-    in_walls[r] = static_cast<std::size_t>(in[r][2]);
-  }
-  // The balls have spread where the largest shell has grown past twice what it was at the first
-  // rebuild after the split: the parts are made afresh (and balanced) from the whole model.
-  std::vector<double> most{received};
-  team_->max_all(most);
-  if (shell_base_ == 0) shell_base_ = std::max(most[0], 1.0);
-  else if (most[0] > 2 * shell_base_) return false;
-
-  // The balls themselves, every array (a record of `words` words each, the whole model's index first).
-  std::vector<const void*> source;
-  b.for_each_array([&](auto& v) { source.push_back(&v); });
-  together([&] {
-    for (int r = 0; r < ranks; ++r) {
-      const std::size_t count = shell[r].size();
-      out[r].assign(words * count, 0.0);
-      for (std::size_t q = 0; q < count; ++q) {
-        const std::uint32_t k = shell[r][q];
-        out[r][q * words] = global_ball_[k];
-        out[r][q * words + 1] = part_dest.empty() || part_dest[k] < 0 ? me : part_dest[k];
-      }
-      std::size_t word = 2;
-      b.for_each_array([&](auto& v) {
-        for (std::size_t q = 0; q < count; ++q) out[r][q * words + word] = to_word(v[shell[r][q]]);
-        ++word;
-      });
-      out[r].insert(out[r].end(), pair_out[r].begin(), pair_out[r].end());
-      out[r].insert(out[r].end(), wall_out[r].begin(), wall_out[r].end());
-      std::vector<double>().swap(pair_out[r]);
-      std::vector<double>().swap(wall_out[r]);
-      in[r].assign(words * shell_in[r] + kPairWords * in_pairs[r] + wall_words * in_walls[r], 0.0);
-    }
-  }, "sending the balls its neighbours need for a new pair list");
-  team_->exchange(out, in);
-
-  // The new part, made beside the old one (which stays whole for a sync where this fails).
+  // The words of a ball's record (the whole-model index, the owner, its arrays) and a wall contact's.
+  std::size_t words = 0, wall_words = 0;
+  // list_entries: this rank's balls and those received, in the whole model's order. from: -1 this
+  // rank's (at: part index), else the rank whose message holds it (at: its record there); owner:
+  // the rank that owns it from now on.
+  struct Entry { std::uint32_t global; int from; std::uint32_t at; int owner; };
+  std::vector<Entry> entries;
+  // unpack_arrivals: the pairs of the balls that move to this rank, with their history (in the
+  // whole model's numbers), and their wall contacts.
+  ContactTable arrived_pairs;
+  WallContacts arrived_walls;
+  // search_part: the pairs found among the entries, those kept (touching a ball of this rank), the
+  // entries the part keeps and each entry's index in it (kAbsent: not kept).
+  PairCandidates found;
+  std::vector<std::uint32_t> pairs, keep, local;
+  // carry_history and make_next_balls: the new part.
   Balls next_balls;
   ContactTable next_table;
   std::vector<std::uint32_t> next_global, next_owned, next_owned_pairs;
-  std::vector<std::vector<std::uint32_t>> next_send(ranks), next_recv(ranks);
+  std::vector<std::vector<std::uint32_t>> next_send, next_recv;
   std::vector<std::uint8_t> next_ghost;
   std::size_t next_ghosts = 0;
   VerletReference next_ref;
-  ContactTable arrived_pairs;   // the pairs of the balls that move to this rank, with their history
-  WallContacts arrived_walls;   // and their wall contacts
+
+  // Ball arrays of the entries `pick` (all where null), from this rank's `part` and the records
+  // received; `only` says which arrays (by the Balls they belong to), the others stay empty.
+  template <class Only>
+  void fill(const Balls& part, Balls& to, const std::vector<std::uint32_t>* pick, Only&& only) const {
+    std::vector<const void*> source;
+    part.for_each_array([&](auto& v) { source.push_back(&v); });
+    std::size_t word = 2, array = 0;
+    to.for_each_array([&](auto& v) {
+      using V = std::decay_t<decltype(v)>;
+      using T = typename V::value_type;
+      const V& mine = *static_cast<const V*>(source[array++]);
+      const std::size_t at = word++;
+      if (!only(to, static_cast<const void*>(&v))) return;
+      const std::size_t size = pick ? pick->size() : entries.size();
+      v.resize(size);
+      for (std::size_t q = 0; q < size; ++q) {
+        const Entry& e = entries[pick ? (*pick)[q] : q];
+        v[q] = e.from < 0 ? mine[e.at] : from_word<T>(in[e.from][e.at * words + at]);
+      }
+    });
+  }
+};
+
+bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool) {
+  // (Every test below reads what is the same on every rank, or is agreed on: every rank returns
+  // alike. The calls on team_ and the stages said to be collective are made by every member.)
+  if (!may_rebuild_local(full)) return false;
+  Rebuild r;
+  r.ranks = team_->size();
+  r.me = team_->rank();
+  r.skin = skin;
+  r.reach = 2 * max_radius_ + skin;
+  r.words = ball_words() + 1;
+  r.wall_words = [] { std::size_t n = 0; WallContacts().for_each_array([&](auto&) { ++n; }); return n; }();
+
+  fit_shell_bins(r, full.space);   // (collective)
+  together([&] { find_moves(r); }, "finding the balls that change owner");
+  team_->allgather(r.moves, r.all_moves);
+  r.moved = r.all_moves.size() / 3;
+  if (!balanced_after_moves(r)) return false;
+  together([&] { mark_bins(r); }, "finding the balls its neighbours need for a new pair list");
+  team_->allgather(r.marks, r.all_marks);
+  together([&] {
+    find_shells(r);
+    pack_leaving(r);
+    announce_counts(r);
+  }, "finding the balls its neighbours need for a new pair list");
+  team_->exchange(r.out, r.in);
+  if (!shells_within_bounds(r)) return false;   // (collective)
+  together([&] { pack_shells(r); }, "sending the balls its neighbours need for a new pair list");
+  team_->exchange(r.out, r.in);
   together([&] {
     if (!team_->shares_whole() && team_->rank() == policy_->fail_part_search) {   // (a rank's test fault)
       policy_->fail_part_search = -1;
       throw std::bad_alloc();
     }
-    // This rank's balls and those received, in the whole model's order.
-    // from: -1 this rank's (at: part index); owner: the rank that owns it from now on.
-    struct Entry { std::uint32_t global; int from; std::uint32_t at; int owner; };
-    std::vector<Entry> entries;
-    entries.reserve(owned_.size() + static_cast<std::size_t>(received));
-    for (std::size_t q = 0; q < owned_.size(); ++q) entries.push_back({global_ball_[owned_[q]], -1, owned_[q], dest[q]});
-    for (int r = 0; r < ranks; ++r)
-      for (std::size_t q = 0; q < shell_in[r]; ++q)
-        entries.push_back({static_cast<std::uint32_t>(in[r][q * words]), r, static_cast<std::uint32_t>(q),
-                           static_cast<int>(in[r][q * words + 1])});
-    std::sort(entries.begin(), entries.end(), [](const Entry& p, const Entry& q) { return p.global < q.global; });
-    const std::size_t count = entries.size();
-    // Ball arrays of the entries `pick` (all where null) from this rank's part and the records
-    // received; `only` says which arrays (by the Balls they belong to), the others stay empty.
-    auto fill = [&](Balls& to, const std::vector<std::uint32_t>* pick, auto&& only) {
-      std::size_t word = 2, array = 0;
-      to.for_each_array([&](auto& v) {
-        using V = std::decay_t<decltype(v)>;
-        using T = typename V::value_type;
-        const V& mine = *static_cast<const V*>(source[array++]);
-        const std::size_t at = word++;
-        if (!only(to, static_cast<const void*>(&v))) return;
-        const std::size_t size = pick ? pick->size() : count;
-        v.resize(size);
-        for (std::size_t q = 0; q < size; ++q) {
-          const Entry& e = entries[pick ? (*pick)[q] : q];
-          v[q] = e.from < 0 ? mine[e.at] : from_word<T>(in[e.from][e.at * words + at]);
-        }
-      });
-    };
-    // What the search reads of them: the count (ids), the places and the radii.
-    Model scan;
-    scan.space = space;
-    fill(scan.balls, nullptr, [](const Balls& to, const void* v) {
-      return v == &to.id || v == &to.x || v == &to.y || v == &to.z || v == &to.rad;
-    });
-    // The history records of the balls that move to this rank: their pairs (in the whole model's
-    // numbers) and their wall contacts.
-    for (int r = 0; r < ranks; ++r) {
-      const double* rec = in[r].data() + words * shell_in[r];
-      for (std::size_t t = 0; t < in_pairs[r]; ++t, rec += kPairWords) {
-        arrived_pairs.i.push_back(static_cast<std::uint32_t>(rec[0]));
-        arrived_pairs.j.push_back(static_cast<std::uint32_t>(rec[1]));
-        arrived_pairs.image_x.push_back(static_cast<std::int8_t>(rec[2]));
-        arrived_pairs.image_y.push_back(static_cast<std::int8_t>(rec[3]));
-        arrived_pairs.image_z.push_back(static_cast<std::int8_t>(rec[4]));
-        std::size_t word = 5;
-        arrived_pairs.for_each_history([&](auto& v, const HistoryPart&) { v.push_back(rec[word++]); });
-      }
-      for (std::size_t t = 0; t < in_walls[r]; ++t, rec += wall_words) {
-        std::size_t word = 0;
-        arrived_walls.for_each_array([&](auto& v) {
-          using T = typename std::decay_t<decltype(v)>::value_type;
-          v.push_back(from_word<T>(rec[word++]));
-        });
-      }
-    }
-
-    // The search: the serial test on these balls (a pair's result depends on its two balls alone),
-    // keeping the pairs of this rank's balls; their partners from elsewhere are the ghosts.
-    PairCandidates found;
-    search.find_part_pairs(scan, skin, found);
-    std::vector<std::uint8_t> kind(count, 0);   // 1 this rank's, 2 a ghost
-    for (std::size_t q = 0; q < count; ++q)
-      if (entries[q].owner == me) kind[q] = 1;
-    std::vector<std::uint32_t> pairs;
-    for (std::size_t p = 0; p < found.i.size(); ++p) {
-      const std::uint32_t i = found.i[p], j = found.j[p];
-      if (kind[i] != 1 && kind[j] != 1) continue;
-      pairs.push_back(static_cast<std::uint32_t>(p));
-      if (kind[i] != 1) kind[i] = 2;
-      if (kind[j] != 1) kind[j] = 2;
-    }
-    std::vector<std::uint32_t> keep, local(count, kAbsent);
-    for (std::size_t q = 0; q < count; ++q)
-      if (kind[q]) {
-        local[q] = static_cast<std::uint32_t>(keep.size());
-        keep.push_back(static_cast<std::uint32_t>(q));
-      }
-    const std::size_t m = keep.size();
-
-    // The history carried over by the pair (the old list holds every pair of this rank's balls),
-    // matched in the whole model's numbers.
-    next_table = part_.contacts;
-    ContactTable& c = next_table;
-    for (std::size_t p = 0; p < c.size(); ++p) {
-      c.i[p] = global_ball_[c.i[p]];
-      c.j[p] = global_ball_[c.j[p]];
-    }
-    // With the pairs of the balls that moved here, in the list's order (a pair this rank held too
-    // has the same history in both: either serves).
-    if (arrived_pairs.size() > 0) {
-      c.drop_results();
-      merge_in_order(visit_pairs, c, c.size(), arrived_pairs,
-                     [&](std::uint32_t p, std::uint32_t q) { return pair_before(c, p, c, q); });
-      arrived_pairs = ContactTable{};
-    }
-    PairCandidates next;
-    for (std::uint32_t p : pairs) {
-      next.i.push_back(entries[found.i[p]].global);
-      next.j.push_back(entries[found.j[p]].global);
-      next.image_x.push_back(found.image_x[p]);
-      next.image_y.push_back(found.image_y[p]);
-      next.image_z.push_back(found.image_z[p]);
-    }
-    install_pairs(c, next);
-    for (std::size_t q = 0; q < pairs.size(); ++q) {
-      c.i[q] = local[found.i[pairs[q]]];
-      c.j[q] = local[found.j[pairs[q]]];
-    }
-    found = PairCandidates{};   // (what follows is the part's largest: its balls)
-    next = PairCandidates{};
-    c.list_version = next_part_version();
-
-    // The part's balls, and what it sends and receives each step.
-    scan = Model{};
-    fill(next_balls, &keep, [](const Balls&, const void*) { return true; });
-    for (auto& v : in) std::vector<double>().swap(v);
-    next_ref.x = next_balls.x;
-    next_ref.y = next_balls.y;
-    next_ref.z = next_balls.z;
-    next_global.resize(m);
-    next_ghost.assign(m, 0);
-    std::vector<int> owner(m, me);
-    for (std::size_t q = 0; q < m; ++q) {
-      const Entry& e = entries[keep[q]];
-      next_global[q] = e.global;
-      if (e.owner == me) {
-        next_owned.push_back(static_cast<std::uint32_t>(q));
-        continue;
-      }
-      owner[q] = e.owner;
-      next_ghost[q] = 1;
-      next_recv[e.owner].push_back(static_cast<std::uint32_t>(q));
-      ++next_ghosts;
-    }
-    for (std::size_t q = 0; q < c.size(); ++q) {
-      const std::uint32_t i = c.i[q], j = c.j[q];
-      if (!next_ghost[i]) next_owned_pairs.push_back(static_cast<std::uint32_t>(q));
-      if (next_ghost[i] != next_ghost[j]) {
-        if (next_ghost[j]) next_send[owner[j]].push_back(i);
-        else next_send[owner[i]].push_back(j);
-      }
-    }
-    for (auto& v : next_send) {
-      std::sort(v.begin(), v.end());
-      v.erase(std::unique(v.begin(), v.end()), v.end());
-    }
+    list_entries(r);
+    unpack_arrivals(r);
+    search_part(r, full.space, search);
+    carry_history(r);
+    make_next_balls(r);
   }, "making a new pair list for its part");
-
   // (Threads: no member commits where another failed; ranks agreed in together.)
   if (team_->shares_whole()) team_->barrier();
-  // (Nothing below fails but the index and the laws, which a sync does not read.)
-  const std::size_t m = next_balls.size();
-  std::swap(part_.balls, next_balls);
-  std::swap(part_.contacts, next_table);
-  global_ball_.swap(next_global);
-  owned_.swap(next_owned);
-  owned_pairs_.swap(next_owned_pairs);
-  send_.swap(next_send);
-  recv_.swap(next_recv);
-  scratch_.ghost.swap(next_ghost);
-  ghosts_ = next_ghosts;
-  ref_.x.swap(next_ref.x);
-  ref_.y.swap(next_ref.y);
-  ref_.z.swap(next_ref.z);
-  if (moved > 0) {   // every rank's record of the owners (sync gathers each rank's balls by it)
-    for (std::size_t t = 0; t < moved; ++t)
-      owner_[static_cast<std::size_t>(all_moves[3 * t])] = static_cast<int>(all_moves[3 * t + 1]);
+  commit_rebuild(r);
+  together([&] { index_part(); }, "indexing its new pair list");
+  if (!full.walls.empty() || part_.wall_contacts.size() > 0)
+    together([&] { find_part_walls(r, full, pool); }, "finding the wall contacts of its part");
+  return true;
+}
+
+bool BrickStep::may_rebuild_local(const Model& full) {
+  if (policy_->local_rule < 0 || !live_ || model_ != &full) return false;
+  if (results_written_ && !current_) return false;   // (the parts hold results the whole model has not)
+  // The members' speeds have moved the shares by a tenth since the split (a core slowed, contacts
+  // crowding in a part): the parts are made afresh, balanced by them.
+  const std::vector<double> next = proposed_shares();   // (a collective call; the same on every member)
+  for (std::size_t r = 0; r < next.size(); ++r)
+    if (std::abs(next[r] - shares_[r]) > 0.1 * shares_[r]) return false;
+  return true;
+}
+
+void BrickStep::fit_shell_bins(Rebuild& r, const Space& space) const {
+  // Bins at least `reach` wide across (the periodic search's, in the cell's fractional coordinates;
+  // in a box, over the extent of every rank's balls): a pair's balls lie in neighbouring bins. Each
+  // rank marks the bins its balls are in, and sends a rank its balls next to a bin that rank marked.
+  const Balls& b = part_.balls;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> box{kInf, kInf, kInf, -kInf, -kInf, -kInf}, boxes;
+  if (!space.periodic)
+    for (std::uint32_t k : owned_) {
+      const double p[3] = {b.x[k], b.y[k], b.z[k]};
+      for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(p[a])) continue;   // (a ball at NaN touches nothing, in the serial search too)
+        box[a] = std::min(box[a], p[a]);
+        box[3 + a] = std::max(box[3 + a], p[a]);
+      }
+    }
+  team_->allgather(box, boxes);   // (a collective call either way)
+  for (int q = 0; q < r.ranks; ++q)
+    for (int a = 0; a < 3; ++a) {
+      box[a] = std::min(box[a], boxes[6 * q + a]);
+      box[3 + a] = std::max(box[3 + a], boxes[6 * q + 3 + a]);
+    }
+  r.bins.fit(space, box, r.reach, full_balls_);
+}
+
+void BrickStep::find_moves(Rebuild& r) const {
+  // The owners follow the balls: a ball of this rank's now in another rank's brick of the split goes
+  // to that rank, with the history of its pairs and wall contacts. Every rank learns every move (its
+  // ball, new owner and bin), so every rank knows every ball's owner and marks the bins of the balls
+  // it will own.
+  const Balls& b = part_.balls;
+  r.dest.assign(owned_.size(), r.me);
+  r.bin_of.resize(owned_.size());
+  for (std::size_t q = 0; q < owned_.size(); ++q) {
+    const std::uint32_t k = owned_[q];
+    r.bin_of[q] = r.bins.bin_of(b.x[k], b.y[k], b.z[k]);
+    if (r.bin_of[q] == ShellBins::kNone) continue;   // (a ball at no finite place stays where it is)
+    r.dest[q] = owner_at(b.x[k], b.y[k], b.z[k], global_ball_[k]);
+    if (r.dest[q] == r.me) continue;
+    r.moves.push_back(global_ball_[k]);
+    r.moves.push_back(r.dest[q]);
+    r.moves.push_back(r.bin_of[q]);
+  }
+}
+
+bool BrickStep::balanced_after_moves(Rebuild& r) const {
+  // The counts after the moves, against the shares: a tenth off (and two balls), and the parts are
+  // made afresh from the whole model, balanced again.
+  r.count.resize(r.ranks);
+  for (int q = 0; q < r.ranks; ++q) r.count[q] = rank_balls_[q].size();
+  for (std::size_t t = 0; t < r.moved; ++t) {
+    --r.count[owner_[static_cast<std::size_t>(r.all_moves[3 * t])]];
+    ++r.count[static_cast<std::size_t>(r.all_moves[3 * t + 1])];
+  }
+  const double total = std::accumulate(shares_.begin(), shares_.end(), 0.0);
+  for (int q = 0; q < r.ranks; ++q) {
+    const double want = shares_[q] / total * static_cast<double>(full_balls_);
+    if (std::abs(static_cast<double>(r.count[q]) - want) > 0.1 * want + 2) return false;
+  }
+  return true;
+}
+
+void BrickStep::mark_bins(Rebuild& r) const {
+  r.marks.assign((r.bins.count() + 7) / 8, 0);
+  auto mark = [&](std::uint32_t bin) { r.marks[bin / 8] |= static_cast<std::uint8_t>(1u << (bin % 8)); };
+  for (std::size_t q = 0; q < owned_.size(); ++q)
+    if (r.dest[q] == r.me && r.bin_of[q] != ShellBins::kNone) mark(r.bin_of[q]);
+  for (std::size_t t = 0; t < r.moved; ++t)
+    if (static_cast<int>(r.all_moves[3 * t + 1]) == r.me) mark(static_cast<std::uint32_t>(r.all_moves[3 * t + 2]));
+}
+
+void BrickStep::find_shells(Rebuild& r) const {
+  const int ranks = r.ranks, me = r.me;
+  r.shell.assign(ranks, {});
+  const std::size_t stride = r.marks.size();
+  std::vector<std::uint32_t> near;
+  // The ranks 64 at a time (one chunk up to 64 ranks): each bin's other ranks of the chunk as the
+  // bits of a word, and a ball's as the OR of the words of its bins around, with its new owner's
+  // (which marked its bin). Each rank's shell lists its balls in this rank's order.
+  std::vector<std::uint64_t> others(r.bins.count());
+  for (int first = 0; first < ranks; first += 64) {
+    const int last = std::min(ranks, first + 64);
+    auto bit = [first](int q) { return std::uint64_t{1} << (q - first); };
+    std::fill(others.begin(), others.end(), 0);
+    for (int q = first; q < last; ++q) {
+      if (q == me) continue;
+      const std::uint8_t* row = r.all_marks.data() + static_cast<std::size_t>(q) * stride;
+      for (std::size_t byte = 0; byte < stride; ++byte)
+        for (unsigned set = row[byte]; set != 0; set &= set - 1) others[8 * byte + std::countr_zero(set)] |= bit(q);
+    }
+    for (std::size_t q = 0; q < owned_.size(); ++q) {
+      if (r.bin_of[q] == ShellBins::kNone) continue;
+      std::uint64_t m = r.bins.around(r.bin_of[q], others.data(), near);
+      if (r.dest[q] >= first && r.dest[q] < last && r.dest[q] != me) m |= bit(r.dest[q]);
+      for (; m != 0; m &= m - 1) r.shell[static_cast<std::size_t>(first + std::countr_zero(m))].push_back(owned_[q]);
+    }
+  }
+}
+
+void BrickStep::pack_leaving(Rebuild& r) {
+  // A moving ball's pairs and wall contacts (this rank's part holds all of them), to its new owner.
+  r.pair_out.assign(r.ranks, {});
+  r.wall_out.assign(r.ranks, {});
+  if (r.moved == 0) return;
+  const Balls& b = part_.balls;
+  r.part_dest.assign(b.size(), -1);
+  for (std::size_t q = 0; q < owned_.size(); ++q)
+    if (r.dest[q] != r.me) r.part_dest[owned_[q]] = r.dest[q];
+  const ContactTable& c = part_.contacts;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const int di = r.part_dest[c.i[p]], dj = r.part_dest[c.j[p]];
+    for (int d : {di, dj != di ? dj : -1}) {
+      if (d < 0) continue;
+      auto& o = r.pair_out[d];
+      for (double v : {static_cast<double>(global_ball_[c.i[p]]), static_cast<double>(global_ball_[c.j[p]]),
+                       static_cast<double>(c.image_x[p]), static_cast<double>(c.image_y[p]),
+                       static_cast<double>(c.image_z[p])})
+        o.push_back(v);
+      c.for_each_history([&](const auto& v, const HistoryPart&) { o.push_back(v[p]); });
+    }
+  }
+  WallContacts& w = part_.wall_contacts;
+  for (std::size_t q = 0; q < w.size(); ++q) {
+    const int d = r.part_dest[w.ball[q]];
+    if (d < 0) continue;
+    std::size_t word = 0;
+    w.for_each_array([&](auto& v) {
+      r.wall_out[d].push_back(word++ == 0 ? static_cast<double>(global_ball_[w.ball[q]])
+                                          : (q < v.size() ? to_word(v[q]) : 0.0));
+    });
+  }
+}
+
+void BrickStep::announce_counts(Rebuild& r) const {
+  // To each rank, how many balls, pairs and wall contacts this one sends it.
+  r.out.assign(r.ranks, {});
+  r.in.assign(r.ranks, {});
+  for (int q = 0; q < r.ranks; ++q) {
+    r.out[q] = {static_cast<double>(r.shell[q].size()), static_cast<double>(r.pair_out[q].size() / kPairWords),
+                static_cast<double>(r.wall_out[q].size() / r.wall_words)};
+    r.in[q].assign(3, 0.0);
+  }
+}
+
+bool BrickStep::shells_within_bounds(Rebuild& r) {
+  r.shell_in.assign(r.ranks, 0);
+  r.in_pairs.assign(r.ranks, 0);
+  r.in_walls.assign(r.ranks, 0);
+  for (int q = 0; q < r.ranks; ++q) {
+    r.received += r.in[q][0];
+    r.shell_in[q] = static_cast<std::size_t>(r.in[q][0]);
+    r.in_pairs[q] = static_cast<std::size_t>(r.in[q][1]);
+    r.in_walls[q] = static_cast<std::size_t>(r.in[q][2]);
+  }
+  // The balls have spread where the largest shell has grown past twice what it was at the first
+  // rebuild after the split: the parts are made afresh (and balanced) from the whole model.
+  std::vector<double> most{r.received};
+  team_->max_all(most);
+  if (shell_base_ == 0) shell_base_ = std::max(most[0], 1.0);
+  else if (most[0] > 2 * shell_base_) return false;
+  return true;
+}
+
+void BrickStep::pack_shells(Rebuild& r) const {
+  // The balls themselves, every array (a record of `words` words each, the whole model's index
+  // first), then the moving balls' pairs and wall contacts.
+  const Balls& b = part_.balls;
+  const std::size_t words = r.words;
+  for (int q = 0; q < r.ranks; ++q) {
+    const std::vector<std::uint32_t>& shell = r.shell[q];
+    std::vector<double>& out = r.out[q];
+    const std::size_t count = shell.size();
+    out.assign(words * count, 0.0);
+    for (std::size_t t = 0; t < count; ++t) {
+      const std::uint32_t k = shell[t];
+      out[t * words] = global_ball_[k];
+      out[t * words + 1] = r.part_dest.empty() || r.part_dest[k] < 0 ? r.me : r.part_dest[k];
+    }
+    std::size_t word = 2;
+    b.for_each_array([&](auto& v) {
+      for (std::size_t t = 0; t < count; ++t) out[t * words + word] = to_word(v[shell[t]]);
+      ++word;
+    });
+    out.insert(out.end(), r.pair_out[q].begin(), r.pair_out[q].end());
+    out.insert(out.end(), r.wall_out[q].begin(), r.wall_out[q].end());
+    std::vector<double>().swap(r.pair_out[q]);
+    std::vector<double>().swap(r.wall_out[q]);
+    r.in[q].assign(words * r.shell_in[q] + kPairWords * r.in_pairs[q] + r.wall_words * r.in_walls[q], 0.0);
+  }
+}
+
+void BrickStep::list_entries(Rebuild& r) const {
+  r.entries.reserve(owned_.size() + static_cast<std::size_t>(r.received));
+  for (std::size_t q = 0; q < owned_.size(); ++q) r.entries.push_back({global_ball_[owned_[q]], -1, owned_[q], r.dest[q]});
+  for (int q = 0; q < r.ranks; ++q)
+    for (std::size_t t = 0; t < r.shell_in[q]; ++t)
+      r.entries.push_back({static_cast<std::uint32_t>(r.in[q][t * r.words]), q, static_cast<std::uint32_t>(t),
+                           static_cast<int>(r.in[q][t * r.words + 1])});
+  std::sort(r.entries.begin(), r.entries.end(),
+            [](const Rebuild::Entry& p, const Rebuild::Entry& q) { return p.global < q.global; });
+}
+
+void BrickStep::unpack_arrivals(Rebuild& r) const {
+  // The history records of the balls that move to this rank: their pairs (in the whole model's
+  // numbers) and their wall contacts, after the balls in each rank's message.
+  for (int q = 0; q < r.ranks; ++q) {
+    const double* rec = r.in[q].data() + r.words * r.shell_in[q];
+    for (std::size_t t = 0; t < r.in_pairs[q]; ++t, rec += kPairWords) {
+      r.arrived_pairs.i.push_back(static_cast<std::uint32_t>(rec[0]));
+      r.arrived_pairs.j.push_back(static_cast<std::uint32_t>(rec[1]));
+      r.arrived_pairs.image_x.push_back(static_cast<std::int8_t>(rec[2]));
+      r.arrived_pairs.image_y.push_back(static_cast<std::int8_t>(rec[3]));
+      r.arrived_pairs.image_z.push_back(static_cast<std::int8_t>(rec[4]));
+      std::size_t word = 5;
+      r.arrived_pairs.for_each_history([&](auto& v, const HistoryPart&) { v.push_back(rec[word++]); });
+    }
+    for (std::size_t t = 0; t < r.in_walls[q]; ++t, rec += r.wall_words) {
+      std::size_t word = 0;
+      r.arrived_walls.for_each_array([&](auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        v.push_back(from_word<T>(rec[word++]));
+      });
+    }
+  }
+}
+
+void BrickStep::search_part(Rebuild& r, const Space& space, Backend& search) const {
+  // The serial test on the entries (a pair's result depends on its two balls alone), keeping the
+  // pairs of this rank's balls; their partners from elsewhere are the ghosts. The search reads the
+  // count (ids), the places and the radii.
+  Model scan;
+  scan.space = space;
+  r.fill(part_.balls, scan.balls, nullptr, [](const Balls& to, const void* v) {
+    return v == &to.id || v == &to.x || v == &to.y || v == &to.z || v == &to.rad;
+  });
+  search.find_part_pairs(scan, r.skin, r.found);
+  const std::size_t count = r.entries.size();
+  std::vector<std::uint8_t> kind(count, 0);   // 1 this rank's, 2 a ghost
+  for (std::size_t q = 0; q < count; ++q)
+    if (r.entries[q].owner == r.me) kind[q] = 1;
+  const PairCandidates& found = r.found;
+  for (std::size_t p = 0; p < found.i.size(); ++p) {
+    const std::uint32_t i = found.i[p], j = found.j[p];
+    if (kind[i] != 1 && kind[j] != 1) continue;
+    r.pairs.push_back(static_cast<std::uint32_t>(p));
+    if (kind[i] != 1) kind[i] = 2;
+    if (kind[j] != 1) kind[j] = 2;
+  }
+  r.local.assign(count, kAbsent);
+  for (std::size_t q = 0; q < count; ++q)
+    if (kind[q]) {
+      r.local[q] = static_cast<std::uint32_t>(r.keep.size());
+      r.keep.push_back(static_cast<std::uint32_t>(q));
+    }
+}
+
+void BrickStep::carry_history(Rebuild& r) const {
+  // The history carried over by the pair (the old list holds every pair of this rank's balls),
+  // matched in the whole model's numbers.
+  r.next_table = part_.contacts;
+  ContactTable& c = r.next_table;
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    c.i[p] = global_ball_[c.i[p]];
+    c.j[p] = global_ball_[c.j[p]];
+  }
+  // With the pairs of the balls that moved here, in the list's order (a pair this rank held too
+  // has the same history in both: either serves).
+  if (r.arrived_pairs.size() > 0) {
+    c.drop_results();
+    merge_in_order(visit_pairs, c, c.size(), r.arrived_pairs,
+                   [&](std::uint32_t p, std::uint32_t q) { return pair_before(c, p, c, q); });
+    r.arrived_pairs = ContactTable{};
+  }
+  const PairCandidates& found = r.found;
+  PairCandidates next;
+  for (std::uint32_t p : r.pairs) {
+    next.i.push_back(r.entries[found.i[p]].global);
+    next.j.push_back(r.entries[found.j[p]].global);
+    next.image_x.push_back(found.image_x[p]);
+    next.image_y.push_back(found.image_y[p]);
+    next.image_z.push_back(found.image_z[p]);
+  }
+  install_pairs(c, next);
+  for (std::size_t q = 0; q < r.pairs.size(); ++q) {
+    c.i[q] = r.local[found.i[r.pairs[q]]];
+    c.j[q] = r.local[found.j[r.pairs[q]]];
+  }
+  r.found = PairCandidates{};   // (what follows is the part's largest: its balls)
+  c.list_version = next_part_version();
+}
+
+void BrickStep::make_next_balls(Rebuild& r) const {
+  // The part's balls, and what it sends and receives each step.
+  const std::size_t m = r.keep.size();
+  r.fill(part_.balls, r.next_balls, &r.keep, [](const Balls&, const void*) { return true; });
+  for (auto& v : r.in) std::vector<double>().swap(v);
+  r.next_ref.x = r.next_balls.x;
+  r.next_ref.y = r.next_balls.y;
+  r.next_ref.z = r.next_balls.z;
+  r.next_global.resize(m);
+  r.next_ghost.assign(m, 0);
+  r.next_send.assign(r.ranks, {});
+  r.next_recv.assign(r.ranks, {});
+  std::vector<int> owner(m, r.me);
+  for (std::size_t q = 0; q < m; ++q) {
+    const Rebuild::Entry& e = r.entries[r.keep[q]];
+    r.next_global[q] = e.global;
+    if (e.owner == r.me) {
+      r.next_owned.push_back(static_cast<std::uint32_t>(q));
+      continue;
+    }
+    owner[q] = e.owner;
+    r.next_ghost[q] = 1;
+    r.next_recv[e.owner].push_back(static_cast<std::uint32_t>(q));
+    ++r.next_ghosts;
+  }
+  const ContactTable& c = r.next_table;
+  for (std::size_t q = 0; q < c.size(); ++q) {
+    const std::uint32_t i = c.i[q], j = c.j[q];
+    if (!r.next_ghost[i]) r.next_owned_pairs.push_back(static_cast<std::uint32_t>(q));
+    if (r.next_ghost[i] != r.next_ghost[j]) {
+      if (r.next_ghost[j]) r.next_send[owner[j]].push_back(i);
+      else r.next_send[owner[i]].push_back(j);
+    }
+  }
+  for (auto& v : r.next_send) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  }
+}
+
+void BrickStep::commit_rebuild(Rebuild& r) {
+  // (Nothing here fails: the index and the laws, which a sync does not read, come after.)
+  std::swap(part_.balls, r.next_balls);
+  std::swap(part_.contacts, r.next_table);
+  global_ball_.swap(r.next_global);
+  owned_.swap(r.next_owned);
+  owned_pairs_.swap(r.next_owned_pairs);
+  send_.swap(r.next_send);
+  recv_.swap(r.next_recv);
+  scratch_.ghost.swap(r.next_ghost);
+  ghosts_ = r.next_ghosts;
+  ref_.x.swap(r.next_ref.x);
+  ref_.y.swap(r.next_ref.y);
+  ref_.z.swap(r.next_ref.z);
+  if (r.moved > 0) {   // every rank's record of the owners (sync gathers each rank's balls by it)
+    for (std::size_t t = 0; t < r.moved; ++t)
+      owner_[static_cast<std::size_t>(r.all_moves[3 * t])] = static_cast<int>(r.all_moves[3 * t + 1]);
     for (auto& v : rank_balls_) v.clear();
     for (std::size_t k = 0; k < owner_.size(); ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
-    most_balls_ = *std::max_element(count.begin(), count.end());
-    least_balls_ = *std::min_element(count.begin(), count.end());
-    migrations_ += moved;
+    most_balls_ = *std::max_element(r.count.begin(), r.count.end());
+    least_balls_ = *std::min_element(r.count.begin(), r.count.end());
+    migrations_ += r.moved;
   }
   ++local_rebuilds_;
   list_local_ = true;
@@ -916,47 +1024,50 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   shared_ = false;
   moved2_ = 0;
   outside_box_ = false;
-  together([&] {
-    send_buf_.assign(ranks, {});
-    recv_buf_.assign(ranks, {});
-    for (int r = 0; r < ranks; ++r) {
-      send_buf_[r].resize(kHalo * send_[r].size());
-      recv_buf_[r].resize(kHalo * recv_[r].size());
-    }
-    scratch_.index(part_.contacts, m);
-    scratch_.index_walls(part_.wall_contacts, m);
-    kernels_.laws = make_pair_laws(part_);
-  }, "indexing its new pair list");
-  if (!full.walls.empty() || part_.wall_contacts.size() > 0) {
-    // The walls' contacts of this rank's balls, their history carried by (ball id, wall id) from
-    // the part's old ones (which hold every contact of these balls).
-    together([&] {
-      part_.walls = full.walls;
-      if (arrived_walls.size() > 0) {
-        // The part's old contacts (the history find_wall_contacts carries over, by ball id and
-        // wall id) with those of the balls that moved here, in that order.
-        WallContacts& w = part_.wall_contacts;
-        merge_in_order(visit_walls, w, w.size(), arrived_walls, [&](std::uint32_t p, std::uint32_t q) {
-          return w.ball_id[p] < w.ball_id[q] || (w.ball_id[p] == w.ball_id[q] && w.wall_id[p] < w.wall_id[q]);
-        });
-      }
-      find_wall_contacts(part_, skin, pool);
-      WallContacts& w = part_.wall_contacts;
-      std::vector<std::uint32_t> mine;
-      for (std::size_t q = 0; q < w.size(); ++q)
-        if (!scratch_.ghost[w.ball[q]]) mine.push_back(static_cast<std::uint32_t>(q));
-      if (mine.size() != w.size()) {
-        WallContacts kept;
-        gather(visit_walls, &w, &kept, mine);
-        kept.list_version = w.list_version;
-        w = std::move(kept);
-      }
-      owned_walls_.resize(w.size());
-      std::iota(owned_walls_.begin(), owned_walls_.end(), 0u);
-      scratch_.index_walls(w, m);
-    }, "finding the wall contacts of its part");
+}
+
+void BrickStep::index_part() {
+  // The ghost exchange's buffers, the step's index of the new list, the part's pair laws.
+  const int ranks = team_->size();
+  const std::size_t m = part_.balls.size();
+  send_buf_.assign(ranks, {});
+  recv_buf_.assign(ranks, {});
+  for (int r = 0; r < ranks; ++r) {
+    send_buf_[r].resize(kHalo * send_[r].size());
+    recv_buf_[r].resize(kHalo * recv_[r].size());
   }
-  return true;
+  scratch_.index(part_.contacts, m);
+  scratch_.index_walls(part_.wall_contacts, m);
+  kernels_.laws = make_pair_laws(part_);
+}
+
+void BrickStep::find_part_walls(Rebuild& r, const Model& full, ThreadPool& pool) {
+  // The walls' contacts of this rank's balls, their history carried by (ball id, wall id) from
+  // the part's old ones (which hold every contact of these balls).
+  const std::size_t m = part_.balls.size();
+  part_.walls = full.walls;
+  if (r.arrived_walls.size() > 0) {
+    // The part's old contacts (the history find_wall_contacts carries over, by ball id and
+    // wall id) with those of the balls that moved here, in that order.
+    WallContacts& w = part_.wall_contacts;
+    merge_in_order(visit_walls, w, w.size(), r.arrived_walls, [&](std::uint32_t p, std::uint32_t q) {
+      return w.ball_id[p] < w.ball_id[q] || (w.ball_id[p] == w.ball_id[q] && w.wall_id[p] < w.wall_id[q]);
+    });
+  }
+  find_wall_contacts(part_, r.skin, pool);
+  WallContacts& w = part_.wall_contacts;
+  std::vector<std::uint32_t> mine;
+  for (std::size_t q = 0; q < w.size(); ++q)
+    if (!scratch_.ghost[w.ball[q]]) mine.push_back(static_cast<std::uint32_t>(q));
+  if (mine.size() != w.size()) {
+    WallContacts kept;
+    gather(visit_walls, &w, &kept, mine);
+    kept.list_version = w.list_version;
+    w = std::move(kept);
+  }
+  owned_walls_.resize(w.size());
+  std::iota(owned_walls_.begin(), owned_walls_.end(), 0u);
+  scratch_.index_walls(w, m);
 }
 
 void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, StepSums& sums, PhaseTimes& times) {
