@@ -29,8 +29,6 @@ namespace {
 
 constexpr std::uint32_t kAbsent = ~std::uint32_t{0};
 constexpr std::size_t kHalo = 9;   // a ghost's state each step: position, velocity, spin
-// A moving ball's pair: i, j (the whole model's), its image, then its history.
-const std::size_t kPairWords = 5 + ContactTable::history_count();
 
 // Owners by recursive coordinate bisection: the balls of a box are cut across its longest extent
 // at the count that gives each side the sum of its ranks' shares. Ties and non-finite coordinates
@@ -96,15 +94,6 @@ void gather(Visit&& visit, const void* from, void* to, const std::vector<std::ui
     for (std::size_t q = 0; q < pick.size(); ++q) v[q] = s[pick[q]];
   });
 }
-const auto visit_balls = [](void* p, auto&& f) { static_cast<Balls*>(p)->for_each_array(f); };
-// A part takes the pair list and the shear history; its results are written by the steps that
-// write them (ParallelStep::run keeps them there), so a whole table without results cuts alike.
-const auto visit_pairs = [](void* p, auto&& f) {
-  ContactTable& c = *static_cast<ContactTable*>(p);
-  f(c.i); f(c.j); f(c.image_x); f(c.image_y); f(c.image_z);
-  c.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
-};
-const auto visit_walls = [](void* p, auto&& f) { static_cast<WallContacts*>(p)->for_each_array(f); };
 
 // `to`'s first `size` entries (each array cut or padded to that) and `add`'s after them, put in the
 // order `before` gives (stable: of entries that compare equal, `to`'s first), every array alike.
@@ -159,8 +148,8 @@ void take_kernels(const StepKernels& from, StepKernels& to) {
   to.motion = from.motion; to.motion_full = from.motion_full; to.motion_lean = from.motion_lean;
 }
 
-// A ball's values as the words of a rebuild_local message: 64-bit integers (ids) by their bits,
-// narrower ones by value (exact in a double).
+// A value as a word of a rebuild_local message: 64-bit integers (ids) by their bits, narrower ones
+// by value (exact in a double).
 template <class T> double to_word(T v) {
   if constexpr (std::is_integral_v<T> && sizeof(T) == 8) return std::bit_cast<double>(v);
   else return static_cast<double>(v);
@@ -169,11 +158,93 @@ template <class T> T from_word(double w) {
   if constexpr (std::is_integral_v<T> && sizeof(T) == 8) return std::bit_cast<T>(w);
   else return static_cast<T>(w);
 }
-std::size_t ball_words() {
-  std::size_t n = 1;   // the whole model's index first
-  Balls().for_each_array([&](auto&) { ++n; });
-  return n;
+
+// What travels between the members at a rebuild on the parts, as records of words: a ball (to
+// each rank whose shell holds it, to its new owner where it moves), and the pairs and wall
+// contacts of a ball that changes owner, with their history. Each kind lists its arrays once,
+// from the model's own declarations, and every side walks that one list: pack_records sends,
+// unpack_record and Rebuild::fill read, and a part's tables are cut (gather) and merged
+// (merge_in_order) by it. So an array added to Balls::for_each_array, ContactTable's list or
+// for_each_history, or WallContacts::for_each_array travels with its ball, and cannot be sent on
+// one side and forgotten on the other. (LAMMPS keeps one such list per atom style:
+// AtomVec::pack_exchange and unpack_exchange.)
+//
+// Travels<T>::each(t, f) calls f(array, ball) for each array in the record's order; `ball` says
+// the array holds ball indices, which travel as the whole model's (a part's own numbers mean
+// nothing to another member). kHead words come first, written and read by the caller.
+template <class T> struct Travels;
+template <class A, class B> bool same_array(const A& a, const B& b) {
+  return static_cast<const void*>(&a) == static_cast<const void*>(&b);
 }
+// A ball: the whole model's index and the rank that owns it from now on, then every per-ball array.
+template <> struct Travels<Balls> {
+  static constexpr std::size_t kIndex = 0, kOwner = 1, kHead = 2;
+  template <class F> static void each(Balls& b, F&& f) { b.for_each_array([&](auto& v) { f(v, false); }); }
+};
+// A pair: the list's arrays (i, j, j's image), then its history. A part's pairs hold no results but
+// those its steps write (ParallelStep::run keeps them there), so a whole table without results
+// cuts alike, and none travel.
+template <> struct Travels<ContactTable> {
+  static constexpr std::size_t kHead = 0;
+  template <class F> static void each(ContactTable& c, F&& f) {
+    c.for_each_list_array([&](auto& v) { f(v, same_array(v, c.i) || same_array(v, c.j)); });
+    c.for_each_history([&](auto& v, const HistoryPart&) { f(v, false); });
+  }
+};
+// A wall contact: every array, its last results too (find_wall_contacts keeps them readable until
+// the next force pass).
+template <> struct Travels<WallContacts> {
+  static constexpr std::size_t kHead = 0;
+  template <class F> static void each(WallContacts& w, F&& f) {
+    w.for_each_array([&](auto& v) { f(v, same_array(v, w.ball)); });
+  }
+};
+
+// f(array, word, ball) for each array of T's record, with the word it takes there.
+template <class T, class F> void each_field(T& t, F&& f) {
+  std::size_t word = Travels<T>::kHead;
+  Travels<T>::each(t, [&](auto& v, bool ball) { f(v, word++, ball); });
+}
+template <class T> std::size_t record_words() {
+  static const std::size_t words = [] {
+    T t;
+    std::size_t n = Travels<T>::kHead;
+    Travels<T>::each(t, [&](auto&, bool) { ++n; });
+    return n;
+  }();
+  return words;
+}
+// The records of `from`'s entries `rows`, one after another from `out` (their head words left to
+// the caller): ball indices as the whole model's (`global`), an array not kept (a part's contact
+// results) as zeros.
+template <class T>
+void pack_records(const T& from, const std::vector<std::uint32_t>& rows, const std::vector<std::uint32_t>& global,
+                  double* out) {
+  const std::size_t words = record_words<T>();
+  each_field(const_cast<T&>(from), [&](const auto& v, std::size_t word, bool ball) {   // (it only reads)
+    for (std::size_t q = 0; q < rows.size(); ++q) {
+      const std::uint32_t row = rows[q];
+      out[q * words + word] = row >= v.size() ? 0.0
+                              : ball          ? static_cast<double>(global[static_cast<std::size_t>(v[row])])
+                                              : to_word(v[row]);
+    }
+  });
+}
+// The record at `in` appended to `to` (its ball indices stay the whole model's).
+template <class T> void unpack_record(const double* in, T& to) {
+  each_field(to, [&](auto& v, std::size_t word, bool) {
+    using E = typename std::decay_t<decltype(v)>::value_type;
+    v.push_back(from_word<E>(in[word]));
+  });
+}
+// The same lists as visitors of gather and merge_in_order: what a part holds of each.
+const auto visit_balls = [](void* p, auto&& f) { Travels<Balls>::each(*static_cast<Balls*>(p), [&](auto& v, bool) { f(v); }); };
+const auto visit_pairs = [](void* p, auto&& f) {
+  Travels<ContactTable>::each(*static_cast<ContactTable*>(p), [&](auto& v, bool) { f(v); });
+};
+const auto visit_walls = [](void* p, auto&& f) {
+  Travels<WallContacts>::each(*static_cast<WallContacts*>(p), [&](auto& v, bool) { f(v); });
+};
 
 // The bins rebuild_local finds each rank's neighbours by: at least `reach` wide across, so the balls
 // of a pair lie in the same or neighbouring bins (through the periodic faces where the space wraps).
@@ -430,7 +501,7 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
     part_.contacts.i[q] = local[part_.contacts.i[q]];
     part_.contacts.j[q] = local[part_.contacts.j[q]];
   }
-  part_.contacts.drop_results();   // (a step that writes them makes them: visit_pairs)
+  part_.contacts.drop_results();   // (a step that writes them makes them: Travels<ContactTable>)
   results_written_ = false;
   part_.contacts.list_version = next_part_version();
   std::vector<std::uint32_t> walls;
@@ -549,17 +620,15 @@ struct BrickStep::Rebuild {
   std::vector<std::uint8_t> marks, all_marks;
   // find_shells: per rank, the balls of this part it sends there (in the part's order).
   std::vector<std::vector<std::uint32_t>> shell;
-  // pack_leaving: per ball of the part, the rank it moves to (-1: none; empty: no moves); per rank,
-  // the records of the moving balls' pairs and wall contacts.
+  // find_leaving: per ball of the part, the rank it moves to (-1: none; empty: no moves); per rank,
+  // the moving balls' pairs and wall contacts it is sent (in the part's order).
   std::vector<int> part_dest;
-  std::vector<std::vector<double>> pair_out, wall_out;
+  std::vector<std::vector<std::uint32_t>> pair_rows, wall_rows;
   // The messages, and what each rank sends this one (shells_within_bounds): its balls, the moving
   // balls' pairs and wall contacts; the balls received over every rank.
   std::vector<std::vector<double>> out, in;
   std::vector<std::size_t> shell_in, in_pairs, in_walls;
   double received = 0;
-  // The words of a ball's record (the whole-model index, the owner, its arrays) and a wall contact's.
-  std::size_t words = 0, wall_words = 0;
   // list_entries: this rank's balls and those received, in the whole model's order. from: -1 this
   // rank's (at: part index), else the rank whose message holds it (at: its record there); owner:
   // the rank that owns it from now on.
@@ -583,23 +652,24 @@ struct BrickStep::Rebuild {
   VerletReference next_ref;
 
   // Ball arrays of the entries `pick` (all where null), from this rank's `part` and the records
-  // received; `only` says which arrays (by the Balls they belong to), the others stay empty.
+  // received (a ball's record read as it was packed, but column by column); `only` says which
+  // arrays (by the Balls they belong to), the others stay empty.
   template <class Only>
   void fill(const Balls& part, Balls& to, const std::vector<std::uint32_t>* pick, Only&& only) const {
+    const std::size_t words = record_words<Balls>();
     std::vector<const void*> source;
-    part.for_each_array([&](auto& v) { source.push_back(&v); });
-    std::size_t word = 2, array = 0;
-    to.for_each_array([&](auto& v) {
+    each_field(const_cast<Balls&>(part), [&](auto& v, std::size_t, bool) { source.push_back(&v); });
+    std::size_t array = 0;
+    each_field(to, [&](auto& v, std::size_t word, bool) {
       using V = std::decay_t<decltype(v)>;
       using T = typename V::value_type;
       const V& mine = *static_cast<const V*>(source[array++]);
-      const std::size_t at = word++;
       if (!only(to, static_cast<const void*>(&v))) return;
       const std::size_t size = pick ? pick->size() : entries.size();
       v.resize(size);
       for (std::size_t q = 0; q < size; ++q) {
         const Entry& e = entries[pick ? (*pick)[q] : q];
-        v[q] = e.from < 0 ? mine[e.at] : from_word<T>(in[e.from][e.at * words + at]);
+        v[q] = e.from < 0 ? mine[e.at] : from_word<T>(in[e.from][e.at * words + word]);
       }
     });
   }
@@ -614,8 +684,6 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   r.me = team_->rank();
   r.skin = skin;
   r.reach = 2 * max_radius_ + skin;
-  r.words = ball_words() + 1;
-  r.wall_words = [] { std::size_t n = 0; WallContacts().for_each_array([&](auto&) { ++n; }); return n; }();
 
   fit_shell_bins(r, full.space);   // (collective)
   together([&] { find_moves(r); }, "finding the balls that change owner");
@@ -626,12 +694,12 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   team_->allgather(r.marks, r.all_marks);
   together([&] {
     find_shells(r);
-    pack_leaving(r);
+    find_leaving(r);
     announce_counts(r);
   }, "finding the balls its neighbours need for a new pair list");
   team_->exchange(r.out, r.in);
   if (!shells_within_bounds(r)) return false;   // (collective)
-  together([&] { pack_shells(r); }, "sending the balls its neighbours need for a new pair list");
+  together([&] { pack_messages(r); }, "sending the balls its neighbours need for a new pair list");
   team_->exchange(r.out, r.in);
   together([&] {
     if (!team_->shares_whole() && team_->rank() == policy_->fail_part_search) {   // (a rank's test fault)
@@ -763,37 +831,25 @@ void BrickStep::find_shells(Rebuild& r) const {
   }
 }
 
-void BrickStep::pack_leaving(Rebuild& r) {
-  // A moving ball's pairs and wall contacts (this rank's part holds all of them), to its new owner.
-  r.pair_out.assign(r.ranks, {});
-  r.wall_out.assign(r.ranks, {});
+void BrickStep::find_leaving(Rebuild& r) const {
+  // A moving ball's pairs and wall contacts (this rank's part holds all of them), to its new owner;
+  // a pair of two balls moving to two ranks, to both.
+  r.pair_rows.assign(r.ranks, {});
+  r.wall_rows.assign(r.ranks, {});
   if (r.moved == 0) return;
-  const Balls& b = part_.balls;
-  r.part_dest.assign(b.size(), -1);
+  r.part_dest.assign(part_.balls.size(), -1);
   for (std::size_t q = 0; q < owned_.size(); ++q)
     if (r.dest[q] != r.me) r.part_dest[owned_[q]] = r.dest[q];
   const ContactTable& c = part_.contacts;
   for (std::size_t p = 0; p < c.size(); ++p) {
     const int di = r.part_dest[c.i[p]], dj = r.part_dest[c.j[p]];
-    for (int d : {di, dj != di ? dj : -1}) {
-      if (d < 0) continue;
-      auto& o = r.pair_out[d];
-      for (double v : {static_cast<double>(global_ball_[c.i[p]]), static_cast<double>(global_ball_[c.j[p]]),
-                       static_cast<double>(c.image_x[p]), static_cast<double>(c.image_y[p]),
-                       static_cast<double>(c.image_z[p])})
-        o.push_back(v);
-      c.for_each_history([&](const auto& v, const HistoryPart&) { o.push_back(v[p]); });
-    }
+    for (int d : {di, dj != di ? dj : -1})
+      if (d >= 0) r.pair_rows[d].push_back(static_cast<std::uint32_t>(p));
   }
-  WallContacts& w = part_.wall_contacts;
+  const WallContacts& w = part_.wall_contacts;
   for (std::size_t q = 0; q < w.size(); ++q) {
     const int d = r.part_dest[w.ball[q]];
-    if (d < 0) continue;
-    std::size_t word = 0;
-    w.for_each_array([&](auto& v) {
-      r.wall_out[d].push_back(word++ == 0 ? static_cast<double>(global_ball_[w.ball[q]])
-                                          : (q < v.size() ? to_word(v[q]) : 0.0));
-    });
+    if (d >= 0) r.wall_rows[d].push_back(static_cast<std::uint32_t>(q));
   }
 }
 
@@ -802,8 +858,8 @@ void BrickStep::announce_counts(Rebuild& r) const {
   r.out.assign(r.ranks, {});
   r.in.assign(r.ranks, {});
   for (int q = 0; q < r.ranks; ++q) {
-    r.out[q] = {static_cast<double>(r.shell[q].size()), static_cast<double>(r.pair_out[q].size() / kPairWords),
-                static_cast<double>(r.wall_out[q].size() / r.wall_words)};
+    r.out[q] = {static_cast<double>(r.shell[q].size()), static_cast<double>(r.pair_rows[q].size()),
+                static_cast<double>(r.wall_rows[q].size())};
     r.in[q].assign(3, 0.0);
   }
 }
@@ -827,41 +883,41 @@ bool BrickStep::shells_within_bounds(Rebuild& r) {
   return true;
 }
 
-void BrickStep::pack_shells(Rebuild& r) const {
-  // The balls themselves, every array (a record of `words` words each, the whole model's index
-  // first), then the moving balls' pairs and wall contacts.
-  const Balls& b = part_.balls;
-  const std::size_t words = r.words;
+void BrickStep::pack_messages(Rebuild& r) const {
+  // To each rank, the records of the balls of its shell, then those of the moving balls' pairs and
+  // wall contacts (Travels); and room for what it sends here.
+  const std::size_t words = record_words<Balls>(), pair_words = record_words<ContactTable>(),
+                    wall_words = record_words<WallContacts>();
   for (int q = 0; q < r.ranks; ++q) {
     const std::vector<std::uint32_t>& shell = r.shell[q];
     std::vector<double>& out = r.out[q];
-    const std::size_t count = shell.size();
-    out.assign(words * count, 0.0);
+    const std::size_t count = shell.size(), pairs = r.pair_rows[q].size(), walls = r.wall_rows[q].size();
+    out.assign(words * count + pair_words * pairs + wall_words * walls, 0.0);
     for (std::size_t t = 0; t < count; ++t) {
       const std::uint32_t k = shell[t];
-      out[t * words] = global_ball_[k];
-      out[t * words + 1] = r.part_dest.empty() || r.part_dest[k] < 0 ? r.me : r.part_dest[k];
+      out[t * words + Travels<Balls>::kIndex] = global_ball_[k];
+      out[t * words + Travels<Balls>::kOwner] = r.part_dest.empty() || r.part_dest[k] < 0 ? r.me : r.part_dest[k];
     }
-    std::size_t word = 2;
-    b.for_each_array([&](auto& v) {
-      for (std::size_t t = 0; t < count; ++t) out[t * words + word] = to_word(v[shell[t]]);
-      ++word;
-    });
-    out.insert(out.end(), r.pair_out[q].begin(), r.pair_out[q].end());
-    out.insert(out.end(), r.wall_out[q].begin(), r.wall_out[q].end());
-    std::vector<double>().swap(r.pair_out[q]);
-    std::vector<double>().swap(r.wall_out[q]);
-    r.in[q].assign(words * r.shell_in[q] + kPairWords * r.in_pairs[q] + r.wall_words * r.in_walls[q], 0.0);
+    double* const pairs_at = out.data() + words * count;
+    pack_records(part_.balls, shell, global_ball_, out.data());
+    pack_records(part_.contacts, r.pair_rows[q], global_ball_, pairs_at);
+    pack_records(part_.wall_contacts, r.wall_rows[q], global_ball_, pairs_at + pair_words * pairs);
+    std::vector<std::uint32_t>().swap(r.pair_rows[q]);
+    std::vector<std::uint32_t>().swap(r.wall_rows[q]);
+    r.in[q].assign(words * r.shell_in[q] + pair_words * r.in_pairs[q] + wall_words * r.in_walls[q], 0.0);
   }
 }
 
 void BrickStep::list_entries(Rebuild& r) const {
+  const std::size_t words = record_words<Balls>();
   r.entries.reserve(owned_.size() + static_cast<std::size_t>(r.received));
   for (std::size_t q = 0; q < owned_.size(); ++q) r.entries.push_back({global_ball_[owned_[q]], -1, owned_[q], r.dest[q]});
   for (int q = 0; q < r.ranks; ++q)
-    for (std::size_t t = 0; t < r.shell_in[q]; ++t)
-      r.entries.push_back({static_cast<std::uint32_t>(r.in[q][t * r.words]), q, static_cast<std::uint32_t>(t),
-                           static_cast<int>(r.in[q][t * r.words + 1])});
+    for (std::size_t t = 0; t < r.shell_in[q]; ++t) {
+      const double* head = r.in[q].data() + t * words;
+      r.entries.push_back({static_cast<std::uint32_t>(head[Travels<Balls>::kIndex]), q, static_cast<std::uint32_t>(t),
+                           static_cast<int>(head[Travels<Balls>::kOwner])});
+    }
   std::sort(r.entries.begin(), r.entries.end(),
             [](const Rebuild::Entry& p, const Rebuild::Entry& q) { return p.global < q.global; });
 }
@@ -869,24 +925,12 @@ void BrickStep::list_entries(Rebuild& r) const {
 void BrickStep::unpack_arrivals(Rebuild& r) const {
   // The history records of the balls that move to this rank: their pairs (in the whole model's
   // numbers) and their wall contacts, after the balls in each rank's message.
+  const std::size_t words = record_words<Balls>(), pair_words = record_words<ContactTable>(),
+                    wall_words = record_words<WallContacts>();
   for (int q = 0; q < r.ranks; ++q) {
-    const double* rec = r.in[q].data() + r.words * r.shell_in[q];
-    for (std::size_t t = 0; t < r.in_pairs[q]; ++t, rec += kPairWords) {
-      r.arrived_pairs.i.push_back(static_cast<std::uint32_t>(rec[0]));
-      r.arrived_pairs.j.push_back(static_cast<std::uint32_t>(rec[1]));
-      r.arrived_pairs.image_x.push_back(static_cast<std::int8_t>(rec[2]));
-      r.arrived_pairs.image_y.push_back(static_cast<std::int8_t>(rec[3]));
-      r.arrived_pairs.image_z.push_back(static_cast<std::int8_t>(rec[4]));
-      std::size_t word = 5;
-      r.arrived_pairs.for_each_history([&](auto& v, const HistoryPart&) { v.push_back(rec[word++]); });
-    }
-    for (std::size_t t = 0; t < r.in_walls[q]; ++t, rec += r.wall_words) {
-      std::size_t word = 0;
-      r.arrived_walls.for_each_array([&](auto& v) {
-        using T = typename std::decay_t<decltype(v)>::value_type;
-        v.push_back(from_word<T>(rec[word++]));
-      });
-    }
+    const double* rec = r.in[q].data() + words * r.shell_in[q];
+    for (std::size_t t = 0; t < r.in_pairs[q]; ++t, rec += pair_words) unpack_record(rec, r.arrived_pairs);
+    for (std::size_t t = 0; t < r.in_walls[q]; ++t, rec += wall_words) unpack_record(rec, r.arrived_walls);
   }
 }
 

@@ -193,10 +193,10 @@ class BrickStep {
   bool balanced_after_moves(Rebuild& r) const;
   void mark_bins(Rebuild& r) const;
   void find_shells(Rebuild& r) const;
-  void pack_leaving(Rebuild& r);
+  void find_leaving(Rebuild& r) const;
   void announce_counts(Rebuild& r) const;
   bool shells_within_bounds(Rebuild& r);
-  void pack_shells(Rebuild& r) const;
+  void pack_messages(Rebuild& r) const;
   void list_entries(Rebuild& r) const;
   void unpack_arrivals(Rebuild& r) const;
   void search_part(Rebuild& r, const Space& space, Backend& search) const;
