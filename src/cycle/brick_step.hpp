@@ -184,6 +184,28 @@ class BrickStep {
   std::vector<double> proposed_shares();
   void update_shares();
 
+  // rebuild_local's stages, in the order it runs them; what each leaves for the next is in the
+  // Rebuild it is handed (the comments at their definitions say which).
+  struct Rebuild;
+  bool may_rebuild_local(const Model& full);
+  void fit_shell_bins(Rebuild& r, const Space& space) const;
+  void find_moves(Rebuild& r) const;
+  bool balanced_after_moves(Rebuild& r) const;
+  void mark_bins(Rebuild& r) const;
+  void find_shells(Rebuild& r) const;
+  void find_leaving(Rebuild& r) const;
+  void announce_counts(Rebuild& r) const;
+  bool shells_within_bounds(Rebuild& r);
+  void pack_messages(Rebuild& r) const;
+  void list_entries(Rebuild& r) const;
+  void unpack_arrivals(Rebuild& r) const;
+  void search_part(Rebuild& r, const Space& space, Backend& search) const;
+  void carry_history(Rebuild& r) const;
+  void make_next_balls(Rebuild& r) const;
+  void commit_rebuild(Rebuild& r);
+  void index_part();
+  void find_part_walls(Rebuild& r, const Model& full, ThreadPool& pool);
+
   StepPolicy* policy_;
   Team* team_ = &rank_team();
   Model part_;

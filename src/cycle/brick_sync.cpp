@@ -1,0 +1,263 @@
+// The whole model made current from the parts: each member's balls, pairs and wall contacts
+// gathered into it (sync), a list rebuilt on the parts made the whole model's, and rank 0's whole
+// model handed to the other ranks (share).
+#include "cycle/brick_step_parts.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+#include "cycle/pair_list.hpp"
+#include "support/comm.hpp"
+
+namespace trubal {
+namespace {
+
+// What a step changes, the arrays sync() gathers: the balls' motion and unbalanced forces, every
+// pair's and wall contact's history, and the pairs' results where the last step wrote them (not
+// their structure: balls, images).
+template <class F> void each_moving_ball_array(Balls& b, F&& f) {
+  for (auto* v : {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz})
+    f(*v);
+}
+template <class F> void each_history_array(ContactTable& c, F&& f) {
+  c.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
+}
+template <class F> void each_moving_wall_array(WallContacts& w, F&& f) {
+  w.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
+  w.for_each_result_array(f);
+}
+
+// Each array's values at this rank's `mine` (part indices) to every rank, written into the whole
+// model's copy at each rank's `by_rank` (whole-model indices): one array at a time, so the buffers
+// hold one array's values, not the whole state.
+// Members sharing one whole model write only their own values into it (disjoint elements).
+template <class T>
+void gather_array(Team& team, const std::vector<T>& part, std::vector<T>& whole, const std::vector<std::uint32_t>& mine,
+                  const std::vector<std::vector<std::uint32_t>>& by_rank, std::vector<double>& out,
+                  std::vector<double>& in) {
+  if (team.shares_whole()) {
+    const std::vector<std::uint32_t>& at = by_rank[team.rank()];
+    for (std::size_t q = 0; q < mine.size(); ++q) whole[at[q]] = part[mine[q]];
+    return;
+  }
+  // Ranks: to rank 0's whole model alone (BrickStep::share hands it to the others where they need it).
+  out.clear();
+  for (std::uint32_t q : mine) out.push_back(static_cast<double>(part[q]));
+  comm::gather_to_root(out, in);
+  if (!comm::root()) return;
+  const double* p = in.data();
+  for (const auto& ranks_own : by_rank)
+    for (std::uint32_t k : ranks_own) whole[k] = static_cast<T>(*p++);
+}
+
+// The arrays an each_moving_* lists, as pointers by element type (the same order for every object).
+struct ArrayList {
+  std::vector<std::vector<double>*> reals;
+  std::vector<std::vector<std::uint8_t>*> bytes;
+  void operator()(std::vector<double>& v) { reals.push_back(&v); }
+  void operator()(std::vector<std::uint8_t>& v) { bytes.push_back(&v); }
+};
+
+// release: each of the part's arrays is freed once gathered (so the peak holds one of them beside
+// the whole model's).
+template <class Each, class S>
+void gather_set(Team& team, Each&& each, S& part, S& whole, const std::vector<std::uint32_t>& mine,
+                const std::vector<std::vector<std::uint32_t>>& by_rank, std::vector<double>& out,
+                std::vector<double>& in, bool release = false) {
+  ArrayList from, to;
+  each(part, [&](auto& v) { from(v); });
+  each(whole, [&](auto& v) { to(v); });
+  for (std::size_t a = 0; a < from.reals.size(); ++a) {
+    gather_array(team, *from.reals[a], *to.reals[a], mine, by_rank, out, in);
+    if (release) std::vector<double>().swap(*from.reals[a]);
+  }
+  for (std::size_t a = 0; a < from.bytes.size(); ++a) {
+    gather_array(team, *from.bytes[a], *to.bytes[a], mine, by_rank, out, in);
+    if (release) std::vector<std::uint8_t>().swap(*from.bytes[a]);
+  }
+}
+
+}  // namespace
+
+void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
+  // The whole model's list is every rank's pairs whose ball i it owns, in the serial order (by i,
+  // j, image): each rank's are in that order already, so they are merged by a sort of positions.
+  // One record per pair: i, j (the whole model's), then j's image.
+  const int ranks = team_->size();
+  const ContactTable& c = part_.contacts;
+  std::vector<std::uint8_t> mine, all;
+  together([&] {
+    mine.resize(owned_pairs_.size() * kPairRecord);
+    std::uint8_t* r = mine.data();
+    for (std::uint32_t q : owned_pairs_) {
+      write_pair_record(r, global_ball_[c.i[q]], global_ball_[c.j[q]], c.image_x[q], c.image_y[q], c.image_z[q]);
+      r += kPairRecord;
+    }
+  }, "gathering the pair list of its part");
+  // Every rank's count, to know whose records are whose (to every thread; to rank 0 of the ranks,
+  // whose whole model alone is made current: share hands it on).
+  std::vector<double> count{static_cast<double>(owned_pairs_.size())}, counts;
+  gather_whole(count, counts);
+  gather_whole(mine, all);
+  together([&] {
+    std::vector<std::uint8_t>().swap(mine);
+    if (!team_->shares_whole() && !comm::root()) return;
+    PairCandidates list;
+    read_pair_records(all, list);
+    const std::size_t total = list.i.size();
+    std::vector<std::uint8_t>().swap(all);
+    std::vector<std::uint32_t> order(total);
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) { return pair_before(list, p, list, q); });
+    PairCandidates sorted;
+    gather([](void* p, auto&& f) {
+      PairCandidates& l = *static_cast<PairCandidates*>(p);
+      f(l.i); f(l.j); f(l.image_x); f(l.image_y); f(l.image_z);
+    }, &list, &sorted, order);
+    list = PairCandidates{};
+    // Each rank's pairs' places in the whole list (sync's gathers write there).
+    std::size_t first = 0;
+    for (int r = 0; r < ranks; ++r) {
+      rank_pairs_[r].resize(static_cast<std::size_t>(counts[r]));
+      first += rank_pairs_[r].size();
+    }
+    std::vector<std::uint32_t> at(total);
+    for (std::size_t q = 0; q < total; ++q) at[order[q]] = static_cast<std::uint32_t>(q);
+    first = 0;
+    for (int r = 0; r < ranks; ++r) {
+      for (std::size_t t = 0; t < rank_pairs_[r].size(); ++t) rank_pairs_[r][t] = at[first + t];
+      first += rank_pairs_[r].size();
+    }
+    // The results go: a sync that has them (results_written_) makes them again, of the new list.
+    // (Threads: member 0 installs it in the one whole model; every member made the same list.)
+    if (team_->shares_whole() && team_->rank() != 0) return;
+    full.contacts.drop_results();
+    install_pairs(full.contacts, sorted);   // (its history is then every rank's, gathered by sync)
+  }, "installing the whole model's pair list");
+  if (team_->shares_whole()) team_->barrier();
+  list_version_ = full.contacts.list_version;   // (ranks other than 0: unchanged, until share)
+  if (walls_any_) install_local_walls(full);
+  if (whole_ref && whole_ref->x.size() == full.balls.size()) {
+    std::vector<double> out, in;
+    gather_array(*team_, ref_.x, whole_ref->x, owned_, rank_balls_, out, in);
+    gather_array(*team_, ref_.y, whole_ref->y, owned_, rank_balls_, out, in);
+    gather_array(*team_, ref_.z, whole_ref->z, owned_, rank_balls_, out, in);
+  }
+  list_local_ = false;
+}
+
+void BrickStep::install_local_walls(Model& full) {
+  // As the pairs: every rank's walls' contacts (of its own balls, by ball then wall), merged into
+  // the whole model's order; sync's gathers then write their state where each went.
+  const int ranks = team_->size();
+  const WallContacts& w = part_.wall_contacts;
+  std::vector<double> mine, all;
+  together([&] {
+    for (std::size_t q = 0; q < w.size(); ++q) {
+      mine.push_back(global_ball_[w.ball[q]]);
+      mine.push_back(w.wall[q]);
+    }
+  }, "gathering the wall contacts of its part");
+  std::vector<double> count{static_cast<double>(w.size())}, counts;
+  gather_whole(count, counts);
+  gather_whole(mine, all);
+  together([&] {
+    if (!team_->shares_whole() && !comm::root()) return;
+    const std::size_t total = all.size() / 2;
+    std::vector<std::uint32_t> order(total);
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+      return all[2 * p] < all[2 * q] || (all[2 * p] == all[2 * q] && all[2 * p + 1] < all[2 * q + 1]);
+    });
+    WallContacts next;
+    for (std::uint32_t p : order) {
+      const auto ball = static_cast<std::uint32_t>(all[2 * p]), wall = static_cast<std::uint32_t>(all[2 * p + 1]);
+      next.ball.push_back(ball);
+      next.wall.push_back(wall);
+      next.ball_id.push_back(full.balls.id[ball]);
+      next.wall_id.push_back(full.walls[wall].id);
+    }
+    each_moving_wall_array(next, [&](auto& v) { v.assign(total, {}); });
+    std::vector<std::uint32_t> at(total);
+    for (std::size_t q = 0; q < total; ++q) at[order[q]] = static_cast<std::uint32_t>(q);
+    std::size_t first = 0;
+    for (int r = 0; r < ranks; ++r) {
+      rank_walls_[r].resize(static_cast<std::size_t>(counts[r]));
+      for (std::size_t t = 0; t < rank_walls_[r].size(); ++t) rank_walls_[r][t] = at[first + t];
+      first += rank_walls_[r].size();
+    }
+    next.list_version = next_part_version();
+    if (!team_->shares_whole() || team_->rank() == 0) full.wall_contacts = std::move(next);
+  }, "installing the whole model's wall contacts");
+  if (team_->shares_whole()) team_->barrier();
+  wall_version_ = full.wall_contacts.list_version;
+}
+
+void BrickStep::sync(Model& full, VerletReference* whole_ref) {
+  if (!live_ || current_ || model_ != &full) return;
+  std::vector<double> out, in;
+  if (list_local_) install_local_list(full, whole_ref);
+  gather_set(*team_, [](Balls& b, auto&& f) { each_moving_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
+             out, in);
+  gather_set(*team_, [](ContactTable& c, auto&& f) { each_history_array(c, f); }, part_.contacts, full.contacts, owned_pairs_,
+             rank_pairs_, out, in);
+  // The results only where the parts' last step wrote them (the same on every rank): a lean step's
+  // table holds none worth reading, and a whole table that dropped its results stays without. The
+  // part's go once gathered: nothing reads them there, and the next step that writes results
+  // makes them again (ParallelStep::run).
+  if (results_written_) {
+    // (Members sharing one whole model: member 0 makes its arrays, then every member writes its own.)
+    // (Ranks: the results are the largest arrays a sync makes; a rank out of memory here alone
+    // must not leave the others in the gathers below.)
+    if (!team_->shares_whole()) {
+      comm::together([&] { if (comm::root()) full.contacts.keep_results(); }, "keeping the contact results");
+    } else {
+      if (team_->rank() == 0) full.contacts.keep_results();
+      team_->barrier();
+    }
+    gather_set(*team_, [](ContactTable& c, auto&& f) { c.for_each_result_array(f); }, part_.contacts, full.contacts,
+               owned_pairs_, rank_pairs_, out, in, true);
+    results_written_ = false;
+  }
+  gather_set(*team_, [](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
+             full.wall_contacts, owned_walls_, rank_walls_, out, in);
+  current_ = true;
+}
+
+template <class T> void BrickStep::gather_whole(const std::vector<T>& mine, std::vector<T>& all) {
+  if (team_->shares_whole()) team_->allgather(mine, all);
+  else comm::gather_to_root(mine, all);
+}
+
+void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_parts) {
+  if (!live_ || model_ != &full) return;
+  sync(full, whole_ref);
+  const bool done = shared_ || team_->shares_whole() || team_->size() < 2;
+  shared_ = true;
+  if (release_parts) release();   // (before the whole model comes: the two are never held together)
+  if (done) return;
+  // Rank 0's whole model, current, to the others, and the list's reference positions.
+  broadcast_arrays(full);
+  if (whole_ref && whole_ref->x.size() == full.balls.size()) {
+    comm::broadcast(whole_ref->x);
+    comm::broadcast(whole_ref->y);
+    comm::broadcast(whole_ref->z);
+  }
+  list_version_ = full.contacts.list_version;
+  wall_version_ = full.wall_contacts.list_version;
+}
+
+void broadcast_arrays(Model& m) {
+  m.balls.for_each_array([](auto& v) { comm::broadcast(v); });
+  m.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
+  comm::broadcast(m.contacts.results_cycle);
+  m.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
+  // What came from rank 0 is new here: new versions, so that no index of the old arrays passes for
+  // one of these (Pipeline::prepare has rank 0 decide whether to search).
+  if (!comm::root()) {
+    m.contacts.list_version = fresh_list_version();
+    m.wall_contacts.list_version = fresh_list_version();
+  }
+}
+
+}  // namespace trubal
