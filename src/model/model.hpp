@@ -77,7 +77,7 @@ struct Balls {
 // places. Every place that moves contact state goes through those lists: the pair list's
 // carry-over (cycle/pair_list.cpp, cycle/wall_list.cpp), the rescue snapshot (cycle/snapshot.hpp),
 // SAVE and RESTART, RENUMBER (model/edit.cpp), and the step shared among threads and ranks
-// (cycle/parallel_step.cpp, cycle/brick_step.cpp).
+// (cycle/parallel_step.cpp; what migrates with a ball: Travels, cycle/brick_step_parts.hpp).
 enum class OnSwap : std::uint8_t {
   Keep,     // a value of the pair as a whole (a count, a flag, a length)
   Negate,   // a vector on j from i (the shear force on j): on i it is minus this
