@@ -22,6 +22,8 @@
 #include "model/wall_shape.hpp"
 
 #include "io/atomic_file.hpp"
+#include "io/model_checks.hpp"
+#include "io/save_format.hpp"
 #include "physics/sample.hpp"
 #include "physics/walls.hpp"
 
@@ -29,120 +31,7 @@ namespace trubal {
 
 namespace {
 
-constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
-// 2: the membrane's pressure and area. 3: the periodic cell's tilts (shear); version 2 files are
-// read as cells without tilt. 4: the servo's last measured moments (Space::servo_measured), so
-// that a restarted servo takes the steps an unbroken run takes; older files start it from the
-// contact table; the cycle the contacts' results are of; a following membrane. 5: walls, their
-// motion, servo and last loads, and the ball-wall contacts with their history; the periodic
-// axes (mixed periodicity; older files are all periodic or all bounded). 6: the cell's volume where
-// the accumulated strain was 0 (the volumetric strain's reference), and the histories (HIST):
-// each table's items, period, file, platen range and balls, and the rows it holds in memory, so
-// that RESTART resumes them; older files restart with none. 7: the energy terms of the last step
-// at its force pass (Model::energy_at_step), so that PRINT energy after RESTART is the saved run's;
-// older files print the state as it is until the next step. 8: the walls a servo's area comes from
-// (Wall::area_walls; older files keep the servo's own area) and the sample (SAMPLE). 9: the
-// contacts' history by name (transfer_contacts), so that a contact law part added later reads
-// older files. 10: the materials' rolling resistance (Material::rolling_friction) and the work the
-// rolling springs dissipated (Energy::rolling_work); older files have none. 11: the materials'
-// capillary bridges (Material::bridge_volume, surface_tension, contact_angle) and the work the
-// bridges did (Energy::capillary_work, EnergyAtStep::capillary_ahead); older files have none (the
-// bridges' state is history, by name).
-constexpr std::uint32_t kVersion = 11;
-constexpr std::uint32_t kOldestVersion = 2;
-
-// FNV-1a, 64 bit: enough to tell a damaged file from a good one.
-std::uint64_t fnv1a(const std::string& data) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
-
-static_assert(sizeof(Damping) == sizeof(DampKind) + sizeof(std::uint32_t) + 5 * sizeof(double), "Damping has hidden padding");
-static_assert(sizeof(Material) == 12 * sizeof(double) + 8, "Material has hidden padding");
-
-// A material as format 10 wrote it (Material before the capillary bridges).
-struct MaterialV10 {
-  double kn, ks, friction, cohesion, density, shear_modulus, poisson, restitution, rolling_friction;
-  std::uint8_t has_restitution;
-  std::uint8_t unused[7];
-};
-static_assert(sizeof(MaterialV10) == 9 * sizeof(double) + 8, "MaterialV10 has hidden padding");
-
-// A material as formats 2 to 9 wrote it (Material before the rolling resistance).
-struct MaterialV9 {
-  double kn, ks, friction, cohesion, density, shear_modulus, poisson, restitution;
-  std::uint8_t has_restitution;   // (a byte: a damaged file's other values are refused, not read as a bool)
-  std::uint8_t unused[7];
-};
-static_assert(sizeof(MaterialV9) == 8 * sizeof(double) + 8, "MaterialV9 has hidden padding");
-
-class Writer {
- public:
-  // A struct written whole must have no padding (its bytes would be whatever the stack held, and a
-  // save's bytes must not depend on the run): Damping and Material name theirs.
-  template <class T> void pod(const T& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    buf.append(reinterpret_cast<const char*>(&v), sizeof v);
-  }
-  template <class T> void vec(const std::vector<T>& v) {
-    pod<std::uint64_t>(v.size());
-    if (!v.empty()) buf.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
-  }
-  void str(const std::string& s) {
-    pod<std::uint64_t>(s.size());
-    buf += s;
-  }
-  std::string buf;
-};
-
-class Reader {
- public:
-  Reader(const std::string& data, const std::string& path) : data_(data), path_(path) {}
-  template <class T> void pod(T& v) {
-    need(sizeof v);
-    std::memcpy(&v, data_.data() + pos_, sizeof v);
-    pos_ += sizeof v;
-  }
-  // A bool is one byte, 0 or 1: any other byte would be a bool with no value (undefined behaviour).
-  void pod(bool& v) {
-    std::uint8_t byte = 0;
-    pod(byte);
-    if (byte > 1) corrupt();
-    v = byte != 0;
-  }
-  template <std::size_t N> void pod(std::array<bool, N>& v) {
-    for (bool& b : v) pod(b);
-  }
-  template <class T> void vec(std::vector<T>& v) {
-    std::uint64_t n = 0;
-    pod(n);
-    if (n > (data_.size() - pos_) / sizeof(T)) corrupt();
-    v.resize(n);
-    if (n) std::memcpy(v.data(), data_.data() + pos_, n * sizeof(T));
-    pos_ += n * sizeof(T);
-  }
-  void str(std::string& s) {
-    std::uint64_t n = 0;
-    pod(n);
-    need(n);
-    s.assign(data_.data() + pos_, n);
-    pos_ += n;
-  }
-  bool at_end() const { return pos_ == data_.size(); }
-  const std::string& path() const { return path_; }
-  [[noreturn]] void corrupt() const {
-    throw std::runtime_error(fmt::format("'{}' is damaged: its contents do not add up (not restarted)", path_));
-  }
-
- private:
-  void need(std::size_t n) const {
-    if (n > data_.size() - pos_) corrupt();
-  }
-  const std::string& data_;
-  std::string path_;
-  std::size_t pos_ = 0;
-};
+using namespace save_bytes;
 
 // A contact table's arrays: its list, its history and its results. From format 9 the history goes
 // by name (the table's for_each_history), so that a law part added later reads older saves (its
@@ -415,90 +304,6 @@ template <class IO> void transfer_histories(IO& io, History& history) {
     if constexpr (reading)
       if (t->every < 1 || !History::valid_table(*t)) io.corrupt();
   }
-}
-
-// A bool inside a struct read whole: its byte must be 0 or 1 (read as bytes, which is allowed).
-bool valid_bool(const bool& b) { return *reinterpret_cast<const unsigned char*>(&b) <= 1; }
-
-// What must hold of a model for it to run: what a checksum cannot vouch for (a file written by
-// hand or by another program). "" when it holds, else what does not.
-std::string invalid_model(const Model& m) {
-  auto finite = [](double v) { return std::isfinite(v); };
-  const Balls& b = m.balls;
-  for (std::size_t k = 0; k < b.size(); ++k) {
-    if (!(b.id[k] > 0) || (k > 0 && !(b.id[k] > b.id[k - 1])))
-      return fmt::format("ball ids are not positive and ascending (ball {} at position {})", b.id[k], k);
-    if (!(b.rad[k] > 0) || !finite(b.rad[k])) return fmt::format("ball {} has radius {}", b.id[k], b.rad[k]);
-    for (double v : {b.x[k], b.y[k], b.z[k], b.vx[k], b.vy[k], b.vz[k], b.wx[k], b.wy[k], b.wz[k]})
-      if (!finite(v)) return fmt::format("ball {} has a position or velocity that is not a number", b.id[k]);
-    if (b.fixed[k] > kVel + kSpin) return fmt::format("ball {} has fixities {}", b.id[k], int(b.fixed[k]));
-  }
-  const ContactTable& c = m.contacts;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!(c.i[p] < c.j[p])) return fmt::format("contact {} is not i < j", p);
-    if (p > 0 && (c.i[p] < c.i[p - 1] || (c.i[p] == c.i[p - 1] && c.j[p] < c.j[p - 1])))
-      return fmt::format("the contacts are not sorted (at {})", p);
-    if (c.state[p] > 2) return fmt::format("contact {} has state {}", p, int(c.state[p]));
-  }
-  const Space& s = m.space;
-  for (int a = 0; a < 3; ++a) {
-    if (m.started && !(s.hi[a] > s.lo[a] && finite(s.lo[a]) && finite(s.hi[a])))
-      return fmt::format("the space's {} bounds are [{}, {}]", "xyz"[a], s.lo[a], s.hi[a]);
-    if (static_cast<unsigned>(s.outside[a]) > 1) return "a box condition is neither stop nor destroy";
-  }
-  for (double v : s.tilt) if (!finite(v)) return "the cell's tilts are not numbers";
-  for (double v : s.strain_rate) if (!finite(v)) return "the strain rates are not numbers";
-  for (const auto& [type, mat] : m.materials)
-    if (!valid_bool(mat.has_restitution) || !finite(mat.kn) || !finite(mat.ks) || !finite(mat.density) ||
-        !(mat.rolling_friction >= 0) || !finite(mat.rolling_friction) || !(mat.bridge_volume >= 0) ||
-        !finite(mat.bridge_volume) || !(mat.surface_tension >= 0) || !finite(mat.surface_tension) ||
-        !(mat.contact_angle >= 0) || !(mat.contact_angle < std::numbers::pi / 2))
-      return fmt::format("type {} has properties that are not numbers", type);
-  const Settings& st = m.settings;
-  if (!(st.frac > 0) || !finite(st.frac)) return fmt::format("FRAC is {}", st.frac);
-  if (!(st.fixed_dt >= 0) || !finite(st.fixed_dt)) return fmt::format("TSTEP is {}", st.fixed_dt);
-  if (static_cast<unsigned>(st.damping.kind) > 2) return "the damping kind is unknown";
-  if (!(m.cycle >= 0) || !(m.dt >= 0) || !finite(m.dt) || !finite(m.time) || !(m.critical_dt >= 0))
-    return "the cycle count, time or step are not valid";
-  const Membrane& mb = m.membrane;
-  const std::size_t loaded = mb.ids.size();
-  if (mb.face_x.size() != loaded || mb.face_y.size() != loaded || mb.layer.size() != loaded ||
-      mb.extent_x.size() != mb.extent_y.size() || mb.extent_x.size() != mb.layer_cells.size())
-    return "the membrane's records do not match";
-  for (std::int32_t L : mb.layer)
-    if (L < 0 || static_cast<std::size_t>(L) >= mb.extent_x.size()) return "the membrane's layers do not match";
-  if (mb.follow_every < 0) return "the membrane's follow period is negative";
-  for (std::size_t k = 0; k < m.walls.size(); ++k) {
-    Wall w = m.walls[k];
-    if (k > 0 && !(w.id > m.walls[k - 1].id)) return "the wall ids are not ascending";
-    if (static_cast<unsigned>(w.kind) > 2) return fmt::format("wall {} has an unknown kind", w.id);
-    const std::string problem = complete_wall(w);
-    if (!problem.empty()) return fmt::format("wall {}: {}", w.id, problem);
-    for (double v : {w.velocity[0], w.velocity[1], w.velocity[2], w.spin[0], w.spin[1], w.spin[2], w.radius_rate,
-                     w.servo_target, w.servo_integral, w.work})
-      if (!finite(v)) return fmt::format("wall {} has a motion or load that is not a number", w.id);
-  }
-  for (const Wall& w : m.walls)
-    for (std::int64_t id : w.area_walls)
-      if (id != 0 && !find_wall(m, id)) return fmt::format("wall {}'s servo area names no wall", w.id);
-  if (m.sample.declared()) {
-    const std::string problem = check_sample(m, m.sample);
-    if (!problem.empty()) return "the sample: " + problem;
-    if (!(m.sample.height0 > 0) || !(m.sample.area0 > 0) || !finite(m.sample.height0) || !finite(m.sample.area0))
-      return "the sample's reference is not a size";
-  } else if (m.sample.platens[1] != 0 || m.sample.sides != std::array<std::int64_t, 4>{}) {
-    return "the sample's walls do not match";
-  }
-  const WallContacts& wc = m.wall_contacts;
-  bool sizes = true;
-  const_cast<WallContacts&>(wc).for_each_array([&](auto& v) { sizes = sizes && v.size() == wc.size(); });
-  if (!sizes) return "the wall contacts' records do not match";
-  for (std::size_t p = 0; p < wc.size(); ++p) {
-    if (wc.ball[p] >= b.size() || wc.wall[p] >= m.walls.size() || b.id[wc.ball[p]] != wc.ball_id[p] ||
-        m.walls[wc.wall[p]].id != wc.wall_id[p] || wc.state[p] > 2)
-      return fmt::format("wall contact {} does not match the balls and walls", p);
-  }
-  return "";
 }
 
 }  // namespace

@@ -1,0 +1,165 @@
+// PRINT info and PRINT counters: what the model, the run and the backend are, in words and as
+// counters (commands/print.cpp dispatches).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+#include "physics/bridge.hpp"
+#include "cycle/pipeline.hpp"
+#include "support/comm.hpp"
+#include "support/peak_memory.hpp"
+#include "model/wall_shape.hpp"
+#include "physics/walls.hpp"
+#include "io/atomic_file.hpp"
+#include "io/csv.hpp"
+#include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
+#include "physics/scene.hpp"
+
+#include "commands/print_parts.hpp"
+
+namespace trubal {
+
+// How far apart balls of consecutive ids lie, in diameters (medians of both): about 1 where the
+// balls are numbered in space order (a lattice, GEN, RENUMBER), tens where at random. Memory holds
+// the balls in id order, so the contact loop reads the latter far more slowly. 0 for < 2 balls.
+static double id_gap_in_diameters(const Balls& b) {
+  if (b.size() < 2) return 0;
+  std::vector<double> gap(b.size() - 1), rad(b.rad);
+  for (std::size_t k = 1; k < b.size(); ++k)
+    gap[k - 1] = std::hypot(b.x[k] - b.x[k - 1], b.y[k] - b.y[k - 1], b.z[k] - b.z[k - 1]);
+  auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const double diameter = 2 * median(rad);
+  return diameter > 0 ? median(gap) / diameter : 0;
+}
+
+void print_info(Context& ctx) {
+  const Session& s = ctx.session;
+  const Model& m = s.model();
+  auto& o = ctx.out;
+  if (!m.title.empty()) o << "title: " << m.title << '\n';
+  if (m.started) {
+    auto L = m.space.length();
+    std::string kind = m.space.periodic ? "periodic" : "box";
+    if (m.space.mixed()) {
+      kind = "box, periodic in";
+      for (int a = 0; a < 3; ++a)
+        if (m.space.wraps(a)) kind += std::string(" ") + "xyz"[a];
+      kind += ":";
+    }
+    o << fmt::format("space: {} {} x {} x {}\n", kind, L[0], L[1], L[2]);
+    const auto& t = m.space.tilt;
+    if (m.space.periodic && (t[0] != 0 || t[1] != 0 || t[2] != 0))
+      o << fmt::format("cell tilt: xy {:.6g}  xz {:.6g}  yz {:.6g}\n", t[0], t[1], t[2]);
+  } else {
+    o << "space: none (START first)\n";
+  }
+  o << fmt::format("balls: {}\n", m.balls.size());
+  if (m.balls.size() >= 2) {
+    const double gap = id_gap_in_diameters(m.balls);
+    o << fmt::format("ball order: consecutive ids {:.3g} diameters apart (median){}\n", gap,
+                     gap > 3 ? "; numbered at random, the contact loop reads memory slowly: RENUMBER numbers them in space order" : "");
+  }
+  o << fmt::format("contacts: {}\n", contact_count(m));
+  if (!m.walls.empty()) {
+    std::size_t touching = 0;
+    for (auto st : m.wall_contacts.state) touching += st != 0;
+    o << fmt::format("walls: {} ({} ball-wall contacts)\n", m.walls.size(), touching);
+  }
+  if (has_bridges(m))
+    o << fmt::format("bridges intact: {} between balls, {} to walls\n", count_bridges(m.contacts),
+                     count_bridges(m.wall_contacts));
+  o << fmt::format("cycle: {}\n", m.cycle);
+  o << fmt::format("time: {}\n", m.time);
+  o << fmt::format("timestep: {}\n", m.dt);
+  o << fmt::format("frac: {}\n", m.settings.frac);
+  if (m.settings.fixed_dt > 0) o << fmt::format("fixed timestep: {}\n", m.settings.fixed_dt);
+  if (m.space.destroyed > 0) o << fmt::format("balls destroyed: {} (they left the box)\n", m.space.destroyed);
+  o << fmt::format("backend: {}\n", s.pipeline().backend().name());
+  o << fmt::format("threads: {}\n", s.pipeline().threads());
+  if (comm::launched()) o << fmt::format("ranks: {}\n", comm::size());   // (under mpirun, one rank included)
+  // The process's peak resident memory so far (every rank's, gathered: every rank runs PRINT).
+  o << fmt::format("peak memory: {} MiB{}\n", mib_list(peak_memory_per_rank()), comm::size() > 1 ? " (per rank)" : "");
+  if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
+    std::vector<double> mine{static_cast<double>(m.contacts.result_bytes()) / (1 << 20)}, all;
+    comm::allgather(mine, all);
+    o << fmt::format("contact results held: {} MiB (per rank: rank 0 alone makes those a command reads after a "
+                     "CYCLE, for what it prints and writes)\n", mib_list(all));
+  }
+  for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
+  const Features f = scene_features(m);
+  o << fmt::format("physics: {}\n", f.describe());
+  // The loops compiled for exactly these features (the general kernel has every one on).
+  const char* damping = f.mass_damping == DampKind::Rayleigh ? ", mass damping"
+                        : f.mass_damping == DampKind::Local  ? ", local damping"
+                                                             : "";
+  const char* estimate = m.settings.fixed_dt > 0    ? "fixed step"
+                         : f.stiffness_damping     ? "damped step estimate"
+                                                   : "undamped step estimate";
+  o << fmt::format("kernel: contacts {}{}{}{}; motion {}{}{}, {}\n", f.hertz ? "hertz" : "linear",
+                   f.friction ? " shear" : " normal-only", f.rotation ? " moments" : "",
+                   f.stiffness_damping ? " dashpots" : "", f.rotation ? "translation+rotation" : "translation only",
+                   f.gravity || f.applied ? ", loads" : "", damping, estimate);
+  o << fmt::format("types: {}\n", m.materials.size());
+  o << fmt::format("groups: {}\n", m.groups.size());
+}
+
+// PRINT counters: the counts PRINT info tells in words, one `name value` line each under a name that
+// stays (HELP lists them), for scripts and tests to read. Every rank runs it (the per-rank values
+// are gathered); rank 0 alone prints or writes.
+void print_counters(Context& ctx, const std::string& file) {
+  const Session& s = ctx.session;
+  const Model& m = s.model();
+  const PipelineCounters c = s.pipeline().counters();
+  std::size_t wall_touching = 0;
+  for (auto st : m.wall_contacts.state) wall_touching += st != 0;
+  std::string text;
+  auto line = [&](std::string_view name, auto value) { text += fmt::format("{} {}\n", name, value); };
+  line("cycle", m.cycle);
+  line("balls", m.balls.size());
+  line("contacts", contact_count(m));
+  line("wall_contacts", wall_touching);
+  line("balls_destroyed", m.space.destroyed);
+  line("ranks", comm::size());
+  line("threads", s.pipeline().threads());
+  line("threads_used", c.threads_used);
+  line("pair_list_rebuilds", c.rebuilds);
+  line("pair_tests", c.pair_tests);
+  line("results_made", c.results_made);
+  line("decompositions", c.parts.decompositions);
+  line("part_list_rebuilds", c.parts.list_rebuilds);
+  line("part_wraps", c.parts.wraps);
+  line("migrations", c.parts.migrations);
+  line("ghosts", c.parts.ghosts);
+  line("least_part_balls", c.parts.least_balls);
+  line("most_part_balls", c.parts.most_balls);
+  if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
+    std::vector<double> mine{static_cast<double>(m.contacts.result_bytes()) / (1 << 20), c.whole_arrays_mib,
+                             c.part_arrays_mib}, all;
+    comm::allgather(mine, all);
+    for (std::size_t r = 0; 3 * r + 2 < all.size(); ++r) {
+      line(fmt::format("rank{}_contact_results_mib", r), all[3 * r]);
+      line(fmt::format("rank{}_whole_arrays_mib", r), all[3 * r + 1]);
+      line(fmt::format("rank{}_part_arrays_mib", r), all[3 * r + 2]);
+    }
+    for (std::size_t r = 0; r < c.cycle_peaks_mib.size(); ++r) line(fmt::format("rank{}_cycle_peak_mib", r), c.cycle_peaks_mib[r]);
+  }
+  if (!comm::root()) return;
+  if (file.empty()) {
+    ctx.out << text;
+    return;
+  }
+  write_file_atomically(file, text);
+  ctx.out << fmt::format("counters written to {}\n", file);
+}
+
+}  // namespace trubal

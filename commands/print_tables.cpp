@@ -1,0 +1,175 @@
+// PRINT balls, contacts, walls and psd: the tables, to the screen or a CSV file (commands/print.cpp
+// dispatches).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "commands/common.hpp"
+#include "physics/bridge.hpp"
+#include "cycle/pipeline.hpp"
+#include "support/comm.hpp"
+#include "support/peak_memory.hpp"
+#include "model/wall_shape.hpp"
+#include "physics/walls.hpp"
+#include "io/atomic_file.hpp"
+#include "io/csv.hpp"
+#include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
+#include "physics/scene.hpp"
+
+#include "commands/print_parts.hpp"
+
+namespace trubal {
+
+void print_balls(Context& ctx, const Range& range, const std::string& file) {
+  const Model& m = ctx.session.model();
+  const Balls& b = m.balls;
+  auto sel = ctx.session.select(range);
+  if (!comm::root()) return;   // (the table or file is rank 0's to print or write: the others' would go nowhere)
+  if (!file.empty()) {
+    write_file_atomically(file, [&](std::ostream& csv) {
+      csv << "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz\n";
+      for (auto k : sel) {
+        csv << b.id[k] << ',' << b.type[k];
+        for (const auto* v : {&b.x, &b.y, &b.z, &b.rad, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz})
+          csv << ',' << csv_real((*v)[k]);
+        csv << '\n';
+      }
+    });
+    ctx.out << fmt::format("{} written to {}\n", count_of(sel.size(), "ball"), file);
+    return;
+  }
+  ctx.out << fmt::format("{:>8} {:>4} {:>12} {:>12} {:>12} {:>10} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}\n", "id",
+                         "type", "x", "y", "z", "rad", "vx", "vy", "vz", "fx", "fy", "fz");
+  for (auto k : sel)
+    ctx.out << fmt::format("{:>8} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>10.4g} {:>11.4g} {:>11.4g} {:>11.4g} {:>11.4g} "
+                           "{:>11.4g} {:>11.4g}\n",
+                           b.id[k], b.type[k], b.x[k], b.y[k], b.z[k], b.rad[k], b.vx[k], b.vy[k], b.vz[k], b.fx[k],
+                           b.fy[k], b.fz[k]);
+}
+
+void print_contacts(Context& ctx, const Range& range, const std::string& file) {
+  const Model& m = ctx.session.model();
+  const ContactTable& c = m.contacts;
+  std::vector<bool> in(m.balls.size(), range.empty());
+  if (!range.empty())
+    for (auto k : ctx.session.select(range)) in[k] = true;
+  if (!comm::root()) return;   // (as print_balls)
+  std::vector<std::size_t> rows;
+  // (Capillary bridges: the pairs they hold apart too, and a column saying which hold one.)
+  const bool bridges = has_bridges(m) && c.bridge.size() == c.size();
+  for (std::size_t p = 0; p < c.size(); ++p)
+    if ((c.touching(p) || (bridges && c.bridge[p] != 0)) && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
+  const auto& id = m.balls.id;
+  const bool rolling = has_rolling(m);   // (the rolling moment on j: columns only where a material has it)
+  if (!file.empty()) {
+    write_file_atomically(file, [&](std::ostream& csv) {
+      csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding"
+          << (bridges ? ",bridge\n" : "\n");
+      for (auto p : rows) {
+        csv << id[c.i[p]] << ',' << id[c.j[p]];
+        for (const auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real((*v)[p]);
+        if (rolling)
+          for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real((*v)[p]);
+        csv << ',' << (c.state[p] == 2 ? 1 : 0);
+        if (bridges) csv << ',' << (c.bridge[p] != 0 ? 1 : 0);
+        csv << '\n';
+      }
+    });
+    ctx.out << fmt::format("{} contacts written to {}\n", rows.size(), file);
+    return;
+  }
+  ctx.out << fmt::format("{:>8} {:>8} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11} {}{:>7}{}\n", "i", "j", "nx", "ny", "nz",
+                         "overlap", "fn", "|fs|", rolling ? fmt::format("{:>11} ", "|mr|") : "", "sliding",
+                         bridges ? "  bridge" : "");
+  for (auto p : rows)
+    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", id[c.i[p]],
+                           id[c.j[p]], c.nx[p], c.ny[p], c.nz[p], c.overlap[p], c.fn[p],
+                           std::sqrt(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]),
+                           rolling ? fmt::format("{:>11.4g} ", std::sqrt(c.mrx[p] * c.mrx[p] + c.mry[p] * c.mry[p] +
+                                                                         c.mrz[p] * c.mrz[p]))
+                                   : "",
+                           c.state[p] == 2 ? "yes" : "no",
+                           bridges ? (c.bridge[p] != 0 ? "     yes" : "      no") : "");
+}
+
+void print_walls(Context& ctx, const std::string& file) {
+  const Model& m = ctx.session.model();
+  if (!file.empty()) {
+    std::ostringstream csv;
+    csv << "id,kind,type,x,y,z,nx,ny,nz,radius,vx,vy,vz,wx,wy,wz,rrate,fx,fy,fz,mx,my,mz,stress,contacts,work\n";
+    for (const Wall& w : m.walls) {
+      const Vec3 c = wall_centre(w);
+      // No area, no stress: nan, as the screen's "(no area)" and HIST's w<n>_stress say it.
+      const double stress = wall_servo_area(m, w) > 0 ? wall_stress(m, w) : std::numeric_limits<double>::quiet_NaN();
+      csv << w.id << ',' << wall_kind_name(w.kind) << ',' << w.type;
+      for (double v : {c[0], c[1], c[2], w.normal[0], w.normal[1], w.normal[2], w.radius, w.velocity[0], w.velocity[1],
+                       w.velocity[2], w.spin[0], w.spin[1], w.spin[2], w.radius_rate, w.force[0], w.force[1], w.force[2],
+                       w.moment[0], w.moment[1], w.moment[2], stress})
+        csv << ',' << csv_real(v);
+      csv << ',' << w.contacts << ',' << csv_real(w.work) << '\n';
+    }
+    write_file_atomically(file, csv.str());
+    ctx.out << fmt::format("{} walls written to {}\n", m.walls.size(), file);
+    return;
+  }
+  if (m.walls.empty()) { ctx.out << "no walls (WALL makes them)\n"; return; }
+  for (const Wall& w : m.walls) {
+    const Vec3 c = wall_centre(w);
+    ctx.out << fmt::format("wall {} ({} of type {}): centre ({:.6g}, {:.6g}, {:.6g}), {} ({:.6g}, {:.6g}, {:.6g})", w.id,
+                           wall_kind_name(w.kind), w.type, c[0], c[1], c[2], w.kind == WallKind::Cylinder ? "axis" : "normal",
+                           w.normal[0], w.normal[1], w.normal[2]);
+    if (w.kind == WallKind::Cylinder)
+      ctx.out << fmt::format(", radius {:.6g}, length {:.6g}, balls {}", w.radius, w.length, w.inside ? "inside" : "outside");
+    if (w.kind == WallKind::Polygon) ctx.out << fmt::format(", {} vertices", w.vertices.size());
+    ctx.out << '\n';
+    ctx.out << fmt::format("  velocity ({:.6g}, {:.6g}, {:.6g})  spin ({:.6g}, {:.6g}, {:.6g})", w.velocity[0], w.velocity[1],
+                           w.velocity[2], w.spin[0], w.spin[1], w.spin[2]);
+    if (w.kind == WallKind::Cylinder) ctx.out << fmt::format("  radius rate {:.6g}", w.radius_rate);
+    if (w.servo_on) ctx.out << fmt::format("  servo to {:.6g}", w.servo_target);
+    ctx.out << '\n';
+    const double area = wall_servo_area(m, w);
+    ctx.out << fmt::format("  force ({:.6g}, {:.6g}, {:.6g})  moment ({:.6g}, {:.6g}, {:.6g})  stress {}  contacts {}  "
+                           "work {:.6g}\n",
+                           w.force[0], w.force[1], w.force[2], w.moment[0], w.moment[1], w.moment[2],
+                           area > 0 ? fmt::format("{:.6g}", wall_stress(m, w)) : std::string("(no area)"), w.contacts, w.work);
+  }
+}
+
+// The grading of the balls the last GEN made (those still there) next to the one it asked for.
+void print_psd(Context& ctx, const std::string& file) {
+  const auto& sizes = ctx.session.last_sizes();
+  if (!sizes) throw std::runtime_error("PRINT psd: no GEN since START or RESTART (it compares the last GEN's balls with its sizes)");
+  const Model& m = ctx.session.model();
+  std::vector<double> radii;
+  for (std::int64_t id : ctx.session.last_generated()) {
+    auto it = std::lower_bound(m.balls.id.begin(), m.balls.id.end(), id);
+    if (it != m.balls.id.end() && *it == id) radii.push_back(m.balls.rad[static_cast<std::size_t>(it - m.balls.id.begin())]);
+  }
+  if (radii.empty()) throw std::runtime_error("PRINT psd: the balls of the last GEN are gone");
+  const auto rows = compare_grading(*sizes, radii);
+  double worst = 0, at = 0;
+  for (const auto& r : rows)
+    if (std::abs(r.sample - r.asked) > worst) { worst = std::abs(r.sample - r.asked); at = r.diameter; }
+  if (!file.empty()) {
+    std::ostringstream csv;
+    csv << "diameter,passing_asked,passing_sample\n";
+    for (const auto& r : rows) csv << csv_real(r.diameter) << ',' << csv_real(r.asked) << ',' << csv_real(r.sample) << '\n';
+    write_file_atomically(file, csv.str());
+    ctx.out << fmt::format("grading at {} diameters written to {}\n", rows.size(), file);
+  } else {
+    ctx.out << fmt::format("grading of the last GEN's {} balls ({}), percent passing by mass:\n", radii.size(),
+                           sizes->describe());
+    ctx.out << fmt::format("{:>14} {:>10} {:>10} {:>10}\n", "diameter", "asked", "sample", "difference");
+    for (const auto& r : rows)
+      ctx.out << fmt::format("{:>14.6g} {:>10.3f} {:>10.3f} {:>10.3f}\n", r.diameter, r.asked, r.sample, r.sample - r.asked);
+  }
+  ctx.out << fmt::format("largest difference: {:.3f} percent passing, at diameter {:.6g}\n", worst, at);
+}
+
+}  // namespace trubal

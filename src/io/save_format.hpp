@@ -1,0 +1,134 @@
+// The bytes of a save file (io/save.cpp): the format's versions, the checksum, the streams that
+// write and read them, and the layouts of older formats' structs. Used by io/save.cpp alone.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "model/model.hpp"
+
+namespace trubal::save_bytes {
+
+constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
+// 2: the membrane's pressure and area. 3: the periodic cell's tilts (shear); version 2 files are
+// read as cells without tilt. 4: the servo's last measured moments (Space::servo_measured), so
+// that a restarted servo takes the steps an unbroken run takes; older files start it from the
+// contact table; the cycle the contacts' results are of; a following membrane. 5: walls, their
+// motion, servo and last loads, and the ball-wall contacts with their history; the periodic
+// axes (mixed periodicity; older files are all periodic or all bounded). 6: the cell's volume where
+// the accumulated strain was 0 (the volumetric strain's reference), and the histories (HIST):
+// each table's items, period, file, platen range and balls, and the rows it holds in memory, so
+// that RESTART resumes them; older files restart with none. 7: the energy terms of the last step
+// at its force pass (Model::energy_at_step), so that PRINT energy after RESTART is the saved run's;
+// older files print the state as it is until the next step. 8: the walls a servo's area comes from
+// (Wall::area_walls; older files keep the servo's own area) and the sample (SAMPLE). 9: the
+// contacts' history by name (transfer_contacts), so that a contact law part added later reads
+// older files. 10: the materials' rolling resistance (Material::rolling_friction) and the work the
+// rolling springs dissipated (Energy::rolling_work); older files have none. 11: the materials'
+// capillary bridges (Material::bridge_volume, surface_tension, contact_angle) and the work the
+// bridges did (Energy::capillary_work, EnergyAtStep::capillary_ahead); older files have none (the
+// bridges' state is history, by name).
+constexpr std::uint32_t kVersion = 11;
+constexpr std::uint32_t kOldestVersion = 2;
+
+// FNV-1a, 64 bit: enough to tell a damaged file from a good one.
+inline std::uint64_t fnv1a(const std::string& data) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+static_assert(sizeof(Damping) == sizeof(DampKind) + sizeof(std::uint32_t) + 5 * sizeof(double), "Damping has hidden padding");
+static_assert(sizeof(Material) == 12 * sizeof(double) + 8, "Material has hidden padding");
+
+// A material as format 10 wrote it (Material before the capillary bridges).
+struct MaterialV10 {
+  double kn, ks, friction, cohesion, density, shear_modulus, poisson, restitution, rolling_friction;
+  std::uint8_t has_restitution;
+  std::uint8_t unused[7];
+};
+static_assert(sizeof(MaterialV10) == 9 * sizeof(double) + 8, "MaterialV10 has hidden padding");
+
+// A material as formats 2 to 9 wrote it (Material before the rolling resistance).
+struct MaterialV9 {
+  double kn, ks, friction, cohesion, density, shear_modulus, poisson, restitution;
+  std::uint8_t has_restitution;   // (a byte: a damaged file's other values are refused, not read as a bool)
+  std::uint8_t unused[7];
+};
+static_assert(sizeof(MaterialV9) == 8 * sizeof(double) + 8, "MaterialV9 has hidden padding");
+
+class Writer {
+ public:
+  // A struct written whole must have no padding (its bytes would be whatever the stack held, and a
+  // save's bytes must not depend on the run): Damping and Material name theirs.
+  template <class T> void pod(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    buf.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  template <class T> void vec(const std::vector<T>& v) {
+    pod<std::uint64_t>(v.size());
+    if (!v.empty()) buf.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+  void str(const std::string& s) {
+    pod<std::uint64_t>(s.size());
+    buf += s;
+  }
+  std::string buf;
+};
+
+class Reader {
+ public:
+  Reader(const std::string& data, const std::string& path) : data_(data), path_(path) {}
+  template <class T> void pod(T& v) {
+    need(sizeof v);
+    std::memcpy(&v, data_.data() + pos_, sizeof v);
+    pos_ += sizeof v;
+  }
+  // A bool is one byte, 0 or 1: any other byte would be a bool with no value (undefined behaviour).
+  void pod(bool& v) {
+    std::uint8_t byte = 0;
+    pod(byte);
+    if (byte > 1) corrupt();
+    v = byte != 0;
+  }
+  template <std::size_t N> void pod(std::array<bool, N>& v) {
+    for (bool& b : v) pod(b);
+  }
+  template <class T> void vec(std::vector<T>& v) {
+    std::uint64_t n = 0;
+    pod(n);
+    if (n > (data_.size() - pos_) / sizeof(T)) corrupt();
+    v.resize(n);
+    if (n) std::memcpy(v.data(), data_.data() + pos_, n * sizeof(T));
+    pos_ += n * sizeof(T);
+  }
+  void str(std::string& s) {
+    std::uint64_t n = 0;
+    pod(n);
+    need(n);
+    s.assign(data_.data() + pos_, n);
+    pos_ += n;
+  }
+  bool at_end() const { return pos_ == data_.size(); }
+  const std::string& path() const { return path_; }
+  [[noreturn]] void corrupt() const {
+    throw std::runtime_error(fmt::format("'{}' is damaged: its contents do not add up (not restarted)", path_));
+  }
+
+ private:
+  void need(std::size_t n) const {
+    if (n > data_.size() - pos_) corrupt();
+  }
+  const std::string& data_;
+  std::string path_;
+  std::size_t pos_ = 0;
+};
+
+}  // namespace trubal::save_bytes
