@@ -1,4 +1,5 @@
 #include "cycle/pipeline.hpp"
+#include "cycle/pipeline_parts.hpp"
 
 #include <algorithm>
 #include <stdexcept>
@@ -49,13 +50,6 @@ constexpr double kSpaceCross = 0.25;
 constexpr std::size_t kSpaceLarge = 50000, kSpaceLargeMax = 500000;
 bool large_in_space(std::size_t balls) { return balls >= kSpaceLarge && balls < kSpaceLargeMax; }
 
-// PRINT info's "last step shared by" where such a scene's steps are timed faster on one thread.
-constexpr const char* kOneThread = "one thread (sharing the steps in space was timed slower)";
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace
 
 Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* policy)
@@ -75,35 +69,6 @@ Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* po
       bricks_[t]->set_team(*thread_members_[t]);
       solo_pools_.push_back(std::make_unique<ThreadPool>(1));
     }
-  }
-}
-
-template <class F> void Pipeline::each_part(F&& f) {
-  if (bricks_.size() == 1) { f(*bricks_[0], 0); return; }
-  // A thread that fails (out of memory) releases the others from the team's barriers, so the
-  // pool returns and rethrows its error instead of waiting forever; the parts are then dropped.
-  // The error rethrown is the thread's that failed first, not the others' "another thread failed".
-  thread_team_->sync.reset();
-  std::mutex first_mutex;
-  std::exception_ptr first;
-  try {
-    pool_.run([&](int t) {
-      try {
-        f(*bricks_[t], t);
-      } catch (const TeamAborted&) {
-        throw;
-      } catch (...) {
-        {
-          std::lock_guard<std::mutex> lock(first_mutex);
-          if (!first) first = std::current_exception();
-        }
-        thread_team_->sync.abort();
-        throw;
-      }
-    });
-  } catch (...) {
-    if (first) std::rethrow_exception(first);
-    throw;
   }
 }
 
@@ -306,144 +271,6 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
   }
   fresh_ = true;
   times_.detect += seconds_since(t0);
-}
-
-void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& sums) {
-  // The last step's findings (every rank's): the parts go on where the serial pipeline would only
-  // step; a wrap or a rebuild goes through the whole model.
-  const auto t0 = std::chrono::steady_clock::now();
-  bool whole = true;
-  if (bricks().live_for(model)) {   // (every rank decides alike: each input is the same on all)
-    bool outside = false;           // a collective call, made unconditionally
-    each_part([&](BrickStep& part, int t) {
-      const bool mine = part.outside_cell(model);
-      if (t == 0) outside = mine;
-    });
-    // A ball across a periodic face: the members wrap their parts' balls where they can.
-    if (outside) {
-      bool wrapped = false;
-      each_part([&](BrickStep& part, int t) {
-        const bool done = part.wrap(model);   // (the same answer on every member)
-        if (t == 0) wrapped = done;
-      });
-      outside = !wrapped;
-    }
-    const double limit2 = ref_.displacement_limit2(model);
-    whole = outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
-    // A stale list alone: the members rebuild it on their parts where they can.
-    if (whole && !outside) {
-      const double skin = list_skin(model);
-      if (rebuild_parts(model, list_reach(model, skin))) {
-        ref_.record_cell(model, skin);
-        wall_travel_ = 0;
-        whole = false;
-      }
-    }
-  }
-  times_.detect += seconds_since(t0);
-  if (whole) {
-    if (bricks().live() || !fresh_ || model_ != &model) prepare(model);   // syncs and drops the parts first
-    if (!distributed_ && !threads_in_space(model)) {   // the new list is better shared by numbers
-      space_threads_ = false;
-      shared_by_ = "ball numbers";
-      whole_step(model, kernels, sums);
-      return;
-    }
-    const auto t1 = std::chrono::steady_clock::now();
-    split_parts(model);
-    times_.detect += seconds_since(t1);
-  }
-  fresh_ = false;
-  // The ranks other than 0 step their parts alone from here: their copy of the whole model's arrays
-  // goes until sync_all hands it over again (rank 0 keeps its own, for the output and the rescue).
-  if (distributed_ && comm::size() > 1 && !comm::root() && bricks().live_for(model)) hollow(model);
-  if (distributed_) {   // (PRINT info: what each rank held in its last step)
-    held_whole_ = array_bytes(model);
-    held_part_ = bricks().part_bytes();
-  }
-  each_part([&](BrickStep& part, int t) {
-    if (distributed_) part.step(pool_, model, kernels, sums, times_);
-    else part.step(*solo_pools_[t], model, kernels, sums, t == 0 ? times_ : member_times_[t]);
-  });
-  moved_known_ = false;
-}
-
-void Pipeline::split_parts(Model& model) {
-  each_part([&](BrickStep& part, int) { part.split(model, ref_); });
-  if (!search_parts_) return;
-  // The list prepare() left stale is searched on the parts just made (they carry its history): the
-  // ranks other than 0 need the whole model no further.
-  const double skin = list_skin(model);
-  ref_.record(model, skin);   // (the positions the parts search at)
-  wall_travel_ = 0;
-  if (distributed_) {
-    if (!comm::root()) hollow(model);
-    for (auto& part : bricks_) part->whole_freed();   // (on every rank: share() is collective)
-  }
-  const bool rebuilt = rebuild_parts(model, list_reach(model, skin));
-  search_parts_ = false;
-  if (rebuilt) return;
-  // They could not (the same answer on every rank; not after a split but in tests): through the
-  // whole model, which rank 0 hands back to the others.
-  for (auto& part : bricks_) part->drop();
-  if (distributed_) broadcast_arrays(model);
-  rebuild(model);
-  each_part([&](BrickStep& part, int) { part.split(model, ref_); });
-}
-
-double Pipeline::list_reach(const Model& model, double skin) const {
-  const double bridge = bridge_reach(model);
-  if (bridge == 0) return skin;
-  if (model.space.periodic) {   // (one image of a ball within its reach, as periodic_skin keeps the skin's)
-    const auto w = cell_widths(model.space);
-    const double d = 2 * model.balls.max_radius();
-    for (int a = 0; a < 3; ++a)
-      if (model.space.periodic_axis[a] && !(d + skin + bridge < 0.5 * w[a]))
-        throw std::runtime_error(fmt::format(
-            "periodic cell too small for the capillary bridges: its {} width {:.6g} is not more than twice the "
-            "largest diameter, the pair list's skin and the bridges' rupture gap ({:.6g}); use a larger cell",
-            "xyz"[a], w[a], d + skin + bridge));
-  }
-  return skin + bridge;
-}
-
-double Pipeline::list_skin(const Model& model) const {
-  double skin = VerletReference::skin_for(model.balls);
-  if (model.space.periodic) skin = periodic_skin(model, skin);
-  check_periodic_cell(model);
-  return skin;
-}
-
-bool Pipeline::rebuild_parts(const Model& model, double skin) {
-  bool rebuilt = false;
-  each_part([&](BrickStep& part, int t) {
-    const bool done = part.rebuild_local(model, skin, *backend_, distributed_ ? pool_ : *solo_pools_[t]);
-    if (t == 0) rebuilt = done;   // (the same answer on every member)
-  });
-  return rebuilt;
-}
-
-double Pipeline::critical_timestep(Model& model, const Features& features, double cap) {
-  if (!search_parts_) return trubal::critical_timestep(model);   // (search_parts_: a distributed run's alone)
-  // The parts search the stale list now, and each rank's own balls give their steps.
-  const auto t0 = std::chrono::steady_clock::now();
-  split_parts(model);
-  times_.detect += seconds_since(t0);
-  return std::min(bricks().critical_step(features), cap);
-}
-
-void Pipeline::hollow(Model& model) {
-  Balls& b = model.balls;
-  if (b.x.empty() && model.contacts.i.empty() && b.size() > 0) return;   // (hollow already)
-  auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
-  // What stays: the ids (the count of balls: BrickStep::live_for) and the radii (the skin and the
-  // displacement test read them; they do not change in a CYCLE).
-  b.for_each_array([&](auto& v) {
-    if (static_cast<const void*>(&v) != &b.id && static_cast<const void*>(&v) != &b.rad) free(v);
-  });
-  model.contacts.for_each_pair_array(free);              // (its list_version stays: live_for)
-  model.wall_contacts.for_each_array(free);
-  scratch_ = StepScratch{};                               // (an index of the arrays that went)
 }
 
 void Pipeline::rewind_step() {
