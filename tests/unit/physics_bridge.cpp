@@ -6,11 +6,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <numbers>
 #include <string>
 
 #include <fmt/format.h>
 
+#include "backends_scenes.hpp"
 #include "interp_support.hpp"
 #include "io/history.hpp"
 #include "io/save.hpp"
@@ -331,4 +334,54 @@ TEST_CASE("bridge: in examples/wet_triaxial.dat the wet sample carries more than
   CHECK(wet - dry < 3 * expected);
   CHECK(count_bridges(m.contacts) > 400);   // (measured 940 at 5%)
   CHECK(m.energy.capillary_work != 0);
+}
+
+namespace {
+
+// What a wet periodic cell under the servo leaves: the balls' and the touching contacts' bits, the
+// bridges by pair of ids, the capillary work and the cell.
+struct WetCell {
+  test::Picture picture;
+  std::map<std::pair<std::int64_t, std::int64_t>, double> bridges;
+  double capillary_work = 0;
+  std::array<double, 3> length{};
+};
+
+WetCell wet_cell(const std::string& backend, const std::vector<int>& cuts) {
+  Harness h;
+  // 320 balls pressed by the servo to 300 Pa: the bridges (about 350 by cycle 1500) outnumber the
+  // contacts, so pairs held apart by their bridges are in the stress the servo reads.
+  REQUIRE(h.deck("start 0.007 0.007 0.007\nprop kn 1e5 ks 1e5 fric 26.57 dens 2650 bridge 1e-12 tension 0.072\n"
+                 "gen 320 0.0004 0.0006 seed 3\ndamp local 0.7\nservo 300 300 300\n" + backend + "\n"));
+  for (int n : cuts) REQUIRE(h.deck(fmt::format("cycle {}\n", n)));
+  const Model& m = h.session.model();
+  WetCell w;
+  w.picture = test::picture(m);
+  const ContactTable& c = m.contacts;
+  for (std::size_t p = 0; p < c.size(); ++p)
+    if (c.bridge[p] != 0) w.bridges[{m.balls.id[c.i[p]], m.balls.id[c.j[p]]}] = c.bridge[p];
+  w.capillary_work = energy(m).capillary_work;
+  w.length = m.space.length();
+  return w;
+}
+
+}  // namespace
+
+TEST_CASE("bridge: a wet periodic cell under the stress servo gives the same bits on every backend and cut",
+          "[bridge][periodic]") {
+  const WetCell serial = wet_cell("backend serial", {1500});
+  INFO("bridges " << serial.bridges.size() << ", contacts " << serial.picture.contacts.size());
+  REQUIRE(serial.bridges.size() > serial.picture.contacts.size());   // some held apart by their bridges
+  REQUIRE(serial.capillary_work != 0);
+  const std::pair<const char*, std::vector<int>> runs[] = {
+      {"backend serial", {1, 749, 750}}, {"backend serial", {700, 800}}, {"backend threaded threads 2", {1500}},
+      {"backend threaded threads 3", {600, 900}}, {"backend allpairs", {1500}}};
+  for (const auto& [backend, cuts] : runs) {
+    INFO(backend << ", " << cuts.size() << " CYCLEs");
+    const WetCell other = wet_cell(backend, cuts);
+    CHECK(test::difference(serial.picture, other.picture).empty());
+    CHECK(other.bridges == serial.bridges);
+    CHECK(std::memcmp(&other.capillary_work, &serial.capillary_work, sizeof(double)) == 0);
+    CHECK(std::memcmp(other.length.data(), serial.length.data(), sizeof serial.length) == 0);
+  }
 }
