@@ -175,8 +175,8 @@ static void warn_of_overlaps(Context& ctx) {
 
 void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked) {
   if (r.destroyed > 0)
-    ctx.out << fmt::format("{} ball{} left the box and {} destroyed ({} since START)\n", r.destroyed,
-                           r.destroyed == 1 ? "" : "s", r.destroyed == 1 ? "was" : "were",
+    ctx.out << fmt::format("{} left the box and {} destroyed ({} since START)\n", count_of(r.destroyed, "ball"),
+                           r.destroyed == 1 ? "was" : "were",
                            ctx.session.state().space.destroyed);
   if (r.unstable || r.left_box) throw std::runtime_error(r.message);
   warn_of_overlaps(ctx);

@@ -54,7 +54,7 @@ static void run_membrane(Context& ctx, Args& args) {
       "area {:.6g} = {:.6g} d^2{}\n",
       pressure, loads.balls.size(), loads.loaded_layers, loads.layers, loads.area,
       loads.area / (loads.cell * loads.cell),
-      follow > 0 ? fmt::format("; following the sample every {} cycle{}", follow, follow == 1 ? "" : "s") : "");
+      follow > 0 ? fmt::format("; following the sample every {}", count_of(static_cast<std::size_t>(follow), "cycle")) : "");
 }
 
 const Command membrane_command = {

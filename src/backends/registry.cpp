@@ -2,6 +2,7 @@
 // names them, so the interpreter and the cycle never include a concrete backend.
 #include <stdexcept>
 
+#include "support/format_number.hpp"
 #include "backends/allpairs/allpairs_backend.hpp"
 #include "backends/backend.hpp"
 #include "backends/mpi/mpi_backend.hpp"
@@ -56,8 +57,8 @@ int default_threads(std::string_view name) {
 std::unique_ptr<Backend> make_backend(std::string_view name, const BackendOptions& options) {
   const Entry& e = entry(name);
   if (e.max_threads > 0 && options.threads > e.max_threads)
-    throw std::invalid_argument("backend " + std::string(name) + " runs on " + std::to_string(e.max_threads) +
-                                " thread" + (e.max_threads == 1 ? "" : "s"));
+    throw std::invalid_argument("backend " + std::string(name) + " runs on " +
+                                count_of(static_cast<std::size_t>(e.max_threads), "thread"));
   if (options.max_memory > 0 && !e.takes_max_memory)
     throw std::invalid_argument("backend " + std::string(name) + " has no memory limit (maxmem goes with BACKEND allpairs)");
   return e.make(options);

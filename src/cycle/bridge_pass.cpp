@@ -51,14 +51,7 @@ void bridge_pairs(Model& model, StepScratch& scratch, const StepKernels& k, std:
   for (std::size_t p = begin; p < end; ++p) {
     const std::size_t i = c.i[p], j = c.j[p];
     const BridgeLaw& law = k.laws.bridge(i, j);
-    double dx = b.x[j] - b.x[i], dy = b.y[j] - b.y[i], dz = b.z[j] - b.z[i];
-    if (periodic) {   // (as the contact loops' gather: j's image)
-      double ox, oy, oz;
-      image_offset(cell, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
-      dx = image_delta(b.x[j], b.x[i], ox);
-      dy = image_delta(b.y[j], b.y[i], oy);
-      dz = image_delta(b.z[j], b.z[i], oz);
-    }
+    const auto [dx, dy, dz] = pair_separation(cell, periodic, b, c, p);   // (as the contact loops' gather)
     const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
     const double gap = d - (b.rad[i] + b.rad[j]);
     const double state = d > 0 ? bridge_state(law, c.bridge[p], gap) : 0.0;

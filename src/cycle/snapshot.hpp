@@ -135,38 +135,37 @@ struct Snapshot {
     if (from.empty()) to.assign(length, typename V::value_type{});
     else to = from;
   }
-  // Every per-ball array but the unbalanced forces and moments (48 bytes a ball the copy need not
-  // hold), each an all-zero one empty.
-  void copy_balls(Balls& to, const Balls& from) {
+  // f(to's array, from's array, k) for every per-ball array but the unbalanced forces and moments
+  // (48 bytes a ball the copy need not hold), k its place in Balls::for_each_array's order.
+  template <class F> static void each_kept_array(Balls& to, const Balls& from, F&& f) {
     std::vector<const void*> source;
     from.for_each_array([&](const auto& v) { source.push_back(&v); });
-    ball_lengths.assign(source.size(), 0);
     const auto skip = unbalanced(to);
     std::size_t k = 0;
     to.for_each_array([&](auto& v) {
       using V = std::decay_t<decltype(v)>;
       const V& s = *static_cast<const V*>(source[k]);
-      ball_lengths[k++] = s.size();
+      const std::size_t at = k++;
       if constexpr (std::is_same_v<V, std::vector<double>>)
         if (std::find(skip.begin(), skip.end(), &v) != skip.end()) return;
-      if constexpr (std::is_same_v<V, std::vector<std::int64_t>>) v = s;   // the ids, compared whole by restore
+      f(v, s, at);
+    });
+  }
+  // The model's balls into the copy, each all-zero array empty (the ids always whole: restore
+  // compares them).
+  void copy_balls(Balls& to, const Balls& from) {
+    std::size_t arrays = 0;
+    from.for_each_array([&](const auto&) { ++arrays; });
+    ball_lengths.assign(arrays, 0);
+    each_kept_array(to, from, [&](auto& v, const auto& s, std::size_t k) {
+      ball_lengths[k] = s.size();
+      if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::vector<std::int64_t>>) v = s;
       else copy_unless_zero(v, s);
     });
   }
   // The copy's balls into the model's (the unbalanced forces left to restore).
   void paste_balls(Balls& to) const {
-    std::vector<const void*> source;
-    balls.for_each_array([&](const auto& v) { source.push_back(&v); });
-    const auto skip = unbalanced(to);
-    std::size_t k = 0;
-    to.for_each_array([&](auto& v) {
-      using V = std::decay_t<decltype(v)>;
-      const V& s = *static_cast<const V*>(source[k]);
-      const std::size_t length = ball_lengths[k++];
-      if constexpr (std::is_same_v<V, std::vector<double>>)
-        if (std::find(skip.begin(), skip.end(), &v) != skip.end()) return;
-      paste(v, s, length);
-    });
+    each_kept_array(to, balls, [&](auto& v, const auto& s, std::size_t k) { paste(v, s, ball_lengths[k]); });
   }
 };
 

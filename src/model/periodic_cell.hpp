@@ -82,6 +82,16 @@ inline void nearest_image(const CellFrame& f, double dx, double dy, double dz, s
 // when it has no tilt).
 std::array<double, 3> cell_widths(const Space& s);
 
+// x_j - x_i of pair p of the contact table: at j's image (its offset from image_offset) where
+// `periodic`, else the plain difference (the same bits: image_delta with a zero offset).
+inline std::array<double, 3> pair_separation(const CellFrame& f, bool periodic, const Balls& b, const ContactTable& c,
+                                             std::size_t p) {
+  const std::size_t i = c.i[p], j = c.j[p];
+  double ox = 0, oy = 0, oz = 0;
+  if (periodic) image_offset(f, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
+  return {image_delta(b.x[j], b.x[i], ox), image_delta(b.y[j], b.y[i], oy), image_delta(b.z[j], b.z[i], oz)};
+}
+
 // Whether balls i < j touch within `reach` at j's nearest image; sets that image. The one test
 // the periodic pair searches make (serial/threaded lists with a skin, allpairs without).
 inline bool nearest_image_within(const CellFrame& f, const Balls& b, std::size_t i, std::size_t j, double reach,

@@ -42,10 +42,7 @@ static void add_bridge_stress(const Model& model, Sym6& s) {
   for (std::size_t p = 0; p < c.size() && c.bridge.size() == c.size(); ++p) {
     if (c.bridge[p] == 0) continue;
     const std::size_t i = c.i[p], j = c.j[p];
-    double ox = 0, oy = 0, oz = 0;
-    if (model.space.periodic) image_offset(cell, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
-    const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
-                 dz = image_delta(b.z[j], b.z[i], oz);
+    const auto [dx, dy, dz] = pair_separation(cell, model.space.periodic, b, c, p);
     const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
     if (!(d > 0)) continue;
     const double f = -bridge_force(pair_bridge(model, i, j), b.rad[i], b.rad[j], d - b.rad[i] - b.rad[j]) / d;

@@ -22,10 +22,7 @@ LargestOverlap largest_overlap(const Model& model, double threshold) {
   for (std::size_t p = 0; p < c.size(); ++p) {
     const std::size_t i = c.i[p], j = c.j[p];
     if (i >= b.size() || j >= b.size()) continue;
-    double ox = 0, oy = 0, oz = 0;
-    if (periodic) image_offset(frame, c.image_x[p], c.image_y[p], c.image_z[p], ox, oy, oz);
-    const double dx = image_delta(b.x[j], b.x[i], ox), dy = image_delta(b.y[j], b.y[i], oy),
-                 dz = image_delta(b.z[j], b.z[i], oz);
+    const auto [dx, dy, dz] = pair_separation(frame, periodic, b, c, p);
     const double overlap = b.rad[i] + b.rad[j] - std::sqrt(dx * dx + dy * dy + dz * dz);
     const std::size_t small = b.rad[j] < b.rad[i] ? j : i;
     take(overlap / b.rad[small], b.id[small], b.id[small == i ? j : i], false);
