@@ -12,7 +12,7 @@ namespace trubal {
 const std::vector<std::string_view> kRangeWords = {"range", "id", "x", "y", "z", "type", "group",
                                                    "sphere", "cylinder", "octagon", "not"};
 
-Range read_range(Args& args) {
+Range read_range(Args& args, const std::vector<std::string_view>& stop) {
   Range range;
   if (args.empty()) return range;
   if (!args.accept("range")) args.done();
@@ -20,7 +20,7 @@ Range read_range(Args& args) {
   static const std::vector<std::string_view> kinds = {"id", "x", "y", "z", "type", "group", "sphere", "cylinder",
                                                       "octagon"};
   if (args.empty()) args.fail("RANGE needs at least one element (id, x, y, z, type, group, sphere, cylinder, octagon)");
-  while (!args.empty()) {
+  while (!args.empty() && !(range.size() && match_keyword(args.peek(), stop))) {
     RangeElement e;
     e.kind = K::Id;
     e.negate = args.accept("not");
@@ -63,8 +63,8 @@ Range read_range(Args& args) {
   return range;
 }
 
-Range read_range(Args& args, const Session& session) {
-  Range range = read_range(args);
+Range read_range(Args& args, const Session& session, const std::vector<std::string_view>& stop) {
+  Range range = read_range(args, stop);
   const auto& groups = session.state().groups;
   for (const RangeElement& e : range) {
     if (e.kind != RangeElement::Kind::Group || groups.count(e.group)) continue;

@@ -17,9 +17,10 @@ namespace trubal {
 // Reads an optional RANGE phrase, which ends the command (so done() is checked here). A `group`
 // that the model does not hold is an error (with the nearest group's name where one is near): a
 // misspelt group would otherwise hold for no ball and the deck run on.
-Range read_range(Args& args, const Session& session);
+// `stop`: words that end the phrase before the command does (BOND's, whose words may follow it).
+Range read_range(Args& args, const Session& session, const std::vector<std::string_view>& stop = {});
 // The phrase alone, its groups not looked up (GEN's: the balls it makes are in no group yet).
-Range read_range(Args& args);
+Range read_range(Args& args, const std::vector<std::string_view>& stop = {});
 // The words a RANGE phrase takes, for completion.
 extern const std::vector<std::string_view> kRangeWords;
 // Three numbers named prefix x, y, z in messages.
@@ -51,7 +52,7 @@ void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked)
 
 // One Command object per file in commands/.
 #define TRUBAL_COMMANDS(X)                                                                                   \
-  X(start) X(gen) X(ball) X(lattice) X(delete) X(renumber) X(group) X(prop) X(damp) X(frac) X(tstep) X(grav) X(fix)    \
+  X(start) X(gen) X(ball) X(lattice) X(delete) X(renumber) X(bond) X(group) X(prop) X(damp) X(frac) X(tstep) X(grav) X(fix)    \
   X(free) X(init) X(apply) X(wall) X(membrane) X(strain) X(servo) X(sample) X(cycle) X(solve) X(print) X(hist) X(plot) X(dump) \
   X(save) X(restart) X(backend) X(set) X(call) X(echo) X(title) X(help) X(stop)
 #define TRUBAL_DECLARE_COMMAND(name) extern const Command name##_command;

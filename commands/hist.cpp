@@ -130,7 +130,7 @@ static void run_hist(Context& ctx, Args& args) {
 
 const Command hist_command = {
     "HIST", {},
-    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: sample stress pq strain volumetric ratio sratio axial platen energy rolling bridges unbal contacts porosity time, wall n, ball id x y z vx vy vz wx wy wz fx fy fz, measure sphere x y z r [id n]",
+    "HIST what... [every n] [file f.csv [new|append]] [area a] [pressure p] [range ...]  |  HIST reset;  what: sample stress pq strain volumetric ratio sratio axial platen energy rolling bridges bonds unbal contacts porosity time, wall n, ball id x y z vx vy vz wx wy wz fx fy fz, measure sphere x y z r [id n]",
     "record quantities every n cycles",
     "Records quantities every n cycles (default 10): sample (ea ev sig1 sig3 q p: the axial and volumetric "
     "strains, sigma1, sigma3, the deviator and the mean stress of the sample between walls that SAMPLE "
@@ -154,7 +154,8 @@ const Command hist_command = {
     "strain_energy friction_work damping_work boundary_work potential; potential is gravity's, as PRINT energy "
     "shows it), rolling (rolling_work: the work the rolling springs' limit dissipated, PROP rr_fric), bridges "
     "(bridges capillary_work: the capillary bridges intact, between balls and to walls, and the work they did "
-    "on the balls, PROP bridge), unbal (mean "
+    "on the balls, PROP bridge), bonds (bonds_intact bonds_broken broken_tension broken_shear: the parallel "
+    "bonds intact, those broken, and of them those broken in tension and in shear, BOND), unbal (mean "
     "unbalanced-force ratio), contacts (contacts sliding coordination), time. The range names the platen "
     "balls, fixed as the balls where it holds now (a group is the safe choice, since they move). With a "
     "range holding the top and bottom platens (the balls above and below the middle of its height): ratio "
@@ -181,7 +182,7 @@ const Command hist_command = {
     "on (a deck that repeats its HIST after RESTART, which resumes the saved histories). SAVE keeps the "
     "histories. `HIST reset` forgets all histories.",
     "hist stress strain every 100 file tri.csv",
-    {"sample", "stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "rolling", "bridges", "unbal", "contacts", "time", "wall", "ball",
+    {"sample", "stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "rolling", "bridges", "bonds", "unbal", "contacts", "time", "wall", "ball",
      "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "fx", "fy", "fz",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},
     run_hist};

@@ -28,7 +28,7 @@ void print_sample(Context& ctx);   // commands/sample.cpp
 static const std::vector<std::string_view> kItems = {"info", "balls", "contacts", "stress", "strain",
                                                      "energy", "fabric", "coordination", "prop", "damp",
                                                      "history", "walls", "psd", "porosity", "measure", "counters",
-                                                     "sample"};
+                                                     "sample", "bonds"};
 
 // The region of PRINT stress, fabric, coordination, porosity and measure: a measurement sphere,
 // given as the range element `sphere x y z r` (nothing else, since the measurement needs a volume).
@@ -80,8 +80,8 @@ static void run_print(Context& ctx, Args& args) {
   auto item = args.expect(kItems, "PRINT item");
   std::string file;
   if (args.accept("file")) file = args.word("file name");
-  if (!file.empty() && item != 1 && item != 2 && item != 11 && item != 12 && item != 15)
-    args.fail("`file` goes with PRINT balls, contacts, walls, psd and counters");
+  if (!file.empty() && item != 1 && item != 2 && item != 11 && item != 12 && item != 15 && item != 17)
+    args.fail("`file` goes with PRINT balls, contacts, bonds, walls, psd and counters");
   const Model& m = ctx.session.model();
   switch (item) {
     case 0: args.done(); print_info(ctx); return;
@@ -89,6 +89,7 @@ static void run_print(Context& ctx, Args& args) {
     case 15: args.done(); print_counters(ctx, file); return;
     case 1: print_balls(ctx, read_range(args, ctx.session), file); return;
     case 2: print_contacts(ctx, read_range(args, ctx.session), file); return;
+    case 17: print_bonds(ctx, read_range(args, ctx.session), file); return;
     case 3: {
       double volume = 0;
       if (args.accept("volume")) volume = args.real("volume");
@@ -122,12 +123,13 @@ static void run_print(Context& ctx, Args& args) {
         ctx.out << "of the state as it is (no step since the balls or the settings last changed):\n";
       ctx.out << fmt::format(
           "kinetic (translation): {:.8g}\nkinetic (rotation): {:.8g}\nstrain: {:.8g}\npotential (gravity): "
-          "{:.8g}\nfriction work: {:.8g}\n{}damping work: {:.8g}\nboundary work: {:.8g}\n{}balance (should stay "
+          "{:.8g}\nfriction work: {:.8g}\n{}damping work: {:.8g}\nboundary work: {:.8g}\n{}{}balance (should stay "
           "constant): {:.8g}\n",
           e.kinetic_translation, e.kinetic_rotation, e.strain, e.potential, e.friction_work,
           has_rolling(m) || e.rolling_work != 0 ? fmt::format("rolling work: {:.8g}\n", e.rolling_work) : "",
           e.damping_work, e.boundary_work,
           has_bridges(m) || e.capillary_work != 0 ? fmt::format("capillary work: {:.8g}\n", e.capillary_work) : "",
+          !m.bonds.empty() || e.bond_break_work != 0 ? fmt::format("bond breakage: {:.8g}\n", e.bond_break_work) : "",
           e.total());
       return;
     }
@@ -218,11 +220,11 @@ static void run_print(Context& ctx, Args& args) {
 }
 
 const Command print_command = {
-    "PRINT", {}, "PRINT info|counters|balls|contacts|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure|sample [file f] [range ...]",
+    "PRINT", {}, "PRINT info|counters|balls|contacts|bonds|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure|sample [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
     "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
-    "order, more than 3 suggests RENUMBER); the capillary bridges intact where a material has them; the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
+    "order, more than 3 suggests RENUMBER); the capillary bridges intact where a material has them; the bonds intact and broken (in tension, in shear) where there are any; the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
     "processes under mpirun; the peak memory so far). counters [file f]: the counts for scripts, one `name value` "
     "line each, under names that stay (cycle, balls, contacts, wall_contacts, balls_destroyed, threads, "
     "pair_list_rebuilds, ...; doc/language.md lists them all and what each counts). "
@@ -232,6 +234,12 @@ const Command print_command = {
     "j, before sliding where a material has rr_fric; the table then shows |mr|; where a material has a capillary "
     "bridge, the pairs a bridge holds apart too (their overlap and normal 0) and a last column bridge, 1 where "
     "one holds), optionally for a range. "
+    "bonds: the parallel bonds (BOND) that hold a ball of the range (all without one), by their balls' ids: "
+    "the normal force (compression positive), |shear force|, |twisting| and |bending moment|, the largest "
+    "tensile and shear stresses on the section, and intact, or broken in tension or shear (a broken bond "
+    "shows what broke it); with `file f.csv`: i,j,radius,fn,fsx,fsy,fsz,mt,mbx,mby,mbz,sigma,tau,"
+    "strength_t,strength_s,state (the forces and moments on j; strength_s the shear strength C - sigma_n "
+    "tan(fa) at the bond's mean normal stress). "
     "stress [volume "
     "v]: the average stress tensor over the volume (SET volume, the periodic cell or the START box), "
     "compression positive. stress, fabric, coordination and porosity with `range sphere x y z r`: those of a "
@@ -264,7 +272,7 @@ const Command print_command = {
     "sample: the measures of the sample between walls (SAMPLE): height, cross-section and volume, the axial and "
     "volumetric strains, sigma1, sigma3, q and p.",
     "print stress",
-    {"sample", "info", "counters", "balls", "contacts", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
+    {"sample", "info", "counters", "balls", "contacts", "bonds", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
      "history", "walls", "psd", "porosity", "measure", "file", "volume", "range"},
     run_print};
 

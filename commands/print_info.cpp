@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "physics/bond.hpp"
 #include "physics/bridge.hpp"
 #include "cycle/pipeline.hpp"
 #include "support/comm.hpp"
@@ -74,6 +75,11 @@ void print_info(Context& ctx) {
     std::size_t touching = 0;
     for (auto st : m.wall_contacts.state) touching += st != 0;
     o << fmt::format("walls: {} ({} ball-wall contacts)\n", m.walls.size(), touching);
+  }
+  if (!m.bonds.empty()) {
+    const BondCounts n = count_bonds(m.bonds);
+    o << fmt::format("bonds: {} intact, {} broken ({} in tension, {} in shear)\n", n.intact, n.broken(), n.tension,
+                     n.shear);
   }
   if (has_bridges(m))
     o << fmt::format("bridges intact: {} between balls, {} to walls\n", count_bridges(m.contacts),

@@ -142,6 +142,22 @@ std::size_t Session::delete_balls(const Range& range) {
   return remove_balls(edit(), remove);
 }
 
+std::size_t Session::make_bonds(const Range& range, const BondSpec& spec) {
+  require_started();
+  const std::vector<std::size_t> selected = select(range);
+  // The balls are where the last step left them: their energies stand, with the new bonds' (at zero).
+  const EnergyAtStep energy = model_.energy_at_step;
+  const std::size_t made = add_bonds(edit(), selected, spec);
+  model_.energy_at_step = energy;
+  return made;
+}
+
+std::size_t Session::delete_bonds(const Range& range) {
+  require_started();
+  const std::vector<std::size_t> selected = select(range);
+  return trubal::delete_bonds(edit(), selected);
+}
+
 Renumbering Session::renumber(RenumberOrder order) {
   require_started();
   const EnergyAtStep energy = model_.energy_at_step;
@@ -181,6 +197,9 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   require_started();
   check_ready(model_);
   update_mass(model_);
+  if (!model_.bonds.empty() && pipeline_->distributed())
+    throw std::runtime_error("bonds are not stepped on several ranks (BACKEND mpi): run a bonded scene on one rank, "
+                             "whose threads share it");
   interrupt_requested() = false;
   CycleControl control;
   control.interrupt = &interrupt_requested();

@@ -18,6 +18,7 @@
 #include "cycle/step_policy.hpp"
 #include "io/history.hpp"
 #include "io/vtk.hpp"
+#include "model/bond_table.hpp"
 #include "model/edit.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
@@ -107,6 +108,10 @@ class Session {
   std::size_t lattice_fcc(double d, int nx, int ny, int nz, const std::array<double, 3>& origin, int type,
                           const Range& range, Layers layers = Layers::All);
   std::size_t delete_balls(const Range& range);
+  // BOND (model/bond_table.hpp): bonds the pairs of balls of the range within the spec's gap, or
+  // deletes the bonds that hold a ball of the range. Return how many.
+  std::size_t make_bonds(const Range& range, const BondSpec& spec);
+  std::size_t delete_bonds(const Range& range);
   // RENUMBER (model/edit.hpp renumber_balls): the balls get ids 1..N in space order or their present
   // order; groups, the membrane, the histories' platens and GEN's last balls follow them. The balls
   // themselves do not change: the last step's energies and step estimate stay the state's.

@@ -60,6 +60,7 @@ EnergyGuard::EnergyGuard(const Model& model)
       damping0_(model.energy.damping_work),
       boundary0_(model.energy.boundary_work),
       capillary0_(model.energy.capillary_work),
+      bond_break0_(model.energy.bond_break_work),
       gross0_(model.space.gross_work) {}
 
 // Energy in must balance energy out. A step beyond the stability limit creates energy from
@@ -74,7 +75,8 @@ bool EnergyGuard::failed(const Model& model, const StepTotals& sums, std::int64_
   const EnergyAtStep& now = model.energy_at_step;
   const double kinetic = now.kinetic_translation + now.kinetic_rotation;
   const double dissipated = model.energy.friction_work + model.energy.rolling_work - friction0_ +
-                            model.energy.damping_work - damping0_ - now.damping_ahead;
+                            model.energy.damping_work - damping0_ - now.damping_ahead +
+                            model.energy.bond_break_work - bond_break0_;
   // (The bridges' work is energy in, as the boundary's.)
   const double boundary = model.energy.boundary_work - boundary0_ - now.boundary_ahead +
                           (model.energy.capillary_work - capillary0_ - now.capillary_ahead);

@@ -43,7 +43,7 @@ class EnergyGuard {
   static constexpr int kGrowthSteps = 32;     // steps looked back over to measure the energy's growth
   static constexpr int kFlippingSteps = 20;   // steps running with a negative kinetic term that stop the run
   double floor_ = 0;
-  double friction0_ = 0, damping0_ = 0, boundary0_ = 0, capillary0_ = 0, gross0_ = 0;   // the works at the start
+  double friction0_ = 0, damping0_ = 0, boundary0_ = 0, capillary0_ = 0, bond_break0_ = 0, gross0_ = 0;   // the works at the start
   double balance_ref_ = 0, potential_ref_ = 0;   // the first step's balance and potential
   double scale_max_ = 0;    // the most energy in play so far
   double in_play_max_ = 0;  // and with the balls' kinetic energy relative to moving walls

@@ -30,7 +30,7 @@ inline constexpr std::size_t kReduceBlock = 256;   // balls per block of the mot
 // in one fixed order).
 template <class Sums>
 void merge_exact_sums(Sums& into, Sums& from) {
-  std::array<ExactSum*, 22> to{};   // (StepSums has the most: 22)
+  std::array<ExactSum*, 23> to{};   // (StepSums has the most: 23)
   std::size_t n = 0;
   into.each_sum([&](ExactSum& s) { to[n++] = &s; });
   n = 0;
@@ -61,6 +61,8 @@ struct StepSums {
   // the balls, F(t) . (v(t - dt/2) + v(t + dt/2)) / 2 dt_mean as the law of motion charges any
   // force, and its part after t.
   ExactSum capillary_work, capillary_ahead;
+  // Scenes with bonds (cycle/bond_pass.hpp): the strain energy the bonds that broke this step held.
+  ExactSum bond_break;
   double critical_dt = std::numeric_limits<double>::infinity();   // next step's estimate (NaN wins)
   double fastest_speed2 = -1;               // |v|^2 + |R w|^2 of the fastest ball (NaN wins)
   std::size_t fastest_ball = 0;
@@ -72,7 +74,7 @@ struct StepSums {
     for (ExactSum& s : force_moment) f(s);
     for (ExactSum& s : stiffness_moment) f(s);
     for (ExactSum* s : {&kinetic_translation, &kinetic_rotation, &potential, &damping_ahead, &boundary_ahead, &rolling_work,
-                        &capillary_work, &capillary_ahead})
+                        &capillary_work, &capillary_ahead, &bond_break})
       f(*s);
   }
   void take_step(double dt) {
@@ -101,6 +103,7 @@ struct StepTotals {
   double kinetic_translation = 0, kinetic_rotation = 0, potential = 0, damping_ahead = 0, boundary_ahead = 0;
   double rolling_work = 0;
   double capillary_work = 0, capillary_ahead = 0;
+  double bond_break = 0;
   double critical_dt = std::numeric_limits<double>::infinity();
   double fastest_speed2 = -1;
   std::size_t fastest_ball = 0;
@@ -110,7 +113,8 @@ struct StepTotals {
         kinetic_translation(s.kinetic_translation.value()), kinetic_rotation(s.kinetic_rotation.value()),
         potential(s.potential.value()), damping_ahead(s.damping_ahead.value()),
         boundary_ahead(s.boundary_ahead.value()), rolling_work(s.rolling_work.value()),
-        capillary_work(s.capillary_work.value()), capillary_ahead(s.capillary_ahead.value()), critical_dt(s.critical_dt),
+        capillary_work(s.capillary_work.value()), capillary_ahead(s.capillary_ahead.value()), bond_break(s.bond_break.value()),
+        critical_dt(s.critical_dt),
         fastest_speed2(s.fastest_speed2), fastest_ball(s.fastest_ball) {
     for (int a = 0; a < 6; ++a) force_moment[a] = s.force_moment[a].value();
     for (int a = 0; a < 3; ++a) stiffness_moment[a] = s.stiffness_moment[a].value();

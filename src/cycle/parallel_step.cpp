@@ -1,5 +1,6 @@
 #include "cycle/parallel_step.hpp"
 
+#include "cycle/bond_pass.hpp"
 #include "cycle/bridge_pass.hpp"
 
 #include <algorithm>
@@ -182,6 +183,14 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     if (parallel) pool.run([&](int t) { if (t < parts) bridges(first_block_[t], first_block_[t + 1], t); });
     else bridges(0, blocks, 0);
   }
+  // Scenes with bonds: each bond's push, the table in equal shares (cycle/bond_pass.hpp).
+  if (kernels.features.bonds) {
+    prepare_bonds(model, scratch);
+    const std::size_t bonds = model.bonds.size();
+    auto share = [&](int t, int of) { bond_forces(model, scratch, kernels, split_point(bonds, of, t), split_point(bonds, of, t + 1), thread_sums_[t]); };
+    if (parallel) pool.run([&](int t) { if (t < parts) share(t, parts); });
+    else share(0, 1);
+  }
   if (wall_count) add_wall_loads(model, threads);
   const auto t1 = Clock::now();
 
@@ -195,6 +204,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     const std::size_t ball0 = std::min(balls, first * kReduceBlock), ball1 = std::min(balls, last * kReduceBlock);
     if (kernels.features.rolling) add_rolling(model.balls, scratch, ball0, ball1, thread_sums_[t]);
     if (kernels.features.bridges) add_bridges(model, scratch, ball0, ball1);
+    if (kernels.features.bonds) add_bonds(model, scratch, kernels, ball0, ball1);
     kernels.motion(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
     if (kernels.features.bridges) bridge_work(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
     if (moved) moved_[t] = moved->max_displacement2(model.balls, ball0, ball1);

@@ -271,6 +271,7 @@ StepTotals CycleRun::advance(bool details) {
   model.energy.damping_work += sums.damping_work;
   model.energy.boundary_work += sums.boundary_work;
   model.energy.capillary_work += sums.capillary_work;
+  model.energy.bond_break_work += sums.bond_break;
   if (kernels.estimate != StepEstimate::None) {
     const double estimate = std::min(sums.critical_dt, cap_);
     if (std::isfinite(estimate))

@@ -44,6 +44,7 @@ struct Snapshot {
   Space space;
   Membrane membrane;                                          // a following membrane's area
   std::map<std::string, std::vector<std::int64_t>> groups;   // destroyed balls leave their groups
+  Bonds bonds;                                                // their forces, and which broke
   std::int64_t cycle = 0;
   double time = 0, dt = 0, critical_dt = 0;
 
@@ -77,7 +78,7 @@ struct Snapshot {
   void restore_light(Model& m) const {
     m.walls = walls; m.space = space;
     m.energy = energy; m.energy_at_step = energy_at_step;
-    m.membrane = membrane; m.groups = groups;
+    m.membrane = membrane; m.groups = groups; m.bonds = bonds;
     m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
   }
 
@@ -116,7 +117,7 @@ struct Snapshot {
     results_cycle = m.contacts.results_cycle;
     walls = m.walls; space = m.space;
     energy = m.energy; energy_at_step = m.energy_at_step;
-    membrane = m.membrane; groups = m.groups;
+    membrane = m.membrane; groups = m.groups; bonds = m.bonds;
     cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
   }
   static std::array<std::vector<double>*, 6> unbalanced(Balls& b) { return {&b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz}; }

@@ -42,6 +42,13 @@ struct BridgeSum {
   double fx = 0, fy = 0, fz = 0, power = 0;
 };
 
+// A bond's push on ball j this step (scenes with bonds, cycle/bond_pass.hpp): its force, n x its
+// shear force (the moment on a ball b is -R_b t, as a contact's), its moment Mt n + Mb, and its
+// stiffness for the time step (translation, and its share of the spins' row). Zero where broken.
+struct BondPush {
+  double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0, mx = 0, my = 0, mz = 0, kmax = 0, ks = 0;
+};
+
 // One ball's parts of the step's global sums from its contacts: its run of pairs (those with
 // higher partners, in list order), then its wall contacts in order. The motion loop adds its own
 // and hands them to the exact sums (StepSums), ball by ball.
@@ -69,6 +76,11 @@ struct StepScratch {
   std::vector<std::uint32_t> partner_begin, partner_pairs;
   std::uint64_t partner_version = 0;
   std::vector<BridgeSum> ball_bridge;
+  // Scenes with bonds only (cycle/bond_pass.hpp, which sizes them): each bond's balls as indices,
+  // each ball's bonds as partner j (ascending i; the first at bond_partner_begin[b]) and as i (its
+  // bonds as i, ascending j, from bond_run_begin[b] in bond_runs), and each bond's push.
+  std::vector<std::uint32_t> bond_ball_i, bond_ball_j, bond_run_begin, bond_runs, bond_partner_begin, bond_partners;
+  std::vector<BondPush> bond_push;
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
   std::vector<std::array<double, 9>> ball_moments;

@@ -1,4 +1,6 @@
 #include "io/history.hpp"
+
+#include "physics/bond.hpp"
 #include "physics/bridge.hpp"
 #include "support/comm.hpp"
 
@@ -35,7 +37,7 @@ using namespace history_files;
 const std::vector<std::string_view>& History::item_names() {
   static const std::vector<std::string_view> names = {"stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial",
                                                       "platen", "energy", "rolling", "unbal", "contacts", "time", "wall",
-                                                      "porosity", "measure", "ball", "sample", "bridges"};
+                                                      "porosity", "measure", "ball", "sample", "bridges", "bonds"};
   return names;
 }
 
@@ -79,6 +81,7 @@ static std::vector<std::string> columns_of(const std::string& item) {
   if (item == "energy") return {"ke", "strain_energy", "friction_work", "damping_work", "boundary_work", "potential"};
   if (item == "rolling") return {"rolling_work"};
   if (item == "bridges") return {"bridges", "capillary_work"};
+  if (item == "bonds") return {"bonds_intact", "bonds_broken", "broken_tension", "broken_shear"};
   if (item == "porosity") return {"porosity", "void_ratio"};
   if (item == "contacts") return {"contacts", "sliding", "coordination"};
   if (item == "time") return {};   // cycle and time lead every row
@@ -267,6 +270,9 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
     } else if (item == "bridges") {
       row.push_back(static_cast<double>(count_bridges(model.contacts) + count_bridges(model.wall_contacts)));
       row.push_back(energy(model).capillary_work);
+    } else if (item == "bonds") {
+      const BondCounts n = count_bonds(model.bonds);
+      for (std::size_t v : {n.intact, n.broken(), n.tension, n.shear}) row.push_back(static_cast<double>(v));
     } else if (item == "porosity") {
       const Porosity p = space_porosity(model, volume);
       row.push_back(p.porosity);

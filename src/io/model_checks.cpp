@@ -1,6 +1,8 @@
 // What must hold of a model read from a file (io/model_checks.hpp).
 #include "io/model_checks.hpp"
 
+#include "model/bond_table.hpp"
+
 #include <cmath>
 #include <string>
 
@@ -96,6 +98,7 @@ std::string invalid_model(const Model& m) {
         m.walls[wc.wall[p]].id != wc.wall_id[p] || wc.state[p] > 2)
       return fmt::format("wall contact {} does not match the balls and walls", p);
   }
+  if (const std::string bonds = bond_table_problem(m); !bonds.empty()) return bonds;
   return "";
 }
 

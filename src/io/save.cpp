@@ -244,6 +244,18 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     Sample& s = m.sample;
     io.pod(s.platens); io.pod(s.sides); io.pod(s.height0); io.pod(s.area0);
   }
+  if (version >= 12) {   // the parallel bonds, array by array (Bonds::for_each_array), and what broke
+    io.pod(m.energy.bond_break_work);
+    std::uint64_t nbonds = m.bonds.size();
+    io.pod(nbonds);
+    if constexpr (std::is_same_v<IO, Reader>)
+      if (nbonds > (std::uint64_t{1} << 34)) io.corrupt();
+    m.bonds.for_each_array([&](auto& v) {
+      io.vec(v);
+      if constexpr (std::is_same_v<IO, Reader>)
+        if (v.size() != nbonds) io.corrupt();
+    });
+  }
 }
 
 // The histories: what each HIST asked for and the rows it holds (a file's window; every row of a

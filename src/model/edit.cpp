@@ -1,5 +1,7 @@
 #include "model/edit.hpp"
 
+#include "model/bond_table.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -120,6 +122,7 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
   w.list_version = 0;
   for (auto& [name, ids] : model.groups)
     std::erase_if(ids, [&](std::int64_t id) { return find_ball(model, id) < 0; });
+  drop_bonds_of_missing_balls(model);
   return removed;
 }
 
@@ -249,6 +252,7 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
     std::sort(ids.begin(), ids.end());
   }
   for (auto& id : model.membrane.ids) id = r.map(id);
+  renumber_bonds(model.bonds, [&](std::int64_t id) { return r.map(id); });
   return r;
 }
 

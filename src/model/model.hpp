@@ -11,6 +11,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "model/bonds.hpp"
+
 namespace trubal {
 
 // Velocity components that FIX/FREE address, as bits of Balls::fixed.
@@ -362,6 +364,7 @@ struct Energy {
   double boundary_work = 0;        // done by fixed velocities and applied forces (gravity: potential)
   double rolling_work = 0;         // dissipated by the rolling springs' limit (PROP rr_fric)
   double capillary_work = 0;       // done on the balls by the capillary bridges (PROP bridge)
+  double bond_break_work = 0;      // the strain energy the parallel bonds held when they broke (BOND)
 };
 
 // The energy terms at the time t of the last step's force pass (cycle/run.cpp): the positions were
@@ -411,6 +414,7 @@ struct Model {
   ContactTable contacts;
   std::vector<Wall> walls;                // by ascending id
   WallContacts wall_contacts;
+  Bonds bonds;                            // parallel bonds (model/bonds.hpp)
   Settings settings;
   Energy energy;
   EnergyAtStep energy_at_step;

@@ -1,6 +1,8 @@
 // Measurements from the balls and the contact table's last force pass.
 #include "physics/measure.hpp"
 
+#include "physics/bond.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -94,8 +96,8 @@ Sym6 average_stress(const Model& model, double volume) {
 }
 
 double EnergyReport::total() const {
-  return kinetic_translation + kinetic_rotation + strain + potential + friction_work + rolling_work + damping_work -
-         boundary_work - capillary_work;
+  return kinetic_translation + kinetic_rotation + strain + potential + friction_work + rolling_work + damping_work +
+         bond_break_work - boundary_work - capillary_work;
 }
 
 EnergyReport energy(const Model& model) {
@@ -105,6 +107,7 @@ EnergyReport energy(const Model& model) {
   e.damping_work = model.energy.damping_work;
   e.boundary_work = model.energy.boundary_work;
   e.capillary_work = model.energy.capillary_work;
+  e.bond_break_work = model.energy.bond_break_work;
   const EnergyAtStep& now = model.energy_at_step;
   if (now.valid) {   // all at t, the time of the last force pass (the step's own sums)
     e.at_step = true;
@@ -142,6 +145,9 @@ EnergyReport energy(const Model& model) {
       const double r = b.rad[w.ball[p]];   // (Rbar of a ball on a wall: its radius)
       e.strain += shear_spring_energy(w.mrx[p] * w.mrx[p] + w.mry[p] * w.mry[p] + w.mrz[p] * w.mrz[p], w.ks_eff[p] * r * r);
     }
+  const Bonds& bonds = model.bonds;
+  for (std::size_t q = 0; q < bonds.size(); ++q)
+    if (bonds.fate[q] == 0) e.strain += bond_strain_energy(bond_law(bonds, q), bond_state(bonds, q));
   return e;
 }
 

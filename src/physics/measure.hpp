@@ -36,9 +36,10 @@ struct EnergyReport {
   double friction_work = 0, damping_work = 0, boundary_work = 0;
   double rolling_work = 0;         // dissipated by the rolling springs' limit
   double capillary_work = 0;       // done on the balls by the capillary bridges (energy in)
+  double bond_break_work = 0;      // the strain energy the parallel bonds held when they broke (lost)
   double potential = 0;            // gravity, relative to x = 0
   bool at_step = false;            // taken at the last step's t (else from the state as it is)
-  double total() const;            // kinetic + strain + potential + dissipated - boundary - capillary
+  double total() const;            // kinetic + strain + potential + dissipated (bonds broken too) - boundary - capillary
 };
 EnergyReport energy(const Model& model);
 

@@ -31,6 +31,7 @@ std::string Features::describe() const {
   if (applied) s += " applied-loads";
   if (periodic) s += " periodic";
   if (bridges) s += " capillary-bridges";
+  if (bonds) s += " parallel-bonds";
   return s;
 }
 
@@ -62,7 +63,9 @@ Features scene_features(const Model& model) {
     moments = moments || b.amx[i] != 0 || b.amy[i] != 0 || b.amz[i] != 0;
     f.applied = f.applied || moments || b.ax[i] != 0 || b.ay[i] != 0 || b.az[i] != 0;
   }
-  f.rotation = (f.friction && free_spin) || spinning || moments;
+  // A bond carries moments: its balls turn whatever the contacts' shear.
+  f.bonds = std::any_of(model.bonds.fate.begin(), model.bonds.fate.end(), [](std::uint8_t v) { return v == 0; });
+  f.rotation = ((f.friction || f.bonds) && free_spin) || spinning || moments;
   f.rolling = rolling && f.friction && f.rotation;
   f.periodic = model.space.periodic;
   f.bridges = bridge_reach(model) > 0;

@@ -15,6 +15,7 @@ struct Features {
   bool hertz = false;
   bool rolling = false;     // some material has rolling resistance (rr_fric), with shear and spins
   bool bridges = false;     // some pair of types has capillary bridges (PROP bridge): cycle/bridge_pass.hpp
+  bool bonds = false;       // some parallel bond holds (BOND): cycle/bond_pass.hpp
   bool stiffness_damping = false;   // Rayleigh beta or restitution dashpots
   DampKind mass_damping = DampKind::None;
   bool gravity = false;

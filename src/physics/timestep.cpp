@@ -3,7 +3,9 @@
 #include <initializer_list>
 #include <limits>
 
+#include "model/edit.hpp"
 #include "model/periodic_cell.hpp"
+#include "physics/bond.hpp"
 #include "physics/contact_law.hpp"
 #include "physics/pair_laws.hpp"
 #include "physics/scene.hpp"
@@ -118,6 +120,18 @@ double balls_critical_step(const Model& model, const Features& features, bool an
     in.ri = in.rj = lane.r;
     in.mstar = b.mass[i];
     add(laws.wall_law(i, w), in, {i});
+  }
+  // The intact bonds, after the wall contacts (the step's order: cycle/bond_pass.hpp).
+  const Bonds& bonds = model.bonds;
+  for (std::size_t q = 0; q < bonds.size(); ++q) {
+    if (bonds.fate[q] != 0) continue;
+    const std::int64_t i = find_ball(model, bonds.id_i[q]), j = find_ball(model, bonds.id_j[q]);
+    if (i < 0 || j < 0) continue;
+    const BondStiffness k = bond_stiffness(bond_law(bonds, q), b.rad[i], b.rad[j]);
+    for (const std::int64_t ball : {i, j}) {
+      sums[static_cast<std::size_t>(ball)].kmax += k.kmax;
+      sums[static_cast<std::size_t>(ball)].ks += k.ks;
+    }
   }
   const bool rotation = features.rotation;
   // Held balls set no step of their own; where every ball is held (the balls may still move at their

@@ -124,7 +124,7 @@ TEST_CASE("io restart: the contacts' history is saved by name, and a save of for
   const std::size_t header = 8 + 4 + 8 + 8;
   std::uint32_t version = 0;
   std::memcpy(&version, data.data() + 8, sizeof version);
-  CHECK(version == 11);
+  CHECK(version == 12);
   const std::string named = std::string("\x03\0\0\0\0\0\0\0fsy", 11);   // the length, then the name
   const auto at = data.find(named, header);
   REQUIRE(at != std::string::npos);

@@ -1,0 +1,36 @@
+// The parallel bonds' part of a step (physics/bond.hpp; doc/physics.md "Parallel bonds"), for
+// scenes with bonds only (Features::bonds): a pass of its own beside the contact loops, as the
+// capillary bridges' (cycle/bridge_pass.hpp), so that the contact kernel tables stay as they are.
+//
+// 1. bond_forces (bonds in any shares, after the contact loops): each intact bond's forces and
+//    moments from the relative motion of its balls over the step before (positions at t, velocities
+//    at t - dt/2, as the contact law's shear spring), then the breakage rules; a bond that breaks
+//    books the strain energy it held as lost (StepSums::bond_break) and pushes no more. Its push on
+//    ball j goes to the bond's scratch, its strain energy to the step's, its force to the servo's
+//    moments where a servo reads them.
+// 2. add_bonds (per ball, before the law of motion): each ball's pushes summed in one order, its
+//    bonds as partner j (ascending i), then as i (ascending j), the table's canonical order, and
+//    joined to its contact sums; so every backend and thread count gives the same bits.
+#pragma once
+
+#include <cstddef>
+
+#include "cycle/kernels.hpp"
+#include "cycle/step_scratch.hpp"
+#include "model/model.hpp"
+
+namespace trubal {
+
+// Whether the model has a bond that still holds: the step then runs the pass.
+bool has_intact_bonds(const Model& model);
+// Indexes the bond table by ball (again where the balls or the table's rows changed) and sizes the
+// pushes.
+void prepare_bonds(const Model& model, StepScratch& scratch);
+// Bonds [begin, end) of the table: step 1. `sums`: the strain energy, the energy lost at breakage,
+// the servo's moments and the image power, where the bond's ball i is not a ghost.
+void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
+                 StepSums& sums);
+// Balls [begin, end): step 2.
+void add_bonds(const Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end);
+
+}  // namespace trubal
