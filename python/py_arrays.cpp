@@ -13,6 +13,7 @@
 
 #include "io/history.hpp"
 #include "model/edit.hpp"
+#include "physics/bond.hpp"
 #include "physics/measure.hpp"
 #include "physics/walls.hpp"
 #include "py_session.hpp"
@@ -186,6 +187,35 @@ py::dict contacts(PySession& s) {
   return d;
 }
 
+// The parallel bonds (BOND), intact and broken, as PRINT bonds lists them: the table's order.
+py::dict bonds(PySession& s) {
+  const Model& m = s.session().model();
+  const Bonds& t = m.bonds;
+  const std::size_t n = t.size();
+  std::vector<double> sigma(n), tau(n);
+  std::vector<std::int32_t> state(t.fate.begin(), t.fate.end());
+  std::vector<bool> intact(n);
+  for (std::size_t q = 0; q < n; ++q) {
+    const BondStress st = bond_stress(bond_law(t, q), bond_state(t, q));
+    sigma[q] = st.sigma;
+    tau[q] = st.tau;
+    intact[q] = t.fate[q] == 0;
+  }
+  py::dict d;
+  d["i"] = column<std::int64_t>(t.id_i);
+  d["j"] = column<std::int64_t>(t.id_j);
+  d["radius"] = column<double>(t.radius);
+  d["normal_force"] = column<double>(t.fn);
+  d["shear_force"] = columns3(t.fsx, t.fsy, t.fsz);
+  d["twisting_moment"] = column<double>(t.mt);
+  d["bending_moment"] = columns3(t.mbx, t.mby, t.mbz);
+  d["sigma"] = column<double>(sigma);
+  d["tau"] = column<double>(tau);
+  d["intact"] = column<bool>(intact);
+  d["state"] = column<std::int32_t>(state);
+  return d;
+}
+
 py::dict energy(PySession& s) {
   const EnergyReport e = trubal::energy(s.session().model());
   py::dict d;
@@ -196,6 +226,7 @@ py::dict energy(PySession& s) {
   d["friction_work"] = e.friction_work;
   d["rolling_work"] = e.rolling_work;
   d["capillary_work"] = e.capillary_work;
+  d["bond_break_work"] = e.bond_break_work;
   d["damping_work"] = e.damping_work;
   d["boundary_work"] = e.boundary_work;
   d["balance"] = e.total();
@@ -304,6 +335,12 @@ void bind_arrays(py::class_<PySession>& cls) {
            "contact sorted by (i, j): i, j (ball ids, i < j), normal (n, 3; unit, from i to j), overlap, "
            "normal_force, shear_force (n, 3; on j), force (n, 3; total on j, on i minus it), sliding (bools); and "
            "cycle, the cycle whose force pass these are (-1: none yet).")
+      .def("bonds", bonds,
+           "The parallel bonds (BOND), intact and broken, as PRINT bonds lists them: a dict of arrays, one row "
+           "per bond sorted by (i, j): i, j (ball ids, i < j), radius, normal_force (compression positive), "
+           "shear_force (n, 3; on j), twisting_moment (about the normal, on j), bending_moment (n, 3; on j), "
+           "sigma and tau (the largest tensile and shear stresses on the section), intact (bools) and state (0 "
+           "intact, 1 broken in tension, 2 in shear; a broken bond keeps the forces that broke it).")
       .def("stress",
            [](PySession& s) {
              return engine_call([&] {
@@ -318,7 +355,7 @@ void bind_arrays(py::class_<PySession>& cls) {
            "rate times step, a logarithmic strain (an edge is about its START length times exp(-strain)).")
       .def("energy", energy,
            "The energy terms (PRINT energy) as a dict: kinetic_translation, kinetic_rotation, strain, potential, "
-           "friction_work, rolling_work, damping_work, boundary_work, capillary_work, balance.")
+           "friction_work, rolling_work, damping_work, boundary_work, capillary_work, bond_break_work (the energy the broken bonds held), balance.")
       .def("history", histories,
            "The HIST tables, in the order given: a list with one dict per table, column name -> array "
            "(cycle, time, then the items' columns, as PRINT history names them).")

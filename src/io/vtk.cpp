@@ -1,5 +1,7 @@
 #include "io/vtk.hpp"
 
+#include "model/edit.hpp"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -142,6 +144,64 @@ void write_contacts_vtp(const Model& model, const std::string& path) {
   w.write(path, 2 * lines, 0, lines);
 }
 
+void write_bonds_vtp(const Model& model, const std::string& path) {
+  const Balls& b = model.balls;
+  const Bonds& t = model.bonds;
+  const CellFrame frame = cell_frame(model.space);
+  // Cracks (broken bonds) first, as vertex cells, then intact bonds as lines: VTK orders the cell
+  // data verts before lines.
+  std::vector<double> crack_points, bond_points;
+  std::vector<std::int64_t> crack_i, crack_j, bond_i, bond_j;
+  std::vector<std::int32_t> crack_state;
+  std::vector<double> crack_fn, bond_fn;
+  for (std::size_t q = 0; q < t.size(); ++q) {
+    const std::int64_t fi = find_ball(model, t.id_i[q]), fj = find_ball(model, t.id_j[q]);
+    if (fi < 0 || fj < 0) continue;
+    const std::size_t i = static_cast<std::size_t>(fi), j = static_cast<std::size_t>(fj);
+    // j at its image nearest i (the one the bond acts across).
+    double d[3] = {b.x[j] - b.x[i], b.y[j] - b.y[i], b.z[j] - b.z[i]};
+    if (model.space.periodic) {
+      std::int8_t ix, iy, iz;
+      nearest_image(frame, d[0], d[1], d[2], ix, iy, iz);
+      double o[3];
+      image_offset(frame, ix, iy, iz, o[0], o[1], o[2]);
+      d[0] = image_delta(b.x[j], b.x[i], o[0]); d[1] = image_delta(b.y[j], b.y[i], o[1]); d[2] = image_delta(b.z[j], b.z[i], o[2]);
+    }
+    if (t.fate[q] == 0) {
+      bond_points.insert(bond_points.end(), {b.x[i], b.y[i], b.z[i], b.x[i] + d[0], b.y[i] + d[1], b.z[i] + d[2]});
+      bond_fn.push_back(t.fn[q]);
+      bond_i.push_back(t.id_i[q]);
+      bond_j.push_back(t.id_j[q]);
+      continue;
+    }
+    // A crack where the bond was: the middle of the gap between the surfaces.
+    const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    const double at = len > 0 ? (b.rad[i] + 0.5 * (len - b.rad[i] - b.rad[j])) / len : 0.5;
+    crack_points.insert(crack_points.end(), {b.x[i] + at * d[0], b.y[i] + at * d[1], b.z[i] + at * d[2]});
+    crack_fn.push_back(t.fn[q]);
+    crack_state.push_back(t.fate[q]);
+    crack_i.push_back(t.id_i[q]);
+    crack_j.push_back(t.id_j[q]);
+  }
+  const std::size_t cracks = crack_fn.size(), lines = bond_fn.size();
+  std::vector<double> points = crack_points;
+  points.insert(points.end(), bond_points.begin(), bond_points.end());
+  auto joined = [](auto a, const auto& b) { a.insert(a.end(), b.begin(), b.end()); return a; };
+  std::vector<std::int32_t> state = crack_state;
+  state.resize(cracks + lines, 0);
+  PolyDataWriter w;
+  w.array("Points", "Float64", "Points", points, 3);
+  w.array("Verts", "Int64", "connectivity", iota64(cracks, 1, 0));
+  w.array("Verts", "Int64", "offsets", iota64(cracks, 1, 1));
+  w.array("Lines", "Int64", "connectivity", iota64(2 * lines, 1, static_cast<std::int64_t>(cracks)));
+  w.array("Lines", "Int64", "offsets", iota64(lines, 2, 2));
+  w.array("CellData", "Int32", "state", state);
+  w.array("CellData", "Float64", "normal_force", joined(crack_fn, bond_fn));
+  w.array("CellData", "Int64", "id_i", joined(crack_i, bond_i));
+  w.array("CellData", "Int64", "id_j", joined(crack_j, bond_j));
+  w.write(path, cracks + 2 * lines, cracks, lines);
+}
+
 void write_walls_vtp(const Model& model, const std::string& path) {
   const auto box = model.space.length();
   const double side = std::sqrt(box[0] * box[0] + box[1] * box[1] + box[2] * box[2]);
@@ -254,6 +314,8 @@ std::string VtkSeries::contacts_path(std::int64_t cycle) const {
 
 std::string VtkSeries::walls_path(std::int64_t cycle) const { return fmt::format("{}_walls_{:06d}.vtp", base_, cycle); }
 
+std::string VtkSeries::bonds_path(std::int64_t cycle) const { return fmt::format("{}_bonds_{:06d}.vtp", base_, cycle); }
+
 std::string VtkSeries::domain_path(std::int64_t cycle) const {
   return fmt::format("{}_domain_{:06d}.vtp", base_, cycle);
 }
@@ -264,9 +326,11 @@ void VtkSeries::write(const Model& model) {
   const bool walls = !model.walls.empty();
   if (walls) write_walls_vtp(model, walls_path(model.cycle));
   write_domain_vtp(model, domain_path(model.cycle));
+  const bool bonds = !model.bonds.empty();
+  if (bonds) write_bonds_vtp(model, bonds_path(model.cycle));
   // A second dump at the same cycle replaces the first.
   if (!entries_.empty() && entries_.back().cycle == model.cycle) entries_.pop_back();
-  entries_.push_back({model.cycle, model.time, walls});
+  entries_.push_back({model.cycle, model.time, walls, bonds});
   write_pvd();
 }
 
@@ -297,6 +361,8 @@ void VtkSeries::write_pvd() const {
     if (e.walls)
       xml += fmt::format("    <DataSet timestep=\"{}\" part=\"2\" file=\"{}\"/>\n", e.time, leaf(walls_path(e.cycle)));
     xml += fmt::format("    <DataSet timestep=\"{}\" part=\"3\" file=\"{}\"/>\n", e.time, leaf(domain_path(e.cycle)));
+    if (e.bonds)
+      xml += fmt::format("    <DataSet timestep=\"{}\" part=\"4\" file=\"{}\"/>\n", e.time, leaf(bonds_path(e.cycle)));
   }
   xml += "  </Collection>\n</VTKFile>\n";
   write_file_atomically(pvd_path(), xml);

@@ -12,8 +12,14 @@
 //   BASE_domain_000123.vtp    the START box or periodic cell (a parallelepiped once sheared): its 8
 //                             corners and 12 edges as line cells; cell data axis (0 1 2, the edge's
 //                             direction) and periodic (1 where that axis is periodic)
+// and, when the model has bonds (BOND),
+//   BASE_bonds_000123.vtp     the parallel bonds: each broken bond a vertex cell (a crack) at the
+//                             middle of the gap between its balls' surfaces, then each intact bond a
+//                             line cell from centre to centre; cell data state (0 intact, 1 broken
+//                             in tension, 2 in shear), normal_force (compression positive; a
+//                             crack's, what broke it), id_i, id_j
 // and rewrites BASE.pvd, the collection (part 0 balls, part 1 contacts, part 2 walls where a dump
-// has them, part 3 the domain) with each dump's time, so ParaView opens the whole series at once. Arrays are binary, appended raw (little-endian, UInt64
+// has them, part 3 the domain, part 4 the bonds where a dump has them) with each dump's time, so ParaView opens the whole series at once. Arrays are binary, appended raw (little-endian, UInt64
 // byte counts). Every file is written to a temporary name and renamed, so a reader never sees
 // half a file.
 #pragma once
@@ -35,6 +41,7 @@ void write_balls_vtp(const Model& model, const std::string& path);
 void write_contacts_vtp(const Model& model, const std::string& path);
 void write_walls_vtp(const Model& model, const std::string& path);
 void write_domain_vtp(const Model& model, const std::string& path);
+void write_bonds_vtp(const Model& model, const std::string& path);
 
 class VtkSeries {
  public:
@@ -53,6 +60,7 @@ class VtkSeries {
   std::string contacts_path(std::int64_t cycle) const;
   std::string walls_path(std::int64_t cycle) const;   // written only when the model has walls
   std::string domain_path(std::int64_t cycle) const;
+  std::string bonds_path(std::int64_t cycle) const;   // written only when the model has bonds
   std::size_t dumps() const { return entries_.size(); }
 
  private:
@@ -60,6 +68,7 @@ class VtkSeries {
     std::int64_t cycle;
     double time;
     bool walls;   // a walls file was written
+    bool bonds;   // a bonds file was written
   };
   void write_pvd() const;
   std::string base_;

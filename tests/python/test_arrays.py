@@ -231,6 +231,24 @@ class SetArrays(unittest.TestCase):
         self.assertAlmostEqual(s.positions[0, 2], 0.1 - weight / 1e5, delta=1e-9 * 0.1)
         self.assertEqual(len(s.contacts()["i"]), 0)   # ball pairs only: there are none
 
+    def test_bonds(self):
+        # Two bonded balls pulled apart break in tension at T A (A = pi (L R)^2): bonds() says which
+        # broke, why, and the force that broke it, within one step's increment (1e-4 of it here).
+        s = trubal.Session(quiet=True)
+        s.command("start box -2 3 -2 2 -2 2\nprop kn 1e8 ks 1e8 mu 0.5 dens 1000\ntstep 1e-5\n"
+                  "ball 0 0 0 0.5 id 1\nball 1 0 0 0.5 id 2\n"
+                  "bond kn 1e9 ks 4e8 ten 1e5 coh 1e9 rmul 0.8\nfix vel spin\ninit xvel 1.0000317e-3 range id 2")
+        b = s.bonds()
+        self.assertEqual((b["i"].tolist(), b["j"].tolist(), b["intact"].tolist()), ([1], [2], [True]))
+        self.assertAlmostEqual(b["radius"][0], 0.4, delta=1e-15)
+        s.cycle(10100)
+        b = s.bonds()
+        self.assertEqual((b["intact"].tolist(), b["state"].tolist()), ([False], [1]))
+        area = np.pi * 0.4**2
+        self.assertAlmostEqual(-b["normal_force"][0] / (1e5 * area), 1, delta=2e-4)
+        self.assertEqual(b["shear_force"].shape, (1, 3))
+        self.assertGreater(s.energy()["bond_break_work"], 0)
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -129,8 +129,23 @@ servo wall 2 off
 wall id 2 velocity 0.01 0 0.02
 )", "hist wall 2 bridges every 7 file h.csv\n", 2000};
 
+// A cemented block: an FCC lattice with parallel bonds, its top layers pushed down and its bottom
+// held, bonds breaking in tension and in shear through the run (the bonds' table carried by its
+// balls' ids, its state cut, saved and restarted; under BACKEND mpi every rank steps it whole).
+const Scene kBondedBlock = {"bonded_block", R"(start box -3 8 -3 8 -3 8 destroy
+prop kn 1e8 ks 5e7 mu 0.5 dens 2000
+lattice fcc 1 5 5 7
+bond gap 1e-6 kn 2e8 ks 1e8 ten 2e5 coh 4e5 fa 30 rmul 0.9 mcf 0.8
+group top range z 3.5 10
+fix vel spin range group top
+fix vel spin range z -1 0.1
+init zvel -0.3 range group top
+)", "hist bonds energy every 7 file h.csv\n", 500};
+
 struct Result {
   std::string balls, contacts, history, walls;
+  std::string bonds = {};  // PRINT bonds file
+
   std::string info = {};   // PRINT info at the end
   std::string dumps = {};  // every file of DUMP vtk d, by name (a scene's `during` may dump)
   Counters counters = {};  // PRINT counters at the end
@@ -151,6 +166,7 @@ std::string dump_files(const std::filesystem::path& dir) {
 
 // What every run prints at its end: its files, PRINT info and PRINT counters.
 const char* const kEndOutputs = "print balls file balls.csv\nprint contacts file contacts.csv\nprint walls file walls.csv\n"
+                                "print bonds file bonds.csv\n"
                                 "print info\nprint counters file counters.txt\n";
 
 // Pair lists rebuilt on the parts of the decomposition (ranks' or threads').
@@ -171,7 +187,8 @@ Result run(const Scene& scene, const std::string& backend, const std::string& cy
   INFO(h.err.str());
   REQUIRE(ok);
   return {slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
-          slurp(dir.path() / "walls.csv"), h.out.str(), dump_files(dir.path()), read_counters(dir.path() / "counters.txt")};
+          slurp(dir.path() / "walls.csv"), slurp(dir.path() / "bonds.csv"), h.out.str(), dump_files(dir.path()),
+          read_counters(dir.path() / "counters.txt")};
 }
 
 // The cuts of a run of n cycles. `keeps_history`: the history file is the unbroken one's (every cut
@@ -231,6 +248,8 @@ void check_reference(const Scene& scene, const Result& r) {
   for (const auto& kv : column_sums("contacts", r.contacts)) sums.insert(kv);
   if (lines_of(r.walls).size() > 1)
     for (const auto& kv : column_sums("walls", r.walls)) sums.insert(kv);
+  if (lines_of(r.bonds).size() > 1)
+    for (const auto& kv : column_sums("bonds", r.bonds)) sums.insert(kv);
   const std::string path = std::string(TRUBAL_TEST_DIR) + "/reference/" + scene.name + ".ref";
   if (std::getenv("TRUBAL_UPDATE_REFERENCES")) {
     std::ofstream f(path);
@@ -285,6 +304,7 @@ void check_scene(const Scene& scene, bool in_space = false) {
       CHECK(other.balls == serial.balls);
       CHECK(other.contacts == serial.contacts);
       CHECK(other.walls == serial.walls);
+      CHECK(other.bonds == serial.bonds);
       if (cut.keeps_history) CHECK(other.history == serial.history);
       if (in_space && cut.name != "switch to allpairs 3")   // (allpairs keeps no list to share out)
         CHECK_THAT(other.info, Catch::Contains("last step shared by: the spatial decomposition, a part per thread"));
@@ -316,7 +336,7 @@ Result run_mpi(const Scene& scene, int ranks, const std::string& cycling) {
   CHECK(counter(counters, "ranks") == ranks);
   CHECK(out.find("trubal> print info") == out.rfind("trubal> print info"));
   return Result{slurp(dir.path() / "balls.csv"), slurp(dir.path() / "contacts.csv"), slurp(dir.path() / "h.csv"),
-                slurp(dir.path() / "walls.csv"), out, dump_files(dir.path()), counters};
+                slurp(dir.path() / "walls.csv"), slurp(dir.path() / "bonds.csv"), out, dump_files(dir.path()), counters};
 }
 
 // Every scene on 2 and 3 ranks, unbroken and cut (a switch from serial to mpi, SAVE and RESTART),
@@ -334,6 +354,7 @@ void check_scene_mpi(const Scene& scene) {
     CHECK(other.balls == serial.balls);
     CHECK(other.contacts == serial.contacts);
     CHECK(other.walls == serial.walls);
+    CHECK(other.bonds == serial.bonds);
     if (keeps_history) CHECK(other.history == serial.history);
     // The dumps, which rank 0 alone writes from the state gathered to it at their steps.
     if (keeps_history && cycling == unbroken) CHECK(other.dumps == serial.dumps);
@@ -496,6 +517,10 @@ TEST_CASE("cycle cuts: a wet bed with capillary bridges between balls and to wal
   check_scene(kWetBox);
 }
 
+TEST_CASE("cycle cuts: a cemented block with parallel bonds breaking in tension and shear", "[cuts][backends][bond][system][threads]") {
+  check_scene(kBondedBlock);
+}
+
 TEST_CASE("cycle cuts: threads sharing the step in space on 2 and 3 threads give the serial bits, every scene",
           "[cuts][backends][system][threads]") {
   for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox, &kWetBox}) {
@@ -505,7 +530,8 @@ TEST_CASE("cycle cuts: threads sharing the step in space on 2 and 3 threads give
 
 TEST_CASE("cycle cuts: BACKEND mpi on 2 and 3 ranks gives the serial bits, every scene", "[cuts][mpi][system][threads]") {
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
-  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox, &kWetBox}) check_scene_mpi(*scene);
+  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox, &kWetBox, &kBondedBlock})
+    check_scene_mpi(*scene);
 }
 
 TEST_CASE("cycle cuts: random GEN packings under the servo, cut 1 + n and n + 1, switched to strain between the stages",

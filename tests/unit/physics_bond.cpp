@@ -303,3 +303,17 @@ TEST_CASE("bond: BOND's words are checked, the errors with the deck's file and l
   REQUIRE(h.deck("delete range id 1\n"));   // a ball deleted takes its bonds
   CHECK(h.session.model().bonds.empty());
 }
+
+TEST_CASE("bond: DUMP vtk draws intact bonds as lines and broken ones as points (cracks)", "[bond][io]") {
+  TempDir dir;
+  WorkingDir cd(dir.path());
+  Harness h;
+  REQUIRE(h.deck(bonded_block(300) + "dump vtk d\n"));
+  const BondCounts n = count_bonds(h.session.model().bonds);
+  REQUIRE(n.broken() > 0);
+  const std::string vtp = slurp(dir.path() / "d_bonds_000300.vtp");
+  CHECK(vtp.find(fmt::format("NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\"", n.broken() + 2 * n.intact,
+                             n.broken(), n.intact)) != std::string::npos);
+  CHECK(vtp.find("Name=\"state\"") != std::string::npos);
+  CHECK(slurp(dir.path() / "d.pvd").find("part=\"4\" file=\"d_bonds_000300.vtp\"") != std::string::npos);
+}
