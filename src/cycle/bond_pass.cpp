@@ -14,19 +14,20 @@ namespace {
 
 constexpr std::uint32_t kNoBall = std::numeric_limits<std::uint32_t>::max();
 
-// Whether the index in `scratch` is of this table and these balls: every bond's indices name its
-// balls' ids (a cheap pass, so that no change of the table or the balls can leave it stale).
+// Whether the index in `scratch` is of this table and these balls: made for the pair list now (every
+// change of the balls or the table between steps goes through Session::edit, which has the next
+// step search afresh, a new list), of the same sizes, its first and last bonds naming their balls.
 bool index_current(const Model& model, const StepScratch& scratch) {
   const Bonds& t = model.bonds;
   const Balls& b = model.balls;
-  if (scratch.bond_ball_i.size() != t.size() || scratch.bond_run_begin.size() != b.size() + 1 ||
-      scratch.bond_push.size() != t.size())
+  if (scratch.bond_version == 0 || scratch.bond_version != model.contacts.list_version ||
+      scratch.bond_ball_i.size() != t.size() || scratch.bond_run_begin.size() != b.size() + 1 ||
+      scratch.bond_push.size() != t.size() || scratch.bond_stiffness.size() != t.size())
     return false;
-  for (std::size_t q = 0; q < t.size(); ++q) {
+  for (std::size_t q : {std::size_t{0}, t.size() - 1}) {
+    if (q >= t.size()) continue;
     const std::uint32_t i = scratch.bond_ball_i[q], j = scratch.bond_ball_j[q];
-    const bool i_ok = i == kNoBall ? find_ball(model, t.id_i[q]) < 0 : i < b.size() && b.id[i] == t.id_i[q];
-    const bool j_ok = j == kNoBall ? find_ball(model, t.id_j[q]) < 0 : j < b.size() && b.id[j] == t.id_j[q];
-    if (!i_ok || !j_ok) return false;
+    if (i != kNoBall && (i >= b.size() || j >= b.size() || b.id[i] != t.id_i[q] || b.id[j] != t.id_j[q])) return false;
   }
   return true;
 }
@@ -63,8 +64,16 @@ void prepare_bonds(const Model& model, StepScratch& scratch) {
     for (std::size_t q = 0; q < bonds; ++q)
       if (ball[q] != kNoBall) list[next[ball[q]]++] = static_cast<std::uint32_t>(q);
   };
+  // Each bond's share of its balls' stiffness sums (constant: its law and its balls' radii).
+  scratch.bond_stiffness.resize(bonds);
+  for (std::size_t q = 0; q < bonds; ++q)
+    scratch.bond_stiffness[q] = scratch.bond_ball_i[q] == kNoBall
+                                    ? BondStiffness{}
+                                    : bond_stiffness(bond_law(t, q), model.balls.rad[scratch.bond_ball_i[q]],
+                                                     model.balls.rad[scratch.bond_ball_j[q]]);
   by_ball(scratch.bond_ball_i, scratch.bond_run_begin, scratch.bond_runs);
   by_ball(scratch.bond_ball_j, scratch.bond_partner_begin, scratch.bond_partners);
+  scratch.bond_version = model.contacts.list_version;
 }
 
 void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end,
@@ -75,66 +84,87 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
   const CellFrame cell = cell_frame(model.space);
   const bool cell_moving = periodic && cell.moving();
   const bool ghosts = !scratch.ghost.empty();
+  const bool stiffness = k.sums_stiffness();
   ExactSum::Stream strain(sums.strain), lost(sums.bond_break);
+  BondBatch B;
+  std::uint32_t lane_bond[BondBatch::kSize];
+  double ivx[BondBatch::kSize], ivy[BondBatch::kSize], ivz[BondBatch::kSize];
+  std::size_t count = 0;
+  // The batch's bonds stepped (physics/bond.hpp step_bonds), their state and push written back.
+  double held[BondBatch::kSize], freed[BondBatch::kSize];
+  auto flush = [&] {
+    step_bonds(B, count, k.dt_prev);
+    for (std::size_t q = 0; q < count; ++q) {   // the energies, the owners' only: the exact sums a batch at a time
+      const bool owner = !(ghosts && scratch.ghost[scratch.bond_ball_i[lane_bond[q]]]);
+      held[q] = owner && B.fate[q] == 0 ? B.energy[q] : 0.0;
+      freed[q] = owner && B.fate[q] != 0 ? B.energy[q] : 0.0;
+    }
+    strain.add_block(held, count);
+    lost.add_block(freed, count);
+    for (std::size_t q = 0; q < count; ++q) {
+      const std::size_t bond = lane_bond[q];
+      const std::uint32_t i = scratch.bond_ball_i[bond];
+      t.fn[bond] = B.fn[q]; t.mt[bond] = B.mt[q];
+      t.fsx[bond] = B.fsx[q]; t.fsy[bond] = B.fsy[q]; t.fsz[bond] = B.fsz[q];
+      t.mbx[bond] = B.mbx[q]; t.mby[bond] = B.mby[q]; t.mbz[bond] = B.mbz[q];
+      const bool owner = !(ghosts && scratch.ghost[i]);
+      BondPush& push = scratch.bond_push[bond];
+      if (B.fate[q] != 0) {   // broken: gone for good, its energy lost
+        t.fate[bond] = static_cast<std::uint8_t>(B.fate[q]);
+        continue;
+      }
+      push.fx = B.fx[q]; push.fy = B.fy[q]; push.fz = B.fz[q];
+      push.tx = B.tx[q]; push.ty = B.ty[q]; push.tz = B.tz[q];
+      push.mx = B.mx[q]; push.my = B.my[q]; push.mz = B.mz[q];
+      if (stiffness) {
+        push.kmax = scratch.bond_stiffness[bond].kmax;
+        push.ks = scratch.bond_stiffness[bond].ks;
+      }
+      if (!owner) continue;
+      if (cell_moving) sums.image_power.add(-(push.fx * ivx[q] + push.fy * ivy[q] + push.fz * ivz[q]));
+      if (k.moments) {   // the force on j times the branch vector i -> j, and kn A l_a^2
+        const double dx = B.dx[q], dy = B.dy[q], dz = B.dz[q];
+        sums.force_moment[0].add(push.fx * dx); sums.force_moment[1].add(push.fy * dy); sums.force_moment[2].add(push.fz * dz);
+        sums.force_moment[3].add(0.5 * (push.fx * dy + push.fy * dx));
+        sums.force_moment[4].add(0.5 * (push.fx * dz + push.fz * dx));
+        sums.force_moment[5].add(0.5 * (push.fy * dz + push.fz * dy));
+        const double kn = t.kn[bond] * bond_section(t.radius[bond]).area;
+        sums.stiffness_moment[0].add(kn * dx * dx); sums.stiffness_moment[1].add(kn * dy * dy);
+        sums.stiffness_moment[2].add(kn * dz * dz);
+      }
+    }
+    count = 0;
+  };
   for (std::size_t q = begin; q < end; ++q) {
-    BondPush& push = scratch.bond_push[q];
-    push = BondPush{};
+    scratch.bond_push[q] = BondPush{};
     const std::uint32_t i = scratch.bond_ball_i[q], j = scratch.bond_ball_j[q];
     if (t.fate[q] != 0 || i == kNoBall) continue;
-    const bool owner = !(ghosts && scratch.ghost[i]);
     // x_j - x_i at j's nearest image, and the image's velocity where the cell moves.
     double dx = b.x[j] - b.x[i], dy = b.y[j] - b.y[i], dz = b.z[j] - b.z[i];
-    double ivx = 0, ivy = 0, ivz = 0;
+    double ux = 0, uy = 0, uz = 0;
     if (periodic) {
       std::int8_t ix, iy, iz;
       nearest_image(cell, dx, dy, dz, ix, iy, iz);
       double ox, oy, oz;
       image_offset(cell, ix, iy, iz, ox, oy, oz);
       dx = image_delta(b.x[j], b.x[i], ox); dy = image_delta(b.y[j], b.y[i], oy); dz = image_delta(b.z[j], b.z[i], oz);
-      if (cell_moving) image_velocity(cell, ix, iy, iz, ivx, ivy, ivz);
+      if (cell_moving) image_velocity(cell, ix, iy, iz, ux, uy, uz);
     }
-    const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const double n[3] = {d > 0 ? dx / d : 0.0, d > 0 ? dy / d : 0.0, d > 0 ? dz / d : 1.0};
-    // j's contact point against i's (the contact law's: V = v_j - v_i - (R_i w_i + R_j w_j) x n),
-    // and the relative spin.
+    const std::size_t l = count++;
+    lane_bond[l] = static_cast<std::uint32_t>(q);
+    ivx[l] = ux; ivy[l] = uy; ivz[l] = uz;
+    B.dx[l] = dx; B.dy[l] = dy; B.dz[l] = dz;
+    B.vx[l] = b.vx[j] - b.vx[i] + ux; B.vy[l] = b.vy[j] - b.vy[i] + uy; B.vz[l] = b.vz[j] - b.vz[i] + uz;
     const double ri = b.rad[i], rj = b.rad[j];
-    const double sx = ri * b.wx[i] + rj * b.wx[j], sy = ri * b.wy[i] + rj * b.wy[j], sz = ri * b.wz[i] + rj * b.wz[j];
-    const double v[3] = {b.vx[j] - b.vx[i] + ivx - (sy * n[2] - sz * n[1]), b.vy[j] - b.vy[i] + ivy - (sz * n[0] - sx * n[2]),
-                         b.vz[j] - b.vz[i] + ivz - (sx * n[1] - sy * n[0])};
-    const double w[3] = {b.wx[j] - b.wx[i], b.wy[j] - b.wy[i], b.wz[j] - b.wz[i]};
-    const BondLaw law = bond_law(t, q);
-    BondState s = bond_state(t, q);
-    bond_update(law, s, n, v, w, k.dt_prev);
-    set_bond_state(t, q, s);
-    const BondFate fate = bond_fate(law, s);
-    if (fate != BondFate::Intact) {
-      t.fate[q] = static_cast<std::uint8_t>(fate);
-      if (owner) lost.add(bond_strain_energy(law, s));
-      continue;
-    }
-    if (owner) strain.add(bond_strain_energy(law, s));
-    push.fx = s.fn * n[0] + s.fs[0]; push.fy = s.fn * n[1] + s.fs[1]; push.fz = s.fn * n[2] + s.fs[2];
-    push.tx = n[1] * s.fs[2] - n[2] * s.fs[1];
-    push.ty = n[2] * s.fs[0] - n[0] * s.fs[2];
-    push.tz = n[0] * s.fs[1] - n[1] * s.fs[0];
-    push.mx = s.mt * n[0] + s.mb[0]; push.my = s.mt * n[1] + s.mb[1]; push.mz = s.mt * n[2] + s.mb[2];
-    if (k.sums_stiffness()) {
-      const BondStiffness stiff = bond_stiffness(law, ri, rj);
-      push.kmax = stiff.kmax;
-      push.ks = stiff.ks;
-    }
-    if (!owner) continue;
-    if (cell_moving) sums.image_power.add(-(push.fx * ivx + push.fy * ivy + push.fz * ivz));
-    if (k.moments) {   // the force on j times the branch vector i -> j, and kn A l_a^2
-      sums.force_moment[0].add(push.fx * dx); sums.force_moment[1].add(push.fy * dy); sums.force_moment[2].add(push.fz * dz);
-      sums.force_moment[3].add(0.5 * (push.fx * dy + push.fy * dx));
-      sums.force_moment[4].add(0.5 * (push.fx * dz + push.fz * dx));
-      sums.force_moment[5].add(0.5 * (push.fy * dz + push.fz * dy));
-      const double kn = law.kn * bond_section(law.radius).area;
-      sums.stiffness_moment[0].add(kn * dx * dx); sums.stiffness_moment[1].add(kn * dy * dy);
-      sums.stiffness_moment[2].add(kn * dz * dz);
-    }
+    B.sx[l] = ri * b.wx[i] + rj * b.wx[j]; B.sy[l] = ri * b.wy[i] + rj * b.wy[j]; B.sz[l] = ri * b.wz[i] + rj * b.wz[j];
+    B.wx[l] = b.wx[j] - b.wx[i]; B.wy[l] = b.wy[j] - b.wy[i]; B.wz[l] = b.wz[j] - b.wz[i];
+    B.kn[l] = t.kn[q]; B.ks[l] = t.ks[q]; B.tension[l] = t.tension[q]; B.cohesion[l] = t.cohesion[q];
+    B.tan_friction[l] = t.tan_friction[q]; B.radius[l] = t.radius[q]; B.mcf[l] = t.mcf[q];
+    B.fn[l] = t.fn[q]; B.fsx[l] = t.fsx[q]; B.fsy[l] = t.fsy[q]; B.fsz[l] = t.fsz[q];
+    B.mt[l] = t.mt[q]; B.mbx[l] = t.mbx[q]; B.mby[l] = t.mby[q]; B.mbz[l] = t.mbz[q];
+    if (count == BondBatch::kSize) flush();
   }
+  if (count) flush();
 }
 
 void add_bonds(const Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end) {

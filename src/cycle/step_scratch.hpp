@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "model/model.hpp"
+#include "physics/bond.hpp"
 
 namespace trubal {
 
@@ -81,6 +82,8 @@ struct StepScratch {
   // bonds as i, ascending j, from bond_run_begin[b] in bond_runs), and each bond's push.
   std::vector<std::uint32_t> bond_ball_i, bond_ball_j, bond_run_begin, bond_runs, bond_partner_begin, bond_partners;
   std::vector<BondPush> bond_push;
+  std::vector<BondStiffness> bond_stiffness;   // each bond's share of the stiffness sums (physics/bond.hpp)
+  std::uint64_t bond_version = 0;              // the ContactTable::list_version the bonds' index is of
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.
   std::vector<std::array<double, 9>> ball_moments;

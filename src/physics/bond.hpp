@@ -50,7 +50,7 @@ struct BondState {
 
 // One step of the bond: Fs and Mb turned onto the plane normal to n (unit, i to j) at their old
 // lengths, then the increments of the relative velocity v of j's contact point against i's and of
-// the relative spin w = w_j - w_i over dt.
+// the relative spin w = w_j - w_i over dt. (A batch of one: step_bonds's arithmetic.)
 void bond_update(const BondLaw& law, BondState& s, const double n[3], const double v[3], const double w[3], double dt);
 
 // The largest normal stress (tension positive) and shear stress on the bond's section.
@@ -58,6 +58,14 @@ struct BondStress {
   double sigma = 0, tau = 0;
   double sigma_n = 0;             // the mean normal stress -Fn / A (tension positive)
 };
+// The one arithmetic of the stresses (step_bonds, bond_stress): from Fn, |Fs|^2, Mt, |Mb|^2.
+[[gnu::always_inline]] inline void bond_stresses(double rb, double mcf, double fn, double fs2, double mt, double mb2,
+                                                 double& sigma_n, double& sigma, double& tau) {
+  const double r2 = rb * rb, area = std::numbers::pi * r2, inertia = area * r2 / 4, polar = area * r2 / 2;
+  sigma_n = -fn / area;
+  sigma = sigma_n + mcf * std::sqrt(mb2) * rb / inertia;
+  tau = std::sqrt(fs2) / area + mcf * std::abs(mt) * rb / polar;
+}
 BondStress bond_stress(const BondLaw& law, const BondState& s);
 
 // Whether the bond holds: the codes Bonds::fate keeps.
@@ -69,7 +77,36 @@ inline double bond_shear_strength(const BondLaw& law, double sigma_n) { return l
 
 // The energy the bond's springs hold: Fn^2 / (2 kn A) + |Fs|^2 / (2 ks A) + Mt^2 / (2 ks J) +
 // |Mb|^2 / (2 kn I).
+[[gnu::always_inline]] inline double bond_energy(double rb, double kn, double ks, double fn, double fs2, double mt,
+                                                 double mb2) {
+  const double r2 = rb * rb, area = std::numbers::pi * r2, inertia = area * r2 / 4, polar = area * r2 / 2;
+  return fn * fn / (2 * kn * area) + fs2 / (2 * ks * area) + mt * mt / (2 * ks * polar) + mb2 / (2 * kn * inertia);
+}
 double bond_strain_energy(const BondLaw& law, const BondState& s);
+
+// A batch of bonds stepped as one loop without branches (cycle/bond_pass.cpp gathers and scatters
+// it), so that the compiler may make vector code of it; every lane is the same arithmetic, so the
+// bits do not depend on which batch or lane a bond falls in.
+struct BondBatch {
+  static constexpr std::size_t kSize = 32;
+  // In: x_j - x_i; v_j - v_i (the image's velocity included); R_i w_i + R_j w_j; w_j - w_i.
+  alignas(64) double dx[kSize], dy[kSize], dz[kSize];
+  alignas(64) double vx[kSize], vy[kSize], vz[kSize];
+  alignas(64) double sx[kSize], sy[kSize], sz[kSize];
+  alignas(64) double wx[kSize], wy[kSize], wz[kSize];
+  // The law.
+  alignas(64) double kn[kSize], ks[kSize], tension[kSize], cohesion[kSize], tan_friction[kSize], radius[kSize], mcf[kSize];
+  // The state, in and out (BondState's).
+  alignas(64) double fn[kSize], fsx[kSize], fsy[kSize], fsz[kSize], mt[kSize], mbx[kSize], mby[kSize], mbz[kSize];
+  // Out: the unit normal, the fate (a BondFate's code), the strain energy of the new state (what a
+  // breaking bond loses), and the push on j where it holds (0 where it broke): its force, n x Fs,
+  // its moment Mt n + Mb.
+  alignas(64) double nx[kSize], ny[kSize], nz[kSize], fate[kSize], energy[kSize];
+  alignas(64) double fx[kSize], fy[kSize], fz[kSize], tx[kSize], ty[kSize], tz[kSize], mx[kSize], my[kSize], mz[kSize];
+};
+// Lanes [0, count) over dt: the relative velocity of j's contact point against i's, V = v - s x n
+// (the contact law's), the increments, the breakage rules and the push.
+void step_bonds(BondBatch& B, std::size_t count, double dt);
 
 // A bond's share of its balls' stiffness sums for the time step (physics/timestep.hpp ball_omega2):
 // kmax = max(kn A, ks A) as a contact's springs; ks = ks A plus the bending and twisting springs,
