@@ -45,22 +45,26 @@ void step_bonds(BondBatch& B, std::size_t count, double dt) {
     bond_stresses(rb, B.mcf[q], fn, fs2, mt, mb2, sigma_n, sigma, tau);
     const bool tension = sigma > B.tension[q];
     const bool shear = !tension && tau > B.cohesion[q] - sigma_n * B.tan_friction[q];
-    const bool holds = !tension && !shear;
     B.fn[q] = fn; B.mt[q] = mt;
     B.fsx[q] = fsx; B.fsy[q] = fsy; B.fsz[q] = fsz;
     B.mbx[q] = mbx; B.mby[q] = mby; B.mbz[q] = mbz;
     B.nx[q] = nx; B.ny[q] = ny; B.nz[q] = nz;
     B.fate[q] = tension ? 1.0 : (shear ? 2.0 : 0.0);
     B.energy[q] = bond_energy(rb, kn, ks, fn, fs2, mt, mb2);
-    B.fx[q] = holds ? fn * nx + fsx : 0.0;
-    B.fy[q] = holds ? fn * ny + fsy : 0.0;
-    B.fz[q] = holds ? fn * nz + fsz : 0.0;
+  }
+  // The push on j where the bond holds (a loop of its own: g++ leaves one loop of all of it scalar).
+  for (std::size_t q = 0; q < count; ++q) {
+    const bool holds = B.fate[q] == 0;
+    const double nx = B.nx[q], ny = B.ny[q], nz = B.nz[q], fsx = B.fsx[q], fsy = B.fsy[q], fsz = B.fsz[q];
+    B.fx[q] = holds ? B.fn[q] * nx + fsx : 0.0;
+    B.fy[q] = holds ? B.fn[q] * ny + fsy : 0.0;
+    B.fz[q] = holds ? B.fn[q] * nz + fsz : 0.0;
     B.tx[q] = holds ? ny * fsz - nz * fsy : 0.0;
     B.ty[q] = holds ? nz * fsx - nx * fsz : 0.0;
     B.tz[q] = holds ? nx * fsy - ny * fsx : 0.0;
-    B.mx[q] = holds ? mt * nx + mbx : 0.0;
-    B.my[q] = holds ? mt * ny + mby : 0.0;
-    B.mz[q] = holds ? mt * nz + mbz : 0.0;
+    B.mx[q] = holds ? B.mt[q] * nx + B.mbx[q] : 0.0;
+    B.my[q] = holds ? B.mt[q] * ny + B.mby[q] : 0.0;
+    B.mz[q] = holds ? B.mt[q] * nz + B.mbz[q] : 0.0;
   }
 }
 
