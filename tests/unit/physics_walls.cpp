@@ -251,7 +251,7 @@ TEST_CASE("walls: a ball held still by FIX is a partner of infinite mass, as a w
     const std::string target = k == 0 ? "ball 0 0 0 0.1 id 2\nfix vel spin range id 2\n" : "wall plane 0 0 0.1 0 0 1\n";
     REQUIRE(h.deck("start box -1 1 -1 1 -1 2\nprop kn 1e6 ks 1e6 dens 1000 rest 0.5\nball 0 0 0.25 0.1 id 1\n" + target +
                    "init zvel -1 range id 1\nfrac 0.02\ncycle 20000\n"));
-    rebound[k] = h.session.model().balls.vz[0];
+    rebound[k] = h.session.model().balls.vz[trubal::test::at(h.session.model(), 1)];
   }
   CHECK(rebound[0] == Approx(0.5).epsilon(0.005));
   CHECK(rebound[0] == Approx(rebound[1]).epsilon(1e-6));
