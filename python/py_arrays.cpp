@@ -147,6 +147,7 @@ void set_positions(PySession& s, const py::object& value) {
                                      "at one centre would fly apart", id, v(k, 0), v(k, 1), v(k, 2)));
   }
   set_columns3(s, in, &Balls::x, &Balls::y, &Balls::z);
+  s.session().edit().order.pending = true;   // (in space order at the next step, as balls BALL adds)
 }
 
 void set_radii(PySession& s, const py::object& value) {
@@ -158,6 +159,7 @@ void set_radii(PySession& s, const py::object& value) {
       raise_error("", 0, fmt::format("radii: ball {} is given radius {}: {}", m.balls.id[m.balls.by_id[k]], v(k), why));
   Balls& balls = s.session().edit().balls;   // masses follow at the next step (update_mass)
   for (std::size_t k = 0; k < balls.size(); ++k) balls.rad[balls.by_id[k]] = v(k);
+  s.session().edit().order.pending = true;   // (the space order's cells are one largest diameter wide)
 }
 
 // The pairs touching at the last force pass, as PRINT contacts lists them.

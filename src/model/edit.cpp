@@ -156,7 +156,8 @@ std::uint64_t spread3(std::uint64_t v) {
 }
 
 // The order of the balls in space: Morton order of cells `cell` wide from the lowest centre, ties
-// (one cell) by index; a ball with a centre not finite goes last.
+// (one cell) by id, so that the order is a function of the centres and ids alone; a ball with a
+// centre not finite goes last.
 std::vector<std::size_t> space_order(const Balls& b, double cell) {
   const std::size_t n = b.size();
   std::array<double, 3> lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
@@ -180,7 +181,8 @@ std::vector<std::size_t> space_order(const Balls& b, double cell) {
   }
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return key[p] < key[q]; });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t p, std::size_t q) { return key[p] != key[q] ? key[p] < key[q] : b.id[p] < b.id[q]; });
   return order;
 }
 

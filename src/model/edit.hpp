@@ -40,9 +40,9 @@ std::int64_t find_ball(const Model& model, std::int64_t id);
 void reorder_balls(Model& model, const std::vector<std::size_t>& order);
 
 // The balls in space order (the Morton order of cells one largest diameter wide from the lowest
-// centres, ties in their present order), as the run puts them at the cycles Model::order names.
-// A function of the balls' positions and present order alone, so every backend, thread and rank
-// count and cut of a run puts them in the same order. Returns whether any ball moved.
+// centres, ties by id), as the run puts them at the cycles Model::order names. A function of the
+// balls' centres and ids alone, so every backend, thread and rank count and cut of a run puts
+// them in the same order, and so does a model that reached the same state another way. Returns whether any ball moved.
 bool sort_in_space(Model& model);
 
 // Whether the step about to be taken puts the balls in space order first (Model::order).

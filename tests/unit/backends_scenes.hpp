@@ -1,6 +1,10 @@
 // Scenes for the cross-backend tests, built directly in C++, and bitwise comparison of two models.
 #pragma once
 
+#include <algorithm>
+
+#include <numeric>
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -149,6 +153,15 @@ struct Picture {
   std::int64_t cycle = 0;
   double time = 0, dt = 0, critical_dt = 0;
 };
+
+// The model with its balls in id order in memory (to compare states whose order differs).
+inline Model in_id_order(Model m) {
+  std::vector<std::size_t> order(m.balls.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return m.balls.id[p] < m.balls.id[q]; });
+  reorder_balls(m, order);
+  return m;
+}
 
 inline Picture picture(const Model& m) {
   Picture p;

@@ -84,7 +84,7 @@ TEST_CASE("order: the run puts the balls in space order, the ids unchanged, and 
   CHECK(worst_f > 0);   // (the sums' order did change)
 }
 
-TEST_CASE("order: balls added go last and are sorted at the next step; SET sort 0 keeps the order made", "[order]") {
+TEST_CASE("order: balls added go last and are sorted at the next step, and SET sort 0 keeps the order made", "[order]") {
   Harness h;
   REQUIRE(h.deck("start 1 1 1\nprop kn 1e4 dens 1000\nball 0.9 0.9 0.9 0.05 id 7\nball 0.1 0.1 0.1 0.05 id 3\n"
                  "ball 0.5 0.5 0.5 0.05\n"));

@@ -189,10 +189,13 @@ TEST_CASE("walls: the servo holds a platen's stress on a sample in a cylinder", 
   }
   CHECK(sum / rows.size() == Approx(5000).epsilon(0.01));
   CHECK(worst < 0.03 * 5000);
-  // The floor carries the platen's load and the weight, less what friction hangs on the cylinder.
+  // The floor carries the platen's load and the weight, less what friction hangs on the cylinder
+  // (its share depends on the packing: 3% to 6% measured): the balls at rest balance the three walls'
+  // forces and their weight, to 1% (their accelerations under the servo; measured 0.1%).
   double weight = 0;
   for (double mass : m.balls.mass) weight += mass * 9.81;
-  CHECK(-m.walls[0].force[2] == Approx(platen.force[2] + weight).epsilon(0.05));
+  CHECK(-m.walls[0].force[2] < platen.force[2] + weight);
+  CHECK(-m.walls[0].force[2] == Approx(platen.force[2] + m.walls[1].force[2] + weight).epsilon(0.01));
 }
 
 TEST_CASE("walls: bad WALL and SERVO wall input is an error that says what is wrong", "[walls][hard]") {
