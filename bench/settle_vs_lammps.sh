@@ -12,8 +12,9 @@
 #
 #   bench/settle_vs_lammps.sh build/trubal [N] [STEPS]   N: 10000 (default), 100000 (the peers'
 #                                                        sizes) or another (box edge 1200 sqrt(N/1e4))
-#   env: REPS (default 3); RENUMBER=1 renumbers trubal's balls in space order after reading them
-#        (the peers' balls are numbered at random; LAMMPS sorts its atoms in space every 1000 steps)
+#   env: REPS (default 3); SORT=n gives trubal `SET sort n` (the peers' balls are numbered at
+#        random; trubal puts them in space order in memory every 1000 cycles by default, as LAMMPS
+#        sorts its atoms every 1000 steps; SORT=0 keeps them in the file's random order)
 #
 # Needs LAMMPS and MPI from Debian (lammps, openmpi-bin; .ci/deps installs them) and
 # ../shared/peers. Writes only under a temporary folder.
@@ -45,7 +46,7 @@ body = [f"start box 0 {x1!r} 0 {y1!r} {z0!r} {ztop!r} x periodic y periodic",
         f"prop type 1 kn 1.5e9 ks 1.5e9 mu 0.12278 dens 2000 rest {e['e_pp']!r}",
         f"prop type 2 kn 1.5e9 ks 1.5e9 mu 0.12278 rest {e['e_wall']!r}",
         "wall id 1 plane 0 0 0 0 0 1 type 2", f"call {w}/balls.dat"]
-body += ["renumber"] if os.environ.get("RENUMBER") == "1" else []
+body += [f"set sort {os.environ['SORT']}"] if os.environ.get("SORT", "") != "" else []
 body += ["grav 0 0 -0.03", "tstep 0.04"]
 for name, backend in (("serial", "backend serial"), ("threaded2", "backend threaded threads 2")):
     open(f"{w}/{name}.dat", "w").write("\n".join(body + [backend, f"cycle {steps}", "print coordination",
@@ -53,7 +54,7 @@ for name, backend in (("serial", "backend serial"), ("threaded2", "backend threa
 PY
 LMP="lmp -in $PEERS/lammps_settle.in -var data $W/settle_$N.data -var nsteps $STEPS"
 t() { local s; s=$(date +%s.%N); "$@" >"$W/last.out" 2>&1 || { cat "$W/last.out" >&2; exit 1; }; echo "$(date +%s.%N) - $s" | bc; }
-echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; settle N=$N, $STEPS steps, $REPS interleaved runs$([ "${RENUMBER:-}" = 1 ] && echo ", trubal's balls renumbered in space order")"
+echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; settle N=$N, $STEPS steps, $REPS interleaved runs$([ -n "${SORT:-}" ] && echo ", trubal's SET sort $SORT")"
 "$HERE/core_speeds.sh"   # a lopsided machine shows beside its figures
 for r in $(seq "$REPS"); do
   echo "lammps_1 $(cd "$W" && t $LMP)" >>"$W/times"; cp "$W/last.out" "$W/lammps_1.out"

@@ -223,8 +223,8 @@ const Command print_command = {
     "PRINT", {}, "PRINT info|counters|balls|contacts|bonds|stress|strain|energy|fabric|coordination|prop|damp|history|walls|psd|porosity|measure|sample [file f] [range ...]",
     "print a table or a measurement",
     "info: a `name: value` summary (space, balls, contacts, cycle, time, timestep, backend, threads, active "
-    "physics; the ball order, how far apart consecutive ids lie (a median, in diameters: about 1 in space "
-    "order, more than 3 suggests RENUMBER); the capillary bridges intact where a material has them; the bonds intact and broken (in tension, in shear) where there are any; the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
+    "physics; the ball order: how far apart balls next to each other in memory lie (a median, in diameters: "
+    "about 1 in space order) and when the run next puts them in space order (SET sort); the capillary bridges intact where a material has them; the bonds intact and broken (in tension, in shear) where there are any; the cell's tilts xy xz yz once STRAIN has sheared it; the number of "
     "processes under mpirun; the peak memory so far). counters [file f]: the counts for scripts, one `name value` "
     "line each, under names that stay (cycle, balls, contacts, wall_contacts, balls_destroyed, threads, "
     "pair_list_rebuilds, ...; doc/language.md lists them all and what each counts). "

@@ -27,10 +27,10 @@
 
 namespace trubal {
 
-// How far apart balls of consecutive ids lie, in diameters (medians of both): about 1 where the
-// balls are numbered in space order (a lattice, GEN, RENUMBER), tens where at random. Memory holds
-// the balls in id order, so the contact loop reads the latter far more slowly. 0 for < 2 balls.
-static double id_gap_in_diameters(const Balls& b) {
+// How far apart balls next to each other in memory lie, in diameters (medians of both): about 1
+// in space order (which the run puts them in: SET sort), tens where at random, which the contact
+// loop reads far more slowly. 0 for < 2 balls.
+static double memory_gap_in_diameters(const Balls& b) {
   if (b.size() < 2) return 0;
   std::vector<double> gap(b.size() - 1), rad(b.rad);
   for (std::size_t k = 1; k < b.size(); ++k)
@@ -66,9 +66,12 @@ void print_info(Context& ctx) {
   }
   o << fmt::format("balls: {}\n", m.balls.size());
   if (m.balls.size() >= 2) {
-    const double gap = id_gap_in_diameters(m.balls);
-    o << fmt::format("ball order: consecutive ids {:.3g} diameters apart (median){}\n", gap,
-                     gap > 3 ? "; numbered at random, the contact loop reads memory slowly: RENUMBER numbers them in space order" : "");
+    const double gap = memory_gap_in_diameters(m.balls);
+    o << fmt::format("ball order: neighbours in memory {:.3g} diameters apart (median); put in space order {}{}\n", gap,
+                     m.order.pending && m.order.every > 0 ? "at the next step, then every " + std::to_string(m.order.every) + " cycles"
+                                                          : m.order.every > 0 ? "every " + std::to_string(m.order.every) + " cycles"
+                                                                              : std::string("never (SET sort 0)"),
+                     gap > 3 && m.order.every == 0 ? ": the contact loop reads memory slowly; SET sort 1000 puts them in space order" : "");
   }
   o << fmt::format("contacts: {}\n", contact_count(m));
   if (!m.walls.empty()) {

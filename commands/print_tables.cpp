@@ -23,6 +23,7 @@
 #include "physics/scene.hpp"
 
 #include "commands/print_parts.hpp"
+#include "model/edit.hpp"
 
 namespace trubal {
 
@@ -31,6 +32,7 @@ void print_balls(Context& ctx, const Range& range, const std::string& file) {
   const Balls& b = m.balls;
   auto sel = ctx.session.select(range);
   if (!comm::root()) return;   // (the table or file is rank 0's to print or write: the others' would go nowhere)
+  std::sort(sel.begin(), sel.end(), [&](std::size_t p, std::size_t q) { return b.id[p] < b.id[q]; });   // by id
   if (!file.empty()) {
     write_file_atomically(file, [&](std::ostream& csv) {
       csv << "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz\n";
@@ -66,16 +68,26 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
   for (std::size_t p = 0; p < c.size(); ++p)
     if ((c.touching(p) || (bridges && c.bridge[p] != 0)) && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
   const auto& id = m.balls.id;
+  // Each pair as (smaller id, larger id), sorted so; a pair the model holds the other way round (its
+  // order in memory is not id order) has its vectors on j turned round (s).
+  const auto low = [&](std::size_t p) { return std::min(id[c.i[p]], id[c.j[p]]); };
+  const auto high = [&](std::size_t p) { return std::max(id[c.i[p]], id[c.j[p]]); };
+  std::stable_sort(rows.begin(), rows.end(), [&](std::size_t p, std::size_t q) {
+    return low(p) != low(q) ? low(p) < low(q) : high(p) < high(q);
+  });
+  const auto s = [&](std::size_t p) { return id[c.i[p]] < id[c.j[p]] ? 1.0 : -1.0; };
   const bool rolling = has_rolling(m);   // (the rolling moment on j: columns only where a material has it)
   if (!file.empty()) {
     write_file_atomically(file, [&](std::ostream& csv) {
       csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding"
           << (bridges ? ",bridge\n" : "\n");
       for (auto p : rows) {
-        csv << id[c.i[p]] << ',' << id[c.j[p]];
-        for (const auto* v : {&c.nx, &c.ny, &c.nz, &c.overlap, &c.fn, &c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real((*v)[p]);
+        csv << low(p) << ',' << high(p);
+        for (const auto* v : {&c.nx, &c.ny, &c.nz}) csv << ',' << csv_real(s(p) * (*v)[p]);
+        for (const auto* v : {&c.overlap, &c.fn}) csv << ',' << csv_real((*v)[p]);
+        for (const auto* v : {&c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real(s(p) * (*v)[p]);
         if (rolling)
-          for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real((*v)[p]);
+          for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real(s(p) * (*v)[p]);
         csv << ',' << (c.state[p] == 2 ? 1 : 0);
         if (bridges) csv << ',' << (c.bridge[p] != 0 ? 1 : 0);
         csv << '\n';
@@ -88,8 +100,8 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
                          "overlap", "fn", "|fs|", rolling ? fmt::format("{:>11} ", "|mr|") : "", "sliding",
                          bridges ? "  bridge" : "");
   for (auto p : rows)
-    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", id[c.i[p]],
-                           id[c.j[p]], c.nx[p], c.ny[p], c.nz[p], c.overlap[p], c.fn[p],
+    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", low(p),
+                           high(p), s(p) * c.nx[p], s(p) * c.ny[p], s(p) * c.nz[p], c.overlap[p], c.fn[p],
                            std::sqrt(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]),
                            rolling ? fmt::format("{:>11.4g} ", std::sqrt(c.mrx[p] * c.mrx[p] + c.mry[p] * c.mry[p] +
                                                                          c.mrz[p] * c.mrz[p]))
@@ -147,10 +159,8 @@ void print_psd(Context& ctx, const std::string& file) {
   if (!sizes) throw std::runtime_error("PRINT psd: no GEN since START or RESTART (it compares the last GEN's balls with its sizes)");
   const Model& m = ctx.session.model();
   std::vector<double> radii;
-  for (std::int64_t id : ctx.session.last_generated()) {
-    auto it = std::lower_bound(m.balls.id.begin(), m.balls.id.end(), id);
-    if (it != m.balls.id.end() && *it == id) radii.push_back(m.balls.rad[static_cast<std::size_t>(it - m.balls.id.begin())]);
-  }
+  for (std::int64_t id : ctx.session.last_generated())
+    if (const std::int64_t k = find_ball(m, id); k >= 0) radii.push_back(m.balls.rad[static_cast<std::size_t>(k)]);
   if (radii.empty()) throw std::runtime_error("PRINT psd: the balls of the last GEN are gone");
   const auto rows = compare_grading(*sizes, radii);
   double worst = 0, at = 0;

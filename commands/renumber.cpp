@@ -21,10 +21,9 @@ const Command renumber_command = {
     "RENUMBER", {}, "RENUMBER [space | present]", "give the balls ids 1 to N, in space order",
     "Gives the balls the ids 1 to N. `space` (the default) numbers them in space order: the Morton (Z) order "
     "of cubic cells one largest diameter wide, from the lowest centre, balls in one cell in the order of their "
-    "ids, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins. `present` keeps their order and closes "
-    "the gaps DELETE left. Balls numbered at random (read from another program, say) make the steps slow: "
-    "RENUMBER once after reading them (PRINT info's `ball order` says how far apart consecutive ids lie; "
-    "doc/speed.md, \"Threads and the numbering of the balls\", says why). The balls and their contacts stay as "
+    "ids, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins. `present` keeps the order of their "
+    "ids and closes the gaps DELETE left. The run keeps the balls in space order in memory whatever their ids "
+    "(SET sort), so RENUMBER is for the ids themselves: compact, or near in number where near in space. The balls and their contacts stay as "
     "they are (a contact's shear history follows it); groups, the membrane's balls, HIST's platens and PRINT "
     "psd's balls follow their balls. Ids given later (ranges by `id`, BALL's `id`) are the new ones; so is the id "
     "of a `HIST ball n` given before: it records whichever ball has id n (its columns keep their names). A run "

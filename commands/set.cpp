@@ -47,6 +47,12 @@ static void run_set(Context& ctx, Args& args) {
     ctx.interp.output().progress_seconds = seconds;
     return;
   }
+  if (name == "sort") {
+    const std::int64_t every = args.count("cycles between sorts", 0);
+    args.done();
+    ctx.session.set_sort_every(every);
+    return;
+  }
   if (name == "volume") {
     double v = args.real("volume");
     args.done();
@@ -67,15 +73,19 @@ static void run_set(Context& ctx, Args& args) {
 }
 
 const Command set_command = {
-    "SET", {}, "SET name value  |  SET echo on|off  |  SET seed n  |  SET log file|off  |  SET progress s  |  SET volume v",
+    "SET", {}, "SET name value  |  SET echo on|off  |  SET seed n  |  SET log file|off  |  SET progress s  |  SET sort n  |  SET volume v",
     "a variable or a setting",
     "`SET name value` defines a variable: $name (or ${name}) in later lines is replaced by the value. Settings: "
     "echo (echo each command in batch mode), seed (default seed of GEN), log (copy everything shown to a "
     "file, appending, never through a symbolic link to a file (/dev/stderr and a link to a device or pipe are followed); `SET log off` stops; while a log is on, progress comes as plain lines), progress (seconds "
-    "between the plain progress lines of a long CYCLE or SOLVE, default 10; 0: none), volume (the volume for the average stress in free space; 0 uses the START "
+    "between the plain progress lines of a long CYCLE or SOLVE, default 10; 0: none), sort (the balls are put in "
+    "space order in memory, so that neighbours in space are read together, at every cycle number that is a multiple "
+    "of n, default 1000 as LAMMPS's `atom_modify sort`, and at the first step after balls were added; 0: never, the balls stay in the order they were made. "
+    "It changes no result's meaning, only the order each ball's contact forces are added in, the same on every "
+    "backend and however the run is cut; ids never change), volume (the volume for the average stress in free space; 0 uses the START "
     "box). PFC's settings are commands here: `SET gravity`, `dt`, `timestep`, `damp`, `damping`, `backend` or "
     "`threads` makes a variable, with a warning naming the command that sets it (GRAV, TSTEP or FRAC, DAMP, BACKEND).",
     "set seed 42",
-    {"echo", "seed", "log", "progress", "volume", "on", "off"}, run_set};
+    {"echo", "seed", "log", "progress", "sort", "volume", "on", "off"}, run_set};
 
 }  // namespace trubal

@@ -55,6 +55,10 @@ template <class T, class From> py::array_t<T> column(const std::vector<From>& v,
   return read_only(out);
 }
 
+// The balls' indices in ascending order of id: the row order of every ball array (the model keeps
+// its balls in its own order in memory, model/model.hpp).
+std::vector<std::size_t> id_rows(const Balls& b) { return {b.by_id.begin(), b.by_id.end()}; }
+
 py::array_t<double> sym_matrix(const std::array<double, 6>& s) {   // xx yy zz xy xz yz
   py::array_t<double> out({py::ssize_t{3}, py::ssize_t{3}});
   auto o = out.mutable_unchecked<2>();
@@ -104,17 +108,18 @@ InArray checked(const py::object& value, const Model& m, int width, const char* 
   for (py::ssize_t k = 0; k < a.size(); ++k)
     if (!std::isfinite(p[k]))
       throw py::value_error(fmt::format("{}: row {} holds {} (ball {}): only finite numbers", what, k / width, p[k],
-                                        m.balls.id[static_cast<std::size_t>(k / width)]));
+                                        m.balls.id[m.balls.by_id[static_cast<std::size_t>(k / width)]]));
   return a;
 }
 
 void set_columns3(PySession& s, const InArray& in, Column Balls::*a, Column Balls::*b, Column Balls::*c) {
   auto v = in.unchecked<2>();
   Balls& balls = s.session().edit().balls;
-  for (std::size_t k = 0; k < balls.size(); ++k) {
-    (balls.*a)[k] = v(k, 0);
-    (balls.*b)[k] = v(k, 1);
-    (balls.*c)[k] = v(k, 2);
+  for (std::size_t k = 0; k < balls.size(); ++k) {   // (row k: the ball of the k-th id)
+    const std::size_t at = balls.by_id[k];
+    (balls.*a)[at] = v(k, 0);
+    (balls.*b)[at] = v(k, 1);
+    (balls.*c)[at] = v(k, 2);
   }
 }
 
@@ -132,16 +137,18 @@ void set_positions(PySession& s, const py::object& value) {
   };
   std::unordered_set<std::array<double, 3>, Hash> centres;
   for (std::size_t k = 0; k < m.balls.size(); ++k) {
+    const std::int64_t id = m.balls.id[m.balls.by_id[k]];
     for (int a = 0; a < 3; ++a)
       if (!space.wraps(a) && (v(k, a) < space.lo[a] || v(k, a) > space.hi[a]))
         raise_error("", 0, fmt::format("positions: ball {}'s centre {} = {} is outside the START box [{}, {}]",
-                                       m.balls.id[k], "xyz"[a], v(k, a), space.lo[a], space.hi[a]));
+                                       id, "xyz"[a], v(k, a), space.lo[a], space.hi[a]));
     auto zero = [](double x) { return x == 0 ? 0.0 : x; };   // -0 and 0 are the same place
     if (!centres.insert({zero(v(k, 0)), zero(v(k, 1)), zero(v(k, 2))}).second)
       raise_error("", 0, fmt::format("positions: ball {} is given the centre of another ball ({}, {}, {}): two balls "
-                                     "at one centre would fly apart", m.balls.id[k], v(k, 0), v(k, 1), v(k, 2)));
+                                     "at one centre would fly apart", id, v(k, 0), v(k, 1), v(k, 2)));
   }
   set_columns3(s, in, &Balls::x, &Balls::y, &Balls::z);
+  s.session().edit().order.pending = true;   // (in space order at the next step, as balls BALL adds)
 }
 
 void set_radii(PySession& s, const py::object& value) {
@@ -150,38 +157,66 @@ void set_radii(PySession& s, const py::object& value) {
   auto v = in.unchecked<1>();
   for (std::size_t k = 0; k < m.balls.size(); ++k)   // BALL's rule
     if (const std::string why = ball_radius_problem(m.space, v(k)); !why.empty())
-      raise_error("", 0, fmt::format("radii: ball {} is given radius {}: {}", m.balls.id[k], v(k), why));
+      raise_error("", 0, fmt::format("radii: ball {} is given radius {}: {}", m.balls.id[m.balls.by_id[k]], v(k), why));
   Balls& balls = s.session().edit().balls;   // masses follow at the next step (update_mass)
-  for (std::size_t k = 0; k < balls.size(); ++k) balls.rad[k] = v(k);
+  for (std::size_t k = 0; k < balls.size(); ++k) balls.rad[balls.by_id[k]] = v(k);
+  s.session().edit().order.pending = true;   // (the space order's cells are one largest diameter wide)
 }
 
 // The pairs touching at the last force pass, as PRINT contacts lists them.
 py::dict contacts(PySession& s) {
   const Model& m = s.session().model();
   const ContactTable& c = m.contacts;
+  const auto& id = m.balls.id;
   std::vector<std::size_t> rows;
   for (std::size_t p = 0; p < c.size() && p < c.state.size(); ++p)
     if (c.state[p] != 0) rows.push_back(p);
+  // Each pair as (smaller id, larger id), sorted so: a pair the model lists the other way round
+  // (its order in memory is not id order) has its vectors on j turned round.
+  const auto low = [&](std::size_t p) { return std::min(id[c.i[p]], id[c.j[p]]); };
+  const auto high = [&](std::size_t p) { return std::max(id[c.i[p]], id[c.j[p]]); };
+  std::stable_sort(rows.begin(), rows.end(), [&](std::size_t p, std::size_t q) {
+    return low(p) != low(q) ? low(p) < low(q) : high(p) < high(q);
+  });
+  std::vector<double> sign(rows.size());
   std::vector<std::int64_t> i(rows.size()), j(rows.size());
   std::vector<bool> sliding(rows.size());
   for (std::size_t k = 0; k < rows.size(); ++k) {
-    i[k] = m.balls.id[c.i[rows[k]]];
-    j[k] = m.balls.id[c.j[rows[k]]];
+    i[k] = low(rows[k]);
+    j[k] = high(rows[k]);
+    sign[k] = id[c.i[rows[k]]] < id[c.j[rows[k]]] ? 1.0 : -1.0;
     sliding[k] = c.state[rows[k]] == 2;
   }
+  const auto on_j = [&](const Column& a, const Column& b, const Column& cc) {
+    py::array_t<double> out = columns3(a, b, cc, &rows);
+    out.attr("flags").attr("writeable") = true;
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      for (int d = 0; d < 3; ++d) o(k, d) *= sign[k];
+    return read_only(out);
+  };
   py::dict d;
   d["i"] = column<std::int64_t>(i);
   d["j"] = column<std::int64_t>(j);
-  d["normal"] = columns3(c.nx, c.ny, c.nz, &rows);
+  d["normal"] = on_j(c.nx, c.ny, c.nz);
   d["overlap"] = column<double>(c.overlap, &rows);
   d["normal_force"] = column<double>(c.fn, &rows);
-  d["shear_force"] = columns3(c.fsx, c.fsy, c.fsz, &rows);
-  d["force"] = columns3(c.fx, c.fy, c.fz, &rows);
+  d["shear_force"] = on_j(c.fsx, c.fsy, c.fsz);
+  d["force"] = on_j(c.fx, c.fy, c.fz);
   d["sliding"] = column<bool>(sliding);
   // Every part of the contacts' history the contact law declares (ContactTable::for_each_history),
-  // by the name SAVE gives it.
+  // by the name SAVE gives it, as seen from the pair (i, j) above.
   py::dict history;
-  c.for_each_history([&](const auto& v, const HistoryPart& part) { history[part.name] = column<double>(v, &rows); });
+  c.for_each_history([&](const auto& v, const HistoryPart& part) {
+    py::array_t<double> a = column<double>(v, &rows);
+    if (part.swap == OnSwap::Negate) {
+      a.attr("flags").attr("writeable") = true;
+      auto o = a.mutable_unchecked<1>();
+      for (std::size_t k = 0; k < rows.size(); ++k) o(k) *= sign[k];
+      a.attr("flags").attr("writeable") = false;
+    }
+    history[part.name] = a;
+  });
   d["history"] = history;
   d["cycle"] = c.results_cycle;
   return d;
@@ -293,9 +328,9 @@ void load_numpy() {
 void bind_arrays(py::class_<PySession>& cls) {
   const auto& B = [](PySession& s) -> const Balls& { return s.session().model().balls; };
   cls.def_property_readonly("num_balls", [B](PySession& s) { return B(s).size(); }, "How many balls there are.")
-      .def_property_readonly("ids", [B](PySession& s) { return column<std::int64_t>(B(s).id); },
+      .def_property_readonly("ids", [B](PySession& s) { const auto r = id_rows(B(s)); return column<std::int64_t>(B(s).id, &r); },
                              "Ball ids, ascending: the order of every ball array.")
-      .def_property_readonly("types", [B](PySession& s) { return column<std::int32_t>(B(s).type); },
+      .def_property_readonly("types", [B](PySession& s) { const auto r = id_rows(B(s)); return column<std::int32_t>(B(s).type, &r); },
                              "Each ball's type (PROP type).")
       .def_property_readonly(
           "fixed",
@@ -304,31 +339,31 @@ void bind_arrays(py::class_<PySession>& cls) {
             py::array_t<bool> out({static_cast<py::ssize_t>(b.size()), py::ssize_t{6}});
             auto o = out.mutable_unchecked<2>();
             for (std::size_t k = 0; k < b.size(); ++k)
-              for (int d = 0; d < 6; ++d) o(k, d) = (b.fixed[k] >> d) & 1;
+              for (int d = 0; d < 6; ++d) o(k, d) = (b.fixed[b.by_id[k]] >> d) & 1;
             return read_only(out);
           },
           "(n, 6) bools: which of xvel yvel zvel xspin yspin zspin FIX holds.")
       .def_property(
-          "positions", [B](PySession& s) { return columns3(B(s).x, B(s).y, B(s).z); }, set_positions,
+          "positions", [B](PySession& s) { const auto r = id_rows(B(s)); return columns3(B(s).x, B(s).y, B(s).z, &r); }, set_positions,
           "(n, 3) ball centres. Setting one moves the balls (checked as BALL checks a centre).")
       .def_property(
-          "velocities", [B](PySession& s) { return columns3(B(s).vx, B(s).vy, B(s).vz); },
+          "velocities", [B](PySession& s) { const auto r = id_rows(B(s)); return columns3(B(s).vx, B(s).vy, B(s).vz, &r); },
           [](PySession& s, const py::object& v) {
             set_columns3(s, checked(v, s.session().model(), 3, "velocities"), &Balls::vx, &Balls::vy, &Balls::vz);
           },
           "(n, 3) velocities (at t - dt/2 after a cycle, as INIT sets them; a fixed component keeps what is set).")
       .def_property(
-          "spins", [B](PySession& s) { return columns3(B(s).wx, B(s).wy, B(s).wz); },
+          "spins", [B](PySession& s) { const auto r = id_rows(B(s)); return columns3(B(s).wx, B(s).wy, B(s).wz, &r); },
           [](PySession& s, const py::object& v) {
             set_columns3(s, checked(v, s.session().model(), 3, "spins"), &Balls::wx, &Balls::wy, &Balls::wz);
           },
           "(n, 3) angular velocities (rad/s, at t - dt/2).")
       .def_property(
-          "radii", [B](PySession& s) { return column<double>(B(s).rad); }, set_radii,
+          "radii", [B](PySession& s) { const auto r = id_rows(B(s)); return column<double>(B(s).rad, &r); }, set_radii,
           "(n,) radii; setting them changes the masses from the next step.")
-      .def_property_readonly("forces", [B](PySession& s) { return columns3(B(s).fx, B(s).fy, B(s).fz); },
+      .def_property_readonly("forces", [B](PySession& s) { const auto r = id_rows(B(s)); return columns3(B(s).fx, B(s).fy, B(s).fz, &r); },
                              "(n, 3) unbalanced forces of the last step (a fixed ball's: its reaction).")
-      .def_property_readonly("moments", [B](PySession& s) { return columns3(B(s).mx, B(s).my, B(s).mz); },
+      .def_property_readonly("moments", [B](PySession& s) { const auto r = id_rows(B(s)); return columns3(B(s).mx, B(s).my, B(s).mz, &r); },
                              "(n, 3) unbalanced moments of the last step.")
       .def("contacts", contacts,
            "The ball pairs touching at the last force pass (PRINT contacts): a dict of arrays, one row per "

@@ -179,6 +179,7 @@ std::size_t Session::define_group(const std::string& name, const Range& range) {
   require_started();
   std::vector<std::int64_t> ids;
   for (auto k : select(range)) ids.push_back(model_.balls.id[k]);
+  std::sort(ids.begin(), ids.end());   // (a group's ids are kept ascending)
   std::size_t n = ids.size();
   model_.groups[name] = std::move(ids);
   unsaved_ = true;

@@ -54,6 +54,12 @@ class Session {
     model_.title = title;
     unsaved_ = true;
   }
+  // SET sort: how often the run puts the balls in space order (Model::order; no change to the balls
+  // now).
+  void set_sort_every(std::int64_t every) {
+    model_.order.every = every;
+    unsaved_ = true;
+  }
   // SAMPLE: the specimen's walls and reference (no change to the balls or the step).
   Sample& edit_sample() {
     unsaved_ = true;

@@ -257,6 +257,7 @@ void broadcast_arrays(Model& m) {
   if (!comm::root()) {
     m.contacts.list_version = fresh_list_version();
     m.wall_contacts.list_version = fresh_list_version();
+    m.balls.index_ids();
   }
 }
 

@@ -94,6 +94,7 @@ class CycleRun {
   StepPlan plan(std::int64_t s) const;
   StepTotals advance(bool details);
   bool escapes(bool replay);
+  void sort_balls();
   bool rescue(std::int64_t bad_cycle);
   CycleResult& unstable(const StepTotals& sums, std::int64_t s);
   void observe(bool observed);
@@ -121,6 +122,7 @@ class CycleRun {
   std::optional<EnergyGuard> guard_;   // made once the masses and the step are known
   Clock::time_point loop_start_, last_progress_;
   std::int64_t start_cycle_ = 0;
+  bool sorted_at_start_ = false;   // the first step's sort was done before the first search
 };
 
 CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control)
@@ -134,6 +136,14 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
       throw std::runtime_error(fmt::format(
           "ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger radius or "
           "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
+  // The first step's sort (Model::order) before the run's first search; not where a step a CYCLE
+  // deferred is to be taken again first (make_results: it is of the order before), which the first
+  // step then sorts after.
+  if (sort_due(model) && !pipeline.results_deferred(model)) {
+    pipeline.sync_all(model);
+    if (sort_in_space(model)) pipeline.invalidate();
+    sorted_at_start_ = true;
+  }
   kernels_ = make_kernels(model);
   cap_ = hertz_step_cap(model);
   // The estimate between contact episodes, below which the held critical step is kept (the whole
@@ -241,6 +251,9 @@ StepTotals CycleRun::advance(bool details) {
   kernels.walls = details ? kernels.walls_full : kernels.walls_lean;
   StepSums step_sums;
   const auto step_start = Clock::now();
+  // The balls in space order (Model::order) on cycles of the absolute count and at the first step
+  // after balls were added: the same steps however the run is cut, on every backend and rank.
+  if (sort_due(model) && !(sorted_at_start_ && model.cycle == start_cycle_)) sort_balls();
   // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
   // (the same steps however the run is cut).
   if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) {
@@ -290,6 +303,15 @@ StepTotals CycleRun::advance(bool details) {
   now.capillary_ahead = sums.capillary_ahead;
   now.boundary_ahead = sums.boundary_ahead + (model.space.periodic ? 0.5 * sums.image_power * kernels.dt_mean : 0.0);
   return sums;
+}
+
+// The balls in space order (Model::order). Where none moves (the first step's order, put before
+// the run's first search: CycleRun's start), the pipeline keeps what it holds.
+void CycleRun::sort_balls() {
+  pipeline_.sync_all(model_);
+  if (!sort_in_space(model_)) return;
+  pipeline_.invalidate();
+  kernels_.laws = make_pair_laws(model_);   // per-ball type indices
 }
 
 // START box: balls outside a bounded axis's faces after a step are destroyed (`destroy`) or stop

@@ -46,6 +46,7 @@ struct Snapshot {
   std::map<std::string, std::vector<std::int64_t>> groups;   // destroyed balls leave their groups
   Bonds bonds;                                                // their forces, and which broke
   std::int64_t cycle = 0;
+  Model::Order order;
   double time = 0, dt = 0, critical_dt = 0;
 
   void take(const Model& m) {
@@ -79,7 +80,7 @@ struct Snapshot {
     m.walls = walls; m.space = space;
     m.energy = energy; m.energy_at_step = energy_at_step;
     m.membrane = membrane; m.groups = groups; m.bonds = bonds;
-    m.cycle = cycle; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
+    m.cycle = cycle; m.order = order; m.time = time; m.dt = dt; m.critical_dt = critical_dt;
   }
 
   // Puts the copy back. Returns whether the table's results are those of the copy's state: true
@@ -103,6 +104,7 @@ struct Snapshot {
       c.results_cycle = -1;
     }
     paste_balls(m.balls);
+    m.balls.index_ids();   // (the copy's order: a sort since has moved them)
     // The unbalanced forces are results too: the model's stand where the results do.
     for (auto* v : unbalanced(m.balls))
       if (!current || v->size() != m.balls.size()) v->assign(m.balls.size(), 0.0);
@@ -118,7 +120,7 @@ struct Snapshot {
     walls = m.walls; space = m.space;
     energy = m.energy; energy_at_step = m.energy_at_step;
     membrane = m.membrane; groups = m.groups; bonds = m.bonds;
-    cycle = m.cycle; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
+    cycle = m.cycle; order = m.order; time = m.time; dt = m.dt; critical_dt = m.critical_dt;
   }
   static std::array<std::vector<double>*, 6> unbalanced(Balls& b) { return {&b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz}; }
   // A copy of `from` in `to`, or `to` emptied where `from` is all zeros (its capacity kept, so

@@ -1,5 +1,8 @@
 #include "cycle/wall_list.hpp"
 
+#include <algorithm>
+#include <numeric>
+
 #include "cycle/pair_list.hpp"
 
 #include <atomic>
@@ -47,21 +50,33 @@ void find_wall_contacts(Model& model, double reach, ThreadPool& pool) {
   const std::size_t size = next.ball.size();
   next.for_each_history([&](auto& v, const HistoryPart&) { v.assign(size, 0.0); });
   next.for_each_result_array([&](auto& v) { v.assign(size, {}); });
-  // The history by (ball id, wall id): both lists are in that order (ball index order is id order,
-  // walls are kept by ascending id).
+  // The history by (ball id, wall id). The lists are in (ball index, wall) order, and the old one's
+  // indices may be another numbering's (a part's, before balls moved between parts): each is read
+  // in (ball id, wall id) order to match them.
   const std::size_t old = table.ball_id.size();
   bool consistent = table.wall_id.size() == old && table.state.size() == old;
   table.for_each_history([&](const auto& v, const HistoryPart&) { consistent = consistent && v.size() == old; });
   // The arrays of the old table, in the order the new one lists them (to copy an entry across).
   std::vector<const std::vector<double>*> old_history;
   table.for_each_history([&](const auto& v, const HistoryPart&) { old_history.push_back(&v); });
-  if (consistent) {
-    std::size_t p = 0;
-    for (std::size_t q = 0; q < size; ++q) {
-      while (p < old && (table.ball_id[p] < next.ball_id[q] ||
-                         (table.ball_id[p] == next.ball_id[q] && table.wall_id[p] < next.wall_id[q])))
-        ++p;
-      if (p < old && table.ball_id[p] == next.ball_id[q] && table.wall_id[p] == next.wall_id[q]) {
+  if (consistent && old > 0) {
+    const auto by_ids = [](const WallContacts& t) {
+      std::vector<std::size_t> at(t.ball_id.size());
+      std::iota(at.begin(), at.end(), std::size_t{0});
+      std::sort(at.begin(), at.end(), [&](std::size_t p, std::size_t q) {
+        return t.ball_id[p] != t.ball_id[q] ? t.ball_id[p] < t.ball_id[q] : t.wall_id[p] < t.wall_id[q];
+      });
+      return at;
+    };
+    const std::vector<std::size_t> olds = by_ids(table), news = by_ids(next);
+    std::size_t o = 0;
+    for (const std::size_t q : news) {
+      while (o < old && (table.ball_id[olds[o]] < next.ball_id[q] ||
+                         (table.ball_id[olds[o]] == next.ball_id[q] && table.wall_id[olds[o]] < next.wall_id[q])))
+        ++o;
+      if (o == old) break;
+      const std::size_t p = olds[o];
+      if (table.ball_id[p] == next.ball_id[q] && table.wall_id[p] == next.wall_id[q]) {
         std::size_t h = 0;
         next.for_each_history([&](auto& v, const HistoryPart&) { v[q] = (*old_history[h++])[p]; });
         if (table.nx.size() == old) {   // the last results stay readable until the next pass

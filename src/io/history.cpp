@@ -204,12 +204,10 @@ bool History::valid_table(const HistoryTable& t) {
 }
 
 std::vector<std::size_t> History::platen_balls(const Model& model, const HistoryTable& t) {
-  const auto& ids = model.balls.id;   // sorted: index order is id order
   std::vector<std::size_t> out;
-  for (std::int64_t id : t.platen_ids) {
-    auto it = std::lower_bound(ids.begin(), ids.end(), id);
-    if (it != ids.end() && *it == id) out.push_back(static_cast<std::size_t>(it - ids.begin()));
-  }
+  for (std::int64_t id : t.platen_ids)
+    if (const std::int64_t k = find_ball(model, id); k >= 0) out.push_back(static_cast<std::size_t>(k));
+  std::sort(out.begin(), out.end());   // (the model's order: the sums over them in that order)
   return out;
 }
 

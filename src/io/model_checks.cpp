@@ -25,9 +25,16 @@ bool valid_bool(const bool& b) { return *reinterpret_cast<const unsigned char*>(
 std::string invalid_model(const Model& m) {
   auto finite = [](double v) { return std::isfinite(v); };
   const Balls& b = m.balls;
+  if (!b.ids_indexed()) {
+    for (std::size_t r = 1; r < b.by_id.size() && b.by_id.size() == b.size(); ++r)
+      if (b.by_id[r] < b.size() && b.by_id[r - 1] < b.size() && b.id[b.by_id[r]] == b.id[b.by_id[r - 1]])
+        return fmt::format("ball id {} is given to two balls (at positions {} and {})", b.id[b.by_id[r]],
+                           b.by_id[r - 1], b.by_id[r]);
+    return "the index of the ball ids is not made";
+  }
   for (std::size_t k = 0; k < b.size(); ++k) {
-    if (!(b.id[k] > 0) || (k > 0 && !(b.id[k] > b.id[k - 1])))
-      return fmt::format("ball ids are not positive and ascending (ball {} at position {})", b.id[k], k);
+    if (!(b.id[k] > 0))
+      return fmt::format("ball ids are not positive (ball {} at position {})", b.id[k], k);
     if (!(b.rad[k] > 0) || !finite(b.rad[k])) return fmt::format("ball {} has radius {}", b.id[k], b.rad[k]);
     for (double v : {b.x[k], b.y[k], b.z[k], b.vx[k], b.vy[k], b.vz[k], b.wx[k], b.wy[k], b.wz[k]})
       if (!finite(v)) return fmt::format("ball {} has a position or velocity that is not a number", b.id[k]);

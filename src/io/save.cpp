@@ -244,7 +244,11 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     Sample& s = m.sample;
     io.pod(s.platens); io.pod(s.sides); io.pod(s.height0); io.pod(s.area0);
   }
-  if (version >= 12) {   // the parallel bonds, array by array (Bonds::for_each_array), and what broke
+  if (version >= 12) {   // (older files: the balls in id order, sorted at the next multiple of 1000)
+    io.pod(m.order.every);
+    io.pod(m.order.pending);
+  }
+  if (version >= 13) {   // the parallel bonds, array by array (Bonds::for_each_array), and what broke
     io.pod(m.energy.bond_break_work);
     std::uint64_t nbonds = m.bonds.size();
     io.pod(nbonds);
@@ -417,6 +421,7 @@ Model load_model(const std::string& path, History* history) {
     consistent = consistent && m.contacts.i[p] < n && m.contacts.j[p] < n;
   m.contacts.for_each_pair_array([&](const auto& v) { consistent = consistent && v.size() == m.contacts.i.size(); });
   if (!consistent) r.corrupt();
+  m.balls.index_ids();
   const std::string wrong = invalid_model(m);
   if (!wrong.empty())
     throw std::runtime_error(fmt::format("'{}' holds no valid model: {} (not restarted)", path, wrong));

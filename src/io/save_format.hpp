@@ -34,9 +34,12 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 // rolling springs dissipated (Energy::rolling_work); older files have none. 11: the materials'
 // capillary bridges (Material::bridge_volume, surface_tension, contact_angle) and the work the
 // bridges did (Energy::capillary_work, EnergyAtStep::capillary_ahead); older files have none (the
-// bridges' state is history, by name). 12: the parallel bonds (Model::bonds, each array whole) and
-// the energy the broken ones held (Energy::bond_break_work); older files restart unbonded.
-constexpr std::uint32_t kVersion = 12;
+// bridges' state is history, by name). 12: the balls in the model's order in memory, which need
+// not be id order, with SET sort's interval and whether balls were added since the last sort
+// (Model::order); older files hold them in id order. 13: the parallel bonds (Model::bonds, each
+// array whole) and the energy the broken ones held (Energy::bond_break_work); older files restart
+// unbonded.
+constexpr std::uint32_t kVersion = 13;
 constexpr std::uint32_t kOldestVersion = 2;
 
 // FNV-1a, 64 bit: enough to tell a damaged file from a good one.

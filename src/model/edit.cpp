@@ -14,10 +14,28 @@
 
 namespace trubal {
 
+void Balls::index_ids() {
+  by_id.resize(size());
+  std::iota(by_id.begin(), by_id.end(), std::uint32_t{0});
+  std::sort(by_id.begin(), by_id.end(), [&](std::uint32_t p, std::uint32_t q) { return id[p] < id[q]; });
+}
+
+bool Balls::ids_indexed() const {
+  if (by_id.size() != size()) return false;
+  std::vector<bool> seen(size(), false);
+  for (std::size_t r = 0; r < by_id.size(); ++r) {
+    const std::uint32_t k = by_id[r];
+    if (k >= size() || seen[k] || (r > 0 && !(id[by_id[r - 1]] < id[k]))) return false;
+    seen[k] = true;
+  }
+  return true;
+}
+
 std::int64_t find_ball(const Model& model, std::int64_t id) {
-  const auto& ids = model.balls.id;
-  auto it = std::lower_bound(ids.begin(), ids.end(), id);
-  return (it != ids.end() && *it == id) ? it - ids.begin() : -1;
+  const Balls& b = model.balls;
+  const auto it = std::lower_bound(b.by_id.begin(), b.by_id.end(), id,
+                                   [&](std::uint32_t k, std::int64_t v) { return b.id[k] < v; });
+  return (it != b.by_id.end() && b.id[*it] == id) ? static_cast<std::int64_t>(*it) : -1;
 }
 
 std::string ball_radius_problem(const Space& space, double rad) {
@@ -34,24 +52,24 @@ std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y
   Balls& b = model.balls;
   if (!(rad > 0)) throw std::invalid_argument("ball radius must be positive");
   if (id <= 0) {
-    if (b.size() && b.id.back() == std::numeric_limits<std::int64_t>::max())
-      throw std::invalid_argument("no ball id is left after " + std::to_string(b.id.back()) +
+    if (!b.by_id.empty() && b.id[b.by_id.back()] == std::numeric_limits<std::int64_t>::max())
+      throw std::invalid_argument("no ball id is left after " + std::to_string(b.id[b.by_id.back()]) +
                                   ": give the new ball its id (BALL ... id n)");
-    id = b.size() ? b.id.back() + 1 : 1;
+    id = b.by_id.empty() ? 1 : b.id[b.by_id.back()] + 1;
   }
-  auto pos = std::lower_bound(b.id.begin(), b.id.end(), id) - b.id.begin();
-  if (static_cast<std::size_t>(pos) < b.size() && b.id[pos] == id)
-    throw std::invalid_argument("ball id " + std::to_string(id) + " is taken");
-  // Contact pairs refer to indices: inserting in the middle shifts them.
-  if (static_cast<std::size_t>(pos) < b.size()) {
-    for (auto& v : model.contacts.i) v += (v >= pos);
-    for (auto& v : model.contacts.j) v += (v >= pos);
-    model.contacts.list_version = 0;   // a list nobody has indexed
-    for (auto& v : model.wall_contacts.ball) v += (v >= pos);
-    model.wall_contacts.list_version = 0;
-  }
+  // The new ball goes last in memory; by_id takes it at its id's place (at its end for a new
+  // largest id, as BALL and GEN give).
+  const auto at = std::lower_bound(b.by_id.begin(), b.by_id.end(), id,
+                                   [&](std::uint32_t k, std::int64_t v) { return b.id[k] < v; });
+  if (at != b.by_id.end() && b.id[*at] == id) throw std::invalid_argument("ball id " + std::to_string(id) + " is taken");
+  if (b.size() >= std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("a model holds at most " + std::to_string(std::numeric_limits<std::uint32_t>::max()) +
+                                " balls");
+  const std::size_t pos = b.size();
+  b.by_id.insert(at, static_cast<std::uint32_t>(pos));
   model.critical_dt = 0;   // the new ball may be stiffer or lighter than any before
-  b.for_each_array([&](auto& v) { v.insert(v.begin() + pos, typename std::decay_t<decltype(v)>::value_type{}); });
+  model.order.pending = true;   // put in space order at the next step
+  b.for_each_array([&](auto& v) { v.emplace_back(); });
   b.id[pos] = id;
   b.type[pos] = type;
   b.x[pos] = x; b.y[pos] = y; b.z[pos] = z;
@@ -95,6 +113,7 @@ std::size_t remove_balls(Model& model, const std::vector<bool>& remove) {
       if (!remove[k]) v[w++] = v[k];
     v.resize(w);
   });
+  b.index_ids();
   ContactTable& c = model.contacts;
   std::vector<bool> keep_pair(c.size());
   for (std::size_t p = 0; p < c.size(); ++p) keep_pair[p] = new_index[c.i[p]] >= 0 && new_index[c.j[p]] >= 0;
@@ -140,7 +159,8 @@ std::uint64_t spread3(std::uint64_t v) {
 }
 
 // The order of the balls in space: Morton order of cells `cell` wide from the lowest centre, ties
-// (one cell) by index; a ball with a centre not finite goes last.
+// (one cell) by id, so that the order is a function of the centres and ids alone; a ball with a
+// centre not finite goes last.
 std::vector<std::size_t> space_order(const Balls& b, double cell) {
   const std::size_t n = b.size();
   std::array<double, 3> lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
@@ -164,7 +184,8 @@ std::vector<std::size_t> space_order(const Balls& b, double cell) {
   }
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return key[p] < key[q]; });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t p, std::size_t q) { return key[p] != key[q] ? key[p] < key[q] : b.id[p] < b.id[q]; });
   return order;
 }
 
@@ -187,26 +208,13 @@ std::int64_t Renumbering::map(std::int64_t old) const {
   return it != old_ids.end() && *it == old ? new_ids[it - old_ids.begin()] : 0;
 }
 
-Renumbering renumber_balls(Model& model, RenumberOrder how) {
+void reorder_balls(Model& model, const std::vector<std::size_t>& order) {
   Balls& b = model.balls;
   const std::size_t n = b.size();
-  Renumbering r;
-  r.old_ids = b.id;
-  std::vector<std::size_t> order(n);
-  if (how == RenumberOrder::Space) {
-    const double diameter = 2 * b.max_radius();
-    r.cell = std::isfinite(diameter) && diameter > 0 ? diameter : 1.0;
-    order = space_order(b, r.cell);
-  } else {
-    std::iota(order.begin(), order.end(), std::size_t{0});
-  }
   std::vector<std::uint32_t> new_index(n);
   for (std::size_t k = 0; k < n; ++k) new_index[order[k]] = static_cast<std::uint32_t>(k);
-  r.new_ids.resize(n);
-  for (std::size_t k = 0; k < n; ++k) r.new_ids[k] = static_cast<std::int64_t>(new_index[k]) + 1;
-
   permute_arrays([&](auto&& f) { b.for_each_array(f); }, order);
-  for (std::size_t k = 0; k < n; ++k) b.id[k] = static_cast<std::int64_t>(k) + 1;
+  b.index_ids();
 
   // The pair list: each pair in the new indices, turned round where its balls changed order (the
   // history as each part declares (OnSwap: the shear force on j changes sign), the normal from i to
@@ -235,10 +243,7 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
   c.list_version = 0;   // a list nobody has indexed
 
   WallContacts& w = model.wall_contacts;
-  for (std::size_t p = 0; p < w.size(); ++p) {
-    w.ball[p] = new_index[w.ball[p]];
-    w.ball_id[p] = static_cast<std::int64_t>(w.ball[p]) + 1;
-  }
+  for (std::size_t p = 0; p < w.size(); ++p) w.ball[p] = new_index[w.ball[p]];
   std::vector<std::size_t> walls(w.size());
   std::iota(walls.begin(), walls.end(), std::size_t{0});
   std::stable_sort(walls.begin(), walls.end(), [&](std::size_t p, std::size_t q) {
@@ -246,7 +251,42 @@ Renumbering renumber_balls(Model& model, RenumberOrder how) {
   });
   permute_arrays([&](auto&& f) { w.for_each_array(f); }, walls);
   w.list_version = 0;
+}
 
+double order_cell(const Balls& b) {
+  const double diameter = 2 * b.max_radius();
+  return std::isfinite(diameter) && diameter > 0 ? diameter : 1.0;
+}
+
+bool sort_in_space(Model& model) {
+  model.order.pending = false;
+  const std::vector<std::size_t> order = space_order(model.balls, order_cell(model.balls));
+  bool moved = false;
+  for (std::size_t k = 0; k < order.size() && !moved; ++k) moved = order[k] != k;
+  if (moved) reorder_balls(model, order);
+  return moved;
+}
+
+Renumbering renumber_balls(Model& model, RenumberOrder how) {
+  Balls& b = model.balls;
+  const std::size_t n = b.size();
+  Renumbering r;
+  if (how == RenumberOrder::Space) {
+    r.cell = order_cell(b);
+    reorder_balls(model, space_order(b, r.cell));
+  }
+  // Space: the ids follow the new order in memory; present: the order of the ids.
+  r.old_ids.resize(n);
+  r.new_ids.resize(n);
+  for (std::size_t rank = 0; rank < n; ++rank) {
+    const std::uint32_t k = b.by_id[rank];
+    r.old_ids[rank] = b.id[k];
+    r.new_ids[rank] = static_cast<std::int64_t>(how == RenumberOrder::Space ? k : rank) + 1;
+  }
+  for (std::size_t rank = 0; rank < n; ++rank) b.id[b.by_id[rank]] = r.new_ids[rank];
+  b.index_ids();
+  WallContacts& w = model.wall_contacts;
+  for (std::size_t p = 0; p < w.size(); ++p) w.ball_id[p] = b.id[w.ball[p]];
   for (auto& [name, ids] : model.groups) {
     for (auto& id : ids) id = r.map(id);
     std::sort(ids.begin(), ids.end());

@@ -1,4 +1,4 @@
-// Adding and removing balls while keeping the arrays sorted by id.
+// Adding, removing and reordering balls, with everything the model keeps by ball index.
 #pragma once
 
 #include <cstdint>
@@ -9,8 +9,9 @@
 
 namespace trubal {
 
-// Adds a ball at rest with no applied loads; returns its index. id <= 0 takes the next free id
-// (one more than the largest). Throws std::invalid_argument if the id is taken or rad <= 0.
+// Adds a ball at rest with no applied loads, last in memory; returns its index. id <= 0 takes the
+// next free id (one more than the largest). Throws std::invalid_argument if the id is taken or
+// rad <= 0. The model is put in space order at its next step (Model::order).
 std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y, double z, double rad);
 
 // What is wrong with a ball's radius in this space, or "" where nothing is: the radius of a new
@@ -32,18 +33,33 @@ void reindex_wall_contacts(Model& model);
 // Index of the ball with this id, or -1.
 std::int64_t find_ball(const Model& model, std::int64_t id);
 
+// Puts the balls in the order `order` (new index k holds the ball at old index order[k]), and
+// with them everything the model keeps by index: the pair list (a pair whose balls change order is
+// turned round: its shear history, normal, force and image change sign, so the physics is the
+// same) and the wall contacts. Ids, groups and the membrane's balls are by id and stay.
+void reorder_balls(Model& model, const std::vector<std::size_t>& order);
+
+// The balls in space order (the Morton order of cells one largest diameter wide from the lowest
+// centres, ties by id), as the run puts them at the cycles Model::order names. A function of the
+// balls' centres and ids alone, so every backend, thread and rank count and cut of a run puts
+// them in the same order, and so does a model that reached the same state another way. Returns whether any ball moved.
+bool sort_in_space(Model& model);
+
+// Whether the step about to be taken puts the balls in space order first (Model::order).
+inline bool sort_due(const Model& model) {
+  return model.order.every > 0 && (model.order.pending || model.cycle % model.order.every == 0);
+}
+
 // RENUMBER: the balls get the ids 1..N, in space order (the Morton order of cells one largest
-// diameter wide, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins) or in their present
-// order. Storage order is id order, so the balls' arrays are permuted with them: neighbours in space
-// become neighbours in memory, which the contact loop reads faster. Everything the model keeps by
-// index or by id follows its ball: the pair list (a pair whose balls change order is turned round:
-// its shear history, normal, force and image change sign, so the physics is the same), the wall
-// contacts, groups and the membrane's balls. The caller renumbers what it keeps of its own (Session:
-// histories' platens, GEN's last balls) through the returned map.
+// diameter wide, as LAMMPS's `reset_atoms id sort yes` numbers atoms by bins) or in
+// the order of their ids (compacting them); in space order the balls are put in that order in
+// memory too (reorder_balls). Groups and the membrane's balls follow
+// their balls' new ids. The caller renumbers what it keeps of its own (Session: histories'
+// platens, GEN's last balls) through the returned map.
 enum class RenumberOrder { Space, Present };
 struct Renumbering {
-  std::vector<std::int64_t> old_ids;   // the ids before, ascending (by old index)
-  std::vector<std::int64_t> new_ids;   // the new id of the ball at each old index
+  std::vector<std::int64_t> old_ids;   // the ids before, ascending
+  std::vector<std::int64_t> new_ids;   // the new id of the ball that had old_ids[k]
   double cell = 0;                     // the cells' width (space order)
   // The new id of the ball that had id `old`, or 0 where no ball had it.
   std::int64_t map(std::int64_t old) const;

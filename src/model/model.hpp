@@ -39,8 +39,11 @@ struct Material {
   bool hertz() const { return shear_modulus > 0; }
 };
 
-// Balls as structure of arrays. Invariant: sorted by id, so index order is id order
-// (forces are gathered by partner id, which is then partner index).
+// Balls as structure of arrays, stored in the model's canonical order: the order each ball's
+// contact forces are summed in (partners by index) and the order SAVE writes. The order is a
+// function of the model's state alone: balls are added at the end, and the run puts them in space
+// order at cycles fixed by the model's own counter (Model::order, cycle/run.cpp). Ids are the
+// user's names for the balls and never change with the order; `by_id` finds a ball by id.
 struct Balls {
   std::vector<std::int64_t> id;
   std::vector<int> type;
@@ -53,8 +56,15 @@ struct Balls {
   std::vector<double> mx, my, mz;               // unbalanced moment of the last step
   std::vector<double> ax, ay, az;               // applied force (APPLY, MEMBRANE)
   std::vector<double> amx, amy, amz;            // applied moment
+  // The balls' indices by ascending id: not a per-ball array of the state (SAVE does not write it).
+  // Kept by what adds, removes and reorders balls (model/edit.hpp); index_ids() makes it afresh.
+  std::vector<std::uint32_t> by_id;
 
   std::size_t size() const { return id.size(); }
+  // Makes by_id afresh from the ids.
+  void index_ids();
+  // Whether by_id lists every index once, by strictly ascending id (the ids unique).
+  bool ids_indexed() const;
   double max_radius() const {
     double r = 0;
     for (double v : rad) r = v > r ? v : r;
@@ -422,6 +432,14 @@ struct Model {
   Sample sample;
   std::map<std::string, std::vector<std::int64_t>> groups;   // GROUP name -> ball ids
   std::int64_t cycle = 0;
+  // The balls' order in memory (SET sort; cycle/run.cpp): at the start of a step whose cycle number
+  // is a multiple of `every`, and of the first step after balls were added (`pending`), the balls
+  // are put in space order, so that neighbours in space are neighbours in memory (every 0: never;
+  // they stay in the order they were added). Both saved.
+  struct Order {
+    std::int64_t every = 1000;            // LAMMPS's atom_modify sort default
+    bool pending = false;
+  } order;
   double time = 0;
   double dt = 0;                          // step of the last cycle (0 before the first)
   double critical_dt = 0;                 // critical step from the last force pass (0: estimate afresh)

@@ -1,6 +1,10 @@
 // Scenes for the cross-backend tests, built directly in C++, and bitwise comparison of two models.
 #pragma once
 
+#include <algorithm>
+
+#include <numeric>
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -36,7 +40,8 @@ inline Material scene_linear(double kn, double ks, double mu, double density) {
 // A dense FCC block (R = 20, every ball touching its 12 neighbours, as the benchmark) whose outer
 // layer is held and moves inward: compression with friction and rotation.
 // by_layer_parity: the balls numbered as the Rowe decks number them, all even lattice layers
-// first, then all odd ones, so that most pairs join balls far apart in numbering.
+// first, then all odd ones, so that most pairs join balls far apart in numbering; kept so in memory
+// (the run never sorts it: SET sort 0).
 inline Scene fcc_compression(int nx, int ny, int nz, bool by_layer_parity = false) {
   Scene s{"dense FCC under compression", {}, 300};
   const double r = 20, a = 0.99 * 2 * r * std::sqrt(2.0);
@@ -58,6 +63,7 @@ inline Scene fcc_compression(int nx, int ny, int nz, bool by_layer_parity = fals
         s.model.balls.vz[ball] = -rate * (z - cz);
       }
     });
+  if (by_layer_parity) s.model.order.every = 0;
   return s;
 }
 
@@ -147,6 +153,15 @@ struct Picture {
   std::int64_t cycle = 0;
   double time = 0, dt = 0, critical_dt = 0;
 };
+
+// The model with its balls in id order in memory (to compare states whose order differs).
+inline Model in_id_order(Model m) {
+  std::vector<std::size_t> order(m.balls.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return m.balls.id[p] < m.balls.id[q]; });
+  reorder_balls(m, order);
+  return m;
+}
 
 inline Picture picture(const Model& m) {
   Picture p;

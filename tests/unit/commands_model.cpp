@@ -202,9 +202,11 @@ TEST_CASE("commands: PRINT balls file and HIST file write the documented CSV", "
   CHECK(balls[0] == "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz");
   const auto& b = h.session.model().balls;
   REQUIRE(balls.size() == b.size() + 1);
-  // Round trip: the text reads back to the very same double.
-  for (std::size_t k = 0; k < b.size(); k += 7) {
-    std::string row = balls[k + 1];
+  // Round trip: the text reads back to the very same double; rows by ascending id (the model keeps
+  // its balls in space order: by_id is the id order).
+  for (std::size_t r = 0; r < b.size(); r += 7) {
+    const std::size_t k = b.by_id[r];
+    std::string row = balls[r + 1];
     std::vector<std::string> f;
     std::stringstream ss(row);
     for (std::string c; std::getline(ss, c, ',');) f.push_back(c);

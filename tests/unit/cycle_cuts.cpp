@@ -43,7 +43,9 @@ const Scene kServoShear = {"servo_shear", kServoShearDeck, "hist stress strain c
 
 // Hertz-Mindlin balls with restitution dashpots and Rayleigh damping falling under gravity onto a held
 // floor, some pushed sideways and spun by applied loads; balls that bounce out of the box are destroyed.
+// Put in space order every 100 cycles (SET sort), so that sorts fall inside the cuts.
 const Scene kHertzDrop = {"hertz_drop", R"(start box -0.1 0.1 -0.1 0.1 -0.02 0.25 destroy
+set sort 100
 prop shear 3e7 poisson 0.3 fric 20 dens 2650 rest 0.6
 lattice fcc 0.01 18 18 1 origin -0.09 -0.09 0
 fix vel spin range z -0.005 0.005
@@ -57,8 +59,9 @@ cycle 300
 
 // Rowe's test on a small FCC sample: the membrane (following the sample every 3 cycles), held
 // platens moving at a fixed speed, linear
-// springs, Rayleigh damping.
+// springs, Rayleigh damping; sorted every 100 cycles, as the drop.
 const Scene kMembrane = {"membrane", R"(start box -200 440 -200 440 -100 450
+set sort 100
 prop kn 1.5e9 ks 1.5e9 fric 7 dens 2000
 lattice fcc 40 7 7 13 layers even range octagon 120 120 120 127
 lattice fcc 40 7 7 13 layers odd  range octagon 120 120 120 99

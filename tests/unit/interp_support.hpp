@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "ball_at.hpp"
 #include "interp/interpreter.hpp"
 #include "interp/output.hpp"
 #include "session.hpp"

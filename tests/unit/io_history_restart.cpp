@@ -260,7 +260,7 @@ TEST_CASE("io history: a save of format 5 (before histories) restarts with none"
   std::string data = slurp(dir.path() / "s.sav");
   std::uint32_t version = 0;
   std::memcpy(&version, data.data() + 8, sizeof version);
-  REQUIRE(version == 12);
+  REQUIRE(version == 13);
   // Format 7 keeps the energy terms of the last force pass: PRINT energy after RESTART is the run's.
   Harness now;
   REQUIRE(now.deck(kScene + "restart s.sav\n"));

@@ -2,6 +2,7 @@
 // sees is checked, not just that a file exists.
 #include <cmath>
 #include <map>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -53,9 +54,10 @@ TEST_CASE("io_vtk: balls and force chains read back with VTK's reader", "[io][vt
     CHECK(vel[3 * k + 2] == m.balls.vz[k]);
     CHECK(spin[3 * k + 1] == m.balls.wy[k]);
   }
-  CHECK(type[2] == 2);
-  CHECK(vel[3 * 3 + 2] == 0.25);   // ball 4 moves freely at its initial speed (no gravity, no contact)
-  CHECK(vel[0] < 0);               // ball 1 is pushed away from ball 2
+  // (The points in the model's order in memory: found by id.)
+  CHECK(type[trubal::test::at(m, 3)] == 2);
+  CHECK(vel[3 * trubal::test::at(m, 4) + 2] == 0.25);   // ball 4 moves freely at its initial speed (no gravity, no contact)
+  CHECK(vel[3 * trubal::test::at(m, 1)] < 0);           // ball 1 is pushed away from ball 2
 
   // The force chains: a line per touching pair (1-2, 2-3; ball 4 touches nothing) between the
   // centres, normal force as cell data equal to the contact table's.
@@ -64,10 +66,19 @@ TEST_CASE("io_vtk: balls and force chains read back with VTK's reader", "[io][vt
   CHECK(chains["lines"] == std::vector<double>{2});
   CHECK(chains["line0"] == std::vector<double>{0, 1});
   CHECK(chains["line1"] == std::vector<double>{2, 3});
-  CHECK(array_of(chains, "cd:id_i") == std::vector<double>{1, 2});
-  CHECK(array_of(chains, "cd:id_j") == std::vector<double>{2, 3});
-  CHECK(chains["p1"] == std::vector<double>{m.balls.x[1], m.balls.y[1], m.balls.z[1]});
-  CHECK(chains["p3"] == std::vector<double>{m.balls.x[2], m.balls.y[2], m.balls.z[2]});
+  // Each line between its pair's centres: the pairs 1-2 and 2-3, in the contact table's order.
+  const auto id_i = array_of(chains, "cd:id_i"), id_j = array_of(chains, "cd:id_j");
+  REQUIRE(id_i.size() == 2);
+  REQUIRE(id_j.size() == 2);
+  std::set<std::pair<double, double>> pairs;
+  for (std::size_t l = 0; l < 2; ++l) {
+    pairs.insert({std::min(id_i[l], id_j[l]), std::max(id_i[l], id_j[l])});
+    for (int end = 0; end < 2; ++end) {
+      const std::size_t k = trubal::test::at(m, static_cast<std::int64_t>(end == 0 ? id_i[l] : id_j[l]));
+      CHECK(chains[fmt::format("p{}", 2 * l + end)] == std::vector<double>{m.balls.x[k], m.balls.y[k], m.balls.z[k]});
+    }
+  }
+  CHECK(pairs == std::set<std::pair<double, double>>{{1, 2}, {2, 3}});
   const auto fn = array_of(chains, "cd:normal_force");
   REQUIRE(fn.size() == 2);
   std::vector<double> expected;

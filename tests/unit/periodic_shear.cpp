@@ -102,8 +102,12 @@ TEST_CASE("periodic shear: simple shear of a frictional FCC block has the cell's
   }
   const double slope = (syvx - sy * svx / n) / (syy - sy * sy / n);
   CHECK(slope == Approx(-2 * e12).epsilon(0.02));
-  CHECK(std::abs(svy / n) < 1e-3 * 2 * e12 * L0[1]);
-  CHECK(std::abs(svz / n) < 1e-3 * 2 * e12 * L0[1]);
+  // No mean flow: under 0.5% of the field's scale 2 e12 L_y. Local damping does not keep the
+  // momentum, so the rounding of the sums leaves a drift: mean v_y measured -2.2e-5 (0.06%) with
+  // the balls summed in id order, -8.7e-5 to -1.1e-4 (0.3%) in space order sorted every 1 to 1000
+  // cycles; mean v_z under 1.3e-5.
+  CHECK(std::abs(svy / n) < 5e-3 * 2 * e12 * L0[1]);
+  CHECK(std::abs(svz / n) < 5e-3 * 2 * e12 * L0[1]);
   // The assembly resists: sigma_12 (compression positive) grows positive with e12.
   const Sym6 s = average_stress(m, L0[0] * L0[1] * L0[2]);
   CHECK(s[3] > 0.05 * s[0]);

@@ -1,6 +1,7 @@
 // Contact detection: the serial backend finds exactly the touching pairs a brute-force check finds.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <random>
 #include <set>
 #include <utility>
@@ -12,7 +13,9 @@ using namespace trubal;
 
 namespace {
 
+// Pairs of ids, the smaller first (the model's order in memory is not id order).
 using PairSet = std::set<std::pair<std::int64_t, std::int64_t>>;
+std::pair<std::int64_t, std::int64_t> ids(std::int64_t a, std::int64_t b) { return {std::min(a, b), std::max(a, b)}; }
 
 PairSet brute_force(const Balls& b) {
   PairSet s;
@@ -20,7 +23,7 @@ PairSet brute_force(const Balls& b) {
     for (std::size_t j = i + 1; j < b.size(); ++j) {
       const double dx = b.x[j] - b.x[i], dy = b.y[j] - b.y[i], dz = b.z[j] - b.z[i];
       const double reach = b.rad[i] + b.rad[j];
-      if (dx * dx + dy * dy + dz * dz < reach * reach) s.insert({b.id[i], b.id[j]});
+      if (dx * dx + dy * dy + dz * dz < reach * reach) s.insert(ids(b.id[i], b.id[j]));
     }
   return s;
 }
@@ -28,7 +31,7 @@ PairSet brute_force(const Balls& b) {
 PairSet touching(const Model& m) {
   PairSet s;
   for (std::size_t p = 0; p < m.contacts.size(); ++p)
-    if (m.contacts.state[p]) s.insert({m.balls.id[m.contacts.i[p]], m.balls.id[m.contacts.j[p]]});
+    if (m.contacts.state[p]) s.insert(ids(m.balls.id[m.contacts.i[p]], m.balls.id[m.contacts.j[p]]));
   return s;
 }
 

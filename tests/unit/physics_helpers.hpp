@@ -4,6 +4,7 @@
 #include <cmath>
 #include <memory>
 
+#include "ball_at.hpp"
 #include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
 #include "model/model.hpp"

@@ -189,10 +189,13 @@ TEST_CASE("walls: the servo holds a platen's stress on a sample in a cylinder", 
   }
   CHECK(sum / rows.size() == Approx(5000).epsilon(0.01));
   CHECK(worst < 0.03 * 5000);
-  // The floor carries the platen's load and the weight, less what friction hangs on the cylinder.
+  // The floor carries the platen's load and the weight, less what friction hangs on the cylinder
+  // (its share depends on the packing: 3% to 6% measured): the balls at rest balance the three walls'
+  // forces and their weight, to 1% (their accelerations under the servo; measured 0.1%).
   double weight = 0;
   for (double mass : m.balls.mass) weight += mass * 9.81;
-  CHECK(-m.walls[0].force[2] == Approx(platen.force[2] + weight).epsilon(0.05));
+  CHECK(-m.walls[0].force[2] < platen.force[2] + weight);
+  CHECK(-m.walls[0].force[2] == Approx(platen.force[2] + m.walls[1].force[2] + weight).epsilon(0.01));
 }
 
 TEST_CASE("walls: bad WALL and SERVO wall input is an error that says what is wrong", "[walls][hard]") {
@@ -251,7 +254,7 @@ TEST_CASE("walls: a ball held still by FIX is a partner of infinite mass, as a w
     const std::string target = k == 0 ? "ball 0 0 0 0.1 id 2\nfix vel spin range id 2\n" : "wall plane 0 0 0.1 0 0 1\n";
     REQUIRE(h.deck("start box -1 1 -1 1 -1 2\nprop kn 1e6 ks 1e6 dens 1000 rest 0.5\nball 0 0 0.25 0.1 id 1\n" + target +
                    "init zvel -1 range id 1\nfrac 0.02\ncycle 20000\n"));
-    rebound[k] = h.session.model().balls.vz[0];
+    rebound[k] = h.session.model().balls.vz[trubal::test::at(h.session.model(), 1)];
   }
   CHECK(rebound[0] == Approx(0.5).epsilon(0.005));
   CHECK(rebound[0] == Approx(rebound[1]).epsilon(1e-6));

@@ -62,7 +62,7 @@ TEST_CASE("renumber: a deck renumbered before its CYCLE steps as the same balls 
 }
 
 TEST_CASE("renumber: mid-run every ball keeps its state and every contact its history", "[commands]") {
-  const std::string scene = scrambled_settle_deck() + "group top range z 150 400\ncycle 300\n";
+  const std::string scene = scrambled_in_memory_deck() + "group top range z 150 400\ncycle 300\n";
   Harness h;
   REQUIRE(h.deck(scene));
   const Model before = h.session.model();
@@ -168,7 +168,7 @@ TEST_CASE("renumber: present order closes DELETE's gaps, and bad input is refuse
   REQUIRE(h.deck("start 1 1 1\nrenumber\n"));
   CHECK(h.out.str() == "new model in the periodic space 1 x 1 x 1\nno balls to renumber\n");
   h.out.str("");
-  REQUIRE(h.deck(scrambled_settle_deck() + "delete range id 1 100\n"));
+  REQUIRE(h.deck(scrambled_in_memory_deck() + "delete range id 1 100\n"));
   const Model before = h.session.model();
   CHECK_FALSE(h.deck("renumber sideways\n", "r.dat"));
   CHECK_THAT(h.first_error_line(), Catch::Contains("r.dat:1: error:"));
@@ -184,22 +184,27 @@ TEST_CASE("renumber: present order closes DELETE's gaps, and bad input is refuse
   }
 }
 
-TEST_CASE("renumber: PRINT info says how far apart consecutive ids lie, and suggests RENUMBER", "[commands]") {
-  // The scrambled scene's neighbours in id order are a random pair of its 384 places (the grid's
-  // edge is 8 diameters: about 4 apart at the median); renumbered, about one apart.
+TEST_CASE("renumber: PRINT info says how far apart neighbours in memory lie, and suggests SET sort", "[commands]") {
+  // The scrambled scene's neighbours in memory are a random pair of its 384 places (the grid's edge
+  // is 8 diameters: about 4 apart at the median); in space order, about one apart.
   Harness h;
-  REQUIRE(h.deck(scrambled_settle_deck() + "print info\n"));
+  REQUIRE(h.deck(scrambled_in_memory_deck() + "print info\n"));
   const auto gap = [](const std::string& out) {
-    const auto at = out.find("ball order: consecutive ids ");
+    const std::string label = "ball order: neighbours in memory ";
+    const auto at = out.find(label);
     REQUIRE(at != std::string::npos);
-    return std::stod(out.substr(at + 28));
+    return std::stod(out.substr(at + label.size()));
   };
   const std::string before = h.out.str();
   CHECK(gap(before) > 3);
-  CHECK_THAT(before, Catch::Contains("RENUMBER numbers them in space order"));
+  CHECK_THAT(before, Catch::Contains("never (SET sort 0): the contact loop reads memory slowly; SET sort 1000 puts them in space order"));
   h.out.str("");
-  REQUIRE(h.deck("renumber\nprint info\n"));
+  REQUIRE(h.deck("set sort 1000\ncycle 1\nprint info\n"));
   const std::string after = h.out.str();
   CHECK(gap(after) < 1.6);
-  CHECK_THAT(after, !Catch::Contains("RENUMBER numbers them"));
+  CHECK_THAT(after, Catch::Contains("put in space order every 1000 cycles\n"));
+  // Balls added are put in order at the next step.
+  h.out.str("");
+  REQUIRE(h.deck("ball 100 100 300 20\nprint info\n"));
+  CHECK_THAT(h.out.str(), Catch::Contains("put in space order at the next step, then every 1000 cycles\n"));
 }

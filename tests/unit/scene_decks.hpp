@@ -1,6 +1,11 @@
 // Decks that more than one test file runs.
 #pragma once
 
+#include <algorithm>
+#include <string>
+#include <utility>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include <string>
@@ -39,6 +44,24 @@ wall id 1 plane 0 0 -1 0 0 1 type 2
                             19.2 + 39.2 * c + 0.5 * jitter, static_cast<long>(k) * 7919 % n + 1);
       }
   return deck + "grav 0 0 -1\ndamp local 0.2\n";
+}
+
+// The same scene with its balls scrambled in memory as well: the BALL lines in id order, and the
+// run never sorting them into space order (SET sort 0). For RENUMBER and PRINT info's ball order.
+inline std::string scrambled_in_memory_deck() {
+  const std::string deck = scrambled_settle_deck();
+  const std::size_t first = deck.find("ball "), last = deck.find("grav ");
+  std::vector<std::pair<long, std::string>> lines;
+  for (std::size_t at = first; at < last;) {
+    const std::size_t end = deck.find('\n', at) + 1;
+    const std::string line = deck.substr(at, end - at);
+    lines.emplace_back(std::stol(line.substr(line.rfind(" id ") + 4)), line);
+    at = end;
+  }
+  std::sort(lines.begin(), lines.end());
+  std::string out = deck.substr(0, first) + "set sort 0\n";
+  for (const auto& [id, line] : lines) out += line;
+  return out + deck.substr(last);
 }
 
 }  // namespace trubal::test
