@@ -61,6 +61,14 @@ void bridge_pairs(Model& model, StepScratch& scratch, const StepKernels& k, std:
       f = {0, 0, 0};
       continue;
     }
+    if (k.writes_results() && c.state[p] == 0) {
+      // Held apart by the bridge alone: the contact loops wrote no normal and no overlap (no
+      // contact); the results give the pair's unit normal and its gap as a negative overlap, as
+      // the contact law would (U = R_i + R_j - d).
+      const double inv_d = 1.0 / d;
+      c.nx[p] = dx * inv_d; c.ny[p] = dy * inv_d; c.nz[p] = dz * inv_d;
+      c.overlap[p] = b.rad[i] + b.rad[j] - d;
+    }
     // On j, toward i: -F n, n = d / |d| from i to j.
     const double pull = bridge_force(law, b.rad[i], b.rad[j], gap) / d;
     f = {-pull * dx, -pull * dy, -pull * dz};

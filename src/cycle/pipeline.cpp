@@ -58,8 +58,8 @@ Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* po
       backend_(std::move(backend)),
       pool_(threads > 0 ? threads : default_threads(backend_->name())),
       step_(*policy_) {
-  distributed_ = backend_->distributed() && comm::size() > 1;
-  const int members = distributed_ ? 1 : pool_.size();
+  if (backend_->distributed() && comm::size() > 1) mode_ = StepMode::Ranks;
+  const int members = distributed() ? 1 : pool_.size();
   for (int t = 0; t < members; ++t) bricks_.push_back(std::make_unique<BrickStep>(*policy_));
   if (members > 1) {
     thread_team_ = std::make_unique<ThreadTeam::Shared>(members);
@@ -74,33 +74,29 @@ Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* po
 
 bool Pipeline::threads_in_space(const Model& model) {
   // (Bonds do not travel with the parts' balls: a bonded scene is shared by ball numbers.)
-  if (distributed_ || bricks_.size() < 2 || !backend_->keeps_list() || !model.bonds.empty()) return false;
+  if (distributed() || bricks_.size() < 2 || !backend_->keeps_list() || !model.bonds.empty()) return false;
   const int rule = policy_->split_rule;
   if (rule != 0) return rule > 0;
   const ContactTable& c = model.contacts;
-  if (space_model_ == &model && space_version_ == c.list_version) return space_verdict_;
-  space_model_ = &model;
-  space_version_ = c.list_version;
+  if (space_verdict_.model == &model && space_verdict_.list_version == c.list_version) return space_verdict_.in_space;
+  space_verdict_ = {&model, c.list_version, false};
   const std::size_t n = model.balls.size();
-  space_verdict_ = false;
   if (n < kSpaceBalls || c.size() == 0) return false;
-  if (large_in_space(n)) return space_verdict_ = true;
+  if (large_in_space(n)) return space_verdict_.in_space = true;
   const int parts = static_cast<int>(bricks_.size());
   std::vector<std::uint16_t> range(n);   // (BACKEND allows up to 4096 threads)
   for (int t = 0; t < parts; ++t)
     for (std::size_t k = split_point(n, parts, t); k < split_point(n, parts, t + 1); ++k) range[k] = static_cast<std::uint16_t>(t);
   std::size_t cross = 0;
   for (std::size_t p = 0; p < c.size(); ++p) cross += range[c.i[p]] != range[c.j[p]];
-  space_verdict_ = static_cast<double>(cross) >= kSpaceCross * static_cast<double>(c.size());
-  return space_verdict_;
+  space_verdict_.in_space = static_cast<double>(cross) >= kSpaceCross * static_cast<double>(c.size());
+  return space_verdict_.in_space;
 }
 
 void Pipeline::invalidate() {
   for (auto& part : bricks_) part->drop();
   ref_.invalidate();
-  moved_known_ = false;
-  fresh_ = false;
-  search_parts_ = false;
+  list_ = ListState::Unchecked;
   list_from_parts_ = false;
   model_ = nullptr;
   whole_next_ = false;   // (a step rewind_step asked for that never came: every rank decides afresh)
@@ -118,13 +114,14 @@ bool Pipeline::any_outside(const Model& model) {
 }
 
 bool Pipeline::needs_rebuild(const Model& model) {
-  const bool known = moved_known_;   // the last step measured the displacements as it moved the balls
-  moved_known_ = false;
+  // The last step measured the displacements as it moved the balls: read once.
+  const bool known = list_ == ListState::Measured;
+  if (known) list_ = ListState::Unchecked;
   if (model_ != &model) return true;
   // A list made from the ranks' parts (a sync), or handed over by rank 0, is current: only the index
   // is of an older one (prepare indexes it). Anything else not indexed here was changed outside.
   if ((!scratch_.fits(model.contacts, model.balls.size()) || !scratch_.fits_walls(model.wall_contacts, model.balls.size())) &&
-      !(distributed_ && list_from_parts_))
+      !(distributed() && list_from_parts_))
     return true;
   // A ball and a wall each moving half the skin can just close the gap of a candidate.
   if (!(wall_travel_ <= 0.5 * ref_.skin())) return true;
@@ -149,7 +146,7 @@ void Pipeline::rebuild(Model& model) {
   if (backend_->keeps_list()) skin = list_skin(model);
   else check_periodic_cell(model);
   const double reach = list_reach(model, skin);
-  search_parts_ = false;
+  if (list_ == ListState::PartsToSearch) list_ = ListState::Current;   // (searched here instead)
   list_from_parts_ = false;
   backend_->find_pairs(model, reach, pool_now(), pairs_);
   auto install = [&] {
@@ -160,7 +157,7 @@ void Pipeline::rebuild(Model& model) {
     if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
   };
   // (Ranks: one that fails alone, out of memory, must not leave the others in the next collective call.)
-  if (distributed_) {
+  if (distributed()) {
     comm::together(install, "installing the new pair list");
     // The parts rebuild their own lists from here on: the whole search's list goes back.
     pairs_ = PairCandidates{};
@@ -188,8 +185,8 @@ void Pipeline::end_cycle(Model& model) {
   if (!bricks().live_for(model)) return;
   list_from_parts_ = true;
   // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
-  if (distributed_) cycle_peaks_ = peak_memory_per_rank();
-  each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed_); });
+  if (distributed()) cycle_peaks_ = peak_memory_per_rank();
+  each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed()); });
 }
 
 namespace {
@@ -198,13 +195,13 @@ bool light_rescue(bool distributed) { return distributed && comm::size() > 1 && 
 }  // namespace
 
 void Pipeline::take_rescue(const Model& model) {
-  if (light_rescue(distributed_)) rescue_.take_light(model);
+  if (light_rescue(distributed())) rescue_.take_light(model);
   else rescue_.take(model);
 }
 
 bool Pipeline::restore_rescue(Model& model) {
   list_from_parts_ = false;   // (the list put back is the copy's, older than the reference: searched afresh)
-  if (!distributed_ || comm::size() < 2) return rescue_.restore(model);
+  if (!distributed() || comm::size() < 2) return rescue_.restore(model);
   // Rank 0 puts its copy back and hands the arrays to the others, which put the rest back from theirs.
   bool current = false;
   if (comm::root()) current = rescue_.restore(model);
@@ -244,13 +241,13 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
   if (bricks().live()) {
     sync_all(model);
     for (auto& part : bricks_) part->drop();
-    moved_known_ = false;
+    if (list_ == ListState::Measured) list_ = ListState::Unchecked;   // (not of the parts' steps)
   }
   const auto t0 = std::chrono::steady_clock::now();
   // The rare wrap itself is serial; the test for it is shared out.
   if (model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
   bool search = !backend_->keeps_list() || needs_rebuild(model);
-  if (distributed_ && comm::size() > 1) {
+  if (distributed() && comm::size() > 1) {
     // Rank 0 decides: the others' lists take new versions whenever rank 0 hands them over
     // (BrickStep::share, restore_rescue), so their own index would search where rank 0's need not.
     std::int64_t flag = search ? 1 : 0;
@@ -262,15 +259,15 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
       if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
     }
   }
-  if (search && distributed_ && parts_may_search && !whole_next_ && policy_->local_rule >= 0) {
+  if (search && distributed() && parts_may_search && !whole_next_ && policy_->local_rule >= 0) {
     // The ranks search on their parts at the split (brick_step), not through the whole model: no
     // rank but 0 then ever holds the whole model's list in a CYCLE. A whole step searches first.
-    search_parts_ = true;
+    list_ = ListState::PartsToSearch;
     model_ = &model;
-  } else if (search) {
-    rebuild(model);
+  } else {
+    if (search) rebuild(model);
+    list_ = ListState::Current;
   }
-  fresh_ = true;
   times_.detect += seconds_since(t0);
 }
 
@@ -280,26 +277,32 @@ void Pipeline::rewind_step() {
   // parts' memory goes back before the results are made (the peak of a read after a CYCLE).
   for (auto& part : bricks_) part->release();
   whole_next_ = true;
-  moved_known_ = false;   // the displacements are measured again at the positions put back
-  fresh_ = false;
+  list_ = ListState::Unchecked;   // tested again at the positions put back, as that step did
   wall_travel_ = wall_travel_at_step_;
 }
 
 void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
   wall_travel_at_step_ = wall_travel_;
-  const bool whole_now = std::exchange(whole_next_, false);
-  if (distributed_ && !whole_now) {
+  if (std::exchange(whole_next_, false)) {
+    // The whole model on the whole pool, on every rank; the mode goes on after this step, but for
+    // one thread's verdict, which is the split in space's and not this step's.
+    if (mode_ == StepMode::OneThread) mode_ = StepMode::Numbers;
+    whole_step(model, kernels, sums);
+    move_walls(model, kernels.dt);
+    return;
+  }
+  if (mode_ == StepMode::Ranks) {
     shared_by_ = "the spatial decomposition";
     brick_step(model, kernels, sums);
     move_walls(model, kernels.dt);
     return;
   }
-  if (!distributed_ && bricks_.size() > 1 && !whole_now) {
+  if (bricks_.size() > 1) {
     // The threads: in space while the parts are live (brick_step decides again at the next list),
     // else as the current list says.
-    // (on one thread if the last step was: one_thread_ holds until a step is shared again)
+    // (on one thread if the last step was: OneThread holds until a step is shared again)
     const auto t0 = std::chrono::steady_clock::now();   // a trial times the whole step, its search too
-    if (!bricks().live_for(model) && (!fresh_ || model_ != &model)) prepare(model);
+    if (!bricks().live_for(model) && !prepared_for(model)) prepare(model);
     if (bricks().live_for(model) || threads_in_space(model)) {
       // In space, or on one thread where sharing it was timed slower (cycle/timed_choice.hpp).
       // (Not timed from kSpaceLarge balls on: each switch between one thread and the parts makes
@@ -308,13 +311,12 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
       const bool timed = policy_->split_rule == 0 && policy_->share_rule == 0 &&
                          !large_in_space(model.balls.size());
       const bool in_space = !timed || space_choice_.shared_now(model.balls.size(), pool_.size());
-      one_thread_ = !in_space;
       if (in_space) {
-        space_threads_ = true;
+        mode_ = StepMode::Space;
         shared_by_ = "the spatial decomposition, a part per thread";
         brick_step(model, kernels, sums);
       } else {
-        space_threads_ = false;
+        mode_ = StepMode::OneThread;
         shared_by_ = kOneThread;
         whole_step(model, kernels, sums);
       }
@@ -323,10 +325,9 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
       move_walls(model, kernels.dt);
       return;
     }
-    space_threads_ = false;
+    mode_ = StepMode::Numbers;
     shared_by_ = "ball numbers";
   }
-  one_thread_ = false;
   whole_step(model, kernels, sums);
   move_walls(model, kernels.dt);
 }
@@ -334,15 +335,15 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
 void Pipeline::whole_step(Model& model, const StepKernels& kernels, StepSums& sums) {
   if (bricks().live()) prepare(model);   // the parts' state into the whole model, the parts dropped
   // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
-  if (!fresh_ || model_ != &model) prepare(model);
-  if (search_parts_) rebuild(model);   // (a whole step needs the whole list)
-  fresh_ = false;
+  if (!prepared_for(model)) prepare(model);
+  if (list_ == ListState::PartsToSearch) rebuild(model);   // (a whole step needs the whole list)
+  list_ = ListState::Unchecked;
   const bool measure = backend_->keeps_list() && ref_.x.size() == model.balls.size();
   if (kernels.moments) scratch_.ball_moments.resize(model.balls.size());   // the contact loops zero their balls'
   if (kernels.features.stiffness_damping) scratch_.ball_dashpot.resize(model.balls.size());   // (and these)
   if (kernels.features.rolling) scratch_.ball_rolling.resize(model.balls.size());
   step_.run(pool_now(), model, scratch_, kernels, sums, times_, measure ? &ref_ : nullptr);
-  moved_known_ = measure;
+  if (measure) list_ = ListState::Measured;
 }
 
 void Pipeline::move_walls(Model& model, double dt) {
@@ -359,7 +360,7 @@ bool Pipeline::Deferred::same(const Deferred& o) const {
 }
 
 PipelineCounters Pipeline::counters() const {
-  return {ref_.rebuilds(),    space_threads_ ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
+  return {ref_.rebuilds(),    mode_ == StepMode::Space ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
           backend_->pair_tests(), results_made_, bricks().counts(), cycle_peaks_,
           static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20)};
 }
@@ -369,7 +370,7 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   if (!shared_by_.empty()) lines.emplace_back("last step shared by", shared_by_);
   if (shared_by_.starts_with("the spatial decomposition"))
     for (auto& line : bricks().info()) lines.push_back(std::move(line));
-  if (distributed_ && comm::size() > 1) {   // (a collective call: every rank runs PRINT info)
+  if (distributed() && comm::size() > 1) {   // (a collective call: every rank runs PRINT info)
     std::vector<double> mine{static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20)}, all;
     comm::allgather(mine, all);
     std::string whole, part;
@@ -398,7 +399,7 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   if (shared_by_ == kOneThread)
     lines.emplace_back("threads used", "1 (the last trial of the split in space found one thread faster: another "
                                        "program busy on a core, or a scene too small to share)");
-  else if (!space_threads_ && used > 0 && used < pool_.size())
+  else if (mode_ != StepMode::Space && used > 0 && used < pool_.size())
     lines.emplace_back("threads used", std::to_string(used) +
                                            (used > 1 ? " (one per block of 256 balls)"
                                                      : " (the balls fill one block of 256, or sharing the step was "

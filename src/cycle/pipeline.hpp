@@ -95,19 +95,23 @@ class Pipeline {
   void take_rescue(const Model& model);
   // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
   bool restore_rescue(Model& model);
-  bool distributed() const { return distributed_; }
+  bool distributed() const { return mode_ == StepMode::Ranks; }
   // While one lives, a distributed pipeline steps as a serial one does: the whole model, searched on
   // this process alone (rank 0's own work under comm::Alone: make_results_to_read).
   class Alone {
    public:
-    explicit Alone(Pipeline& p) : p_(p), was_(std::exchange(p.distributed_, false)) {}
-    ~Alone() { p_.distributed_ = was_; }
+    explicit Alone(Pipeline& p) : p_(p), ranks_(p.distributed()) {
+      if (ranks_) p.mode_ = StepMode::Numbers;
+    }
+    ~Alone() {
+      if (ranks_) p_.mode_ = StepMode::Ranks;
+    }
     Alone(const Alone&) = delete;
     Alone& operator=(const Alone&) = delete;
 
    private:
     Pipeline& p_;
-    bool was_;
+    bool ranks_;
   };
   // The critical step of the model's state (physics/timestep.hpp, `cap` the Hertz cap), before the
   // CYCLE's first step: where a distributed run's list is to be searched on the parts, they are made
@@ -140,13 +144,68 @@ class Pipeline {
   void count_results_made() { ++results_made_; }
 
  private:
+  // What the pipeline holds between calls: two enums and two bools, each of which the others do not
+  // determine.
+  //
+  // The pair list against the balls' positions (list_):
+  //   Unchecked      the balls may have moved since the list was tested (the skin rule, prepare)
+  //   Measured       so they may, and the step that moved them measured how far (step_.moved2()),
+  //                  so that the test costs no pass over the balls
+  //   Current        tested at the current positions, and searched again where it was stale
+  //   PartsToSearch  tested at the current positions and found stale; the search is left to the
+  //                  parts at their split (a distributed run's: no rank but 0 then holds the whole
+  //                  model's list), or to rebuild where a whole step comes first
+  //
+  //   invalidate, rewind_step                        any -> Unchecked
+  //   prepare (the test; rebuild where stale)        any -> Current, or PartsToSearch where the
+  //                                                  ranks' parts may search and the next step is
+  //                                                  not on the whole model
+  //   whole_step (prepare first unless Current or    -> Measured where the backend keeps a list,
+  //     PartsToSearch; rebuild from PartsToSearch)      else Unchecked
+  //   split_parts (critical_timestep, brick_step)    PartsToSearch -> Current (rebuild_parts)
+  //   brick_step (through prepare and split_parts    -> Unchecked (the parts measure their own
+  //     where its parts cannot go on)                   displacements)
+  // list_from_parts_: the model's list was last written by the parts (sync, sync_all, end_cycle),
+  // not searched through the whole model (rebuild) nor put back (restore_rescue, invalidate): it
+  // is current though its index is older, so that prepare's test in a distributed run does not
+  // take the index's misfit for a change made outside. Not a value of list_: the parts write the
+  // list in any of its states (Unchecked while they step, PartsToSearch where prepare synced them
+  // and found the list stale, Current where it did not).
+  //
+  // How the steps are shared (mode_):
+  //   Numbers    the whole model, its balls shared among the pool's threads by their numbers (a
+  //              pool of one: serially)
+  //   OneThread  the whole model on this thread alone: the split in space's timed verdict (the
+  //              pool's other threads would wake at every step and spin beside another program)
+  //   Space      the threads share in space, a part of the decomposition each
+  //   Ranks      BACKEND mpi on several ranks: every step by the decomposition, a part per rank
+  //
+  //   constructor                                    -> Ranks (a distributed backend on several
+  //                                                     ranks), else Numbers
+  //   step on a pool of several threads              -> Space or OneThread where the parts are live
+  //                                                     or the list is better shared in space
+  //                                                     (timed_choice.hpp between the two), else
+  //                                                     Numbers; brick_step -> Numbers where the
+  //                                                     list it searched is better shared by numbers
+  //   Alone                                          Ranks -> Numbers while it lives, then back
+  //   step with whole_next_                          OneThread -> Numbers (the whole pool takes
+  //                                                  it); the others stay
+  // whole_next_: the next step on the whole model (rewind_step sets it; step and invalidate clear
+  // it). A bool beside the mode, not a mode: it overrides any of them for one step and the mode
+  // goes on after it (a distributed CYCLE whose servo read the contact table first steps by the
+  // ranks after that step; PRINT info and counters report how the CYCLE's steps were shared, not
+  // how its last step was taken again to make the results read). Ranks is never Space or OneThread
+  // (a distributed pipeline holds one part), and a pool of one is always Numbers.
+  enum class ListState : std::uint8_t { Unchecked, Measured, Current, PartsToSearch };
+  enum class StepMode : std::uint8_t { Numbers, OneThread, Space, Ranks };
+
   void rebuild(Model& model);
   bool needs_rebuild(const Model& model);
   bool any_outside(const Model& model);
   // A step by the spatial decomposition (a distributed run's, or the threads' where it applies).
   void brick_step(Model& model, const StepKernels& kernels, StepSums& sums);
   // A step on the whole model, its contacts and motion shared among the threads by ball numbers.
-  // (On this thread alone where one_thread_ says so: the split in space's timed fallback.)
+  // (On this thread alone in StepMode::OneThread: the split in space's timed fallback.)
   void whole_step(Model& model, const StepKernels& kernels, StepSums& sums);
   // A rank other than 0 of a distributed run, its part live: frees the whole model's arrays but the
   // balls' ids and radii (BrickStep::share and restore_rescue hand them over again).
@@ -173,7 +232,11 @@ class Pipeline {
   template <class F> void each_part(F&& f);
   // The threads of the search and the step's tests: one where the split in space's trial found one
   // thread faster (the pool's others would wake at every step and spin beside another program).
-  ThreadPool& pool_now() { return one_thread_ ? *solo_pools_[0] : pool_; }
+  ThreadPool& pool_now() { return mode_ == StepMode::OneThread ? *solo_pools_[0] : pool_; }
+  // Whether prepare() has brought the list up to date for the model's current positions.
+  bool prepared_for(const Model& model) const {
+    return model_ == &model && (list_ == ListState::Current || list_ == ListState::PartsToSearch);
+  }
   BrickStep& bricks() { return *bricks_[0]; }
   const BrickStep& bricks() const { return *bricks_[0]; }
   // The walls' motion over a step, and how far any wall's surface may have gone since the search.
@@ -191,26 +254,22 @@ class Pipeline {
   std::vector<std::unique_ptr<ThreadTeam>> thread_members_;
   std::vector<std::unique_ptr<ThreadPool>> solo_pools_;   // per thread: its part's pool of one
   std::vector<PhaseTimes> member_times_;                 // threads 1..: their parts' times (not reported)
-  bool space_threads_ = false;      // the threads share the steps in space now
-  const Model* space_model_ = nullptr;   // the list threads_in_space() last decided for
-  std::uint64_t space_version_ = 0;
-  bool space_verdict_ = false;
-  bool one_thread_ = false;         // this step runs on one thread (space_choice_'s verdict)
+  StepMode mode_ = StepMode::Numbers;
+  bool whole_next_ = false;         // the next step on the whole model, on every rank (rewind_step)
+  // threads_in_space's answer for one list (a memo of a function of the list, not a state).
+  struct SpaceVerdict {
+    const Model* model = nullptr;
+    std::uint64_t list_version = 0;
+    bool in_space = false;
+  } space_verdict_;
   TimedChoice space_choice_;        // where the list says in space: whether in space or on one thread
-  bool distributed_ = false;        // BACKEND mpi on several ranks: every step by the decomposition
-  bool whole_next_ = false;         // but the next (rewind_step): on the whole model, on every rank
-  std::string shared_by_;           // how the last distributed step was shared among the ranks (PRINT info)
+  std::string shared_by_;           // how the last step was shared (PRINT info)
   VerletReference ref_;
   PairCandidates pairs_;
   PhaseTimes times_;
   std::vector<double> partial_;     // per thread: a test's partial answer
   const Model* model_ = nullptr;    // the model the list and index were made for
-  bool moved_known_ = false;        // step_.moved2() holds the displacements of the current positions
-  bool fresh_ = false;              // searched at the current positions (nothing moved since)
-  // A distributed run's stale list, left for the parts to search at the split (prepare).
-  bool search_parts_ = false;
-  // The model's list may have been made from the parts' since the last search (a sync): current,
-  // its index older.
+  ListState list_ = ListState::Unchecked;
   bool list_from_parts_ = false;
   double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
   double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)

@@ -62,9 +62,9 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
   }
   times_.detect += seconds_since(t0);
   if (whole) {
-    if (bricks().live() || !fresh_ || model_ != &model) prepare(model);   // syncs and drops the parts first
-    if (!distributed_ && !threads_in_space(model)) {   // the new list is better shared by numbers
-      space_threads_ = false;
+    if (bricks().live() || !prepared_for(model)) prepare(model);   // syncs and drops the parts first
+    if (!distributed() && !threads_in_space(model)) {   // the new list is better shared by numbers
+      mode_ = StepMode::Numbers;
       shared_by_ = "ball numbers";
       whole_step(model, kernels, sums);
       return;
@@ -73,40 +73,39 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
     split_parts(model);
     times_.detect += seconds_since(t1);
   }
-  fresh_ = false;
+  list_ = ListState::Unchecked;   // (the parts measure their own displacements)
   // The ranks other than 0 step their parts alone from here: their copy of the whole model's arrays
   // goes until sync_all hands it over again (rank 0 keeps its own, for the output and the rescue).
-  if (distributed_ && comm::size() > 1 && !comm::root() && bricks().live_for(model)) hollow(model);
-  if (distributed_) {   // (PRINT info: what each rank held in its last step)
+  if (distributed() && comm::size() > 1 && !comm::root() && bricks().live_for(model)) hollow(model);
+  if (distributed()) {   // (PRINT info: what each rank held in its last step)
     held_whole_ = array_bytes(model);
     held_part_ = bricks().part_bytes();
   }
   each_part([&](BrickStep& part, int t) {
-    if (distributed_) part.step(pool_, model, kernels, sums, times_);
+    if (distributed()) part.step(pool_, model, kernels, sums, times_);
     else part.step(*solo_pools_[t], model, kernels, sums, t == 0 ? times_ : member_times_[t]);
   });
-  moved_known_ = false;
 }
 
 void Pipeline::split_parts(Model& model) {
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
-  if (!search_parts_) return;
+  if (list_ != ListState::PartsToSearch) return;
   // The list prepare() left stale is searched on the parts just made (they carry its history): the
   // ranks other than 0 need the whole model no further.
   const double skin = list_skin(model);
   ref_.record(model, skin);   // (the positions the parts search at)
   wall_travel_ = 0;
-  if (distributed_) {
+  if (distributed()) {
     if (!comm::root()) hollow(model);
     for (auto& part : bricks_) part->whole_freed();   // (on every rank: share() is collective)
   }
   const bool rebuilt = rebuild_parts(model, list_reach(model, skin));
-  search_parts_ = false;
+  list_ = ListState::Current;
   if (rebuilt) return;
   // They could not (the same answer on every rank; not after a split but in tests): through the
   // whole model, which rank 0 hands back to the others.
   for (auto& part : bricks_) part->drop();
-  if (distributed_) broadcast_arrays(model);
+  if (distributed()) broadcast_arrays(model);
   rebuild(model);
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
 }
@@ -137,14 +136,15 @@ double Pipeline::list_skin(const Model& model) const {
 bool Pipeline::rebuild_parts(const Model& model, double skin) {
   bool rebuilt = false;
   each_part([&](BrickStep& part, int t) {
-    const bool done = part.rebuild_local(model, skin, *backend_, distributed_ ? pool_ : *solo_pools_[t]);
+    const bool done = part.rebuild_local(model, skin, *backend_, distributed() ? pool_ : *solo_pools_[t]);
     if (t == 0) rebuilt = done;   // (the same answer on every member)
   });
   return rebuilt;
 }
 
 double Pipeline::critical_timestep(Model& model, const Features& features, double cap) {
-  if (!search_parts_) return trubal::critical_timestep(model);   // (search_parts_: a distributed run's alone)
+  // (PartsToSearch: a distributed run's alone)
+  if (list_ != ListState::PartsToSearch) return trubal::critical_timestep(model);
   // The parts search the stale list now, and each rank's own balls give their steps.
   const auto t0 = std::chrono::steady_clock::now();
   split_parts(model);

@@ -88,7 +88,8 @@ struct Snapshot {
   // the same. The results then still stand in
   // the model's table, and install_pairs moves them to the copy's list by the pair, as it moves
   // them at a rebuild; a pair the list has lost since comes back with zero results, which are its
-  // results only if it did not touch (its state tells). Else they are zero, with results_cycle -1.
+  // results only if it did not touch (its state tells) and no bridge held it apart (its normal
+  // does: bridge_lost). Else they are zero, with results_cycle -1.
   bool restore(Model& m) const {
     ContactTable& c = m.contacts;
     const bool same_step = c.results_cycle == results_cycle && m.balls.id == balls.id;
@@ -98,7 +99,7 @@ struct Snapshot {
       paste(v, history[h], history_lengths[h]);
       ++h;
     });
-    const bool current = same_step && results_cycle == cycle && c.state == state;
+    const bool current = same_step && results_cycle == cycle && c.state == state && !bridge_lost(c);
     if (!current) {
       c.for_each_result_array([&](auto& v) { v.assign(v.size(), {}); });
       c.results_cycle = -1;
@@ -114,6 +115,14 @@ struct Snapshot {
   }
 
  private:
+  // Whether a pair that a bridge held apart in the results' force pass has no normal there: the
+  // bridge pass gave every such pair one (cycle/bridge_pass.cpp), so the list lost it since.
+  static bool bridge_lost(const ContactTable& c) {
+    if (c.bridge.size() != c.size() || !c.results_kept()) return false;
+    for (std::size_t p = 0; p < c.size(); ++p)
+      if (c.bridge[p] != 0 && c.state[p] == 0 && c.nx[p] == 0 && c.ny[p] == 0 && c.nz[p] == 0) return true;
+    return false;
+  }
   // Everything but the balls, the pairs and the wall contacts (restore_light puts it back).
   void take_rest(const Model& m) {
     results_cycle = m.contacts.results_cycle;

@@ -71,6 +71,7 @@ struct ContactBatch {
   // F.dashpot only: the dashpots' part of the force on j and of t (the law of motion books their
   // work per ball: cycle/kernel_motion.hpp, DashpotForce).
   alignas(64) double dfx[kBatch], dfy[kBatch], dfz[kBatch], dtx[kBatch], dty[kBatch], dtz[kBatch];
+  alignas(64) double fn_spring[kBatch];   // F.dashpot only: the normal spring's force (the rolling cap's)
 
   void set_law(std::size_t q, const PairLaw& law) {
     kn_law[q] = law.kn; ks_law[q] = law.ks; friction[q] = law.friction; cohesion[q] = law.cohesion;
@@ -85,25 +86,24 @@ struct RollingLanes {
   double* out[3];
 };
 
-// The lanes of a batch (contact_forces below): [0, count), or lane `lane` alone (kOne). kCap false
-// makes each shear spring as if it held (CoulombSpring::force): a lane whose spring would slide is
-// then marked state 2 and is to be made again with kCap. (Out of line: inlined into contact_forces
-// twice, g++ 12 lost the restrict of the history pointers and no longer vectorised the loop.)
-// kRest: with one law and dashpots, whether it has a restitution dashpot, tested here once
-// (dashpot.hpp, kRestPerLane).
+// The lanes of a batch (contact_forces below): [0, count), or lane `lane` alone (kOne), by every
+// part of the law but the rolling spring (rolling_lanes). kCap false makes each shear spring as if
+// it held (CoulombSpring::force): a lane whose spring would slide is then marked state 2 and is to
+// be made again with kCap. (Out of line: inlined into contact_forces twice, g++ 12 lost the
+// restrict of the history pointers and no longer vectorised the loop.) kRest: with one law and
+// dashpots, whether it has a restitution dashpot, tested here once (dashpot.hpp, kRestPerLane).
 template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRestPerLane>
 [[gnu::noinline]] void contact_lanes(ContactBatch& B, std::size_t lane, std::size_t count, const PairLaw& law, double dt,
                                      double dt_work, double beta, const double* __restrict hx_in, const double* __restrict hy_in,
                                      const double* __restrict hz_in, double* __restrict hx_out,
-                                     double* __restrict hy_out, double* __restrict hz_out, const double* __restrict rx_in,
-                                     const double* __restrict ry_in, const double* __restrict rz_in,
-                                     double* __restrict rx_out, double* __restrict ry_out, double* __restrict rz_out) {
+                                     double* __restrict hy_out, double* __restrict hz_out) {
+  static_assert(!F.rolling, "the rolling springs are rolling_lanes' pass");
   if constexpr (F.dashpot && kOneLaw && kRest == kRestPerLane) {
     if (law.rest_xi > 0)
       return contact_lanes<F, kOneLaw, kCap, kOne, kRestOn>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out,
-                                                            hy_out, hz_out, rx_in, ry_in, rz_in, rx_out, ry_out, rz_out);
+                                                            hy_out, hz_out);
     return contact_lanes<F, kOneLaw, kCap, kOne, kRestOff>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out,
-                                                           hy_out, hz_out, rx_in, ry_in, rz_in, rx_out, ry_out, rz_out);
+                                                           hy_out, hz_out);
   }
   using Model = ContactModel<F.law()>;
   using Normal = typename Model::Normal;
@@ -114,7 +114,7 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
     const LaneLaw L = kOneLaw ? LaneLaw{law.kn, law.ks, law.friction, law.cohesion, law.hertz_n, law.hertz_s, law.rest_xi,
                                         law.rolling}
                               : LaneLaw{B.kn_law[q], B.ks_law[q], B.friction[q], B.cohesion[q], B.hertz_n[q],
-                                        B.hertz_s[q], B.rest_xi[q], F.rolling ? B.rolling[q] : 0.0};
+                                        B.hertz_s[q], B.rest_xi[q], 0.0};
     const double dx = B.dx[q], dy = B.dy[q], dz = B.dz[q], ri = B.ri[q], rj = B.rj[q];
     const double d2 = dx * dx + dy * dy + dz * dz;
     const double rsum = ri + rj;
@@ -155,25 +155,7 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
       Damping::shear(beta, k.ks, s.vsx, s.vsy, s.vsz, sx, sy, sz, work_damping, dt_work);
     }
 
-    // The rolling spring (PROP rr_fric, doc/physics.md "Rolling resistance"): the shear spring's
-    // arithmetic on the relative rotation, a moment on j of stiffness k_r = k_s Rbar^2 against the
-    // rolling (bending) part of w_j - w_i, capped at mu_r Rbar F_n, Rbar = R_i R_j / (R_i + R_j).
-    double strain_rolling = 0;
-    if constexpr (F.rolling) {
-      const double rbar = ri * rj / rsum;
-      const double wx = B.wx[q], wy = B.wy[q], wz = B.wz[q];
-      const double wn = wx * nx + wy * ny + wz * nz;
-      ShearState r;
-      CoulombSpring::force<true>(rx_in[q], ry_in[q], rz_in[q], nx, ny, nz, wx, wy, wz, wn, k.ks * rbar * rbar, dt,
-                                 L.rolling * rbar * k.fn, r);
-      rx_out[q] = touching ? r.fsx : 0.0;
-      ry_out[q] = touching ? r.fsy : 0.0;
-      rz_out[q] = touching ? r.fsz : 0.0;
-      B.work_rolling[q] = touching ? r.work_friction : 0.0;
-      strain_rolling = r.strain;
-    }
-
-    const double strain = normal_spring_energy<Normal>(k.fn, u) + strain_shear + strain_rolling;
+    const double strain = normal_spring_energy<Normal>(k.fn, u) + strain_shear;
     B.nx[q] = touching ? nx : 0.0; B.ny[q] = touching ? ny : 0.0; B.nz[q] = touching ? nz : 0.0;
     B.overlap[q] = touching ? u : 0.0;
     B.fn[q] = touching ? fn : 0.0;
@@ -192,6 +174,7 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
     B.strain[q] = touching ? strain : 0.0;
     B.state[q] = touching ? state : 0.0;
     if constexpr (F.dashpot) {   // the dashpots' part: normal, and the shear force's beyond the spring's
+      B.fn_spring[q] = k.fn;
       const double dsx = sx - fsx, dsy = sy - fsy, dsz = sz - fsz;
       B.dfx[q] = touching ? fn_dash * nx + dsx : 0.0;
       B.dfy[q] = touching ? fn_dash * ny + dsy : 0.0;
@@ -200,6 +183,42 @@ template <ContactFeatures F, bool kOneLaw, bool kCap, bool kOne, int kRest = kRe
       B.dty[q] = touching ? nz * dsx - nx * dsz : 0.0;
       B.dtz[q] = touching ? nx * dsy - ny * dsx : 0.0;
     }
+  }
+}
+
+// The rolling springs of lanes [0, count) (PROP rr_fric, doc/physics.md "Rolling resistance"),
+// once contact_lanes has made the rest of the law: the shear spring's arithmetic on the relative
+// rotation, a moment on j of stiffness k_r = k_s Rbar^2 against the rolling (bending) part of
+// w_j - w_i, capped at mu_r Rbar F_n, Rbar = R_i R_j / (R_i + R_j). A pass of its own, reading what
+// contact_lanes left in the batch (the normal, k_s, the normal spring's force, the state), so that
+// a law with rolling runs the loop of the same law without it: the kernel tables make one
+// contact_lanes for each law without rolling, and this loop once for each kOneLaw and kDashpot,
+// rather than the law's whole loop again for every rolling law. A touching lane does the arithmetic
+// it would inside the law's loop (its normal, k_s and F_n are the same numbers; the strain adds the
+// rolling spring's energy to the normal's and the shear's in the same order); an apart one gets
+// zeros, as there.
+template <bool kOneLaw, bool kDashpot>
+[[gnu::noinline]] void rolling_lanes(ContactBatch& B, std::size_t count, const PairLaw& law, double dt,
+                                     const double* __restrict rx_in, const double* __restrict ry_in,
+                                     const double* __restrict rz_in, double* __restrict rx_out, double* __restrict ry_out,
+                                     double* __restrict rz_out) {
+  for (std::size_t q = 0; q < count; ++q) {
+    const bool touching = B.state[q] != 0;   // (0 apart, 1 touching, 2 sliding)
+    const double ri = B.ri[q], rj = B.rj[q];
+    const double rbar = ri * rj / (ri + rj);
+    const double nx = B.nx[q], ny = B.ny[q], nz = B.nz[q];
+    const double wx = B.wx[q], wy = B.wy[q], wz = B.wz[q];
+    const double wn = wx * nx + wy * ny + wz * nz;
+    const double mu = kOneLaw ? law.rolling : B.rolling[q];
+    const double fn_spring = kDashpot ? B.fn_spring[q] : B.fn[q];   // (without a dashpot fn is the spring's)
+    ShearState r;
+    CoulombSpring::force<true>(rx_in[q], ry_in[q], rz_in[q], nx, ny, nz, wx, wy, wz, wn, B.ks[q] * rbar * rbar, dt,
+                               mu * rbar * fn_spring, r);
+    rx_out[q] = touching ? r.fsx : 0.0;
+    ry_out[q] = touching ? r.fsy : 0.0;
+    rz_out[q] = touching ? r.fsz : 0.0;
+    B.work_rolling[q] = touching ? r.work_friction : 0.0;
+    B.strain[q] = touching ? B.strain[q] + r.strain : 0.0;
   }
 }
 
@@ -232,28 +251,28 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
                            const double* __restrict hx_in, const double* __restrict hy_in,
                            const double* __restrict hz_in, double* __restrict hx_out, double* __restrict hy_out,
                            double* __restrict hz_out, int* clean_run = nullptr, const RollingLanes* roll = nullptr) {
-  // (The rolling springs' history as plain restrict arguments, as the shear spring's: read through
-  // a struct, g++ 12 could not tell them from the batch and did not vectorise the loop.)
-  double unused[6] = {};   // (distinct places for the rolling arguments of a law without them: never read)
   auto lanes = [&]<bool kCap, bool kOne>(std::size_t lane) {
+    contact_lanes<F.without_rolling(), kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in,
+                                                            hx_out, hy_out, hz_out);
+  };
+  // Every part but the rolling spring, then (F.rolling) the rolling spring's pass over the lanes.
+  // (Its history as plain restrict arguments, as the shear spring's: read through a struct, g++ 12
+  // could not tell them from the batch and did not vectorise the loop.)
+  auto rolling = [&] {
     if constexpr (F.rolling)
-      contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out,
-                                            hz_out, roll->in[0], roll->in[1], roll->in[2], roll->out[0], roll->out[1],
-                                            roll->out[2]);
-    else
-      contact_lanes<F, kOneLaw, kCap, kOne>(B, lane, count, law, dt, dt_work, beta, hx_in, hy_in, hz_in, hx_out, hy_out,
-                                            hz_out, unused, unused + 1, unused + 2, unused + 3, unused + 4, unused + 5);
+      rolling_lanes<kOneLaw, F.dashpot>(B, count, law, dt, roll->in[0], roll->in[1], roll->in[2], roll->out[0], roll->out[1],
+                                        roll->out[2]);
   };
   if constexpr (ContactModel<F.law()>::Tangential::kOn) {
     if (clean_run && *clean_run >= kCleanRun) {
       lanes.template operator()<false, false>(0);
       const std::size_t sliding = sliding_lanes(B, count);
-      if (sliding == 0) return;
+      if (sliding == 0) return rolling();
       if (sliding == 1) {
         std::size_t q = 0;
         while (!lane_slides(B, q)) ++q;
         lanes.template operator()<true, true>(q);
-        return;
+        return rolling();
       }
     }
     lanes.template operator()<true, false>(0);
@@ -261,6 +280,7 @@ inline void contact_forces(ContactBatch& B, std::size_t count, const PairLaw& la
   } else {
     lanes.template operator()<true, false>(0);
   }
+  rolling();
 }
 
 // The force at one contact: the batch kernel on one lane (for the time-step estimate and tests).

@@ -9,7 +9,9 @@
 #include <cstring>
 #include <map>
 #include <numbers>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -133,6 +135,37 @@ TEST_CASE("bridge: it breaks at the rupture gap (1 + theta/2) V^(1/3) and forms 
   CHECK(count_bridges(h.session.model().contacts) == 1);
   CHECK(h.out.str().find("bridges intact: 1 between balls") != std::string::npos);
   CHECK(h.out.str().find("bridge") != std::string::npos);
+}
+
+TEST_CASE("bridge: PRINT contacts gives a pair its bridge holds apart its unit normal and its gap as a negative "
+          "overlap", "[bridge]") {
+  TempDir dir;
+  WorkingDir cd(dir.path());
+  Harness h;
+  REQUIRE(h.deck(wet_pair_deck("cycle 1\n")));   // the bridge forms at contact
+  h.session.edit().balls.x[1] = kR1 + kR2 + 0.4 * rupture_gap();   // apart, the bridge holding
+  REQUIRE(h.deck("cycle 1\nprint contacts file c.csv\n"));
+  const Model& m = h.session.model();
+  REQUIRE(count_bridges(m.contacts) == 1);
+  const double gap = gap_now(m);   // (the balls are held: the gap of the force pass)
+  const auto rows = lines_of(slurp(dir.path() / "c.csv"));
+  REQUIRE(rows.size() == 2);
+  CHECK(rows[0] == "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz,sliding,bridge");
+  std::vector<double> v;
+  std::istringstream row(rows[1]);
+  for (std::string field; std::getline(row, field, ',');) v.push_back(std::stod(field));
+  REQUIRE(v.size() == 12);
+  CHECK(v[0] == 1);
+  CHECK(v[1] == 2);
+  // Ball 2 lies along +x from ball 1: n = dx (1 / d), 1 within a rounding.
+  CHECK(v[2] == Approx(1).epsilon(1e-15));
+  CHECK(v[3] == 0);
+  CHECK(v[4] == 0);
+  // The overlap R1 + R2 - d: minus the gap, up to the roundings of the two sums (1e-19 m of 1e-4 m).
+  CHECK(v[5] < 0);
+  CHECK(v[5] == Approx(-gap).epsilon(1e-12));
+  CHECK(v[6] == 0);    // no contact, no normal force
+  CHECK(v[11] == 1);   // the bridge
 }
 
 TEST_CASE("bridge: the work to pull a pair apart is the integral of the force from contact to rupture", "[bridge]") {

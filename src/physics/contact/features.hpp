@@ -42,6 +42,10 @@ struct ContactFeatures {
   }
   // The same law without the details (what the law itself computes does not depend on them).
   constexpr ContactFeatures law() const { return {rotation, shear, hertz, dashpot, false, rolling}; }
+  // The parts one loop over a batch makes (contact_lanes, physics/contact_law.hpp): all but the
+  // rolling springs, which a pass of their own adds (rolling_lanes). A law with rolling thus shares
+  // the loop of its row without it (kLawRows: shear, spins, and Hertz or not, either way).
+  constexpr ContactFeatures without_rolling() const { return {rotation, shear, hertz, dashpot, details, false}; }
 };
 
 // Every entry decodes to itself.
