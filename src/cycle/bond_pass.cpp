@@ -140,16 +140,10 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
     const std::uint32_t i = scratch.bond_ball_i[q], j = scratch.bond_ball_j[q];
     if (t.fate[q] != 0 || i == kNoBall) continue;
     // x_j - x_i at j's nearest image, and the image's velocity where the cell moves.
-    double dx = b.x[j] - b.x[i], dy = b.y[j] - b.y[i], dz = b.z[j] - b.z[i];
+    std::int8_t ix, iy, iz;
+    const auto [dx, dy, dz] = nearest_separation(cell, periodic, b, i, j, ix, iy, iz);
     double ux = 0, uy = 0, uz = 0;
-    if (periodic) {
-      std::int8_t ix, iy, iz;
-      nearest_image(cell, dx, dy, dz, ix, iy, iz);
-      double ox, oy, oz;
-      image_offset(cell, ix, iy, iz, ox, oy, oz);
-      dx = image_delta(b.x[j], b.x[i], ox); dy = image_delta(b.y[j], b.y[i], oy); dz = image_delta(b.z[j], b.z[i], oz);
-      if (cell_moving) image_velocity(cell, ix, iy, iz, ux, uy, uz);
-    }
+    if (cell_moving) image_velocity(cell, ix, iy, iz, ux, uy, uz);
     const std::size_t l = count++;
     lane_bond[l] = static_cast<std::uint32_t>(q);
     ivx[l] = ux; ivy[l] = uy; ivz[l] = uz;

@@ -63,14 +63,8 @@ std::size_t add_bonds(Model& model, const std::vector<std::size_t>& selected, co
       const std::size_t j = order[c % n];
       const double ahead = b.x[j] - b.x[i] + (c >= n ? lx : 0.0);
       if (ahead > reach + slack) break;
-      double dx = b.x[j] - b.x[i], dy = b.y[j] - b.y[i], dz = b.z[j] - b.z[i];
-      if (periodic) {
-        std::int8_t ix, iy, iz;
-        nearest_image(frame, dx, dy, dz, ix, iy, iz);
-        double ox, oy, oz;
-        image_offset(frame, ix, iy, iz, ox, oy, oz);
-        dx = image_delta(b.x[j], b.x[i], ox); dy = image_delta(b.y[j], b.y[i], oy); dz = image_delta(b.z[j], b.z[i], oz);
-      }
+      std::int8_t ix, iy, iz;
+      const auto [dx, dy, dz] = nearest_separation(frame, periodic, b, i, j, ix, iy, iz);
       const double gap = std::sqrt(dx * dx + dy * dy + dz * dz) - b.rad[i] - b.rad[j];
       if (!(gap <= spec.gap)) continue;
       const std::int64_t lo = std::min(b.id[i], b.id[j]), hi = std::max(b.id[i], b.id[j]);

@@ -92,6 +92,19 @@ inline std::array<double, 3> pair_separation(const CellFrame& f, bool periodic, 
   return {image_delta(b.x[j], b.x[i], ox), image_delta(b.y[j], b.y[i], oy), image_delta(b.z[j], b.z[i], oz)};
 }
 
+// x_j - x_i at j's nearest image where `periodic` (that image in ix iy iz), else the plain
+// difference (images 0): a pair whose image no list holds, as a bond's or one BOND considers.
+inline std::array<double, 3> nearest_separation(const CellFrame& f, bool periodic, const Balls& b, std::size_t i,
+                                                std::size_t j, std::int8_t& ix, std::int8_t& iy, std::int8_t& iz) {
+  ix = iy = iz = 0;
+  double ox = 0, oy = 0, oz = 0;
+  if (periodic) {
+    nearest_image(f, b.x[j] - b.x[i], b.y[j] - b.y[i], b.z[j] - b.z[i], ix, iy, iz);
+    image_offset(f, ix, iy, iz, ox, oy, oz);
+  }
+  return {image_delta(b.x[j], b.x[i], ox), image_delta(b.y[j], b.y[i], oy), image_delta(b.z[j], b.z[i], oz)};
+}
+
 // Whether balls i < j touch within `reach` at j's nearest image; sets that image. The one test
 // the periodic pair searches make (serial/threaded lists with a skin, allpairs without).
 inline bool nearest_image_within(const CellFrame& f, const Balls& b, std::size_t i, std::size_t j, double reach,
