@@ -140,8 +140,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // deferred is to be taken again first (make_results: it is of the order before), which the first
   // step then sorts after.
   if (sort_due(model) && !pipeline.results_deferred(model)) {
-    pipeline.sync_all(model);
-    if (sort_in_space(model)) pipeline.invalidate();
+    sort_balls();
     sorted_at_start_ = true;
   }
   kernels_ = make_kernels(model);

@@ -31,10 +31,16 @@ bool Balls::ids_indexed() const {
   return true;
 }
 
+namespace {
+// Where `id` stands or would stand in by_id.
+std::vector<std::uint32_t>::const_iterator id_slot(const Balls& b, std::int64_t id) {
+  return std::lower_bound(b.by_id.begin(), b.by_id.end(), id, [&](std::uint32_t k, std::int64_t v) { return b.id[k] < v; });
+}
+}  // namespace
+
 std::int64_t find_ball(const Model& model, std::int64_t id) {
   const Balls& b = model.balls;
-  const auto it = std::lower_bound(b.by_id.begin(), b.by_id.end(), id,
-                                   [&](std::uint32_t k, std::int64_t v) { return b.id[k] < v; });
+  const auto it = id_slot(b, id);
   return (it != b.by_id.end() && b.id[*it] == id) ? static_cast<std::int64_t>(*it) : -1;
 }
 
@@ -59,8 +65,7 @@ std::size_t add_ball(Model& model, std::int64_t id, int type, double x, double y
   }
   // The new ball goes last in memory; by_id takes it at its id's place (at its end for a new
   // largest id, as BALL and GEN give).
-  const auto at = std::lower_bound(b.by_id.begin(), b.by_id.end(), id,
-                                   [&](std::uint32_t k, std::int64_t v) { return b.id[k] < v; });
+  const auto at = id_slot(b, id);
   if (at != b.by_id.end() && b.id[*at] == id) throw std::invalid_argument("ball id " + std::to_string(id) + " is taken");
   if (b.size() >= std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("a model holds at most " + std::to_string(std::numeric_limits<std::uint32_t>::max()) +
