@@ -36,6 +36,7 @@
 #include "physics/timestep.hpp"
 #include "physics/measure.hpp"
 #include "../tests/unit/fcc_lattice.hpp"   // the FCC block the tests build too
+#include "traffic.hpp"
 
 using namespace trubal;
 
@@ -86,7 +87,12 @@ Model fcc_block(int nx, int ny, int nz, Scene scene) {
 
 double peak_memory_mib();
 
-struct Timing { double ball_steps, contact_steps, seconds; std::size_t contacts; double peak_mib; };
+struct Timing {
+  double ball_steps, contact_steps, seconds;
+  std::size_t contacts;
+  double peak_mib;
+  double pairs_per_ball;   // the pair list's pairs (touching or within the skin) a ball
+};
 
 // The warm-up builds the pair list, fills the caches and covers the threaded backend's trial of
 // whether sharing a step pays (its first 128 steps): start-up costs, not throughput.
@@ -109,7 +115,9 @@ Timing run(Model model, const std::string& backend_name, int steps, int threads 
                 backend_name.c_str(), threads, p.detect * us, p.forces * us, p.motion * us,
                 (p.step - p.detect - p.forces - p.motion) * us, (s - p.step) * us);
   }
-  return {static_cast<double>(model.balls.size()) * steps / s, static_cast<double>(contacts) * steps / s, s, contacts, peak};
+  const double n = static_cast<double>(model.balls.size());
+  return {n * steps / s, static_cast<double>(contacts) * steps / s, s, contacts, peak,
+          static_cast<double>(model.contacts.size()) / n};
 }
 
 // Peak resident memory of the process since the last reset_peak_memory(), from /proc (Linux);
@@ -289,13 +297,16 @@ int settle(const std::string& path, const std::string& backend, int threads, int
               backend.c_str(), threads, steps, parts);
   std::printf("%8s %8s %10s %10s %8s %14s %s\n", "from", "steps", "contacts", "list", "s", "ball-steps/s",
               g_phases ? "  us per step: detect, forces, motion, rest of step, outside step" : "");
-  double total = 0;
+  double total = 0, pairs = 0, walls = 0;   // the pair list and the wall contacts a ball, summed over steps
+  const double bandwidth = bench::copy_bandwidth();
   for (int p = 0; p < parts; ++p) {
     const int k = steps / parts + (p < steps % parts ? 1 : 0);
     const std::int64_t from = session.model().cycle;
     const CycleResult r = session.cycle(k);
     if (r.unstable || r.left_box || r.done != k) throw std::runtime_error("--settle: the run stopped: " + r.message);
     total += r.seconds;
+    pairs += static_cast<double>(session.model().contacts.size()) / n * k;
+    walls += static_cast<double>(session.model().wall_contacts.size()) / n * k;
     std::printf("%8lld %8d %10zu %10zu %8.3f %12.2f M", static_cast<long long>(from), k, contact_count(session.model()),
                 session.model().contacts.size(), r.seconds, static_cast<double>(n) * k / r.seconds / 1e6);
     if (g_phases) {
@@ -309,14 +320,35 @@ int settle(const std::string& path, const std::string& backend, int threads, int
   }
   std::printf("whole run: %.3f s, %.2f M ball-steps/s, coordination %.4f (ball pairs, 2 C / N)\n", total,
               static_cast<double>(n) * steps / total / 1e6, coordination_number(session.model()));
+  const bench::TrafficScene scene{.dashpot = true, .loads = true, .periodic = true};
+  const double bytes = bench::step_traffic(scene).bytes(pairs / steps, walls / steps), most = bandwidth / bytes;
+  std::printf("the limit set by memory: %.0f B a ball-step (bench/traffic.hpp; the parts' pair lists and wall\n"
+              "contacts at their ends), copy bandwidth %.2f GB/s: %.2f M ball-steps/s; reached %.0f%%\n",
+              bytes, bandwidth / 1e9, most / 1e6, 100 * static_cast<double>(n) * steps / total / most);
   return 0;
+}
+
+// The limit memory sets: per row, the bytes a ball-step must move (bench/traffic.hpp), the copy
+// bandwidth measured before that row's runs, the ball-steps a second that bandwidth allows, and
+// the fraction of it the run reached.
+template <class Limit> void print_limits(const std::vector<Limit>& limits) {
+  std::printf("\nthe limit set by memory: bytes a ball-step must move (bench/traffic.hpp), copy bandwidth\n");
+  std::printf("%8s %-22s %14s %8s %10s %14s %9s\n", "N", "scene", "ball-steps/s", "B/step", "copy GB/s",
+              "limit", "of limit");
+  for (const Limit& l : limits) {
+    const double most = l.bandwidth / l.bytes;
+    std::printf("%8d %-22s %12.2f M %8.0f %10.2f %12.2f M %8.0f%%\n", l.balls, l.scene, l.ball_steps / 1e6, l.bytes,
+                l.bandwidth / 1e9, most / 1e6, 100 * l.ball_steps / most);
+  }
+  std::printf("A model small enough for the caches can pass 100%%: the limit is that of a model in main memory.\n");
 }
 
 const char* const kUsage =
     "usage:\n"
     "  trubal_bench [--backend NAME] [--threads T] [--steps K] [--periodic] [--phases] [N ...]\n"
     "      the dense FCC block on one backend, N rounded to 4 n^3 balls (default 1680 13500 108000):\n"
-    "      the standard scene, without shear or rotation, and with damping and gravity\n"
+    "      the standard scene, without shear or rotation, and with damping and gravity; then each\n"
+    "      run against the limit memory sets (bytes a ball-step moves, copy bandwidth measured)\n"
     "  trubal_bench --compare [--steps K] [--periodic] [--phases] [N ...]\n"
     "      every backend on 1 and 2 threads, speedup and efficiency against the best one-thread\n"
     "      time, peak memory per row (default 403 1680 13500 108000)\n"
@@ -406,6 +438,8 @@ int main(int argc, char** argv) {
                 g_periodic ? "periodic cell" : "free space, outer layer held", backend.c_str(), threads);
     std::printf("%8s %10s %8s %6s %14s %14s %10s %10s %9s %7s\n", "N", "contacts", "steps", "s", "ball-steps/s",
                 "contacts/s", "no-rot x", "all-on x", "peak MiB", "B/ball");
+    struct Limit { int balls; const char* scene; double ball_steps, bytes, bandwidth; };
+    std::vector<Limit> limits;
     for (int n : sizes) {
       // 4 n^3 balls; 1680 is the peers' 7 x 6 x 10 block.
       int nx, ny, nz;
@@ -417,6 +451,14 @@ int main(int argc, char** argv) {
       const Timing reduced = run(fcc_block(nx, ny, nz, Scene::NoRotation), backend, k, threads);
       const Timing full = run(fcc_block(nx, ny, nz, Scene::Everything), backend, k, threads);
       const int balls = 4 * nx * ny * nz;
+      const double bandwidth = bench::copy_bandwidth();   // beside the runs it is the limit of
+      auto limit = [&](const char* scene, const Timing& t, bench::TrafficScene traffic) {
+        traffic.periodic = g_periodic;
+        limits.push_back({balls, scene, t.ball_steps, bench::step_traffic(traffic).bytes(t.pairs_per_ball, 0), bandwidth});
+      };
+      limit("standard", standard, {});
+      limit("no rotation, no shear", reduced, {.rotation = false, .shear = false});
+      limit("damping + gravity", full, {.loads = !g_periodic});
       std::printf("%8d %10zu %8d %6.2f %12.2f M %12.2f M %9.2fx %9.2fx %9.0f %7.0f\n", balls, standard.contacts, k,
                   standard.seconds, standard.ball_steps / 1e6, standard.contact_steps / 1e6,
                   reduced.ball_steps / standard.ball_steps, full.ball_steps / standard.ball_steps, peak,
@@ -427,6 +469,7 @@ int main(int argc, char** argv) {
                 "damping%s as well. peak MiB: the process's peak resident memory in the standard run (the\n"
                 "program's own few MiB included); B/ball: that per ball.\n",
                 g_periodic ? " (no gravity in the periodic cell)" : " and gravity");
+    print_limits(limits);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "trubal_bench: %s\n", e.what());
     return 1;

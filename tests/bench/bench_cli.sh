@@ -43,8 +43,14 @@ rc=$?
 # whose peak is above the program's own few MiB and below 200 MiB, and the same per ball.
 if "$BENCH" --steps 20 1680 >"$W/out" 2>"$W/err"; then
   grep -q 'peak MiB' "$W/out" || { echo "FAIL: no peak MiB column"; cat "$W/out"; fail=1; }
-  awk '$1 == 1680 { ok = ($(NF-1) > 2 && $(NF-1) < 200 && $NF > 1000) } END { exit !ok }' "$W/out" ||
+  awk '$1 == 1680 && $NF ~ /^[0-9]+$/ { ok = ($(NF-1) > 2 && $(NF-1) < 200 && $NF > 1000) } END { exit !ok }' "$W/out" ||
     { echo "FAIL: the 1680-ball row's peak memory is not plausible"; cat "$W/out"; fail=1; }
+  # The limit memory sets, per scene: the bytes a ball-step moves are those bench/traffic.hpp counts
+  # (the standard scene's about 800 at 5.9 pairs a ball: 500 to 1500 says the count and the pairs
+  # were taken), the copy bandwidth is measured (above 0.1 GB/s) and the fraction is a number.
+  awk '$1 == 1680 && $2 == "standard" { ok = ($(NF-4) > 500 && $(NF-4) < 1500 && $(NF-3) > 0.1 && $NF ~ /^[0-9]+%$/) }
+       END { exit !ok }' "$W/out" ||
+    { echo "FAIL: the 1680-ball standard scene's memory limit row is not plausible"; cat "$W/out"; fail=1; }
 else
   echo "FAIL: trubal_bench --steps 20 1680 exited $?"; cat "$W/out" "$W/err"; fail=1
 fi
@@ -55,6 +61,7 @@ if [ -n "$PEERS" ] && [ -f "$PEERS/gen_scenes.py" ] && command -v python3 >/dev/
   (cd "$W" && SCENES_OUT=$W python3 -c "import sys; sys.path.insert(0, sys.argv[1]); import gen_scenes; gen_scenes.settle(400, 300.0)" "$PEERS") >/dev/null || { echo "FAIL: gen_scenes.settle"; fail=1; }
   if "$BENCH" --settle "$W/settle_400.xyz" --steps 300 --phases >"$W/out" 2>"$W/err"; then
     grep -q 'whole run:' "$W/out" || { echo "FAIL: --settle printed no totals"; cat "$W/out"; fail=1; }
+    grep -q 'the limit set by memory: [0-9]* B a ball-step' "$W/out" || { echo "FAIL: --settle printed no memory limit"; cat "$W/out"; fail=1; }
   else
     echo "FAIL: --settle exited $?"; cat "$W/out" "$W/err"; fail=1
   fi
