@@ -22,6 +22,7 @@
 
 #include "counters.hpp"
 #include "interp_support.hpp"
+#include "mpi_launch.hpp"
 #include "scene_decks.hpp"
 #include "skip.hpp"
 #include "cycle/pipeline.hpp"
@@ -319,17 +320,16 @@ void check_scene(const Scene& scene, bool in_space = false) {
   }
 }
 
-// The same scene under `mpirun -np ranks trubal` with BACKEND mpi, `cycling` after the setup. Under
-// ASan, leak checking is off for the ranks: Open MPI keeps allocations of its own start-up to the end.
+// A run on ranks that passes this many seconds is taken for a hang (a loaded machine takes a minute).
+constexpr int kMpiLimit = 600;
+
+// The same scene under `mpirun -np ranks trubal` with BACKEND mpi, `cycling` after the setup.
 Result run_mpi(const Scene& scene, int ranks, const std::string& cycling) {
   TempDir dir;
   const std::string deck = "backend mpi\n" + std::string(scene.setup) + scene.during + cycling + kEndOutputs;
   dir.write("deck.dat", deck);
-  const std::string command = "cd " + quote(dir.str()) +
-                              " && OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-                              "ASAN_OPTIONS=detect_leaks=0 "
-                              "mpirun -np " + std::to_string(ranks) + " " + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1";
-  const int status = shell(command);
+  const int status = shell("cd " + quote(dir.str()) + " && " + launcher(ranks, "", kMpiLimit) + quote(TRUBAL_EXE) +
+                           " deck.dat >out.txt 2>&1");
   INFO(deck);
   INFO(slurp(dir.path() / "out.txt"));
   REQUIRE(status == 0);
@@ -465,9 +465,7 @@ Reads run_stages_mpi(int ranks, const Packing& p, const StageCut& cut) {
   std::vector<int> read_at;
   const std::string deck = "backend mpi\n" + stage_deck(packing_setup(p), cut, read_at);
   dir.write("deck.dat", deck);
-  const int status = shell("cd " + quote(dir.str()) +
-                           " && OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-                           "ASAN_OPTIONS=detect_leaks=0 mpirun -np " + std::to_string(ranks) + " " + quote(TRUBAL_EXE) +
+  const int status = shell("cd " + quote(dir.str()) + " && " + launcher(ranks, "", kMpiLimit) + quote(TRUBAL_EXE) +
                            " deck.dat >out.txt 2>&1");
   const std::string out = slurp(dir.path() / "out.txt");
   INFO(deck);

@@ -1,0 +1,244 @@
+// What a user meets on several ranks: bad input on any rank stops every rank with one FILE:LINE
+// message and exit 1 (no rank left hanging), PRINT info names the ranks, rank 0 alone reads the
+// input files, and a signal stops every rank's CYCLE at the same step. Skipped where this build or
+// machine has no MPI.
+#include "paths.hpp"
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <string>
+
+#include "counters.hpp"
+#include "interp_support.hpp"
+#include "mpi_launch.hpp"
+#include "skip.hpp"
+
+using namespace trubal;
+using namespace trubal::test;
+
+TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message and exit 1", "[mpi][system]") {
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  SECTION("a deck error") {
+    TempDir dir;
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nprop kn banana\ncycle 10\n");
+    CHECK(run_deck(dir, 3) == 1);
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    const auto at = out.find("deck.dat:3:");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:3:", at + 1) == std::string::npos);   // rank 0 alone reports it
+  }
+  SECTION("a failure on rank 0 alone (its file write) stops the others too") {
+    TempDir dir;
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nsave no/such/folder/s.sav\ncycle 10\n");
+    CHECK(run_deck(dir, 3) == 1);   // not 124: no rank waits for the others
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(out.find("deck.dat:3:") != std::string::npos);
+    CHECK(out.find("deck.dat:3:") == out.rfind("deck.dat:3:"));
+  }
+  SECTION("a dump that rank 0 alone fails to write mid-CYCLE stops every rank at that step") {
+    // The dump of cycle 10 cannot replace a folder of its name: rank 0 fails in the CYCLE's
+    // observer while the others would go on into the next step's exchange (they hung there).
+    TempDir dir;
+    std::filesystem::create_directories(dir.path() / "out" / "d_000010.vtp");
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                          "dump vtk out/d every 10\ncycle 30\nprint info\n");
+    CHECK(run_deck(dir, 3) == 1);   // not 124
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    const auto at = out.find("deck.dat:5: error: will not replace 'out/d_000010.vtp'");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:5:", at + 1) == std::string::npos);   // one message
+    CHECK(out.find("cycle: ") == std::string::npos);                 // the deck went no further
+  }
+  SECTION("a rank out of memory in its share of the search or its part stops every rank's CYCLE") {
+    // Rank 1 fails as out of memory in its first search on its part (the CYCLE's first list), in
+    // its first share of a search through the whole model (the way of TRUBAL_REBUILD_WHOLE), or at
+    // its first split (TRUBAL_TEST_FAIL_AT "1 part", "1 search", "1 split"): the others must not go
+    // on into the exchange of the balls or the gather of the lists, or step their parts and wait
+    // for its ghosts.
+    for (const std::string where : {"part", "search", "split"}) {
+      INFO(where);
+      TempDir dir;
+      dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                            "cycle 30\nprint info\n");
+      CHECK(run_deck(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='1 {}'{}", where,
+                                         where == "search" ? " TRUBAL_REBUILD_WHOLE=1" : "")) == 1);   // not 124
+      const std::string out = slurp(dir.path() / "out.txt");
+      INFO(out);
+      const auto at = out.find(fmt::format("deck.dat:4: error: rank 1 ran out of memory {}",
+                                           where == "search"  ? "searching its share of the pairs"
+                                           : where == "part" ? "making a new pair list for its part"
+                                                             : "making its part of the decomposition"));
+      REQUIRE(at != std::string::npos);
+      CHECK(out.find("deck.dat:4:", at + 1) == std::string::npos);
+      CHECK(out.find("cycle: ") == std::string::npos);
+    }
+  }
+  SECTION("after a rank ran out of memory in its first search on its part, the shell goes on with the whole model") {
+    // The ranks other than 0 freed their whole model before that search (Pipeline::split_parts):
+    // the failure hands it back, so the next CYCLE and the files are serial's (they crashed or hung).
+    TempDir dir, serial;
+    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    dir.write("deck.dat", setup);
+    dir.write("more.txt", "cycle 30\ncycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+    const int status = run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='1 part'");
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(status != 124);
+    CHECK_THAT(out, Catch::Contains("rank 1 ran out of memory making a new pair list for its part"));
+    serial.write("deck.dat", setup + "cycle 30\n" + kOutputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+    CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+  }
+  SECTION("rank 0 out of memory making the contact results a command reads: every rank goes back a step, and the shell goes on") {
+    // Rank 0 alone takes the CYCLE's last step again for the PRINT (make_results_to_read); its
+    // serial search fails (TRUBAL_TEST_FAIL_AT "0 search"). Every rank goes back to the rescue
+    // copy, cycle 29, and the PRINT fails with one message; the next CYCLE gives the serial bits of
+    // 29 steps and then 30 (a rank left at cycle 30 would split its part from another state).
+    TempDir dir, serial;
+    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    dir.write("deck.dat", setup);
+    dir.write("more.txt", "cycle 30\nprint contacts file first.csv\n" + std::string(kCounters) + "cycle 30\nprint balls file balls.csv\n"
+                          "print contacts file contacts.csv\nquit\n");
+    const int status = run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='0 search'");
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(status != 124);
+    const std::string message = "rank 0 ran out of memory making the contact results";
+    const auto at = out.find(message);
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find(message, at + 1) == std::string::npos);
+    CHECK(counter(counters_of(dir), "cycle") == 29);
+    serial.write("deck.dat", setup + "cycle 29\ncycle 30\n" + kOutputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+    CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+  }
+  SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
+    // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks
+    // alone made their CYCLE record, and wait for rank 0, on steps rank 0 did not (it hung).
+    TempDir dir;
+    dir.write("afile", "a file, not a folder\n");
+    dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 200 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                          "hist stress every 10 file afile/h.csv\n");
+    dir.write("more.txt", "cycle 30\n" + std::string(kCounters) + "quit\n");
+    const int status = run_shell(dir, 3);
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(status != 124);
+    const auto at = out.find("deck.dat:4: error: cannot write the history file");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:4:", at + 1) == std::string::npos);
+    CHECK(counter(counters_of(dir), "cycle") == 30);
+  }
+  SECTION("a quick command (BALL) failing on one rank alone stops every rank at that rank's FILE:LINE") {
+    // In a batch deck the ranks agree on quick commands only before the next command that is not
+    // quick, or at the deck's end (Interpreter::agree_lazily): the others go on past the failing
+    // line, so the error must carry the failing rank's place. Lines 3-42 are BALL lines; rank 1 or
+    // rank 0 fails at line 10, then a CYCLE follows; or at the deck's last line (nothing follows);
+    // or at line 10 where line 20 is bad on every rank (the earlier failure is the one reported).
+    std::string deck = "start 0.01 0.01 0.01\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    for (int k = 0; k < 40; ++k)
+      deck += fmt::format("{}ball {} 0.005 0.005 0.00008\n", k == 17 ? "#" : "", 0.001 + 0.0002 * k);
+    for (const char* kind : {"cycle follows", "deck ends", "later error"}) {
+      for (const int rank : {1, 0}) {
+        const int line = kind == std::string("deck ends") ? 42 : 10;
+        INFO(kind << ": rank " << rank << " fails at line " << line);
+        std::string text = deck;
+        if (kind == std::string("later error")) text.replace(text.find("#ball"), 1, "ball 1 2\n#");   // line 20
+        if (kind != std::string("deck ends")) text += "cycle 10\nprint info\n";
+        TempDir dir;
+        dir.write("deck.dat", text);
+        const std::string env = fmt::format("TRUBAL_TEST_FAIL_AT='{} {}'", rank, line);
+        CHECK(run_deck(dir, 2, env) == 1);   // not 124: no rank waits for the others
+        const std::string out = slurp(dir.path() / "out.txt");
+        INFO(out);
+        const std::string where = fmt::format("deck.dat:{}: error: rank {} fails here", line, rank);
+        CHECK(out.find(where) != std::string::npos);
+        CHECK(out.find(": error:") == out.rfind(": error:"));   // one message
+        CHECK(out.find("cycle 10") == std::string::npos);       // the CYCLE did not run
+      }
+    }
+  }
+}
+
+// One rank under mpirun is still a distributed run (BACKEND mpi is its default): PRINT info says so.
+// A plain trubal has no ranks line.
+TEST_CASE("distributed: PRINT info says `ranks: 1` under mpirun -np 1", "[system]") {
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  TempDir dir;
+  dir.write("deck.dat", "start box 0 1 0 1 0 1\nprop kn 1e5 dens 1000\nball 0.5 0.5 0.5 0.1\nbackend mpi\ncycle 2\n"
+                        "print info\n");
+  REQUIRE(run_deck(dir, 1) == 0);
+  const std::string out = slurp(dir.path() / "out.txt");
+  INFO(out);
+  CHECK_THAT(out, Catch::Contains("\nranks: 1\n"));
+  CHECK_THAT(out, Catch::Contains("\nbackend: mpi\n"));
+  dir.write("deck.dat", "start box 0 1 0 1 0 1\nprop kn 1e5 dens 1000\nball 0.5 0.5 0.5 0.1\ncycle 2\nprint info\n");
+  REQUIRE(run_deck(dir, 0) == 0);
+  CHECK_THAT(slurp(dir.path() / "out.txt"), !Catch::Contains("ranks:"));
+}
+
+TEST_CASE("distributed: rank 0 alone reads the input files (the others need not see them)", "[mpi][system]") {
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  // Rank 1 starts in an empty folder (an MPMD launch): the deck, a CALLed file and GEN's sieve
+  // curve are rank 0's to read. Rank 1 read the sieve curve itself, failed alone and left rank 0's
+  // GEN waiting on a collective call (a hang, or a GEN cut short).
+  TempDir dir, empty;
+  dir.write("sieve.csv", "diameter,passing\n0.0005,0\n0.0008,20\n0.001,50\n0.0015,100\n");
+  dir.write("props.dat", "prop kn 1e5 ks 1e5 fric 0.5 dens 2650\n");
+  dir.write("deck.dat", "start 0.01 0.01 0.01\ngen porosity 0.6 psd sieve file sieve.csv seed 3\ncall props.dat\n"
+                        "cycle 20\nprint balls file balls.csv\n");
+  REQUIRE(run_deck(dir, 0) == 0);
+  const std::string serial = slurp(dir.path() / "balls.csv");
+  REQUIRE(lines_of(serial).size() > 1000);
+  std::filesystem::remove(dir.path() / "balls.csv");
+  const std::string mpmd =
+"env " + kMpiEnv + " timeout 120 mpirun -np 1 -wdir " + quote(dir.str()) + " " + quote(TRUBAL_EXE) +
+      " deck.dat : -np 1 -wdir " + quote(empty.str()) + " " + quote(TRUBAL_EXE) + " deck.dat";
+  const int status = shell(mpmd + " >" + quote((dir.path() / "out.txt").string()) + " 2>&1");
+  INFO(slurp(dir.path() / "out.txt"));
+  REQUIRE(status == 0);
+  CHECK(slurp(dir.path() / "balls.csv") == serial);
+}
+
+// Ctrl-C under mpirun: mpirun forwards SIGUSR1 to the ranks, and a CYCLE stops as Ctrl-C stops it
+// in a serial run; Ctrl-C (or SIGTERM) at mpirun itself ends the job (SIGTERM to the ranks, SIGKILL
+// a second later), and the ranks stop together and say where. A rank that stopped alone would leave the
+// others waiting in the step's exchange: the time limit would end the run, without the message.
+TEST_CASE("distributed: a signal stops every rank's CYCLE at the same step, with one message", "[mpi][system]") {
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string deck = std::string(R"(backend mpi
+start 0.007 0.007 0.007
+prop kn 1e5 ks 1e5 fric 26.57 dens 2650
+gen 500 0.0003 0.0005 seed 5
+damp local 0.7
+)") + "save before.sav\ncycle 100000000\nsave after.sav\n";
+  // mpirun takes SIGTERM as it takes Ctrl-C (it ends the job: SIGTERM to the ranks, SIGKILL a
+  // second later); the test sends TERM because a shell's background job ignores SIGINT.
+  for (const char* signal : {"USR1", "TERM"}) {
+    INFO("SIG" << signal << " to mpirun");
+    TempDir dir;
+    const std::string deck_path = dir.write("deck.dat", deck);
+    // The signal goes once the CYCLE has begun (before.sav is written just before it).
+    const int status = shell(
+        "cd " + quote(dir.str()) +
+        " || exit 1; (" + launcher(2) + quote(TRUBAL_EXE) + " " + deck_path +
+        " >out.txt 2>&1; echo $? >status.txt) & launched=$!; "
+        "for i in $(seq 1 600); do [ -e before.sav ] && break; sleep 0.1; done; sleep 1; "
+        // this test's mpirun alone (the deck's path is unique; its ranks and `timeout` do not match)
+        "pkill -" + signal + " -f '^mpirun -np 2 .*" + deck_path + "'; wait $launched");
+    REQUIRE(status == 0);
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(std::stoi(slurp(dir.path() / "status.txt")) != 0);
+    CHECK_THAT(out, Catch::Contains("interrupted by a signal (Ctrl-C at mpirun, or SIGUSR1) at cycle "));
+    const auto at = out.find("interrupted by a signal");
+    CHECK(out.find("interrupted by a signal", at + 1) == std::string::npos);   // rank 0 alone says it
+    CHECK_FALSE(std::filesystem::exists(dir.path() / "after.sav"));   // the deck stopped there
+  }
+}
