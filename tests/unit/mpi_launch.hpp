@@ -17,6 +17,10 @@ inline const std::string kMpiEnv =
     "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
     "ASAN_OPTIONS=detect_leaks=0";
 
+// The time limit of a run of the cut matrix on ranks: a loaded machine takes a minute or two, a
+// hang forever.
+inline constexpr int kLongRunLimit = 600;
+
 // The words before trubal's path: `ranks` ranks under mpirun (0: a plain trubal), under `timeout`
 // (124 is then the exit status of a run that passed it); `env`: more "NAME=value ..." for every rank.
 inline std::string launcher(int ranks, const std::string& env = "", int limit_s = 120) {
