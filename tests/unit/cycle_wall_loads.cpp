@@ -99,6 +99,22 @@ TEST_CASE("wall loads: a HIST of the walls reads the loads of the steps it sampl
   CHECK(std::find(fields.begin(), fields.end(), want_fx) != fields.end());
 }
 
+TEST_CASE("wall loads: a wall servo given after a CYCLE reads the loads of that CYCLE's last step", "[walls][cuts]") {
+  // CYCLE leaves its last step's contact results to be made when read, but forms the walls' loads
+  // at that step: a SERVO wall given after it reads them at the next CYCLE's first step. Against a
+  // run whose HIST reads (so forms) every step's loads.
+  TempDir dir;
+  const std::string servo = "servo wall 1 stress 20 area 6.4e-5\ncycle 50\n";
+  Harness plain, sampled;
+  REQUIRE(plain.deck(kBox + "cycle 1200\n" + servo));
+  REQUIRE(sampled.deck(kBox + "hist wall 1 every 1 file " + dir.str() + "/h.csv\ncycle 1200\n" + servo));
+  const Model& a = plain.session.model();
+  const Model& b = sampled.session.model();
+  REQUIRE(a.walls[0].point[2] != 0);   // the servo moved the floor
+  CHECK(std::bit_cast<std::uint64_t>(a.walls[0].point[2]) == std::bit_cast<std::uint64_t>(b.walls[0].point[2]));
+  CHECK(wall_bits(a) == wall_bits(b));
+}
+
 TEST_CASE("wall contacts: a ball that comes to a wall between rebuilds is caught (the skin rule)", "[walls]") {
   // A ball flies at a plane from five skins away (skin: a fifth of the mean radius, 0.002 here); the
   // kept list is rebuilt when a ball has moved half a skin, every 100 steps here, so the ball
