@@ -23,6 +23,7 @@ void take_kernels(const StepKernels& from, StepKernels& to) {
   to.features = from.features;
   to.estimate = from.estimate;
   to.moments = from.moments;
+  to.wall_loads = from.wall_loads;
   to.dt = from.dt;
   to.dt_prev = from.dt_prev;
   to.dt_mean = from.dt_mean;
@@ -166,7 +167,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
     outside_any = std::max(outside_any, *in++);
   }
   outside_box_ = outside_any != 0;
-  if (wall_count && adds) set_wall_loads(full.walls, totals);
+  if (wall_count && adds) set_wall_loads(full.walls, totals, kernels_.wall_loads);
 }
 
 bool BrickStep::wrap(Model& full) {

@@ -104,6 +104,7 @@ void bridge_walls(Model& model, StepScratch& scratch, const StepKernels& k, std:
     // On the ball, toward the wall: +F n; the wall takes -F n, a pull (negative compression).
     const double force = bridge_force(law, lane.r, lane.r, gap), pull = force / d;
     f = {pull * lane.dx, pull * lane.dy, pull * lane.dz};
+    if (!k.wall_loads) continue;   // (the wall's loads: on the steps that form them)
     WallLoad& load = loads[c.wall[p]];
     const double ax = lane.point[0] - wall.spin_point[0], ay = lane.point[1] - wall.spin_point[1],
                  az = lane.point[2] - wall.spin_point[2];

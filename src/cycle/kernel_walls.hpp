@@ -68,17 +68,22 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       const double fx = B.fx[q], fy = B.fy[q], fz = B.fz[q];
       const double ax = point[q][0] - w.spin_point[0], ay = point[q][1] - w.spin_point[1], az = point[q][2] - w.spin_point[2];
       const double power = -(fx * surface[q][0] + fy * surface[q][1] + fz * surface[q][2]);   // the wall's on the ball
-      // Each contact goes to the exact sums on its own (the same additions wherever it is computed).
-      load.fx.add(fx); load.fy.add(fy); load.fz.add(fz);
-      load.mx.add(ay * fz - az * fy); load.my.add(az * fx - ax * fz); load.mz.add(ax * fy - ay * fx);
-      load.normal_force.add(B.fn[q]);
-      load.stiffness.add(B.kn[q]);
-      load.work.add(power * k.dt_mean);
-      load.contacts += B.state[q] != 0;
-      // A moving surface: the touching ball's kinetic energy in the wall's frame (Wall::relative_kinetic).
-      const double ux = surface[q][0] - b.vx[i], uy = surface[q][1] - b.vy[i], uz = surface[q][2] - b.vz[i];
-      if (B.state[q] != 0 && (surface[q][0] != 0 || surface[q][1] != 0 || surface[q][2] != 0))
-        load.relative_kinetic.add(0.5 * b.mass[i] * (ux * ux + uy * uy + uz * uz));
+      // Each contact goes to the exact sums on its own (the same additions wherever it is computed):
+      // the loads on the steps that read them, the work and the kinetic energy in the wall's frame
+      // where the surface moves (a surface standing still adds zeros to them).
+      if (k.wall_loads) {
+        load.fx.add(fx); load.fy.add(fy); load.fz.add(fz);
+        load.mx.add(ay * fz - az * fy); load.my.add(az * fx - ax * fz); load.mz.add(ax * fy - ay * fx);
+        load.normal_force.add(B.fn[q]);
+        load.stiffness.add(B.kn[q]);
+        load.contacts += B.state[q] != 0;
+      }
+      if (surface[q][0] != 0 || surface[q][1] != 0 || surface[q][2] != 0) {
+        load.work.add(power * k.dt_mean);
+        // The touching ball's kinetic energy in the wall's frame (Wall::relative_kinetic).
+        const double ux = surface[q][0] - b.vx[i], uy = surface[q][1] - b.vy[i], uz = surface[q][2] - b.vz[i];
+        if (B.state[q] != 0) load.relative_kinetic.add(0.5 * b.mass[i] * (ux * ux + uy * uy + uz * uz));
+      }
       BallParts& part = scratch.ball_parts[i];
       part.boundary += power * k.dt_mean;
       part.boundary_ahead += power * (0.5 * k.dt_mean);   // the wall moves on with the balls: half after t

@@ -192,6 +192,12 @@ struct StepKernels {
   StepEstimate estimate = StepEstimate::Undamped;
   bool moments = false;                     // the contact loops sum StepSums::force_moment and
                                             // stiffness_moment (set while a servo runs)
+  // Whether this step forms the walls' loads (Wall::force, moment, normal_force, stiffness,
+  // contacts): on the steps something reads them (run.cpp, StepPlan::wall_loads); the others leave
+  // them as the last step that formed them did. Each wall's work and relative_kinetic, which
+  // every step reads, are formed every step (a wall whose surface stands still adds nothing to
+  // them).
+  bool wall_loads = true;
   // The steps of central differences with a step that changes (doc/physics.md "Law of motion"):
   // positions move by v(t + dt/2) dt, this step; velocities by F(t)/m times dt_mean, the mean of the
   // step before and this one, and so does the work the law of motion charges a force with; a

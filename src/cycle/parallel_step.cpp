@@ -2,6 +2,7 @@
 
 #include "cycle/bond_pass.hpp"
 #include "cycle/bridge_pass.hpp"
+#include "physics/walls.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -56,27 +57,40 @@ void ParallelStep::split_if_stale(const ContactTable& c, const StepScratch& scra
     split(c, scratch, balls, parts);
 }
 
-void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals) {
+void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals, bool loads) {
   for (std::size_t w = 0; w < walls.size() && w < totals.size(); ++w) {
     WallLoad& total = totals[w];
     Wall& wall = walls[w];
+    wall.work += total.work.value();
+    wall.relative_kinetic = total.relative_kinetic.value();
+    if (!loads) continue;
     wall.force = {total.fx.value(), total.fy.value(), total.fz.value()};
     wall.moment = {total.mx.value(), total.my.value(), total.mz.value()};
     wall.normal_force = total.normal_force.value();
     wall.stiffness = total.stiffness.value();
     wall.contacts = total.contacts;
-    wall.work += total.work.value();
-    wall.relative_kinetic = total.relative_kinetic.value();
   }
 }
 
-void ParallelStep::add_wall_loads(Model& model, int parts) {
-  // Each wall's load: every thread's exact sums merged.
+void ParallelStep::add_wall_loads(Model& model, int parts, bool loads) {
+  // Each wall's load: every thread's exact sums merged (where the loads are not formed, the two
+  // that are: the work and the kinetic energy in the wall's frame).
   const std::size_t wall_count = model.walls.size();
-  wall_totals_.assign(wall_count, WallLoad{});
-  for (std::size_t w = 0; w < wall_count; ++w)
-    for (int t = 0; t < parts; ++t) wall_totals_[w].add(wall_loads_[t * wall_count + w]);
-  if (!part_only_) set_wall_loads(model.walls, wall_totals_);
+  wall_totals_.resize(wall_count);
+  for (std::size_t w = 0; w < wall_count; ++w) {
+    WallLoad& total = wall_totals_[w];
+    if (loads) {
+      total = WallLoad{};
+      for (int t = 0; t < parts; ++t) total.add(wall_loads_[t * wall_count + w]);
+    } else {
+      total.work = total.relative_kinetic = ExactSum{};
+      for (int t = 0; t < parts; ++t) {
+        total.work.add(wall_loads_[t * wall_count + w].work);
+        total.relative_kinetic.add(wall_loads_[t * wall_count + w].relative_kinetic);
+      }
+    }
+  }
+  if (!part_only_) set_wall_loads(model.walls, wall_totals_, loads);
 }
 
 bool ParallelStep::share_now(std::size_t balls, int parts) {
@@ -129,10 +143,22 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   split_if_stale(c, scratch, balls, parts);
   const bool parallel = parts > 1 && share_now(balls, parts);
   const int threads = parallel ? static_cast<int>(pool.size()) : 1;
-  thread_sums_.assign(threads, StepSums{});
+  // Thread 0 adds to `sums` itself, the others to parts of their own merged after (exact sums, a
+  // min and a max: the same in any order).
+  if (threads > 1) thread_sums_.assign(threads, StepSums{});
+  auto part = [&](int t) -> StepSums& { return t == 0 ? sums : thread_sums_[t]; };
   const std::size_t wall_count = model.walls.size();
   auto block_wall = [&](std::size_t k) { return static_cast<std::size_t>(scratch.wall_run_begin[block_ball(k)]); };
-  if (wall_count) wall_loads_.assign(threads * wall_count, WallLoad{});
+  // Each thread's loads, zero: all of them where the step forms the loads, else the two it adds
+  // to (StepKernels::wall_loads), and none where no wall moves.
+  const bool loads = kernels.wall_loads;
+  bool moving = false;
+  for (const Wall& w : model.walls) moving = moving || !wall_still(w);
+  if (wall_count && (loads || wall_loads_.size() < threads * wall_count)) {
+    wall_loads_.assign(threads * wall_count, WallLoad{});
+  } else if (wall_count && moving) {
+    for (std::size_t k = 0; k < threads * wall_count; ++k) wall_loads_[k].work = wall_loads_[k].relative_kinetic = ExactSum{};
+  }
   // After all of a thread's blocks (every sum of its balls is then complete): its balls' wall contacts.
   auto walls = [&](std::size_t first, std::size_t last, int t) {
     if (!wall_count) return;
@@ -177,7 +203,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   if (kernels.features.bridges) {
     prepare_bridges(model, scratch);
     auto bridges = [&](std::size_t first, std::size_t last, int t) {
-      bridge_pairs(model, scratch, kernels, block_pair(first), block_pair(last), thread_sums_[t]);
+      bridge_pairs(model, scratch, kernels, block_pair(first), block_pair(last), part(t));
       if (wall_count) bridge_walls(model, scratch, kernels, block_wall(first), block_wall(last), &wall_loads_[t * wall_count]);
     };
     if (parallel) pool.run([&](int t) { if (t < parts) bridges(first_block_[t], first_block_[t + 1], t); });
@@ -187,11 +213,20 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
   if (kernels.features.bonds) {
     prepare_bonds(model, scratch);
     const std::size_t bonds = model.bonds.size();
-    auto share = [&](int t, int of) { bond_forces(model, scratch, kernels, split_point(bonds, of, t), split_point(bonds, of, t + 1), thread_sums_[t]); };
+    auto share = [&](int t, int of) { bond_forces(model, scratch, kernels, split_point(bonds, of, t), split_point(bonds, of, t + 1), part(t)); };
     if (parallel) pool.run([&](int t) { if (t < parts) share(t, parts); });
     else share(0, 1);
   }
-  if (wall_count) add_wall_loads(model, threads);
+  if (wall_count && (loads || moving)) {
+    add_wall_loads(model, threads, loads);
+  } else if (wall_count) {   // (what add_wall_loads gives where no wall moves: no work, no kinetic term)
+    if (!part_only_) {
+      for (Wall& w : model.walls) { w.work += 0.0; w.relative_kinetic = 0.0; }
+    } else {
+      wall_totals_.resize(wall_count);
+      for (WallLoad& t : wall_totals_) t.work = t.relative_kinetic = ExactSum{};
+    }
+  }
   const auto t1 = Clock::now();
 
   // The balls in equal shares (the contact split may be uneven, to even out cross pairs).
@@ -202,16 +237,16 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     if (t >= motion_parts) return;
     const std::size_t first = split_point(motion_blocks, motion_parts, t), last = split_point(motion_blocks, motion_parts, t + 1);
     const std::size_t ball0 = std::min(balls, first * kReduceBlock), ball1 = std::min(balls, last * kReduceBlock);
-    if (kernels.features.rolling) add_rolling(model.balls, scratch, ball0, ball1, thread_sums_[t]);
+    if (kernels.features.rolling) add_rolling(model.balls, scratch, ball0, ball1, part(t));
     if (kernels.features.bridges) add_bridges(model, scratch, ball0, ball1);
     if (kernels.features.bonds) add_bonds(model, scratch, kernels, ball0, ball1);
-    kernels.motion(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
-    if (kernels.features.bridges) bridge_work(model, scratch, kernels, ball0, ball1, thread_sums_[t]);
+    kernels.motion(model, scratch, kernels, ball0, ball1, part(t));
+    if (kernels.features.bridges) bridge_work(model, scratch, kernels, ball0, ball1, part(t));
     if (moved) moved_[t] = moved->max_displacement2(model.balls, ball0, ball1);
   }, motion_parts > 1);
   moved2_ = 0;
   for (double m : moved_) moved2_ = std::max(moved2_, m);
-  for (StepSums& part : thread_sums_) sums.add(part);
+  for (int t = 1; t < threads; ++t) sums.add(thread_sums_[t]);
   const auto t2 = Clock::now();
   if (parts > 1 && policy_->share_rule == 0 && trial_.in_trial())
     trial_.record(parallel, std::chrono::duration<double>(t2 - t0).count());

@@ -28,8 +28,9 @@
 namespace trubal {
 
 // Each wall's force, moment, normal force, stiffness and contacts from its merged load (rounded
-// once); its work grows by the load's.
-void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals);
+// once), where `loads` (StepKernels::wall_loads); its work grows by the load's, and its
+// relative_kinetic is the load's.
+void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals, bool loads);
 
 class ParallelStep {
  public:
@@ -58,7 +59,7 @@ class ParallelStep {
 
  private:
   // The walls' loads of this step from the `parts` threads' loads (Model::walls' force, moment, ...).
-  void add_wall_loads(Model& model, int parts);
+  void add_wall_loads(Model& model, int parts, bool loads);
   const StepPolicy* policy_;
   bool part_only_ = false;
   std::vector<WallLoad> wall_totals_;      // per wall: the threads' loads merged
@@ -69,7 +70,7 @@ class ParallelStep {
   void split_if_stale(const ContactTable& c, const StepScratch& scratch, std::size_t balls, int parts);
   void cross_lists(const ContactTable& c, std::size_t balls, int parts);
 
-  std::vector<StepSums> thread_sums_;      // per thread
+  std::vector<StepSums> thread_sums_;      // per thread but the first (which adds to the step's sums)
   std::vector<WallLoad> wall_loads_;       // per thread, per wall
   std::vector<std::size_t> first_block_;   // per thread, then the block count
   std::vector<std::vector<std::uint32_t>> cross_;   // per thread: its cross pairs, in list order

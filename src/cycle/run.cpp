@@ -81,6 +81,12 @@ struct StepPlan {
   bool observed = false;   // an observer reads this step's contact results
   bool deferred = false;   // the CYCLE's last step, its results made when read (from a copy of the step before)
   bool details = false;    // the step writes the per-pair results
+  // The step forms the walls' loads (StepKernels::wall_loads): where it writes the results, at the
+  // CYCLE's last step (deferred or not: what follows a CYCLE reads the walls), at each step a
+  // rescue copy is taken after (the rescue may leave the model there: the 500th steps' and, where
+  // the last step's results are deferred, the step before it), and while a wall servo runs
+  // (advance).
+  bool wall_loads = false;
 };
 
 // One CYCLE: n steps of the pipeline, each followed by the guard, the START box's faces, the
@@ -92,7 +98,7 @@ class CycleRun {
 
  private:
   StepPlan plan(std::int64_t s) const;
-  StepTotals advance(bool details);
+  StepTotals advance(bool details, bool wall_loads);
   bool escapes(bool replay);
   void sort_balls();
   bool rescue(std::int64_t bad_cycle);
@@ -191,7 +197,7 @@ CycleResult CycleRun::run() {
     for (std::int64_t s = 1; s <= n_; ++s) {
       const StepPlan step = plan(s);
       if (step.deferred && pipeline_.rescue().cycle != model_.cycle) take_copy();
-      const StepTotals sums = advance(step.details);
+      const StepTotals sums = advance(step.details, step.wall_loads);
       if (guard_->failed(model_, sums, s, result_)) return unstable(sums, s);
       result_.done = s;
       if (escapes(false)) return finish();
@@ -224,13 +230,14 @@ StepPlan CycleRun::plan(std::int64_t s) const {
   p.deferred = control_.defer_results && s == n_ && !p.stopping && !p.observed;
   p.details = (s == n_ && !p.deferred) || p.stopping || (!control_.defer_results && (s + 1) % kSnapshotEvery == 0) ||
               p.observed;
+  p.wall_loads = p.details || s == n_ || (s + 1) % kSnapshotEvery == 0 || (control_.defer_results && s + 1 == n_);
   return p;
 }
 
 // One step: the cell and the walls before it, the pipeline's step, and what follows it (the cell's
 // strain and tilt, the clock, the works, the next critical step, the energy terms at t).
 // details: the step writes the per-pair results (CycleControl::reads_contacts).
-StepTotals CycleRun::advance(bool details) {
+StepTotals CycleRun::advance(bool details, bool wall_loads) {
   Model& model = model_;
   StepKernels& kernels = kernels_;
   const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
@@ -248,6 +255,9 @@ StepTotals CycleRun::advance(bool details) {
   kernels.contacts = details ? kernels.contacts_full : kernels.contacts_lean;
   kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
   kernels.walls = details ? kernels.walls_full : kernels.walls_lean;
+  // A wall servo reads its wall's loads before every step.
+  kernels.wall_loads = wall_loads;
+  for (const Wall& w : model.walls) kernels.wall_loads = kernels.wall_loads || w.servo_on;
   StepSums step_sums;
   const auto step_start = Clock::now();
   // The balls in space order (Model::order) on cycles of the absolute count and at the first step
@@ -369,7 +379,7 @@ bool CycleRun::rescue(std::int64_t bad_cycle) {
   pipeline_.invalidate();
   kernels_.laws = make_pair_laws(model_);   // the balls destroyed since the copy are back
   if (model_.cycle != start_cycle_ && model_.cycle + 1 < bad_cycle) {
-    advance(true);
+    advance(true, true);
     escapes(true);
     current = true;
   }

@@ -65,7 +65,9 @@ struct CycleResult {
 // of the force pass of the step that ended at cycle ContactTable::results_cycle: every CYCLE's
 // last step writes them (or defers them: CycleControl::defer_results), and so do the steps whose cycle an observer reads (reads_contacts), the
 // step a Ctrl-C ends and the one before every 500th (the rescue copy's); other steps skip the writes
-// and compute the same numbers.
+// and compute the same numbers. The walls' loads (Wall::force, moment, normal_force, stiffness,
+// contacts) are formed on those steps too, on every CYCLE's last step whether or not its results
+// are deferred, and on every step while a wall servo runs; each wall's work on every step.
 CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control);
 
 // Makes the model's contact results current where they can be: a CYCLE that deferred its last

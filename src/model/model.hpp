@@ -296,7 +296,10 @@ struct Wall {
   // (a platen in a cylinder); a cylinder's is 2 pi r times the distance along its axis between walls
   // area_walls[0] and [1] (the platens), so the stress is over the loaded height.
   std::array<std::int64_t, 2> area_walls{0, 0};
-  // Loads of the last force pass, and the work the wall has done on the balls since START.
+  // Loads of the last force pass that formed them: every CYCLE's last step, the steps an observer
+  // reads, every step while a wall servo runs (cycle/run.cpp, StepPlan::wall_loads; a CYCLE that a
+  // ball leaving the box stops leaves those of an earlier step); and the work the wall has done on
+  // the balls since START (every step).
   std::array<double, 3> force{}, moment{};      // on the wall; moment about spin_point
   double normal_force = 0;                      // sum of the contacts' normal forces (compression > 0)
   double stiffness = 0;                         // sum of the touching contacts' k_n

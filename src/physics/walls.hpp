@@ -11,6 +11,8 @@
 #pragma once
 
 #include <array>
+#include <bit>
+#include <cstdint>
 
 #include "model/model.hpp"
 #include "model/wall_shape.hpp"
@@ -25,6 +27,14 @@ struct WallLane {
   Vec3 velocity;              // the wall's surface velocity there
 };
 
+// Whether the wall stands still: no velocity (+0 in every component), spin or radius rate, so its
+// surface velocity (wall_surface_velocity) is +0 everywhere.
+inline bool wall_still(const Wall& w) {
+  return std::bit_cast<std::uint64_t>(w.velocity[0]) == 0 && std::bit_cast<std::uint64_t>(w.velocity[1]) == 0 &&
+         std::bit_cast<std::uint64_t>(w.velocity[2]) == 0 && w.spin[0] == 0 && w.spin[1] == 0 && w.spin[2] == 0 &&
+         w.radius_rate == 0;
+}
+
 // A centre past a one-sided wall by more than R (or NaN) is no contact: gap is then taken as 2R.
 inline WallLane wall_lane(const Wall& wall, const Vec3& centre, double radius) {
   const WallTouch t = wall_touch(wall, centre);
@@ -34,7 +44,8 @@ inline WallLane wall_lane(const Wall& wall, const Vec3& centre, double radius) {
   lane.dx = t.dir[0] * d; lane.dy = t.dir[1] * d; lane.dz = t.dir[2] * d;
   lane.r = 2 * radius;
   lane.point = {centre[0] + t.dir[0] * gap, centre[1] + t.dir[1] * gap, centre[2] + t.dir[2] * gap};
-  lane.velocity = wall_surface_velocity(wall, lane.point, t);
+  // (A wall standing still: its surface velocity is +0 in every component, as the sum would give.)
+  lane.velocity = wall_still(wall) ? Vec3{0, 0, 0} : wall_surface_velocity(wall, lane.point, t);
   return lane;
 }
 

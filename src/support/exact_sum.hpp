@@ -60,14 +60,18 @@ class ExactSum {
 
   class Stream;
 
-  // Adds another sum (exactly).
+  // Adds another sum (exactly): limb by limb, the carries left waiting (each side's limbs are at
+  // most its pending count plus one times 2^32 from their normalised values).
   void add(const ExactSum& o) {
-    ExactSum other = o;
-    other.normalise();
-    normalise();
-    for (int k = 0; k < kLimbs; ++k) limb_[k] += other.limb_[k];
-    special_ |= other.special_;
-    pending_ = 1;
+    if (pending_ + o.pending_ + 1 >= kMaxPending) [[unlikely]] {
+      ExactSum other = o;
+      other.normalise();
+      normalise();
+      return add(other);
+    }
+    for (int k = 0; k < kLimbs; ++k) limb_[k] += o.limb_[k];
+    special_ |= o.special_;
+    pending_ += o.pending_ + 1;
   }
 
   // The sum, rounded to the nearest double (ties to even; a total beyond the double range is an
@@ -77,21 +81,26 @@ class ExactSum {
       if ((special_ & kNaN) || (special_ & kPlusInf && special_ & kMinusInf)) return std::nan("");
       return special_ & kPlusInf ? INFINITY : -INFINITY;
     }
-    ExactSum s = *this;
-    s.normalise();
-    bool negative = s.limb_[kLimbs - 1] < 0;
+    // Normalised over the limbs in use only (a step's sums span a few of the 67).
+    int lo = 0;
+    while (lo < kLimbs && limb_[lo] == 0) ++lo;
+    if (lo == kLimbs) return 0.0;
+    int hi = kLimbs - 1;
+    while (limb_[hi] == 0) --hi;
+    std::array<std::int64_t, kLimbs> l = limb_;
+    int top = carry_up(l.data(), lo, hi);
+    const bool negative = l[top] < 0;
     if (negative) {   // the magnitude, normalised again
-      for (auto& l : s.limb_) l = -l;
-      s.normalise();
+      for (int k = lo; k <= top; ++k) l[k] = -l[k];
+      top = carry_up(l.data(), lo, top);
     }
-    int top = kLimbs - 1;
-    while (top >= 0 && s.limb_[top] == 0) --top;
-    if (top < 0) return 0.0;
+    while (top >= lo && l[top] == 0) --top;
+    if (top < lo) return 0.0;
     // The top three digits hold at least 65 significant bits; the rest only decide ties.
     unsigned __int128 m = 0;
-    for (int k = top; k > top - 3; --k) m = (m << 32) | static_cast<std::uint64_t>(k >= 0 ? s.limb_[k] : 0);
+    for (int k = top; k > top - 3; --k) m = (m << 32) | static_cast<std::uint64_t>(k >= 0 ? l[k] : 0);
     bool sticky = false;
-    for (int k = top - 3; k >= 0; --k) sticky |= s.limb_[k] != 0;
+    for (int k = top - 3; k >= lo; --k) sticky |= l[k] != 0;
     int exponent = 32 * (top - 2) - 1074;   // the unit of m
     const int bits = 128 - count_leading_zeros(m);
     if (bits > 53) {
@@ -125,6 +134,19 @@ class ExactSum {
   static int count_leading_zeros(unsigned __int128 v) {
     const auto high = static_cast<std::uint64_t>(v >> 64), low = static_cast<std::uint64_t>(v);
     return high != 0 ? std::countl_zero(high) : 64 + std::countl_zero(low);
+  }
+  // Carries from limb lo upwards, in place (hi: the highest limb that may be nonzero), stopping
+  // where nothing is left to carry: the limbs below the returned one are in [0, 2^32), the returned
+  // one holds the sign, and those above it are zero. The same number as normalise() makes, with
+  // the run of all-ones limbs below a negative top folded into -1.
+  static int carry_up(std::int64_t* l, int lo, int hi) {
+    for (int k = lo; k < kLimbs - 1; ++k) {
+      const std::int64_t carry = l[k] >> 32;   // floor division by 2^32
+      l[k] -= carry * (std::int64_t{1} << 32);
+      l[k + 1] += carry;
+      if (k >= hi && (carry == 0 || carry == -1)) return k + 1;
+    }
+    return kLimbs - 1;
   }
   void normalise() {
     for (int k = 0; k < kLimbs - 1; ++k) {

@@ -84,6 +84,34 @@ TEST_CASE("exact sum: any order and any split give the same bits", "[support][ex
   CHECK(naive_differs);   // the test would be empty if the order never mattered to doubles
 }
 
+TEST_CASE("exact sum: a negative total rounds as its magnitude, merged parts with their carries waiting too",
+          "[support][exact]") {
+  // value() carries only over the limbs in use and folds a negative total's run of borrows: the
+  // ties and the sticky bits below them must round as for the positive total, mirrored.
+  for (const double sign : {1.0, -1.0}) {
+    CHECK(sum_of({sign * 1.0, sign * std::ldexp(1.0, -53)}) == sign * 1.0);   // a tie, to even
+    CHECK(sum_of({sign * 1.0, sign * std::ldexp(1.0, -53), sign * std::ldexp(1.0, -200)}) ==
+          sign * std::nextafter(1.0, 2.0));                                   // a sticky bit far below
+    CHECK(sum_of({sign * std::ldexp(1.0, 300), -sign * std::ldexp(1.0, -300)}) ==
+          sign * std::ldexp(1.0, 300));                                       // a borrow through 19 limbs
+    CHECK(sum_of({sign * 3.0, -sign * std::ldexp(1.0, -1074)}) == sign * 3.0);
+    CHECK(sum_of({-sign * std::ldexp(1.0, -1074), sign * std::ldexp(1.0, -1073)}) == sign * std::ldexp(1.0, -1074));
+  }
+  // One part merged many times over (its limbs unnormalised each time): 1000 times -(1 + 2^-40).
+  ExactSum part, total;
+  for (int k = 0; k < 7; ++k) part.add(-1.0 / 7.0);   // (not exactly -1: the sum of the rounded sevenths)
+  part.add(-std::ldexp(1.0, -40));
+  const double one = part.value();
+  for (int k = 0; k < 1000; ++k) total.add(part);
+  ExactSum reference;
+  for (int k = 0; k < 1000; ++k) {
+    for (int q = 0; q < 7; ++q) reference.add(-1.0 / 7.0);
+    reference.add(-std::ldexp(1.0, -40));
+  }
+  CHECK(one < 0);
+  CHECK(std::bit_cast<std::uint64_t>(total.value()) == std::bit_cast<std::uint64_t>(reference.value()));
+}
+
 TEST_CASE("exact sum: many additions between normalisations stay exact", "[support][exact]") {
   // 3 million additions of the largest 32-bit digit pattern (every limb's increment at its
   // largest) and as many subtractions: the carries must be propagated in time.
