@@ -74,6 +74,21 @@ std::string read_all(std::istream& in, const std::string& what) {
   return text;
 }
 
+// A stream over a text held elsewhere, read in place: a million-line deck is not copied again into
+// an istringstream beside the text it was read into.
+class TextStream : public std::istream {
+ public:
+  explicit TextStream(const std::string& text) : std::istream(&buf_), buf_(text) {}
+
+ private:
+  struct Buf : std::streambuf {
+    explicit Buf(const std::string& text) {
+      char* p = const_cast<char*>(text.data());   // (read only: a get area is never written)
+      setg(p, p, p + text.size());
+    }
+  } buf_;
+};
+
 }  // namespace
 
 std::optional<std::string> Interpreter::read_file_on_root(const std::string& path) {
@@ -322,7 +337,7 @@ bool Interpreter::run_deck(std::istream& in, const std::string& name) {
 
 bool Interpreter::run_text(const std::string& text, const std::string& name, const std::string& canonical,
                            int first_line) {
-  std::istringstream in(text);
+  TextStream in(text);
   try {
     return run_frames(in, name, canonical, first_line);
   } catch (const ReportedError&) {
@@ -359,7 +374,7 @@ bool Interpreter::run_file(const std::string& path) {
     if (report_errors) output_.err() << "error: " << file.error << '\n';
     return false;
   }
-  std::istringstream in(file.text);
+  TextStream in(file.text);
   try {
     return run_frames(in, path, file.canonical);
   } catch (const ReportedError&) {
@@ -433,7 +448,7 @@ void Interpreter::call_file(const std::string& path) {
   for (const auto& f : frames_)
     if (f.canonical == file.canonical)
       throw InputError(fmt::format("'{}' calls itself (include cycle through {})", printable(path), f.name));
-  std::istringstream in(file.text);
+  TextStream in(file.text);
   run_frames(in, path, file.canonical);
 }
 
