@@ -346,6 +346,9 @@ bool Interpreter::run_text(const std::string& text, const std::string& name, con
 }
 
 bool Interpreter::run_file(const std::string& path) {
+  // One process reads its deck as it runs it (a million BALL lines are 65 MB); under mpirun rank 0
+  // reads it whole and hands it to the others.
+  std::ifstream streamed;
   const FileText file = read_on_root([&] {
     FileText f;
     std::error_code dir_ec;
@@ -360,6 +363,11 @@ bool Interpreter::run_file(const std::string& path) {
     }
     std::error_code ec;
     f.canonical = fs::weakly_canonical(path, ec).string();
+    if (comm::size() == 1) {
+      streamed = std::move(in);
+      f.ok = true;
+      return f;
+    }
     try {
       f.text = read_all(in, fmt::format("the deck '{}'", path));
     } catch (const InputError& e) {
@@ -374,7 +382,8 @@ bool Interpreter::run_file(const std::string& path) {
     if (report_errors) output_.err() << "error: " << file.error << '\n';
     return false;
   }
-  TextStream in(file.text);
+  TextStream text(file.text);
+  std::istream& in = streamed.is_open() ? static_cast<std::istream&>(streamed) : text;
   try {
     return run_frames(in, path, file.canonical);
   } catch (const ReportedError&) {
