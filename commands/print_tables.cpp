@@ -62,18 +62,26 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
   if (!range.empty())
     for (auto k : ctx.session.select(range)) in[k] = true;
   if (!comm::root()) return;   // (as print_balls)
-  std::vector<std::size_t> rows;
   // (Capillary bridges: the pairs they hold apart too, and a column saying which hold one.)
   const bool bridges = has_bridges(m) && c.bridge.size() == c.size();
+  const auto printed = [&](std::size_t p) {
+    return (c.touching(p) || (bridges && c.bridge[p] != 0)) && (in[c.i[p]] || in[c.j[p]]);
+  };
+  // The rows counted first and sorted in place: a million balls' list is no larger than it must be.
+  std::size_t count = 0;
+  for (std::size_t p = 0; p < c.size(); ++p) count += printed(p) ? 1 : 0;
+  std::vector<std::size_t> rows;
+  rows.reserve(count);
   for (std::size_t p = 0; p < c.size(); ++p)
-    if ((c.touching(p) || (bridges && c.bridge[p] != 0)) && (in[c.i[p]] || in[c.j[p]])) rows.push_back(p);
+    if (printed(p)) rows.push_back(p);
   const auto& id = m.balls.id;
   // Each pair as (smaller id, larger id), sorted so; a pair the model holds the other way round (its
-  // order in memory is not id order) has its vectors on j turned round (s).
+  // order in memory is not id order) has its vectors on j turned round (s). Two images of one pair
+  // (a small periodic cell) keep their order in the list.
   const auto low = [&](std::size_t p) { return std::min(id[c.i[p]], id[c.j[p]]); };
   const auto high = [&](std::size_t p) { return std::max(id[c.i[p]], id[c.j[p]]); };
-  std::stable_sort(rows.begin(), rows.end(), [&](std::size_t p, std::size_t q) {
-    return low(p) != low(q) ? low(p) < low(q) : high(p) < high(q);
+  std::sort(rows.begin(), rows.end(), [&](std::size_t p, std::size_t q) {
+    return low(p) != low(q) ? low(p) < low(q) : high(p) != high(q) ? high(p) < high(q) : p < q;
   });
   const auto s = [&](std::size_t p) { return id[c.i[p]] < id[c.j[p]] ? 1.0 : -1.0; };
   const bool rolling = has_rolling(m);   // (the rolling moment on j: columns only where a material has it)

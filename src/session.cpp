@@ -195,6 +195,7 @@ double Session::stress_volume() const {
 CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress,
                            bool defer_results) {
   ++changes_;   // the balls move
+  decltype(centres_)().swap(centres_);   // (a million balls' map is 50 MB; the next BALL makes it again)
   unsaved_ = true;
   require_started();
   check_ready(model_);

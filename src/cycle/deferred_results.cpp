@@ -12,14 +12,17 @@
 
 namespace trubal {
 
-void make_results(Model& model, Pipeline& pipeline) {
+void make_results(Model& model, Pipeline& pipeline, bool keep_rescue) {
   if (pipeline.results_deferred(model)) {
     const Pipeline::Deferred left = pipeline.deferred();
     pipeline.clear_deferred();
     // The list as that step had it: the same search, or none (the SAVE that follows writes it).
     pipeline.restore_rescue(model);
     pipeline.rewind_step();
-    const CycleResult r = run_cycles(model, pipeline, 1, {});   // its one step writes the results
+    CycleControl control;
+    control.replay = !keep_rescue;
+    if (control.replay) pipeline.release_rescue();
+    const CycleResult r = run_cycles(model, pipeline, 1, control);   // its one step writes the results
     pipeline.count_results_made();
     if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
       throw std::logic_error(fmt::format(
@@ -45,7 +48,7 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
       {
         comm::Alone alone;
         Pipeline::Alone serial(pipeline);
-        make_results(model, pipeline);
+        make_results(model, pipeline, true);
       }
       if (!holds_pairs(model.contacts, held)) install_pairs(model.contacts, held);
     }, "making the contact results");

@@ -95,6 +95,9 @@ class Pipeline {
   void take_rescue(const Model& model);
   // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
   bool restore_rescue(Model& model);
+  // The copy's arrays freed (Snapshot::release), after a one-process restore_rescue that needs
+  // them no more (make_results).
+  void release_rescue() { rescue_.release(); }
   bool distributed() const { return mode_ == StepMode::Ranks; }
   // While one lives, a distributed pipeline steps as a serial one does: the whole model, searched on
   // this process alone (rank 0's own work under comm::Alone: make_results_to_read).

@@ -176,7 +176,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   observes_ = !output_on_root_ || comm::root();
   // A CYCLE right after one that deferred its last step's results: the rescue copy, of the step
   // before, is kept as this run's copy (the rescue takes that step again).
-  if (!pipeline.results_deferred(model)) take_copy();
+  if (!pipeline.results_deferred(model) && !control.replay) take_copy();
   pipeline.clear_deferred();
   if (control.defer_results) {
     // Results not of this state are of no use (the servo has read them already).
@@ -375,6 +375,9 @@ bool CycleRun::escapes(bool replay) {
 // are those of the state it is left in (false only where a step after the copy overwrote them:
 // Snapshot::restore).
 bool CycleRun::rescue(std::int64_t bad_cycle) {
+  if (control_.replay)
+    throw std::logic_error(fmt::format("internal error: cycle {} taken again to make its contact results failed",
+                                       model_.cycle + 1));
   bool current = pipeline_.restore_rescue(model_);
   pipeline_.invalidate();
   kernels_.laws = make_pair_laws(model_);   // the balls destroyed since the copy are back

@@ -32,6 +32,9 @@ struct CycleControl {
   // alone makes them (make_results_to_read), as it alone prints and writes. One stopped early and
   // one whose last step an observer reads write them as usual.
   bool defer_results = false;
+  // The step a CYCLE deferred, taken again from the rescue copy put back and released (make_results):
+  // it takes no copy of its own, as it gave these bits once already; a failure is an internal error.
+  bool replay = false;
 };
 
 inline constexpr double kBalanceWarning = 0.01;   // of the energy that moved: CycleResult::energy_warning
@@ -75,7 +78,9 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
 // (throws std::logic_error where it does not come back to them); else the result arrays are made
 // of the list's length, zero where they were not kept (results_cycle -1). Every reader of the
 // results (the Session's model()) calls it first.
-void make_results(Model& model, Pipeline& pipeline);
+// keep_rescue: the copy is kept (a distributed run's rank 0: every rank goes back to it where this
+// fails); else it is freed before the results take their memory.
+void make_results(Model& model, Pipeline& pipeline, bool keep_rescue = false);
 
 // make_results for what a command reads (the Session's model()), called by every rank at the same
 // points. A distributed run's deferred results are made by rank 0 alone, which alone prints and

@@ -68,13 +68,25 @@ struct Snapshot {
   // All but the balls, the pairs and the wall contacts (a distributed run's ranks other than 0:
   // rank 0 hands those over where the copy is put back, Pipeline::restore_rescue). Their memory goes.
   void take_light(const Model& m) {
+    take_light_arrays();
+    take_rest(m);
+  }
+  void take_light_arrays() {
     auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
     balls = Balls{};
     pairs = PairCandidates{};
     free(history); free(history_lengths); free(state); free(ball_lengths);
     wall_contacts = WallContacts{};
-    take_rest(m);
   }
+  // Frees the balls, the pairs and the wall contacts, and marks the copy as of no cycle: make_results
+  // puts the copy back to take a step again and needs it no more (a million balls' copy is about
+  // 300 MB, which the results made then take instead).
+  void release() {
+    take_light_arrays();
+    cycle = kNone;
+  }
+  static constexpr std::int64_t kNone = -2;   // (cycle + 1 is no model's cycle)
+
   // What take_light kept, back into the model.
   void restore_light(Model& m) const {
     m.walls = walls; m.space = space;

@@ -74,6 +74,21 @@ std::string read_all(std::istream& in, const std::string& what) {
   return text;
 }
 
+// A stream over a text held elsewhere, read in place: a million-line deck is not copied again into
+// an istringstream beside the text it was read into.
+class TextStream : public std::istream {
+ public:
+  explicit TextStream(const std::string& text) : std::istream(&buf_), buf_(text) {}
+
+ private:
+  struct Buf : std::streambuf {
+    explicit Buf(const std::string& text) {
+      char* p = const_cast<char*>(text.data());   // (read only: a get area is never written)
+      setg(p, p, p + text.size());
+    }
+  } buf_;
+};
+
 }  // namespace
 
 std::optional<std::string> Interpreter::read_file_on_root(const std::string& path) {
@@ -322,7 +337,7 @@ bool Interpreter::run_deck(std::istream& in, const std::string& name) {
 
 bool Interpreter::run_text(const std::string& text, const std::string& name, const std::string& canonical,
                            int first_line) {
-  std::istringstream in(text);
+  TextStream in(text);
   try {
     return run_frames(in, name, canonical, first_line);
   } catch (const ReportedError&) {
@@ -331,6 +346,9 @@ bool Interpreter::run_text(const std::string& text, const std::string& name, con
 }
 
 bool Interpreter::run_file(const std::string& path) {
+  // One process reads its deck as it runs it (a million BALL lines are 65 MB); under mpirun rank 0
+  // reads it whole and hands it to the others.
+  std::ifstream streamed;
   const FileText file = read_on_root([&] {
     FileText f;
     std::error_code dir_ec;
@@ -345,6 +363,11 @@ bool Interpreter::run_file(const std::string& path) {
     }
     std::error_code ec;
     f.canonical = fs::weakly_canonical(path, ec).string();
+    if (comm::size() == 1) {
+      streamed = std::move(in);
+      f.ok = true;
+      return f;
+    }
     try {
       f.text = read_all(in, fmt::format("the deck '{}'", path));
     } catch (const InputError& e) {
@@ -359,7 +382,8 @@ bool Interpreter::run_file(const std::string& path) {
     if (report_errors) output_.err() << "error: " << file.error << '\n';
     return false;
   }
-  std::istringstream in(file.text);
+  TextStream text(file.text);
+  std::istream& in = streamed.is_open() ? static_cast<std::istream&>(streamed) : text;
   try {
     return run_frames(in, path, file.canonical);
   } catch (const ReportedError&) {
@@ -433,7 +457,7 @@ void Interpreter::call_file(const std::string& path) {
   for (const auto& f : frames_)
     if (f.canonical == file.canonical)
       throw InputError(fmt::format("'{}' calls itself (include cycle through {})", printable(path), f.name));
-  std::istringstream in(file.text);
+  TextStream in(file.text);
   run_frames(in, path, file.canonical);
 }
 

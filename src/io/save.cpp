@@ -329,33 +329,31 @@ void save_model(const Model& model, const std::string& path, const History* hist
   if (version == 0) version = kVersion;
   if (version < kOldestVersion || version > kVersion)
     throw std::invalid_argument(fmt::format("save format {} is not one this trubal writes", version));
-  Writer w;
-  transfer(w, const_cast<Model&>(model), version);
-  History none;
-  if (version >= 6) transfer_histories(w, const_cast<History&>(history ? *history : none));
-  std::string header(kMagic, sizeof kMagic);
-  header.append(reinterpret_cast<const char*>(&version), sizeof version);
-  std::uint64_t size = w.buf.size(), sum = fnv1a(w.buf);
-  header.append(reinterpret_cast<const char*>(&size), sizeof size);
-  header.append(reinterpret_cast<const char*>(&sum), sizeof sum);
-
   check_replaceable(path);
   TemporaryFile tmp(path);   // (the stale temporaries of killed SAVEs go first)
   const int fd = tmp.fd();
-  auto write_all = [&](const std::string& s) {
-    std::size_t done = 0;
-    while (done < s.size()) {
-      ssize_t n = ::write(fd, s.data() + done, s.size() - done);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        return false;
-      }
-      done += static_cast<std::size_t>(n);
-    }
-    return true;
-  };
-  bool ok = write_all(header) && write_all(w.buf) && ::fsync(fd) == 0;
-  int err = errno;
+  // The header's length and checksum are written last, in place, once the body has been streamed.
+  std::string header(kMagic, sizeof kMagic);
+  header.append(reinterpret_cast<const char*>(&version), sizeof version);
+  const std::size_t sums_at = header.size();
+  header.append(2 * sizeof(std::uint64_t), '\0');
+  Writer w(fd);
+  bool ok = ::pwrite(fd, header.data(), header.size(), 0) == static_cast<ssize_t>(header.size()) &&
+            ::lseek(fd, static_cast<off_t>(header.size()), SEEK_SET) >= 0;
+  int err = ok ? 0 : errno;
+  if (ok) {
+    transfer(w, const_cast<Model&>(model), version);
+    History none;
+    if (version >= 6) transfer_histories(w, const_cast<History&>(history ? *history : none));
+    ok = w.flush();
+    err = w.error();
+  }
+  if (ok) {
+    const std::uint64_t sums[2] = {w.size(), w.sum()};
+    ok = ::pwrite(fd, sums, sizeof sums, static_cast<off_t>(sums_at)) == static_cast<ssize_t>(sizeof sums) &&
+         ::fsync(fd) == 0;
+    err = errno;
+  }
   if (!tmp.close() && ok) {
     ok = false;
     err = errno;

@@ -2,7 +2,10 @@
 // write and read them, and the layouts of older formats' structs. Used by io/save.cpp alone.
 #pragma once
 
+#include <unistd.h>
+
 #include <array>
+#include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
@@ -68,23 +71,65 @@ struct MaterialV9 {
 };
 static_assert(sizeof(MaterialV9) == 8 * sizeof(double) + 8, "MaterialV9 has hidden padding");
 
+// Writes a save's body into a file as it goes (a million balls' body is over a GB: never held
+// whole), a buffer at a time, keeping its length and checksum for the header (save_model writes
+// them last, in place). A failed write is kept (errno) and ends the writing; failed() tells.
 class Writer {
  public:
+  explicit Writer(int fd) : fd_(fd) { buf_.reserve(kBuffer); }
   // A struct written whole must have no padding (its bytes would be whatever the stack held, and a
   // save's bytes must not depend on the run): Damping and Material name theirs.
   template <class T> void pod(const T& v) {
     static_assert(std::is_trivially_copyable_v<T>);
-    buf.append(reinterpret_cast<const char*>(&v), sizeof v);
+    bytes(reinterpret_cast<const char*>(&v), sizeof v);
   }
   template <class T> void vec(const std::vector<T>& v) {
     pod<std::uint64_t>(v.size());
-    if (!v.empty()) buf.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+    if (!v.empty()) bytes(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
   }
   void str(const std::string& s) {
     pod<std::uint64_t>(s.size());
-    buf += s;
+    bytes(s.data(), s.size());
   }
-  std::string buf;
+  // Writes what the buffer holds; false (errno kept) where a write failed, now or before.
+  bool flush() {
+    if (!error_ && !buf_.empty()) put(buf_.data(), buf_.size());
+    buf_.clear();
+    return !error_;
+  }
+  std::uint64_t size() const { return size_; }
+  std::uint64_t sum() const { return sum_; }   // fnv1a of the body
+  int error() const { return error_; }
+
+ private:
+  static constexpr std::size_t kBuffer = std::size_t{1} << 20;
+  void bytes(const char* p, std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k) sum_ = (sum_ ^ static_cast<unsigned char>(p[k])) * 1099511628211ull;
+    size_ += n;
+    if (buf_.size() + n <= kBuffer) {
+      buf_.append(p, n);
+      return;
+    }
+    flush();
+    if (n < kBuffer) buf_.append(p, n);
+    else if (!error_) put(p, n);   // a large array straight from its memory
+  }
+  void put(const char* p, std::size_t n) {
+    while (n > 0) {
+      const ssize_t w = ::write(fd_, p, n);
+      if (w < 0) {
+        if (errno == EINTR) continue;
+        error_ = errno;
+        return;
+      }
+      p += w;
+      n -= static_cast<std::size_t>(w);
+    }
+  }
+  int fd_;
+  std::string buf_;
+  std::uint64_t size_ = 0, sum_ = 1469598103934665603ull;
+  int error_ = 0;
 };
 
 class Reader {

@@ -156,9 +156,14 @@ TEST_CASE("lean steps: CYCLE leaves its results to the next command that reads t
   test::Harness h;
   REQUIRE(h.deck(deck + "cycle 333\n"));
   CHECK_FALSE(h.session.state().contacts.results_kept());
+  CHECK(h.session.pipeline().rescue().balls.size() == h.session.state().balls.size());   // of cycle 332
   const Model& m = h.session.model();
   CHECK(m.contacts.results_kept());
   CHECK(m.contacts.results_cycle == 333);
+  // The copy they were made from is freed (its memory goes to the results) and of no cycle.
+  CHECK(h.session.pipeline().rescue().balls.size() == 0);
+  CHECK(h.session.pipeline().rescue().pairs.i.empty());
+  CHECK(h.session.pipeline().rescue().cycle + 1 != m.cycle);
   REQUIRE(h.deck("save deferred.sav\n"));
   test::Harness straight;
   REQUIRE(straight.deck(deck));
@@ -168,4 +173,9 @@ TEST_CASE("lean steps: CYCLE leaves its results to the next command that reads t
   const std::string a = test::slurp(dir.path() / "deferred.sav"), b = test::slurp(dir.path() / "straight.sav");
   CHECK(!a.empty());
   CHECK(a == b);
+  // A CYCLE after the copy was freed takes its own and goes on to the same bits.
+  REQUIRE(h.deck("cycle 20\nsave deferred2.sav\n"));
+  straight.session.cycle(20);
+  straight.session.save("straight2.sav");
+  CHECK(test::slurp(dir.path() / "deferred2.sav") == test::slurp(dir.path() / "straight2.sav"));
 }
