@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <span>
+#include <utility>
 
 #include "model/bond_table.hpp"
 #include "model/edit.hpp"
@@ -143,8 +146,26 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
   std::size_t count = 0;
   // The batch's bonds stepped (physics/bond.hpp step_bonds), their state and push written back.
   double held[BondBatch::kSize], freed[BondBatch::kSize];
+  // The table's arrays of the law and of the state beside the batch's: a batch of places one after
+  // another (no bond broken between them) is read and written as blocks.
+  const std::pair<double*, double*> state[] = {{t.fn.data(), B.fn}, {t.fsx.data(), B.fsx}, {t.fsy.data(), B.fsy},
+                                               {t.fsz.data(), B.fsz}, {t.mt.data(), B.mt}, {t.mbx.data(), B.mbx},
+                                               {t.mby.data(), B.mby}, {t.mbz.data(), B.mbz}};
+  const std::pair<double*, double*> law[] = {{t.kn.data(), B.kn}, {t.ks.data(), B.ks}, {t.tension.data(), B.tension},
+                                             {t.cohesion.data(), B.cohesion}, {t.tan_friction.data(), B.tan_friction},
+                                             {t.radius.data(), B.radius}, {t.mcf.data(), B.mcf}};
   auto flush = [&] {
+    const std::size_t first = lane_place[0];
+    const bool block = count == BondBatch::kSize && lane_place[count - 1] - first + 1 == count;   // (copies of a known size)
+    using Arrays = std::span<const std::pair<double*, double*>>;
+    for (const Arrays rows : {Arrays(law), Arrays(state)})
+      for (const auto& [table, batch] : rows)
+        if (block) std::memcpy(batch, table + first, sizeof(double) * BondBatch::kSize);
+        else for (std::size_t q = 0; q < count; ++q) batch[q] = table[lane_place[q]];
     step_bonds(B, count, k.dt_prev);
+    for (const auto& [table, batch] : state)
+      if (block) std::memcpy(table + first, batch, sizeof(double) * BondBatch::kSize);
+      else for (std::size_t q = 0; q < count; ++q) table[lane_place[q]] = batch[q];
     for (std::size_t q = 0; q < count; ++q) {   // the energies, the owners' only: the exact sums a batch at a time
       const bool owner = !(ghosts && scratch.ghost[scratch.bond_ball_i[lane_place[q]]]);
       held[q] = owner && B.fate[q] == 0 ? B.energy[q] : 0.0;
@@ -154,9 +175,6 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
     lost.add_block(freed, count);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t at = lane_place[q];   // (the place is the table's row)
-      t.fn[at] = B.fn[q]; t.mt[at] = B.mt[q];
-      t.fsx[at] = B.fsx[q]; t.fsy[at] = B.fsy[q]; t.fsz[at] = B.fsz[q];
-      t.mbx[at] = B.mbx[q]; t.mby[at] = B.mby[q]; t.mbz[at] = B.mbz[q];
       BondPush& push = scratch.bond_push[at];
       if (B.fate[q] != 0) {   // broken: gone for good, its energy lost
         t.fate[at] = static_cast<std::uint8_t>(B.fate[q]);
@@ -200,10 +218,6 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
     inv_ri[l] = 1.0 / ri; inv_rj[l] = 1.0 / rj;
     B.sx[l] = ri * b.wx[i] + rj * b.wx[j]; B.sy[l] = ri * b.wy[i] + rj * b.wy[j]; B.sz[l] = ri * b.wz[i] + rj * b.wz[j];
     B.wx[l] = b.wx[j] - b.wx[i]; B.wy[l] = b.wy[j] - b.wy[i]; B.wz[l] = b.wz[j] - b.wz[i];
-    B.kn[l] = t.kn[q]; B.ks[l] = t.ks[q]; B.tension[l] = t.tension[q]; B.cohesion[l] = t.cohesion[q];
-    B.tan_friction[l] = t.tan_friction[q]; B.radius[l] = t.radius[q]; B.mcf[l] = t.mcf[q];
-    B.fn[l] = t.fn[q]; B.fsx[l] = t.fsx[q]; B.fsy[l] = t.fsy[q]; B.fsz[l] = t.fsz[q];
-    B.mt[l] = t.mt[q]; B.mbx[l] = t.mbx[q]; B.mby[l] = t.mby[q]; B.mbz[l] = t.mbz[q];
     if (count == BondBatch::kSize) flush();
   }
   if (count) flush();
