@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <span>
 #include <utility>
 
@@ -103,6 +104,17 @@ void prepare_bonds(Model& model, StepScratch& scratch, int shares) {
     // (constant: its law and its balls' radii)
     scratch.bond_stiffness[q] = bond_stiffness(bond_law(t, q), b.rad[i], b.rad[j]);
   }
+  // The laws but the radius, each once (BOND gives one to all the bonds it makes): a small table the
+  // gather reads from the cache, not six arrays of the bonds' length from memory.
+  std::map<BondLawRow, std::uint32_t> known;
+  scratch.bond_laws.clear();
+  scratch.bond_law_of.resize(places);
+  for (std::size_t q = 0; q < places; ++q) {
+    const BondLawRow law = {t.kn[q], t.ks[q], t.tension[q], t.cohesion[q], t.tan_friction[q], t.mcf[q]};
+    const auto [at, made] = known.try_emplace(law, static_cast<std::uint32_t>(scratch.bond_laws.size()));
+    if (made) scratch.bond_laws.push_back(law);
+    scratch.bond_law_of[q] = at->second;
+  }
   scratch.bond_holds.assign(places, 1);
   scratch.bond_push.assign(places, BondPush{});
   // Each ball's bonds as i and as j, each a counting sort by that ball of the rows by their ids: as
@@ -146,19 +158,17 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
   std::size_t count = 0;
   // The batch's bonds stepped (physics/bond.hpp step_bonds), their state and push written back.
   double held[BondBatch::kSize], freed[BondBatch::kSize];
-  // The table's arrays of the law and of the state beside the batch's: a batch of places one after
-  // another (no bond broken between them) is read and written as blocks.
+  // The table's arrays of the bonds' radius and state beside the batch's: a batch of places one
+  // after another (no bond broken between them) is read and written as blocks.
   const std::pair<double*, double*> state[] = {{t.fn.data(), B.fn}, {t.fsx.data(), B.fsx}, {t.fsy.data(), B.fsy},
                                                {t.fsz.data(), B.fsz}, {t.mt.data(), B.mt}, {t.mbx.data(), B.mbx},
                                                {t.mby.data(), B.mby}, {t.mbz.data(), B.mbz}};
-  const std::pair<double*, double*> law[] = {{t.kn.data(), B.kn}, {t.ks.data(), B.ks}, {t.tension.data(), B.tension},
-                                             {t.cohesion.data(), B.cohesion}, {t.tan_friction.data(), B.tan_friction},
-                                             {t.radius.data(), B.radius}, {t.mcf.data(), B.mcf}};
+  const std::pair<double*, double*> radius[] = {{t.radius.data(), B.radius}};
   auto flush = [&] {
     const std::size_t first = lane_place[0];
     const bool block = count == BondBatch::kSize && lane_place[count - 1] - first + 1 == count;   // (copies of a known size)
     using Arrays = std::span<const std::pair<double*, double*>>;
-    for (const Arrays rows : {Arrays(law), Arrays(state)})
+    for (const Arrays rows : {Arrays(radius), Arrays(state)})
       for (const auto& [table, batch] : rows)
         if (block) std::memcpy(batch, table + first, sizeof(double) * BondBatch::kSize);
         else for (std::size_t q = 0; q < count; ++q) batch[q] = table[lane_place[q]];
@@ -218,6 +228,9 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
     inv_ri[l] = 1.0 / ri; inv_rj[l] = 1.0 / rj;
     B.sx[l] = ri * b.wx[i] + rj * b.wx[j]; B.sy[l] = ri * b.wy[i] + rj * b.wy[j]; B.sz[l] = ri * b.wz[i] + rj * b.wz[j];
     B.wx[l] = b.wx[j] - b.wx[i]; B.wy[l] = b.wy[j] - b.wy[i]; B.wz[l] = b.wz[j] - b.wz[i];
+    const BondLawRow& law = scratch.bond_laws[scratch.bond_law_of[q]];
+    B.kn[l] = law[0]; B.ks[l] = law[1]; B.tension[l] = law[2]; B.cohesion[l] = law[3]; B.tan_friction[l] = law[4];
+    B.mcf[l] = law[5];
     if (count == BondBatch::kSize) flush();
   }
   if (count) flush();

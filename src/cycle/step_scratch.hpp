@@ -43,6 +43,10 @@ struct BridgeSum {
   double fx = 0, fy = 0, fz = 0, power = 0;
 };
 
+// A bond's law but its radius (scenes with bonds, cycle/bond_pass.hpp): kn, ks, tension, cohesion,
+// tan_friction, mcf.
+using BondLawRow = std::array<double, 6>;
+
 // A bond's push this step (scenes with bonds, cycle/bond_pass.hpp), as each ball adds it: the force
 // on j (i takes its opposite), and the moment over its own radius on j, t - M / R_j, and on i,
 // t + M / R_i, where t = n x Fs (the moment on a ball b is -R_b t, as a contact's) and M = Mt n + Mb
@@ -88,6 +92,8 @@ struct StepScratch {
   // bond_broken). The table's ids as the index left them.
   std::vector<std::uint32_t> bond_ball_i, bond_ball_j, bond_run_begin, bond_runs, bond_partner_begin, bond_partners;
   std::vector<std::uint8_t> bond_holds;
+  std::vector<BondLawRow> bond_laws;           // the distinct laws but the radius: kn ks tension cohesion tan_friction mcf
+  std::vector<std::uint32_t> bond_law_of;      // each place's
   std::vector<BondPush> bond_push;
   std::vector<BondStiffness> bond_stiffness, ball_bond_stiffness;
   std::vector<std::vector<std::uint32_t>> bond_broken;   // the places of the bonds each share broke this step
