@@ -8,11 +8,12 @@
 //    books the strain energy it held as lost (StepSums::bond_break) and pushes no more. Its push
 //    goes to the bond's scratch as each of its balls will add it, its strain energy to the step's,
 //    its force to the servo's moments where a servo reads them. The bonds are stepped in the order of
-//    their balls in memory (StepScratch::bond_row), so that the gather reads the balls as blocks.
+//    their balls in memory (prepare_bonds puts the table in that order), so that the gather reads
+//    the balls as the contact loops do and the bonds as blocks.
 // 2. settle_broken_bonds (once, after every share): the stiffness sums of the balls whose bonds
 //    broke, again over their bonds that hold.
 // 3. add_bonds (per ball, before the law of motion): each ball's pushes summed in one order, its
-//    bonds as partner j (ascending i), then as i (ascending j), the table's canonical order, and
+//    bonds as partner j (ascending i), then as i (ascending j), by the balls' ids, and
 //    joined to its contact sums; so every backend and thread count gives the same bits.
 #pragma once
 
