@@ -1,10 +1,13 @@
 #!/bin/bash
 # The cost of parallel bonds (doc/speed.md "Bonds"): a periodic sample of 20,126 balls pressed by the
 # servo to 37,500 contacts, then strained 1100 cycles unbonded and with a bond on every touching pair
-# (37,476 bonds). Prints the CPU seconds of each run (restart and 1100 cycles), three times each.
-# Usage: bench/bonds_speed.sh build/trubal
+# (37,584 bonds). Prints the CPU seconds of each run (restart and 1100 cycles), three times each;
+# given a second program, the two interleaved (the first makes the sample).
+# Usage: bench/bonds_speed.sh build/trubal [other/trubal]
 set -euo pipefail
 trubal=$(realpath "${1:-build/trubal}")
+programs=("$trubal")
+if [ -n "${2:-}" ]; then programs+=("$(realpath "$2")"); fi
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 cd "$dir"
@@ -25,8 +28,10 @@ for bonded in 0 1; do
 done
 TIMEFORMAT='%U s'
 for k in 1 2 3; do
-  for bonded in 0 1; do
-    echo -n "bonded=$bonded "
-    { time "$trubal" run$bonded.dat > /dev/null; } 2>&1
+  for program in "${programs[@]}"; do
+    for bonded in 0 1; do
+      echo -n "$program bonded=$bonded "
+      { time "$program" run$bonded.dat > /dev/null; } 2>&1
+    done
   done
 done

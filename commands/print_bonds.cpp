@@ -7,6 +7,7 @@
 #include "commands/print_parts.hpp"
 #include "io/atomic_file.hpp"
 #include "io/csv.hpp"
+#include "model/bond_table.hpp"
 #include "model/edit.hpp"
 #include "physics/bond.hpp"
 #include "support/comm.hpp"
@@ -30,7 +31,7 @@ void print_bonds(Context& ctx, const Range& range, const std::string& file) {
   if (!range.empty())
     for (auto k : ctx.session.select(range)) in[k] = true;
   std::vector<std::size_t> rows;
-  for (std::size_t q = 0; q < t.size(); ++q) {
+  for (std::size_t q : bond_rows_by_id(t)) {
     const std::int64_t i = find_ball(m, t.id_i[q]), j = find_ball(m, t.id_j[q]);
     if ((i >= 0 && in[static_cast<std::size_t>(i)]) || (j >= 0 && in[static_cast<std::size_t>(j)])) rows.push_back(q);
   }

@@ -12,6 +12,7 @@
 #include <pybind11/stl.h>
 
 #include "io/history.hpp"
+#include "model/bond_table.hpp"
 #include "model/edit.hpp"
 #include "physics/bond.hpp"
 #include "physics/measure.hpp"
@@ -222,10 +223,11 @@ py::dict contacts(PySession& s) {
   return d;
 }
 
-// The parallel bonds (BOND), intact and broken, as PRINT bonds lists them: the table's order.
+// The parallel bonds (BOND), intact and broken, as PRINT bonds lists them: by their balls' ids.
 py::dict bonds(PySession& s) {
   const Model& m = s.session().model();
-  const Bonds& t = m.bonds;
+  Bonds t = m.bonds;
+  sort_bonds(t);
   const std::size_t n = t.size();
   std::vector<double> sigma(n), tau(n);
   std::vector<std::int32_t> state(t.fate.begin(), t.fate.end());

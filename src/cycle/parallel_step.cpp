@@ -209,13 +209,14 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     if (parallel) pool.run([&](int t) { if (t < parts) bridges(first_block_[t], first_block_[t + 1], t); });
     else bridges(0, blocks, 0);
   }
-  // Scenes with bonds: each bond's push, the table in equal shares (cycle/bond_pass.hpp).
+  // Scenes with bonds: each bond's push, the step's order in equal shares (cycle/bond_pass.hpp).
   if (kernels.features.bonds) {
-    prepare_bonds(model, scratch);
-    const std::size_t bonds = model.bonds.size();
-    auto share = [&](int t, int of) { bond_forces(model, scratch, kernels, split_point(bonds, of, t), split_point(bonds, of, t + 1), part(t)); };
+    prepare_bonds(model, scratch, parallel ? parts : 1);
+    const std::size_t bonds = bond_places(scratch);
+    auto share = [&](int t, int of) { bond_forces(model, scratch, kernels, split_point(bonds, of, t), split_point(bonds, of, t + 1), part(t), t); };
     if (parallel) pool.run([&](int t) { if (t < parts) share(t, parts); });
     else share(0, 1);
+    settle_broken_bonds(scratch);
   }
   if (wall_count && (loads || moving)) {
     add_wall_loads(model, threads, loads);

@@ -43,11 +43,16 @@ struct BridgeSum {
   double fx = 0, fy = 0, fz = 0, power = 0;
 };
 
-// A bond's push on ball j this step (scenes with bonds, cycle/bond_pass.hpp): its force, n x its
-// shear force (the moment on a ball b is -R_b t, as a contact's), its moment Mt n + Mb, and its
-// stiffness for the time step (translation, and its share of the spins' row). Zero where broken.
+// A bond's law but its radius (scenes with bonds, cycle/bond_pass.hpp): kn, ks, tension, cohesion,
+// tan_friction, mcf.
+using BondLawRow = std::array<double, 6>;
+
+// A bond's push this step (scenes with bonds, cycle/bond_pass.hpp), as each ball adds it: the force
+// on j (i takes its opposite), and the moment over its own radius on j, t - M / R_j, and on i,
+// t + M / R_i, where t = n x Fs (the moment on a ball b is -R_b t, as a contact's) and M = Mt n + Mb
+// is the bond's moment on j. Zero where broken.
 struct BondPush {
-  double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0, mx = 0, my = 0, mz = 0, kmax = 0, ks = 0;
+  double fx = 0, fy = 0, fz = 0, tjx = 0, tjy = 0, tjz = 0, tix = 0, tiy = 0, tiz = 0;
 };
 
 // One ball's parts of the step's global sums from its contacts: its run of pairs (those with
@@ -77,12 +82,23 @@ struct StepScratch {
   std::vector<std::uint32_t> partner_begin, partner_pairs;
   std::uint64_t partner_version = 0;
   std::vector<BridgeSum> ball_bridge;
-  // Scenes with bonds only (cycle/bond_pass.hpp, which sizes them): each bond's balls as indices,
-  // each ball's bonds as partner j (ascending i; the first at bond_partner_begin[b]) and as i (its
-  // bonds as i, ascending j, from bond_run_begin[b] in bond_runs), and each bond's push.
+  // Scenes with bonds only (cycle/bond_pass.cpp, which makes them, the table's rows put in the
+  // step's order: its first places the bonds that held when the index was made, by their balls'
+  // places in memory, so that the gather reads the balls as the contact loops do): each place's
+  // balls as indices, whether it still holds, its push. Each ball's bonds as partner j (ascending i;
+  // the first at bond_partner_begin[b]) and as i (ascending j, from bond_run_begin[b] in bond_runs),
+  // as places: the order by ids, in which every ball sums. Each bond's share of the stiffness sums
+  // (physics/bond.hpp) and each ball's sum of its intact bonds' (changed only where a bond breaks:
+  // bond_broken). The table's ids as the index left them.
   std::vector<std::uint32_t> bond_ball_i, bond_ball_j, bond_run_begin, bond_runs, bond_partner_begin, bond_partners;
+  std::vector<std::uint8_t> bond_holds;
+  std::vector<BondLawRow> bond_laws;           // the distinct laws but the radius: kn ks tension cohesion tan_friction mcf
+  std::vector<std::uint32_t> bond_law_of;      // each place's
   std::vector<BondPush> bond_push;
-  std::vector<BondStiffness> bond_stiffness;   // each bond's share of the stiffness sums (physics/bond.hpp)
+  std::vector<BondStiffness> bond_stiffness, ball_bond_stiffness;
+  std::vector<std::vector<std::uint32_t>> bond_broken;   // the places of the bonds each share broke this step
+  std::vector<std::int64_t> bond_id_i, bond_id_j;
+  std::size_t bond_intact = 0;                 // how many of the table's bonds hold
   std::uint64_t bond_version = 0;              // the ContactTable::list_version the bonds' index is of
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
   // run's sums of F (x) l (xx yy zz xy xz yz) and k_n l_a^2.

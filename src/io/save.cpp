@@ -19,6 +19,7 @@
 
 #include <fmt/format.h>
 
+#include "model/bond_table.hpp"
 #include "model/wall_shape.hpp"
 
 #include "io/atomic_file.hpp"
@@ -254,7 +255,12 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     io.pod(nbonds);
     if constexpr (std::is_same_v<IO, Reader>)
       if (nbonds > (std::uint64_t{1} << 34)) io.corrupt();
-    m.bonds.for_each_array([&](auto& v) {
+    Bonds by_id;   // written by the balls' ids, whatever order the step keeps them in
+    if constexpr (!std::is_same_v<IO, Reader>) {
+      by_id = m.bonds;
+      sort_bonds(by_id);
+    }
+    (std::is_same_v<IO, Reader> ? m.bonds : by_id).for_each_array([&](auto& v) {
       io.vec(v);
       if constexpr (std::is_same_v<IO, Reader>)
         if (v.size() != nbonds) io.corrupt();

@@ -1,5 +1,6 @@
 #include "io/vtk.hpp"
 
+#include "model/bond_table.hpp"
 #include "model/edit.hpp"
 
 #include <algorithm>
@@ -154,7 +155,7 @@ void write_bonds_vtp(const Model& model, const std::string& path) {
   std::vector<std::int64_t> crack_i, crack_j, bond_i, bond_j;
   std::vector<std::int32_t> crack_state;
   std::vector<double> crack_fn, bond_fn;
-  for (std::size_t q = 0; q < t.size(); ++q) {
+  for (std::size_t q : bond_rows_by_id(t)) {
     const std::int64_t fi = find_ball(model, t.id_i[q]), fj = find_ball(model, t.id_j[q]);
     if (fi < 0 || fj < 0) continue;
     const std::size_t i = static_cast<std::size_t>(fi), j = static_cast<std::size_t>(fj);

@@ -24,13 +24,20 @@ void keep_rows(Bonds& bonds, const std::vector<bool>& keep) {
 
 }  // namespace
 
-void sort_bonds(Bonds& bonds) {
+std::vector<std::size_t> bond_rows_by_id(const Bonds& bonds) {
   const std::size_t n = bonds.size();
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+  auto before = [&](std::size_t a, std::size_t b) {
     return bonds.id_i[a] != bonds.id_i[b] ? bonds.id_i[a] < bonds.id_i[b] : bonds.id_j[a] < bonds.id_j[b];
-  });
+  };
+  if (!std::is_sorted(order.begin(), order.end(), before)) std::stable_sort(order.begin(), order.end(), before);
+  return order;
+}
+
+void sort_bonds(Bonds& bonds) {
+  const std::size_t n = bonds.size();
+  const std::vector<std::size_t> order = bond_rows_by_id(bonds);
   bonds.for_each_array([&](auto& v) {
     if (v.size() != n) return;
     std::decay_t<decltype(v)> out(n);
@@ -76,6 +83,7 @@ std::size_t add_bonds(Model& model, const std::vector<std::size_t>& selected, co
   Bonds& t = model.bonds;
   std::vector<std::pair<std::int64_t, std::int64_t>> have(t.size());
   for (std::size_t k = 0; k < t.size(); ++k) have[k] = {t.id_i[k], t.id_j[k]};
+  std::sort(have.begin(), have.end());
   std::size_t made = 0;
   for (const auto& [lo, hi] : found) {
     if (std::binary_search(have.begin(), have.end(), std::make_pair(lo, hi))) continue;
@@ -139,10 +147,11 @@ std::string bond_table_problem(const Model& model) {
   bool lengths = true;
   t.for_each_array([&](const auto& v) { lengths = lengths && v.size() == n; });
   if (!lengths) return "the bond table's arrays differ in length";
+  const std::vector<std::size_t> by_id = bond_rows_by_id(t);
+  for (std::size_t a = 1; a < n; ++a)
+    if (t.id_i[by_id[a - 1]] == t.id_i[by_id[a]] && t.id_j[by_id[a - 1]] == t.id_j[by_id[a]]) return "a bond is given twice";
   for (std::size_t k = 0; k < n; ++k) {
     if (!(t.id_i[k] < t.id_j[k])) return "a bond's first ball id is not below its second";
-    if (k > 0 && !(t.id_i[k - 1] < t.id_i[k] || (t.id_i[k - 1] == t.id_i[k] && t.id_j[k - 1] < t.id_j[k])))
-      return "the bonds are not sorted by their balls' ids, or one is given twice";
     if (find_ball(model, t.id_i[k]) < 0 || find_ball(model, t.id_j[k]) < 0) return "a bond names a ball that is not there";
     if (!(t.kn[k] > 0) || !(t.ks[k] > 0) || !(t.radius[k] > 0) || !std::isfinite(t.kn[k]) || !std::isfinite(t.ks[k]) ||
         !std::isfinite(t.radius[k]))

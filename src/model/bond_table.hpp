@@ -18,7 +18,10 @@ struct BondSpec {
   double rmul = 1, mcf = 1;
 };
 
-// Sorts the table by (id_i, id_j), each row already with id_i < id_j.
+// The table's rows by (id_i, id_j) (each row with id_i < id_j): the order of every list, file and
+// sum of the bonds outside the step.
+std::vector<std::size_t> bond_rows_by_id(const Bonds& bonds);
+// Sorts the table by (id_i, id_j).
 void sort_bonds(Bonds& bonds);
 
 // Bonds every pair of the balls `selected` (indices) whose gap at j's nearest image is at most
@@ -37,7 +40,7 @@ void drop_bonds_of_missing_balls(Model& model);
 void renumber_bonds(Bonds& bonds, const std::function<std::int64_t(std::int64_t)>& map);
 
 // What is wrong with the table of a model read from a file, or "" where nothing is: every array of
-// its length, id_i < id_j naming balls of the model, sorted without repeats, the law's numbers finite
+// its length, id_i < id_j naming balls of the model, no pair twice, the law's numbers finite
 // with positive stiffness and radius, the fate a known code.
 std::string bond_table_problem(const Model& model);
 

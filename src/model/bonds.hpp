@@ -1,7 +1,9 @@
 // The parallel bonds (BOND; physics/bond.hpp, doc/physics.md "Parallel bonds"): a table of their
 // own, not contacts found by proximity. A bond is keyed by its two balls' ids (id_i < id_j), so that
-// a new pair list, a renumbering or another storage order cannot confuse it, and the table is kept
-// sorted by (id_i, id_j): the one order in which every ball sums its bonds, whatever the backend.
+// a new pair list, a renumbering or another storage order cannot confuse it. Its rows are in no fixed
+// order: the step keeps them in its own (by the balls' places in memory, cycle/bond_pass.hpp), and
+// whatever shows, saves or sums them goes by (id_i, id_j) (bond_rows_by_id): the one order in which
+// every ball sums its bonds, whatever the backend, and in which they are listed and saved.
 // A broken bond stays in the table (PRINT bonds says why it broke, DUMP draws it as a crack) and
 // carries no force: its pair is an ordinary contact.
 #pragma once

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "model/bond_table.hpp"
 #include "model/periodic_cell.hpp"
 #include "physics/bridge.hpp"
 #include "physics/walls.hpp"
@@ -146,7 +147,7 @@ EnergyReport energy(const Model& model) {
       e.strain += shear_spring_energy(w.mrx[p] * w.mrx[p] + w.mry[p] * w.mry[p] + w.mrz[p] * w.mrz[p], w.ks_eff[p] * r * r);
     }
   const Bonds& bonds = model.bonds;
-  for (std::size_t q = 0; q < bonds.size(); ++q)
+  for (std::size_t q : bond_rows_by_id(bonds))   // (by ids: the step keeps its own order)
     if (bonds.fate[q] == 0) e.strain += bond_strain_energy(bond_law(bonds, q), bond_state(bonds, q));
   return e;
 }

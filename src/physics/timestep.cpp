@@ -3,6 +3,7 @@
 #include <initializer_list>
 #include <limits>
 
+#include "model/bond_table.hpp"
 #include "model/edit.hpp"
 #include "model/periodic_cell.hpp"
 #include "physics/bond.hpp"
@@ -121,9 +122,10 @@ double balls_critical_step(const Model& model, const Features& features, bool an
     in.mstar = b.mass[i];
     add(laws.wall_law(i, w), in, {i});
   }
-  // The intact bonds, after the wall contacts (the step's order: cycle/bond_pass.hpp).
+  // The intact bonds, after the wall contacts, by their balls' ids (the step's order of the sums:
+  // cycle/bond_pass.hpp).
   const Bonds& bonds = model.bonds;
-  for (std::size_t q = 0; q < bonds.size(); ++q) {
+  for (std::size_t q : bond_rows_by_id(bonds)) {
     if (bonds.fate[q] != 0) continue;
     const std::int64_t i = find_ball(model, bonds.id_i[q]), j = find_ball(model, bonds.id_j[q]);
     if (i < 0 || j < 0) continue;
