@@ -10,6 +10,7 @@
 
 #include "counters.hpp"
 #include "interp_support.hpp"
+#include "mpi_launch.hpp"
 #include "skip.hpp"
 
 using namespace trubal;
@@ -17,19 +18,10 @@ using namespace trubal::test;
 
 namespace {
 
-// deck.dat in `dir` on `ranks` ranks (0: a plain trubal), under a time limit; output in out.txt.
-int run_deck(const TempDir& dir, int ranks) {
-  const std::string launcher =
-      ranks == 0 ? std::string("timeout 120 ")
-                 : "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-                   "ASAN_OPTIONS=detect_leaks=0 timeout 120 mpirun -np " + std::to_string(ranks) + " ";
-  return shell("cd " + quote(dir.str()) + " && " + launcher + quote(TRUBAL_EXE) + " deck.dat >out.txt 2>&1");
-}
-
 const char* kBlock = "start box -3 8 -3 8 -3 8 destroy\nprop kn 1e8 ks 5e7 mu 0.5 dens 2000\nlattice fcc 1 5 5 7\n"
                      "bond gap 1e-6 kn 2e8 ks 1e8 ten 2e5 coh 4e5 fa 30\ngroup top range z 3.5 10\n"
                      "fix vel spin range group top\nfix vel spin range z -1 0.1\ninit zvel -0.3 range group top\n";
-const char* kOutputs = "print balls file balls.csv\nprint bonds file bonds.csv\nprint counters file counters.txt\n";
+const char* kBondOutputs = "print balls file balls.csv\nprint bonds file bonds.csv\nprint counters file counters.txt\n";
 
 }  // namespace
 
@@ -37,14 +29,14 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
           "[mpi][system][bond]") {
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   TempDir serial;
-  serial.write("deck.dat", std::string(kBlock) + "cycle 400\n" + kOutputs);
+  serial.write("deck.dat", std::string(kBlock) + "cycle 400\n" + kBondOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
   const std::string balls = slurp(serial.path() / "balls.csv"), bonds = slurp(serial.path() / "bonds.csv");
   REQUIRE(bonds.find("tension") != std::string::npos);   // bonds broke, in tension and in shear
   REQUIRE(bonds.find("shear") != std::string::npos);
 
   TempDir two;
-  two.write("deck.dat", "backend mpi\n" + std::string(kBlock) + "cycle 400\n" + kOutputs);
+  two.write("deck.dat", "backend mpi\n" + std::string(kBlock) + "cycle 400\n" + kBondOutputs);
   REQUIRE(run_deck(two, 2) == 0);
   INFO(slurp(two.path() / "out.txt"));
   CHECK(counter(read_counters(two.path() / "counters.txt"), "ranks") == 2);
@@ -58,7 +50,7 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
   cut_serial.write("deck.dat", std::string(kBlock) + "cycle 170\nsave s.sav\n");
   REQUIRE(run_deck(cut_serial, 0) == 0);
   CHECK(slurp(cut.path() / "s.sav") == slurp(cut_serial.path() / "s.sav"));
-  cut.write("deck.dat", "restart s.sav\nbackend mpi\ncycle 230\n" + std::string(kOutputs));
+  cut.write("deck.dat", "restart s.sav\nbackend mpi\ncycle 230\n" + std::string(kBondOutputs));
   REQUIRE(run_deck(cut, 2) == 0);
   INFO(slurp(cut.path() / "out.txt"));
   CHECK(slurp(cut.path() / "balls.csv") == balls);
