@@ -72,14 +72,17 @@ void set_wall_loads(std::vector<Wall>& walls, std::vector<WallLoad>& totals, boo
   }
 }
 
-void ParallelStep::add_wall_loads(Model& model, int parts, bool loads) {
+void ParallelStep::add_wall_loads(Model& model, int parts, bool loads, bool moving) {
   // Each wall's load: every thread's exact sums merged (where the loads are not formed, the two
-  // that are: the work and the kinetic energy in the wall's frame).
+  // that are: the work and the kinetic energy in the wall's frame; where besides no wall moves,
+  // those are zero, and the threads' parts, not cleared for that step, are not read).
   const std::size_t wall_count = model.walls.size();
   wall_totals_.resize(wall_count);
   for (std::size_t w = 0; w < wall_count; ++w) {
     WallLoad& total = wall_totals_[w];
-    if (loads) {
+    if (!loads && !moving) {
+      total.work = total.relative_kinetic = ExactSum{};
+    } else if (loads) {
       total = WallLoad{};
       for (int t = 0; t < parts; ++t) total.add(wall_loads_[t * wall_count + w]);
     } else {
@@ -218,16 +221,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     else share(0, 1);
     settle_broken_bonds(scratch);
   }
-  if (wall_count && (loads || moving)) {
-    add_wall_loads(model, threads, loads);
-  } else if (wall_count) {   // (what add_wall_loads gives where no wall moves: no work, no kinetic term)
-    if (!part_only_) {
-      for (Wall& w : model.walls) { w.work += 0.0; w.relative_kinetic = 0.0; }
-    } else {
-      wall_totals_.resize(wall_count);
-      for (WallLoad& t : wall_totals_) t.work = t.relative_kinetic = ExactSum{};
-    }
-  }
+  if (wall_count) add_wall_loads(model, threads, loads, moving);
   const auto t1 = Clock::now();
 
   // The balls in equal shares (the contact split may be uneven, to even out cross pairs).

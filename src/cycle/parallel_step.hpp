@@ -58,8 +58,9 @@ class ParallelStep {
   std::vector<WallLoad>& wall_totals() { return wall_totals_; }
 
  private:
-  // The walls' loads of this step from the `parts` threads' loads (Model::walls' force, moment, ...).
-  void add_wall_loads(Model& model, int parts, bool loads);
+  // The walls' loads of this step from the `parts` threads' loads (Model::walls' force, moment, ...);
+  // loads: the step forms them (StepKernels::wall_loads); moving: some wall's surface moves.
+  void add_wall_loads(Model& model, int parts, bool loads, bool moving);
   const StepPolicy* policy_;
   bool part_only_ = false;
   std::vector<WallLoad> wall_totals_;      // per wall: the threads' loads merged
