@@ -110,14 +110,14 @@ TEST_CASE("backends: Rayleigh damping, bitwise", "[backends][threads]") {
   check_scene(rayleigh_cloud(13));   // 2197 balls
 }
 
-TEST_CASE("backends: a sheared periodic cell, images renamed mid-run, bitwise", "[backends][periodic][threads]") {
+TEST_CASE("backends: a sheared periodic cell, images renamed mid-run, bitwise", "[long][backends][periodic][threads]") {
   const Scene scene = sheared_periodic(12, 300);   // 1728 balls
   const Model reference = run(scene, "serial", 1, scene.cycles);
   REQUIRE(reference.space.tilt[0] < 0);   // the xy tilt passed half an edge and the images were renamed
   check_scene(scene);
 }
 
-TEST_CASE("backends: a periodic cell under the servo, bitwise", "[backends][periodic][threads]") {
+TEST_CASE("backends: a periodic cell under the servo, bitwise", "[long][backends][periodic][threads]") {
   // The servo reads the stress and stiffness the contact loops sum per pair block.
   Scene scene = sheared_periodic(10, 300);   // 1000 balls
   scene.model.space.servo_on = {true, true, false};
@@ -285,7 +285,7 @@ TEST_CASE("backends: the periodic pair search finds what testing every pair at i
   }
 }
 
-TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[backends][threads]") {
+TEST_CASE("backends: a longer run of 3000 cycles stays bitwise equal", "[long][backends][threads]") {
   check_scene(settling(9, 8, 3000), false);   // 81 held + 648 falling; two threads only
 }
 

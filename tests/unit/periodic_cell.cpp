@@ -198,7 +198,7 @@ TEST_CASE("periodic: a loose assembly under the servo is bitwise equal on every 
   }
 }
 
-TEST_CASE("periodic: SERVO holds its targets through simple shear (the integral term)", "[periodic][servo]") {
+TEST_CASE("periodic: SERVO holds its targets through simple shear (the integral term)", "[long][periodic][servo]") {
   // examples/periodic_simple_shear.dat, shortened: 400 loose balls compressed to 100 kPa, then
   // sheared at e12 rate 8 /s with all three normal stresses servoed. Shear dilates the assembly, so
   // the servo must keep expanding the cell: a proportional servo needs an error to drive that rate

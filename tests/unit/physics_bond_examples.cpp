@@ -67,7 +67,7 @@ TEST_CASE("bond: examples/bonded_ucs.dat peaks and fails with cracks, most in te
   CHECK(r.column(peak, "bonds_broken") < 0.3 * static_cast<double>(r.bonds.broken()));   // most cracks after the peak
 }
 
-TEST_CASE("bond: examples/brazilian.dat splits the disc, its stress peaking and falling to nothing", "[bond][example]") {
+TEST_CASE("bond: examples/brazilian.dat splits the disc, its stress peaking and falling to nothing", "[long][bond][example]") {
   const ExampleRun r = run_example("brazilian.dat", "brazilian.csv");
   double strength = 0;
   for (std::size_t k = 0; k < r.table->rows.size(); ++k) strength = std::max(strength, r.column(k, "w2_stress"));

@@ -323,7 +323,7 @@ TEST_CASE("bridge: two types mix to a bridge only where both have one, of the me
 }
 
 TEST_CASE("bridge: in examples/wet_triaxial.dat the wet sample carries more than the dry one, its envelope shifted up",
-          "[bridge][example]") {
+          "[long][bridge][example]") {
   // The example to 3% axial strain, no figures: four shears, dry and wet at 300 and 900 Pa.
   std::string deck = slurp(fs::path(TRUBAL_SOURCE_DIR) / "examples" / "wet_triaxial.dat");
   REQUIRE_FALSE(deck.empty());
@@ -420,7 +420,7 @@ WetCell wet_cell(const std::string& backend, const std::vector<int>& cuts) {
 }  // namespace
 
 TEST_CASE("bridge: a wet periodic cell under the stress servo gives the same bits on every backend and cut",
-          "[bridge][periodic]") {
+          "[long][bridge][periodic]") {
   const WetCell serial = wet_cell("backend serial", {1500});
   INFO("bridges " << serial.bridges.size() << ", contacts " << serial.picture.contacts.size());
   REQUIRE(serial.bridges.size() > serial.picture.contacts.size());   // some held apart by their bridges

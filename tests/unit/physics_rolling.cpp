@@ -179,7 +179,7 @@ TEST_CASE("rolling: PROP rr_fric mixes as the smaller, shows in PRINT prop and t
   CHECK_FALSE(h.deck("prop rr_fric -1\n"));
 }
 
-TEST_CASE("rolling: examples/rolling_triaxial.dat, rr_fric 0.3 raises the peak stress ratio", "[rolling][example]") {
+TEST_CASE("rolling: examples/rolling_triaxial.dat, rr_fric 0.3 raises the peak stress ratio", "[long][rolling][example]") {
   // The example to 4% axial strain (past both peaks, about 3% with rolling resistance), no figures.
   std::string deck = slurp(fs::path(TRUBAL_SOURCE_DIR) / "examples" / "rolling_triaxial.dat");
   REQUIRE_FALSE(deck.empty());
