@@ -2,6 +2,9 @@
 // switches mid-run, writes byte-identical PRINT balls and PRINT contacts files.
 #include <catch2/catch.hpp>
 
+#include <cstring>
+
+#include "backends_scenes.hpp"
 #include "interp_support.hpp"
 
 using namespace trubal;
@@ -47,6 +50,7 @@ TEST_CASE("backends: a deck writes byte-identical balls and contacts files on ev
                             "cycle 300\nbackend allpairs threads 3\ncycle 300\nbackend threaded threads 2\ncycle 300\n",
                             "backend threaded\ncycle 450\nbackend serial\ncycle 450\n"};
   for (const char* cycling : variants) {
+    if (kRaceCheckOnly && (std::strstr(cycling, "threads 1\n") || std::strstr(cycling, "threads 4\n"))) continue;
     INFO(cycling);
     const Files other = run_deck(cycling);
     CHECK(other.balls == serial.balls);
