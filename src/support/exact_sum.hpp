@@ -141,20 +141,22 @@ class ExactSum {
   // the run of all-ones limbs below a negative top folded into -1.
   static int carry_up(std::int64_t* l, int lo, int hi) {
     for (int k = lo; k < kLimbs - 1; ++k) {
-      const std::int64_t carry = l[k] >> 32;   // floor division by 2^32
-      l[k] -= carry * (std::int64_t{1} << 32);
-      l[k + 1] += carry;
+      const std::int64_t carry = carry_from(l, k);
       if (k >= hi && (carry == 0 || carry == -1)) return k + 1;
     }
     return kLimbs - 1;
   }
+  // Every limb's carry taken up (every limb but the top one in [0, 2^32)).
   void normalise() {
-    for (int k = 0; k < kLimbs - 1; ++k) {
-      const std::int64_t carry = limb_[k] >> 32;   // floor division by 2^32
-      limb_[k] -= carry * (std::int64_t{1} << 32);
-      limb_[k + 1] += carry;
-    }
+    for (int k = 0; k < kLimbs - 1; ++k) carry_from(limb_.data(), k);
     pending_ = 0;
+  }
+  // Limb k brought into [0, 2^32), what it held beyond added to limb k + 1; returns that carry.
+  static std::int64_t carry_from(std::int64_t* l, int k) {
+    const std::int64_t carry = l[k] >> 32;   // floor division by 2^32
+    l[k] -= carry * (std::int64_t{1} << 32);
+    l[k + 1] += carry;
+    return carry;
   }
 
   std::array<std::int64_t, kLimbs> limb_{};
