@@ -93,23 +93,45 @@ std::vector<EnergyRow> energies_every_7(const std::vector<std::int64_t>& cuts, b
 
 TEST_CASE("guard: checking every 8th cycle still stops an unstable block within a check of the step-by-step guard",
           "[physics][energy]") {
-  // FRAC 2 is beyond the block's stable step (physics_stability.cpp). An observer that reads every
-  // step makes the guard check every step: the regular checks alone see the same growth at most
-  // kCheckEvery - 1 cycles later.
-  auto run = [](bool every_step) {
-    Model model = vibrating_block(4);
-    model.settings.frac = 2;
+  // An observer that reads every step makes the guard check every step: the regular checks alone
+  // see the same growth at most kCheckEvery - 1 cycles later. Three scenes beyond their stable
+  // step: the held block undamped at FRAC 2 and with Cundall's damping at FRAC 5 (over-damped:
+  // its limit squared; physics_stability.cpp), where the velocities' flipping stops both guards
+  // at their fourth regular check, and a chain of three balls, one held, at FRAC 3, whose balance
+  // trips within a few cycles.
+  const int scene = GENERATE(0, 1, 2);
+  const bool damped = scene == 1;
+  auto run = [scene, damped](bool every_step) {
+    Model model;
+    if (scene == 2) {
+      model.materials[1] = test::linear_material(1e6, 1e6, 0.3, 1000);
+      for (const double x : {-0.0099, 0.0099, 0.0297}) add_ball(model, 0, 1, x, 0, 0, 0.01);
+      model.balls.fixed[0] = kVel | kSpin;
+      model.settings.frac = 3;
+    } else {
+      model = vibrating_block(4);
+      model.settings.frac = damped ? 5 : 2;
+    }
+    if (damped) {   // DAMP 0.05 0.5: alpha = lambda omega, beta = lambda / omega, omega = 2 pi f
+      const double omega = 2 * M_PI * 0.5;
+      model.settings.damping.kind = DampKind::Rayleigh;
+      model.settings.damping.alpha = 0.05 * omega;
+      model.settings.damping.beta = 0.05 / omega;
+    }
     auto backend = make_pipeline("serial", 1);
     CycleControl control;
     if (every_step) control.after_step = [](const Model&) {};
     const CycleResult r = run_cycles(model, *backend, 5000, control);
     INFO(r.message);
     REQUIRE(r.unstable);
-    return unstable_cycle(r.message);
+    return std::make_pair(unstable_cycle(r.message), r.message);
   };
-  const std::int64_t each = run(true), checks = run(false);
-  CAPTURE(each, checks);
-  CHECK(each < 200);   // (the step is twice the stable one: the energy grows many times a cycle)
+  const auto [each, each_message] = run(true);
+  const auto [checks, checks_message] = run(false);
+  CAPTURE(each, checks, each_message, checks_message);
+  CHECK(each_message.find("energy was created") != std::string::npos);
+  CHECK(checks_message.find("energy was created") != std::string::npos);
+  CHECK(each <= (scene == 2 ? 4 : 32));   // (measured: 3 and 32)
   CHECK(checks >= 1);
   CHECK(checks <= each + EnergyGuard::kCheckEvery - 1);
   CHECK(checks % EnergyGuard::kCheckEvery == 0);   // found at a regular check
