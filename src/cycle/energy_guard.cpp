@@ -26,9 +26,10 @@ double resting_energy_floor(const Model& model) {
 }
 
 // How fast the balance grew over the last steps before the guard stopped step s (`recent`, a ring
-// of its distances from the start at the last `count` checks; `now`, step s's): an unstable mode of central differences grows
-// by a factor mu a step in amplitude, mu^2 in energy, where (omega dt)^2 = 2 + mu + 1/mu, so the
-// step was omega dt / 2 times the stable one (`over`; 1 where no growth is seen).
+// of its distances from the start at the last `count` checks; `now`, step s's): an unstable mode
+// of central differences grows by a factor mu a step in amplitude, mu^2 in energy, where
+// (omega dt)^2 = 2 + mu + 1/mu, so the step was omega dt / 2 times the stable one (`over`; 1
+// where no growth is seen).
 struct Growth {
   int steps = 0;
   double grew = 0, factor = 1, over = 1;

@@ -1,6 +1,7 @@
 // The instability guard of a CYCLE (doc/physics.md "Instability guard"): the energy balance at the
-// force pass of the steps it checks against the energy in play, the stop where energy is created, its message and
-// the advice that comes with it, and the warning a CYCLE ends with where the balance drifted.
+// force pass of the steps it checks against the energy in play, the stop where energy is created,
+// its message and the advice that comes with it, and the warning a CYCLE ends with where the
+// balance drifted.
 #pragma once
 
 #include <array>
@@ -67,7 +68,7 @@ class EnergyGuard {
   double scale_max_ = 0;    // the most energy in play so far
   double in_play_max_ = 0;  // and with the balls' kinetic energy relative to moving walls
   double drift_ = 0;        // the last step's distance from the first step's balance
-  int flipping_ = 0;        // regular checks running with the kinetic term negative there and a step before
+  int flipping_ = 0;        // regular checks running with a negative kinetic term (and the step before)
   double last_kinetic_ = 0;             // the kinetic term of the last step that formed it
   std::int64_t last_kinetic_cycle_ = -1;   // and the cycle that step reached
   // The last checks (a ring; every step may be one), over the last kGrowthSteps steps: how fast the
