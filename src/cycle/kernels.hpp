@@ -194,9 +194,9 @@ struct StepKernels {
                                             // stiffness_moment (set while a servo runs)
   // Whether this step forms the walls' loads (Wall::force, moment, normal_force, stiffness,
   // contacts): on the steps something reads them (run.cpp, StepPlan::wall_loads); the others leave
-  // them as the last step that formed them did. Each wall's work and relative_kinetic, which
-  // every step reads, are formed every step (a wall whose surface stands still adds nothing to
-  // them).
+  // them as the last step that formed them did. Each wall's work is formed every step, its
+  // relative_kinetic (the guard's) on the steps that form the energy terms (`energies`); a wall
+  // whose surface stands still adds nothing to them.
   bool wall_loads = true;
   // Whether this step forms the energy terms at t (StepSums::kinetic_translation, kinetic_rotation,
   // potential, strain and the aheads, state quantities): on the steps the guard checks and those
