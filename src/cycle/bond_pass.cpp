@@ -181,7 +181,7 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
       held[q] = owner && B.fate[q] == 0 ? B.energy[q] : 0.0;
       freed[q] = owner && B.fate[q] != 0 ? B.energy[q] : 0.0;
     }
-    strain.add_block(held, count);
+    if (k.energies) strain.add_block(held, count);   // (the energy at t: where the step forms it)
     lost.add_block(freed, count);
     for (std::size_t q = 0; q < count; ++q) {
       const std::size_t at = lane_place[q];   // (the place is the table's row)

@@ -24,6 +24,8 @@ void take_kernels(const StepKernels& from, StepKernels& to) {
   to.estimate = from.estimate;
   to.moments = from.moments;
   to.wall_loads = from.wall_loads;
+  to.energies = from.energies;
+  to.kinetic = from.kinetic;
   to.dt = from.dt;
   to.dt_prev = from.dt_prev;
   to.dt_mean = from.dt_mean;

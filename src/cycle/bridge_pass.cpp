@@ -149,7 +149,7 @@ void bridge_work(const Model& model, const StepScratch& scratch, const StepKerne
     const BridgeSum& s = scratch.ball_bridge[i];
     const double after = s.fx * b.vx[i] + s.fy * b.vy[i] + s.fz * b.vz[i];
     work.add((s.power + after) * half);
-    ahead.add(after * half);
+    if (k.energies) ahead.add(after * half);   // (the part after t: where the step forms the energies)
   }
 }
 

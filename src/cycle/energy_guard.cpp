@@ -26,25 +26,30 @@ double resting_energy_floor(const Model& model) {
 }
 
 // How fast the balance grew over the last steps before the guard stopped step s (`recent`, a ring
-// of its distances from the start; `now`, step s's): an unstable mode of central differences grows
-// by a factor mu a step in amplitude, mu^2 in energy, where (omega dt)^2 = 2 + mu + 1/mu, so the
-// step was omega dt / 2 times the stable one (`over`; 1 where no growth is seen).
+// of its distances from the start at the last `count` checks; `now`, step s's): an unstable mode
+// of central differences grows by a factor mu a step in amplitude, mu^2 in energy, where
+// (omega dt)^2 = 2 + mu + 1/mu, so the step was omega dt / 2 times the stable one (`over`; 1
+// where no growth is seen).
 struct Growth {
   int steps = 0;
   double grew = 0, factor = 1, over = 1;
 };
 template <std::size_t N>
-Growth energy_growth(const std::array<double, N>& recent, std::int64_t s, double now, double floor) {
+Growth energy_growth(const std::array<EnergyGuard::Check, N>& recent, std::size_t count, std::int64_t s, double now,
+                     double floor) {
   Growth g;
   if (!std::isfinite(now) || !(now > floor)) return g;
-  constexpr auto ring = static_cast<std::int64_t>(N);
-  // The earliest of the ring's steps whose distance was above the floor (and a trillionth of now).
-  for (int back = static_cast<int>(std::min<std::int64_t>(s - 1, ring - 1)); back >= 1; --back) {
-    const double then = recent[static_cast<std::size_t>((s - back) % ring)];
+  // The earliest of the checks in the last N steps whose distance was above the floor (and a
+  // trillionth of now).
+  for (std::size_t c = count > N ? count - N : 0; c < count; ++c) {
+    const EnergyGuard::Check& check = recent[c % N];
+    const std::int64_t back = s - check.s;
+    if (back < 1 || back >= static_cast<std::int64_t>(N)) continue;
+    const double then = check.drift;
     if (!(then > floor) || !(then > 1e-12 * now) || !(then < now)) continue;
-    g.steps = back;
+    g.steps = static_cast<int>(back);
     g.grew = now - then;
-    g.factor = std::pow(now / then, 1.0 / back);
+    g.factor = std::pow(now / then, 1.0 / static_cast<double>(back));
     const double mu = std::sqrt(g.factor);
     g.over = std::max(1.0, 0.5 * std::sqrt(2 + mu + 1 / mu));
     return g;
@@ -68,8 +73,14 @@ EnergyGuard::EnergyGuard(const Model& model)
 // an instability of the linear springs: central differences keep m v(t-dt/2).v(t+dt/2)/2 plus the
 // springs' energy even as the velocities flip sign and grow, the kinetic term going negative, and
 // sliding contacts can hold such a flipping motion at a bounded size. So the run also stops where
-// the kinetic term stays negative for kFlippingSteps steps running (for a stable step it is
-// negative only near the turning points of the fastest vibrations, a few steps of each period).
+// the kinetic term stays negative: at kFlippingChecks regular checks running, and at the step
+// before each (for a stable step it is negative only at the step that straddles a turning point of
+// a vibration, one step of each half period, so never at two steps running for one vibration; a
+// check alone, every kCheckEvery steps, would see the same phase of a vibration whose period
+// divides kCheckEvery steps at every check).
+// The guard checks only the steps that formed the energy terms (cycle/run.cpp, StepPlan::energies):
+// an unstable step, whose energy grows by a factor a step, is seen at most kCheckEvery - 1 steps
+// later than at a check of every step.
 bool EnergyGuard::failed(const Model& model, const StepTotals& sums, std::int64_t s, CycleResult& result) {
   // The balance at t, the time of this step's force pass.
   const EnergyAtStep& now = model.energy_at_step;
@@ -100,10 +111,15 @@ bool EnergyGuard::failed(const Model& model, const StepTotals& sums, std::int64_
   double wall_relative = 0;
   for (const Wall& w : model.walls) wall_relative += w.relative_kinetic;
   in_play_max_ = std::max(in_play_max_, scale + wall_relative);
-  flipping_ = kinetic < -floor_ ? flipping_ + 1 : 0;
+  if (model.cycle % kCheckEvery == 0) {
+    const bool flipped = kinetic < -floor_ && last_kinetic_cycle_ == model.cycle - 1 && last_kinetic_ < -floor_;
+    flipping_ = flipped ? flipping_ + 1 : 0;
+  }
+  note_kinetic(sums, model.cycle);
   drift_ = std::abs(balance - balance_ref_);
-  recent_[static_cast<std::size_t>(s % kGrowthSteps)] = drift_;
-  return !std::isfinite(balance) || drift_ > 0.5 * in_play_max_ + floor_ || flipping_ >= kFlippingSteps;
+  recent_[checks_ % kGrowthSteps] = {s, drift_};
+  ++checks_;
+  return !std::isfinite(balance) || drift_ > 0.5 * in_play_max_ + floor_ || flipping_ >= kFlippingChecks;
 }
 
 GuardStop EnergyGuard::stop(const Model& model, const StepTotals& sums, std::int64_t s) const {
@@ -112,7 +128,7 @@ GuardStop EnergyGuard::stop(const Model& model, const StepTotals& sums, std::int
   g.fastest_id = model.balls.size() ? model.balls.id[ball] : 0;
   g.fastest_speed = std::sqrt(sums.fastest_speed2);
   g.bad_cycle = model.cycle;
-  const Growth growth = energy_growth(recent_, s, drift_, floor_);
+  const Growth growth = energy_growth(recent_, checks_, s, drift_, floor_);
   g.over = growth.over;
   if (growth.steps > 0 && growth.factor > 1.001) {
     g.what = fmt::format("energy was created: the balance grew by {:.3g} ({:.3g}% of the energy in play) over the "
@@ -121,10 +137,11 @@ GuardStop EnergyGuard::stop(const Model& model, const StepTotals& sums, std::int
     if (growth.factor > 1.05)   // a clear exponential: a mode beyond the stable step
       g.what += fmt::format(", {:.3g} times a cycle, as a step about {:.2g} times the stable one makes it",
                             growth.factor, growth.over);
-  } else if (flipping_ >= kFlippingSteps) {
-    g.what = fmt::format("the velocities flip sign every cycle (the kinetic term m v(t-dt/2).v(t+dt/2)/2 stayed "
-                         "negative for {} cycles), as a step beyond the stable one makes them",
-                         kFlippingSteps);
+  } else if (flipping_ >= kFlippingChecks) {
+    g.what = fmt::format("the velocities flip sign every cycle (the kinetic term m v(t-dt/2).v(t+dt/2)/2 was "
+                         "negative at two cycles running, {} times over {} cycles), as a step beyond the stable "
+                         "one makes them",
+                         kFlippingChecks, (kFlippingChecks - 1) * kCheckEvery + 2);
   } else {
     g.what = "energy was created";
   }

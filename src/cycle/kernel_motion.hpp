@@ -224,6 +224,7 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
   alignas(64) double speed2[kTermBlock];
   const bool periodic = model.space.periodic;
   const bool ghosts = !scratch.ghost.empty();
+  const bool energies = k.energies, kinetic = k.energies || k.kinetic;
   for (std::size_t b0 = begin; b0 < end; b0 += kTermBlock) {
     const std::size_t n = std::min(kTermBlock, end - b0);
     if (ghosts) motion_block<M, true>(b, scratch, k, b0, n, terms, speed2);
@@ -231,16 +232,21 @@ void motion_loop(Model& model, const StepScratch& scratch, const StepKernels& k,
     if (k.moments) [[unlikely]]
       for (std::size_t q = 0; q < n; ++q)
         if (!ghosts || !scratch.ghost[b0 + q]) add_moments(sums, scratch.ball_moments[b0 + q]);
+    // The works every step; the energy terms at t where the step forms them (StepKernels::energies).
     friction_sum.add_block(terms[kFriction], n);
-    strain_sum.add_block(terms[kStrain], n);
     if (periodic) image_sum.add_block(terms[kImage], n);
-    kinetic_sum.add_block(terms[kKinetic], n);
-    if constexpr (kRot) spin_sum.add_block(terms[kSpin], n);
     boundary_sum.add_block(terms[kBoundary], n);
-    if constexpr (kLoads) potential_sum.add_block(terms[kPotential], n);
     damping_sum.add_block(terms[kDamping], n);
-    boundary_ahead_sum.add_block(terms[kBoundaryAhead], n);
-    damping_ahead_sum.add_block(terms[kDampingAhead], n);
+    if (kinetic) {
+      kinetic_sum.add_block(terms[kKinetic], n);
+      if constexpr (kRot) spin_sum.add_block(terms[kSpin], n);
+    }
+    if (energies) {
+      strain_sum.add_block(terms[kStrain], n);
+      if constexpr (kLoads) potential_sum.add_block(terms[kPotential], n);
+      boundary_ahead_sum.add_block(terms[kBoundaryAhead], n);
+      damping_ahead_sum.add_block(terms[kDampingAhead], n);
+    }
     // The fastest ball: the first of the largest, a NaN before any number.
     for (std::size_t q = 0; q < n; ++q)
       if (speed2[q] > fastest2 || (std::isnan(speed2[q]) && !std::isnan(fastest2))) { fastest2 = speed2[q]; fastest = b0 + q; }

@@ -69,8 +69,9 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
       const double ax = point[q][0] - w.spin_point[0], ay = point[q][1] - w.spin_point[1], az = point[q][2] - w.spin_point[2];
       const double power = -(fx * surface[q][0] + fy * surface[q][1] + fz * surface[q][2]);   // the wall's on the ball
       // Each contact goes to the exact sums on its own (the same additions wherever it is computed):
-      // the loads on the steps that read them, the work and the kinetic energy in the wall's frame
-      // where the surface moves (a surface standing still adds zeros to them).
+      // the loads on the steps that read them, the work where the surface moves (a surface standing
+      // still adds zeros to it), and there the kinetic energy in the wall's frame on the steps the
+      // guard checks (StepKernels::energies).
       if (k.wall_loads) {
         load.fx.add(fx); load.fy.add(fy); load.fz.add(fz);
         load.mx.add(ay * fz - az * fy); load.my.add(az * fx - ax * fz); load.mz.add(ax * fy - ay * fx);
@@ -82,7 +83,7 @@ void wall_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::si
         load.work.add(power * k.dt_mean);
         // The touching ball's kinetic energy in the wall's frame (Wall::relative_kinetic).
         const double ux = surface[q][0] - b.vx[i], uy = surface[q][1] - b.vy[i], uz = surface[q][2] - b.vz[i];
-        if (B.state[q] != 0) load.relative_kinetic.add(0.5 * b.mass[i] * (ux * ux + uy * uy + uz * uz));
+        if (B.state[q] != 0 && k.energies) load.relative_kinetic.add(0.5 * b.mass[i] * (ux * ux + uy * uy + uz * uz));
       }
       BallParts& part = scratch.ball_parts[i];
       part.boundary += power * k.dt_mean;

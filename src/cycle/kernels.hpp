@@ -194,10 +194,18 @@ struct StepKernels {
                                             // stiffness_moment (set while a servo runs)
   // Whether this step forms the walls' loads (Wall::force, moment, normal_force, stiffness,
   // contacts): on the steps something reads them (run.cpp, StepPlan::wall_loads); the others leave
-  // them as the last step that formed them did. Each wall's work and relative_kinetic, which
-  // every step reads, are formed every step (a wall whose surface stands still adds nothing to
-  // them).
+  // them as the last step that formed them did. Each wall's work is formed every step, its
+  // relative_kinetic (the guard's) on the steps that form the energy terms (`energies`); a wall
+  // whose surface stands still adds nothing to them.
   bool wall_loads = true;
+  // Whether this step forms the energy terms at t (StepSums::kinetic_translation, kinetic_rotation,
+  // potential, strain and the aheads, state quantities): on the steps the guard checks and those
+  // that write or keep results (run.cpp, StepPlan::energies); the others leave them zero. `kinetic`
+  // forms the kinetic terms alone (the step before each of the guard's regular checks, for its test
+  // of velocities that flip sign). The works (friction, damping, boundary, rolling, capillary,
+  // bond_break, image_power) are formed on every step.
+  bool energies = true;
+  bool kinetic = true;
   // The steps of central differences with a step that changes (doc/physics.md "Law of motion"):
   // positions move by v(t + dt/2) dt, this step; velocities by F(t)/m times dt_mean, the mean of the
   // step before and this one, and so does the work the law of motion charges a force with; a

@@ -87,6 +87,19 @@ struct StepPlan {
   // the last step's results are deferred, the step before it), and while a wall servo runs
   // (advance).
   bool wall_loads = false;
+  // The step forms the energy terms at t (StepKernels::energies) and the guard checks it: at the
+  // guard's regular checks (cycles of the model's count on EnergyGuard::kCheckEvery), the CYCLE's
+  // first step (the balance's reference), and every step that forms the walls' loads (those whose
+  // state is written, kept in a rescue copy or left at the CYCLE's end). kinetic: the kinetic terms
+  // alone, on the step before a regular check (the guard's test of velocities that flip sign).
+  bool energies = false;
+  bool kinetic = false;
+  // Everything: the steps the rescue takes again.
+  static StepPlan all() {
+    StepPlan p;
+    p.details = p.wall_loads = p.energies = p.kinetic = true;
+    return p;
+  }
 };
 
 // One CYCLE: n steps of the pipeline, each followed by the guard, the START box's faces, the
@@ -98,7 +111,8 @@ class CycleRun {
 
  private:
   StepPlan plan(std::int64_t s) const;
-  StepTotals advance(bool details, bool wall_loads);
+  StepTotals advance(const StepPlan& step);
+  StepTotals retake_to(std::int64_t cycle);
   bool escapes(bool replay);
   void sort_balls();
   bool rescue(std::int64_t bad_cycle);
@@ -197,10 +211,23 @@ CycleResult CycleRun::run() {
     for (std::int64_t s = 1; s <= n_; ++s) {
       const StepPlan step = plan(s);
       if (step.deferred && pipeline_.rescue().cycle != model_.cycle) take_copy();
-      const StepTotals sums = advance(step.details, step.wall_loads);
-      if (guard_->failed(model_, sums, s, result_)) return unstable(sums, s);
+      const StepTotals sums = advance(step);
+      if (step.energies) {
+        if (guard_->failed(model_, sums, s, result_)) return unstable(sums, s);
+      } else if (step.kinetic) {
+        guard_->note_kinetic(sums, model_.cycle);
+      }
       result_.done = s;
-      if (escapes(false)) return finish();
+      if (escapes(false)) {
+        if (step.energies || !result_.left_box) return finish();
+        // A ball left across a `stop` face at a step the guard did not check: an unstable step
+        // is told as such (and the model put back), not as a ball that left. The steps from the
+        // rescue copy are taken again (the same bits), this one with its energy terms.
+        const StepTotals checked = retake_to(model_.cycle);
+        if (guard_->failed(model_, checked, s, result_)) return unstable(checked, s);
+        escapes(true);   // (its balls destroyed were counted the first time)
+        return finish();
+      }
       observe(step.observed);
       // The rescue steps on to cycles on kSnapshotEvery. Not after the last step: the next CYCLE
       // takes its own copy at its start, and a deferred last step needs the copy of the step before.
@@ -231,13 +258,17 @@ StepPlan CycleRun::plan(std::int64_t s) const {
   p.details = (s == n_ && !p.deferred) || p.stopping || (!control_.defer_results && (s + 1) % kSnapshotEvery == 0) ||
               p.observed;
   p.wall_loads = p.details || s == n_ || (s + 1) % kSnapshotEvery == 0 || (control_.defer_results && s + 1 == n_);
+  const std::int64_t reaches = model_.cycle + 1;   // the cycle this step reaches
+  p.energies = s == 1 || p.wall_loads || reaches % EnergyGuard::kCheckEvery == 0;
+  p.kinetic = p.energies || (reaches + 1) % EnergyGuard::kCheckEvery == 0;
   return p;
 }
 
 // One step: the cell and the walls before it, the pipeline's step, and what follows it (the cell's
 // strain and tilt, the clock, the works, the next critical step, the energy terms at t).
-// details: the step writes the per-pair results (CycleControl::reads_contacts).
-StepTotals CycleRun::advance(bool details, bool wall_loads) {
+// step: what it writes and forms (plan()).
+StepTotals CycleRun::advance(const StepPlan& step) {
+  const bool details = step.details;
   Model& model = model_;
   StepKernels& kernels = kernels_;
   const double dt = model.settings.fixed_dt > 0 ? model.settings.fixed_dt : model.settings.frac * model.critical_dt;
@@ -256,7 +287,9 @@ StepTotals CycleRun::advance(bool details, bool wall_loads) {
   kernels.motion = details ? kernels.motion_full : kernels.motion_lean;
   kernels.walls = details ? kernels.walls_full : kernels.walls_lean;
   // A wall servo reads its wall's loads before every step.
-  kernels.wall_loads = wall_loads;
+  kernels.wall_loads = step.wall_loads;
+  kernels.energies = step.energies;
+  kernels.kinetic = step.kinetic;
   for (const Wall& w : model.walls) kernels.wall_loads = kernels.wall_loads || w.servo_on;
   StepSums step_sums;
   const auto step_start = Clock::now();
@@ -302,8 +335,10 @@ StepTotals CycleRun::advance(bool details, bool wall_loads) {
   }
   // The energy terms at t, the time of this step's force pass: every term there (the works less
   // their parts after t; the cell moves on with the balls, so half its step's work is after t).
+  // Formed on the steps plan() says; on the others they are marked as not the state's.
   EnergyAtStep& now = model.energy_at_step;
-  now.valid = true;
+  now.valid = step.energies;
+  if (!step.energies) return sums;
   now.kinetic_translation = sums.kinetic_translation;
   now.kinetic_rotation = sums.kinetic_rotation;
   now.strain = sums.strain;
@@ -382,12 +417,30 @@ bool CycleRun::rescue(std::int64_t bad_cycle) {
   pipeline_.invalidate();
   kernels_.laws = make_pair_laws(model_);   // the balls destroyed since the copy are back
   if (model_.cycle != start_cycle_ && model_.cycle + 1 < bad_cycle) {
-    advance(true, true);
+    advance(StepPlan::all());
     escapes(true);
     current = true;
   }
   pipeline_.sync_all(model_);
   return current;
+}
+
+// Back to the rescue copy, and the steps from it to the one that reached `cycle` taken again (the
+// same bits; the observers do not run again), the last with everything formed: its sums.
+StepTotals CycleRun::retake_to(std::int64_t cycle) {
+  result_.left_box = false;
+  result_.message.clear();
+  pipeline_.restore_rescue(model_);
+  pipeline_.invalidate();
+  kernels_.laws = make_pair_laws(model_);   // the balls destroyed since the copy are back
+  while (model_.cycle + 1 < cycle) {
+    StepPlan p;
+    p.kinetic = model_.cycle + 2 == cycle;   // (the guard's test of velocities that flip sign)
+    const StepTotals sums = advance(p);
+    if (p.kinetic) guard_->note_kinetic(sums, model_.cycle);
+    escapes(true);
+  }
+  return advance(StepPlan::all());
 }
 
 // The guard stopped step s: what it saw, then the rescue, then the message with what to try.

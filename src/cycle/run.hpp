@@ -70,7 +70,11 @@ struct CycleResult {
 // step a Ctrl-C ends and the one before every 500th (the rescue copy's); other steps skip the writes
 // and compute the same numbers. The walls' loads (Wall::force, moment, normal_force, stiffness,
 // contacts) are formed on those steps too, on every CYCLE's last step whether or not its results
-// are deferred, and on every step while a wall servo runs; each wall's work on every step.
+// are deferred, and on every step while a wall servo runs; each wall's work on every step. The
+// energy terms at t (Model::energy_at_step) are formed on the steps that form the walls' loads (but
+// not for a wall servo alone), on each CYCLE's first step and on the guard's checks, every
+// EnergyGuard::kCheckEvery cycles of the model's count; the other steps mark them not valid. The
+// works (Model::energy) count every step.
 CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control);
 
 // Makes the model's contact results current where they can be: a CYCLE that deferred its last

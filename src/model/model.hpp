@@ -307,7 +307,7 @@ struct Wall {
   double work = 0;
   // Where its surface moves: sum over the touching balls of m |v_wall(c) - v|^2 / 2, their kinetic
   // energy in the wall's frame (v at t - dt/2). The instability guard counts it as energy in play
-  // (cycle/run.cpp); not saved (every step makes it again before the guard reads it).
+  // (cycle/run.cpp); not saved (every step the guard checks makes it again).
   double relative_kinetic = 0;
 };
 
