@@ -85,6 +85,8 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
   });
   const auto s = [&](std::size_t p) { return id[c.i[p]] < id[c.j[p]] ? 1.0 : -1.0; };
   const bool rolling = has_rolling(m);   // (the rolling moment on j: columns only where a material has it)
+  const bool rolling_kept = c.mrx.size() == c.size();   // (else zero: ContactTable::history_laws)
+  const auto moment = [&](const std::vector<double>& v, std::size_t p) { return rolling_kept ? v[p] : 0.0; };
   if (!file.empty()) {
     write_file_atomically(file, [&](std::ostream& csv) {
       csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding"
@@ -95,7 +97,7 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
         for (const auto* v : {&c.overlap, &c.fn}) csv << ',' << csv_real((*v)[p]);
         for (const auto* v : {&c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real(s(p) * (*v)[p]);
         if (rolling)
-          for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real(s(p) * (*v)[p]);
+          for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real(s(p) * moment(*v, p));
         csv << ',' << (c.state[p] == 2 ? 1 : 0);
         if (bridges) csv << ',' << (c.bridge[p] != 0 ? 1 : 0);
         csv << '\n';
@@ -111,8 +113,9 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
     ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", low(p),
                            high(p), s(p) * c.nx[p], s(p) * c.ny[p], s(p) * c.nz[p], c.overlap[p], c.fn[p],
                            std::sqrt(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]),
-                           rolling ? fmt::format("{:>11.4g} ", std::sqrt(c.mrx[p] * c.mrx[p] + c.mry[p] * c.mry[p] +
-                                                                         c.mrz[p] * c.mrz[p]))
+                           rolling ? fmt::format("{:>11.4g} ", std::sqrt(moment(c.mrx, p) * moment(c.mrx, p) +
+                                                                         moment(c.mry, p) * moment(c.mry, p) +
+                                                                         moment(c.mrz, p) * moment(c.mrz, p)))
                                    : "",
                            c.state[p] == 2 ? "yes" : "no",
                            bridges ? (c.bridge[p] != 0 ? "     yes" : "      no") : "");

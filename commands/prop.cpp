@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
+#include "physics/scene.hpp"
 
 namespace trubal {
 
@@ -59,6 +60,8 @@ static void run_prop(Context& ctx, Args& args) {
   if (m.bridge_volume > 0 && !(m.surface_tension > 0))
     args.fail("bridge V needs the liquid's surface tension: `tension gamma`, gamma > 0");
   ctx.session.edit().materials[type] = m;
+  // A law with history new to the scene: its part of every pair's history, zero (ContactTable::history_laws).
+  ctx.session.edit().contacts.use_history(laws_with_history(ctx.session.model()));
   // PFC's `fric` is the coefficient: 0.5 typed here is half a degree, mu 0.0087.
   if (small_angle > 0)
     ctx.warn(fmt::format("fric {0:g} is a friction angle in degrees: mu = tan({0:g} deg) = {1:.3g}; for a friction "

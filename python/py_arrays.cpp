@@ -205,11 +205,13 @@ py::dict contacts(PySession& s) {
   d["shear_force"] = on_j(c.fsx, c.fsy, c.fsz);
   d["force"] = on_j(c.fx, c.fy, c.fz);
   d["sliding"] = column<bool>(sliding);
-  // Every part of the contacts' history the contact law declares (ContactTable::for_each_history),
-  // by the name SAVE gives it, as seen from the pair (i, j) above.
+  // Every part of the contacts' history the contact laws declare (ContactTable::for_each_declared_history),
+  // by the name SAVE gives it, as seen from the pair (i, j) above: zero where the table keeps no
+  // such part (no law of the scene uses it).
   py::dict history;
-  c.for_each_history([&](const auto& v, const HistoryPart& part) {
-    py::array_t<double> a = column<double>(v, &rows);
+  const std::vector<double> zeros(c.size(), 0.0);
+  c.for_each_declared_history([&](const auto& v, const HistoryPart& part, bool used) {
+    py::array_t<double> a = column<double>(used ? v : zeros, &rows);
     if (part.swap == OnSwap::Negate) {
       a.attr("flags").attr("writeable") = true;
       auto o = a.mutable_unchecked<1>();

@@ -64,7 +64,7 @@ bool BrickStep::shells_within_bounds(Rebuild& r) {
 void BrickStep::pack_messages(Rebuild& r) const {
   // To each rank, the records of the balls of its shell, then those of the moving balls' pairs and
   // wall contacts (Travels); and room for what it sends here.
-  const std::size_t words = record_words<Balls>(), pair_words = record_words<ContactTable>(),
+  const std::size_t words = record_words<Balls>(), pair_words = record_words(part_.contacts),
                     wall_words = record_words<WallContacts>();
   for (int q = 0; q < r.ranks; ++q) {
     const std::vector<std::uint32_t>& shell = r.shell[q];
@@ -105,10 +105,11 @@ void BrickStep::list_entries(Rebuild& r) const {
 void BrickStep::unpack_arrivals(Rebuild& r) const {
   // The history records of the balls that move to this rank: their pairs (in the whole model's
   // numbers) and their wall contacts, after the balls in each rank's message.
-  const std::size_t words = record_words<Balls>(), pair_words = record_words<ContactTable>(),
+  const std::size_t words = record_words<Balls>(), pair_words = record_words(part_.contacts),
                     wall_words = record_words<WallContacts>();
   for (int q = 0; q < r.ranks; ++q) {
     const double* rec = r.in[q].data() + words * r.shell_in[q];
+    if (r.in_pairs[q] > 0) r.arrived_pairs.set_history_laws(part_.contacts.history_laws);   // (as pair_words)
     for (std::size_t t = 0; t < r.in_pairs[q]; ++t, rec += pair_words) unpack_record(rec, r.arrived_pairs);
     for (std::size_t t = 0; t < r.in_walls[q]; ++t, rec += wall_words) unpack_record(rec, r.arrived_walls);
   }

@@ -173,6 +173,7 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   part_.settings = full.settings;
   part_.started = full.started;
   gather(visit_balls, &full.balls, &part_.balls, global_ball_);
+  part_.contacts.set_history_laws(full.contacts.history_laws);   // (the same parts: visit_pairs)
   gather(visit_pairs, &full.contacts, &part_.contacts, pairs);
   for (std::size_t q = 0; q < pairs.size(); ++q) {
     part_.contacts.i[q] = local[part_.contacts.i[q]];

@@ -97,6 +97,8 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
   // servos act on it between steps).
   part_.space = full.space;
   part_.walls = full.walls;
+  // The history parts of the whole model's laws (a law added since the part was cut: zero).
+  part_.contacts.use_history(full.contacts.history_laws);
   take_kernels(kernels, kernels_);
   Balls& b = part_.balls;
   const std::size_t m = b.size();

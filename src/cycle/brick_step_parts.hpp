@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numeric>
+#include <stdexcept>
 #include <type_traits>
 #include <vector>
 
@@ -38,10 +39,21 @@ void gather(Visit&& visit, const void* from, void* to, const std::vector<std::ui
   std::size_t n = 0;
   visit(to, [&](auto& v) {
     using V = std::decay_t<decltype(v)>;
+    if (n >= source.size()) throw std::logic_error("internal error: a part's table gathered into one of other arrays");
     const V& s = *static_cast<const V*>(source[n++]);
     v.resize(pick.size());
     for (std::size_t q = 0; q < pick.size(); ++q) v[q] = s[pick[q]];
   });
+  if (n != source.size()) throw std::logic_error("internal error: a part's table gathered into one of other arrays");
+}
+
+// An empty table to gather `t`'s entries into: one that visits the same arrays (a contact table:
+// the same history parts in use).
+template <class T> T empty_like(const T&) { return T{}; }
+inline ContactTable empty_like(const ContactTable& t) {
+  ContactTable empty;
+  empty.history_laws = t.history_laws;
+  return empty;
 }
 
 // `to`'s first `size` entries (each array cut or padded to that) and `add`'s after them, put in the
@@ -59,7 +71,7 @@ void merge_in_order(Visit&& visit, T& to, std::size_t size, T& add, Less&& befor
   std::vector<std::uint32_t> order(to.size());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), before);
-  T sorted;
+  T sorted = empty_like(to);
   gather(visit, &to, &sorted, order);
   to = std::move(sorted);
 }
@@ -133,6 +145,14 @@ template <class T> std::size_t record_words() {
   }();
   return words;
 }
+// A pair's record: as long as the history parts in use of the table (ContactTable::history_laws;
+// every rank's part keeps the same).
+inline std::size_t record_words(const ContactTable& c) {
+  std::size_t n = Travels<ContactTable>::kHead;
+  Travels<ContactTable>::each(const_cast<ContactTable&>(c), [&](auto&, bool) { ++n; });
+  return n;
+}
+template <class T> std::size_t record_words(const T&) { return record_words<T>(); }
 
 // The records of `from`'s entries `rows`, one after another from `out` (their head words left to
 // the caller): ball indices as the whole model's (`global`), an array not kept (a part's contact
@@ -140,7 +160,7 @@ template <class T> std::size_t record_words() {
 template <class T>
 void pack_records(const T& from, const std::vector<std::uint32_t>& rows, const std::vector<std::uint32_t>& global,
                   double* out) {
-  const std::size_t words = record_words<T>();
+  const std::size_t words = record_words(from);
   each_field(const_cast<T&>(from), [&](const auto& v, std::size_t word, bool ball) {   // (it only reads)
     for (std::size_t q = 0; q < rows.size(); ++q) {
       const std::uint32_t row = rows[q];

@@ -249,6 +249,10 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
 
 void broadcast_arrays(Model& m) {
   m.balls.for_each_array([](auto& v) { comm::broadcast(v); });
+  // (The history parts in use first: the arrays that follow are those.)
+  std::int64_t laws = (m.contacts.history_laws.rolling ? 1 : 0) + (m.contacts.history_laws.bridge ? 2 : 0);
+  comm::broadcast(laws);
+  m.contacts.set_history_laws(HistoryLaws{(laws & 1) != 0, (laws & 2) != 0});
   m.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
   comm::broadcast(m.contacts.results_cycle);
   m.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });

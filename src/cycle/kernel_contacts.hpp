@@ -186,7 +186,7 @@ void cross_loop(Model& model, StepScratch& scratch, const StepKernels& k, std::s
   alignas(64) double hx[kBatch], hy[kBatch], hz[kBatch], ox[kBatch], oy[kBatch], oz[kBatch];
   alignas(64) double rx[kBatch], ry[kBatch], rz[kBatch], mx[kBatch], my[kBatch], mz[kBatch];
   const RollingLanes roll{{rx, ry, rz}, {mx, my, mz}};
-  const double* rolling_history = history + ContactTable::kRollingHistory * pair_count;
+  const double* rolling_history = history + ContactTable::rolling_history_at() * pair_count;
   for (std::size_t q0 = 0; q0 < pair_count; q0 += kBatch) {
     const std::size_t count = std::min(kBatch, pair_count - q0);
     for (std::size_t q = 0; q < count; ++q) {

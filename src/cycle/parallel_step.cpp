@@ -180,7 +180,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
       const std::size_t n = kernels.features.friction ? list.size() : 0;
       // Every history array's values of these pairs, one array after another (for_each_history's
       // order: the kernel reads each part's at its place).
-      h.resize(ContactTable::history_count() * n);
+      h.resize(c.history_count() * n);
       std::size_t at = 0;
       c.for_each_history([&](const auto& v, const HistoryPart&) {
         for (std::size_t q = 0; q < n; ++q) h[at + q] = v[list[q]];

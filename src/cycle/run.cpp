@@ -163,6 +163,8 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
     sort_balls();
     sorted_at_start_ = true;
   }
+  // The history parts the laws of this run use, zero where a law is new since the pairs were found.
+  model.contacts.use_history(laws_with_history(model));
   kernels_ = make_kernels(model);
   cap_ = hertz_step_cap(model);
   // The estimate between contact episodes, below which the held critical step is kept (the whole

@@ -34,6 +34,7 @@ struct Snapshot {
   // in its order).
   PairCandidates pairs;
   std::vector<std::vector<double>> history;   // an all-zero part empty
+  HistoryLaws history_laws;                    // the parts in use
   std::vector<std::size_t> history_lengths;
   std::vector<std::uint8_t> state;   // whether each pair touched (restore: a pair the list lost since)
   std::int64_t results_cycle = -1;
@@ -53,7 +54,8 @@ struct Snapshot {
     copy_balls(balls, m.balls);
     const ContactTable& c = m.contacts;
     pairs = pair_list_of(c);
-    history.resize(ContactTable::history_count());
+    history_laws = c.history_laws;
+    history.resize(c.history_count());
     history_lengths.assign(history.size(), 0);
     std::size_t h = 0;
     c.for_each_history([&](const auto& v, const HistoryPart&) {
@@ -106,6 +108,7 @@ struct Snapshot {
     ContactTable& c = m.contacts;
     const bool same_step = c.results_cycle == results_cycle && m.balls.id == balls.id;
     if (!holds_pairs(c, pairs)) install_pairs(c, pairs);   // the same list keeps its index
+    c.set_history_laws(history_laws);
     std::size_t h = 0;
     c.for_each_history([&](auto& v, const HistoryPart&) {
       paste(v, history[h], history_lengths[h]);

@@ -26,6 +26,7 @@
 #include "io/model_checks.hpp"
 #include "io/save_format.hpp"
 #include "physics/sample.hpp"
+#include "physics/scene.hpp"
 #include "physics/walls.hpp"
 
 namespace trubal {
@@ -57,7 +58,10 @@ void transfer_contacts(IO& io, Table& t, std::uint32_t version, Put&& put) {
     });
   } else {
     std::uint64_t parts = 0;
-    if constexpr (!kReading) t.for_each_history([&](const auto&, const HistoryPart&) { ++parts; });
+    // Every part a law declares is written, one not in use as zeros, so that a save's bytes do not
+    // depend on which parts a table keeps; on reading each part named is taken into use (load_model
+    // drops those all zero that no law of the model needs).
+    if constexpr (!kReading) t.for_each_declared_history([&](const auto&, const HistoryPart&, bool) { ++parts; });
     io.pod(parts);
     if constexpr (kReading) {
       if (parts > 64) io.corrupt();
@@ -69,6 +73,12 @@ void transfer_contacts(IO& io, Table& t, std::uint32_t version, Put&& put) {
             name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
           io.corrupt();
         bool known = false;
+        if constexpr (std::is_same_v<Table, ContactTable>) {
+          HistoryLaws laws = t.history_laws;
+          laws.rolling = laws.rolling || name == "mrx" || name == "mry" || name == "mrz";
+          laws.bridge = laws.bridge || name == "bridge";
+          t.use_history(laws);
+        }
         t.for_each_history([&](auto& v, const HistoryPart& part) {
           if (!known && name == part.name) {
             known = true;
@@ -81,7 +91,7 @@ void transfer_contacts(IO& io, Table& t, std::uint32_t version, Put&& put) {
         read.push_back(name);
       }
     } else {
-      t.for_each_history([&](auto& v, const HistoryPart& part) {
+      t.for_each_declared_history([&](auto& v, const HistoryPart& part, bool) {
         io.str(std::string(part.name));
         put(v);
       });
@@ -425,6 +435,10 @@ Model load_model(const std::string& path, History* history) {
     consistent = consistent && m.contacts.i[p] < n && m.contacts.j[p] < n;
   m.contacts.for_each_pair_array([&](const auto& v) { consistent = consistent && v.size() == m.contacts.i.size(); });
   if (!consistent) r.corrupt();
+  // The history parts the model's laws use, and those the save holds values of (a part all zero
+  // that no law uses is not kept: the same as one never in use).
+  m.contacts.drop_zero_history(laws_with_history(m));
+  m.contacts.use_history(laws_with_history(m));
   m.balls.index_ids();
   const std::string wrong = invalid_model(m);
   if (!wrong.empty())

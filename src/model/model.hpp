@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -90,6 +91,8 @@ struct Balls {
 // carry-over (cycle/pair_list.cpp, cycle/wall_list.cpp), the rescue snapshot (cycle/snapshot.hpp),
 // SAVE and RESTART, RENUMBER (model/edit.cpp), and the step shared among threads and ranks
 // (cycle/parallel_step.cpp; what migrates with a ball: Travels, cycle/brick_step_parts.hpp).
+// A contact table keeps the parts of the laws its scene has (ContactTable::history_laws): the
+// lists visit only those, and a part not kept is zero for every pair.
 enum class OnSwap : std::uint8_t {
   Keep,     // a value of the pair as a whole (a count, a flag, a length)
   Negate,   // a vector on j from i (the shear force on j): on i it is minus this
@@ -97,6 +100,14 @@ enum class OnSwap : std::uint8_t {
 struct HistoryPart {
   const char* name;   // as SAVE names it (a save is read by these names, so a new part reads old saves)
   OnSwap swap;
+};
+
+// The contact laws that keep history of their own beside the shear spring (a contact table keeps
+// their arrays only where such a law is in the scene: ContactTable::history_laws).
+struct HistoryLaws {
+  bool rolling = false;   // rolling resistance (PROP rr_fric): mrx mry mrz
+  bool bridge = false;    // capillary bridges (PROP bridge): bridge
+  bool operator==(const HistoryLaws&) const = default;
 };
 
 // Pairs of balls that may touch, i < j as ball indices, sorted by (i, j). Only pairs with positive
@@ -117,6 +128,9 @@ struct ContactTable {
   std::vector<double> cn_eff;                           // restitution dashpot coefficient now
   std::vector<double> work_friction, work_damping;      // energy dissipated this step
   std::vector<std::uint8_t> state;                      // 0 apart, 1 touching, 2 sliding
+  // Which laws' history the table keeps beside the shear spring's (for_each_history): the arrays of
+  // the others are empty (zero for every pair).
+  HistoryLaws history_laws;
   // The cycle whose step's force pass the results above are of (cycle/run.hpp says which steps
   // write them); -1: none yet. The result arrays are either all of the list's length or all empty
   // (not kept: results_cycle is then -1); a CYCLE's last step may leave them empty, to be made again
@@ -150,28 +164,82 @@ struct ContactTable {
     for_each_result_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
     results_cycle = -1;
   }
-  // The history, each array with its name and what its value does when i and j trade places.
+  // The history, each array with its name and what its value does when i and j trade places: the
+  // parts in use (history_laws), in one fixed order.
   template <class F> void for_each_history(F&& f) {
-    f(fsx, HistoryPart{"fsx", OnSwap::Negate});   // the shear spring
-    f(fsy, HistoryPart{"fsy", OnSwap::Negate});
-    f(fsz, HistoryPart{"fsz", OnSwap::Negate});
-    f(mrx, HistoryPart{"mrx", OnSwap::Negate});   // the rolling spring
-    f(mry, HistoryPart{"mry", OnSwap::Negate});
-    f(mrz, HistoryPart{"mrz", OnSwap::Negate});
-    f(bridge, HistoryPart{"bridge", OnSwap::Keep});   // the capillary bridge (cycle/bridge_pass.hpp)
+    for_each_declared_history([&](auto& v, const HistoryPart& part, bool used) {
+      if (used) f(v, part);
+    });
   }
-  // Where each part's arrays start in for_each_history's order (the cross pairs' copy of the
-  // history, cycle/parallel_step.cpp, holds them in that order).
-  static constexpr std::size_t kShearHistory = 0, kRollingHistory = 3, kBridgeHistory = 6;
+  // Every part a law declares, with whether the table keeps it (in use): the shear spring's always,
+  // the rolling spring's and the capillary bridge's where history_laws says. A part not in use holds
+  // zero for every pair and its array is empty.
+  template <class F> void for_each_declared_history(F&& f) {
+    f(fsx, HistoryPart{"fsx", OnSwap::Negate}, true);   // the shear spring
+    f(fsy, HistoryPart{"fsy", OnSwap::Negate}, true);
+    f(fsz, HistoryPart{"fsz", OnSwap::Negate}, true);
+    f(mrx, HistoryPart{"mrx", OnSwap::Negate}, history_laws.rolling);   // the rolling spring
+    f(mry, HistoryPart{"mry", OnSwap::Negate}, history_laws.rolling);
+    f(mrz, HistoryPart{"mrz", OnSwap::Negate}, history_laws.rolling);
+    f(bridge, HistoryPart{"bridge", OnSwap::Keep}, history_laws.bridge);   // the capillary bridge (cycle/bridge_pass.hpp)
+  }
+  template <class F> void for_each_declared_history(F&& f) const {
+    const_cast<ContactTable*>(this)->for_each_declared_history(
+        [&](auto& v, const HistoryPart& part, bool used) { f(static_cast<const decltype(v)&>(v), part, used); });
+  }
   template <class F> void for_each_history(F&& f) const {
     const_cast<ContactTable*>(this)->for_each_history(
         [&](auto& v, const HistoryPart& part) { f(static_cast<const decltype(v)&>(v), part); });
   }
-  // How many doubles of history a pair carries.
-  static std::size_t history_count() {
+  // How many doubles of history a pair carries (the parts in use).
+  std::size_t history_count() const {
     std::size_t n = 0;
-    ContactTable().for_each_history([&](const auto&, const HistoryPart&) { ++n; });
+    for_each_history([&](const auto&, const HistoryPart&) { ++n; });
     return n;
+  }
+  // Where each part's arrays start in for_each_history's order (the cross pairs' copy of the
+  // history, cycle/parallel_step.cpp, holds them in that order); a part not in use has none.
+  static constexpr std::size_t shear_history_at() { return 0; }
+  static constexpr std::size_t rolling_history_at() { return 3; }
+  std::size_t bridge_history_at() const { return history_laws.rolling ? 6 : 3; }
+  // Takes the parts `laws` names into use beside those in use (zero for every pair: a law added
+  // since the pairs were found has stored nothing yet). A part once in use stays so (a law taken
+  // away and given back later finds its history as it left it), until drop_zero_history.
+  void use_history(HistoryLaws laws) {
+    HistoryLaws next = history_laws;
+    next.rolling = next.rolling || laws.rolling;
+    next.bridge = next.bridge || laws.bridge;
+    set_history_laws(next);
+  }
+  // Makes exactly `laws`'s parts in use: those added zero for every pair, those dropped freed.
+  void set_history_laws(HistoryLaws laws) {
+    const HistoryLaws before = history_laws;
+    history_laws = laws;
+    const auto fit = [&](std::vector<double>& v, bool was, bool now) {
+      if (now && !was) v.assign(i.size(), 0.0);
+      if (!now) std::vector<double>().swap(v);
+    };
+    for (auto* v : {&mrx, &mry, &mrz}) fit(*v, before.rolling, laws.rolling);
+    fit(bridge, before.bridge, laws.bridge);
+  }
+  // Leaves in use only the parts `keep` names and those holding a value other than zero (dropping
+  // a part that is zero for every pair changes nothing a step reads).
+  void drop_zero_history(HistoryLaws keep) {
+    const auto zero = [](const std::vector<double>& v) {
+      for (double x : v)
+        if (x != 0 || std::signbit(x)) return false;
+      return true;
+    };
+    HistoryLaws next = history_laws;
+    next.rolling = next.rolling && (keep.rolling || !(zero(mrx) && zero(mry) && zero(mrz)));
+    next.bridge = next.bridge && (keep.bridge || !zero(bridge));
+    set_history_laws(next);
+  }
+  // The bytes the history arrays hold (their capacity).
+  std::size_t history_bytes() const {
+    std::size_t bytes = 0;
+    for_each_declared_history([&](const auto& v, const HistoryPart&, bool) { bytes += v.capacity() * sizeof(double); });
+    return bytes;
   }
   // Whether pair p carries any history.
   bool has_history(std::size_t p) const {
@@ -337,6 +405,10 @@ struct WallContacts {
     f(mry, HistoryPart{"mry", OnSwap::Negate});
     f(mrz, HistoryPart{"mrz", OnSwap::Negate});
     f(bridge, HistoryPart{"bridge", OnSwap::Keep});   // the capillary bridge
+  }
+  // As ContactTable's (a wall contact keeps every part: the list is short).
+  template <class F> void for_each_declared_history(F&& f) {
+    for_each_history([&](auto& v, const HistoryPart& part) { f(v, part, true); });
   }
   // The list's arrays (which ball meets which wall).
   template <class F> void for_each_list_array(F&& f) { f(ball); f(wall); f(ball_id); f(wall_id); }

@@ -134,6 +134,7 @@ EnergyReport energy(const Model& model) {
     if (!c.touching(p)) continue;
     add_contact_strain(e.strain, is_hertz(model, c.i[p]), c.kn_eff[p], c.overlap[p], c.fsx[p], c.fsy[p], c.fsz[p],
                        c.ks_eff[p]);
+    if (c.mrx.size() != c.size()) continue;   // (no rolling history: zero energy)
     const double ri = b.rad[c.i[p]], rj = b.rad[c.j[p]], rbar = ri * rj / (ri + rj);
     e.strain += shear_spring_energy(c.mrx[p] * c.mrx[p] + c.mry[p] * c.mry[p] + c.mrz[p] * c.mrz[p], c.ks_eff[p] * rbar * rbar);
   }

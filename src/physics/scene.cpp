@@ -72,6 +72,8 @@ Features scene_features(const Model& model) {
   return f;
 }
 
+HistoryLaws laws_with_history(const Model& model) { return HistoryLaws{has_rolling(model), has_bridges(model)}; }
+
 bool has_rolling(const Model& model) {
   for (const auto& [type, m] : model.materials)
     if (m.rolling_friction > 0) return true;

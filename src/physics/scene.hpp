@@ -27,6 +27,9 @@ struct Features {
 Features scene_features(const Model& model);
 // Whether some material has rolling resistance (PROP rr_fric): output then shows the rolling moments.
 bool has_rolling(const Model& model);
+// The laws with history of their own that the model's materials have (rolling resistance,
+// capillary bridges): the parts a contact table keeps (ContactTable::history_laws).
+HistoryLaws laws_with_history(const Model& model);
 
 // Checks that every ball's type has density and stiffness; throws std::runtime_error naming the type.
 void check_ready(const Model& model);

@@ -376,12 +376,24 @@ TEST_CASE("hard: an unstable run goes back to its last multiple of 500 cycles wi
 // not the other would be lost (or kept stale) after a rescue.
 TEST_CASE("hard: the contact table's arrays are the pair list, the history and the results", "[hard]") {
   ContactTable c;
-  int all = 0, results = 0;
-  c.for_each_pair_array([&](auto&) { ++all; });
-  c.for_each_result_array([&](auto&) { ++results; });
-  // i, j and the image (5 arrays), every declared part of the history, the results.
-  CHECK(all == 5 + static_cast<int>(ContactTable::history_count()) + results);
-  CHECK(ContactTable::history_count() == 7);   // the shear force's three components, the rolling moment's three, the bridge
+  const auto count = [&] {
+    int all = 0, results = 0;
+    c.for_each_pair_array([&](auto&) { ++all; });
+    c.for_each_result_array([&](auto&) { ++results; });
+    // i, j and the image (5 arrays), every part of the history in use, the results.
+    CHECK(all == 5 + static_cast<int>(c.history_count()) + results);
+  };
+  count();
+  CHECK(c.history_count() == 3);   // the shear force's three components (no law with history of its own)
+  c.use_history(HistoryLaws{true, false});
+  count();
+  CHECK(c.history_count() == 6);   // and the rolling moment's three
+  c.use_history(HistoryLaws{false, true});
+  count();
+  CHECK(c.history_count() == 7);   // and the bridge (a part once in use stays so)
+  int declared = 0;
+  c.for_each_declared_history([&](auto&, const HistoryPart&, bool) { ++declared; });
+  CHECK(declared == 7);
 }
 
 // A run that fails before its first copy on a multiple of 500 goes back to where the CYCLE started,
