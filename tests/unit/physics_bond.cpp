@@ -4,6 +4,7 @@
 // springs predicts; the energy a breaking bond held is booked.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -263,6 +264,36 @@ TEST_CASE("bond: a breaking bonded block gives the same bits on every backend an
     REQUIRE(run_cycles(model, *pipeline, 300, {}).done == 300);
     same_bits(reference, model);
   }
+}
+
+TEST_CASE("bond: the step's index of the bonds follows every edit and copy of the table", "[bond]") {
+  // The table's edition: new with each copy and each edit, so that the step knows its index of the
+  // rows stale in one comparison.
+  Harness h;
+  REQUIRE(h.deck(bonded_block(0)));
+  Model model = h.session.model();
+  const std::uint64_t first = model.bonds.edition.value();
+  const Bonds copy = model.bonds;
+  CHECK(copy.edition.value() != first);
+  CHECK(model.bonds.edition.value() == first);
+  sort_bonds(model.bonds);
+  CHECK(model.bonds.edition.value() != first);
+  // A copy of the table whose broken bonds hold again, its rows in the step's order, put over the
+  // table in the same model stepped by the same pipeline on the same pair list: the step must index
+  // it afresh (its index says which bonds broke), and so step as a fresh pipeline does from the
+  // same state.
+  StepPolicy policy;
+  auto pipeline = make_pipeline("serial", 1, 0, &policy);
+  REQUIRE(run_cycles(model, *pipeline, 200, {}).done == 200);
+  REQUIRE(count_bonds(model.bonds).broken() > 10);
+  Bonds whole_again = model.bonds;
+  std::fill(whole_again.fate.begin(), whole_again.fate.end(), std::uint8_t{0});
+  model.bonds = whole_again;
+  Model fresh = model;
+  REQUIRE(run_cycles(model, *pipeline, 20, {}).done == 20);
+  auto other = make_pipeline("serial", 1, 0, &policy);
+  REQUIRE(run_cycles(fresh, *other, 20, {}).done == 20);
+  same_bits(fresh, model);
 }
 
 TEST_CASE("bond: cut runs and SAVE and RESTART keep every bond's state to the bit", "[bond][io]") {
