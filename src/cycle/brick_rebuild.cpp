@@ -69,6 +69,9 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
 bool BrickStep::may_rebuild_local(const Model& full) {
   if (policy_->local_rule < 0 || !live_ || model_ != &full) return false;
   if (results_written_ && !current_) return false;   // (the parts hold results the whole model has not)
+  // A bonded scene's ghosts include its bonds' other balls, which a search within the list's reach
+  // need not find: its parts are made afresh from the whole model, whose bonds every member reads.
+  if (bonded_) return false;
   // The members' speeds have moved the shares by a tenth since the split (a core slowed, contacts
   // crowding in a part): the parts are made afresh, balanced by them.
   const std::vector<double> next = proposed_shares();   // (a collective call; the same on every member)

@@ -263,6 +263,9 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   for (double share : shares_) fmt::format_to(std::back_inserter(shares), "{}{:.2f}", shares.empty() ? "" : " ", share);
   lines.emplace_back("shares of the balls", shares + " (by " + member + ", in proportion to the speed each stepped its own balls at)");
   lines.emplace_back("decompositions made", std::to_string(splits_));
+  if (bonded_)
+    lines.emplace_back("bonds across " + member + "s", std::to_string(bonds_across_) + " intact at the last split (each stepped on both " +
+                                                   member + "s, reported by its ball i's)");
   {
     lines.emplace_back("pair lists rebuilt on the parts",
                        std::to_string(local_rebuilds_) + " (each rank searching its own balls and those within reach of them)");

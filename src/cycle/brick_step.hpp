@@ -19,6 +19,15 @@
 //   bins next to its own balls' bins, searches them with the serial search's test and carries its
 //   pairs' history over; a ball leaving the periodic cell is wrapped on every part that holds it
 //   (wrap); the whole model's list is made from the ranks' lists at the next sync.
+// - Bonds (model/bonds.hpp) go with the balls: a part holds the intact bonds of its owned balls,
+//   their other balls as ghosts however far (a bond is kept by topology, not found in the list's
+//   reach). A bond between two members' balls is stepped on both, from the same inputs, as a pair
+//   across them is, and both keep the same state; its owner is the owner of its ball i (the rule
+//   of LAMMPS's bonds, kept by the atom whose tag comes first there): that member alone books its
+//   energies and the servo's moments, and reports its state and fate to sync(). A broken bond
+//   carries nothing and stays in the whole model's table. The pair list of a bonded scene is
+//   rebuilt through the whole model (rebuild_local declines), so the parts' bonds are those of
+//   the split until the next one.
 // - Anything else the step cannot do on its own part (a ball outside a START box, an edit between
 //   steps, a decomposition whose balls have spread) goes
 //   through the whole model: sync() gathers every rank's balls, pairs and wall contacts into rank
@@ -160,9 +169,10 @@ class BrickStep {
   struct Counts {
     std::size_t decompositions = 0, list_rebuilds = 0, wraps = 0, migrations = 0;
     std::size_t ghosts = 0, least_balls = 0, most_balls = 0;
+    std::size_t bonds_across = 0;   // intact bonds whose balls two members owned at the last split
   };
   Counts counts() const {
-    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_};
+    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_, bonds_across_};
   }
   // The bytes of the part's arrays of balls, pairs and wall contacts.
   std::size_t part_bytes() const;
@@ -174,6 +184,8 @@ class BrickStep {
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.
   void install_local_walls(Model& full);
+  // sync()'s part for a bonded scene: the state and fate of every member's bonds into full's.
+  void gather_bonds(Model& full, std::vector<double>& out, std::vector<double>& in);
   // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
   template <class T> void gather_whole(const std::vector<T>& mine, std::vector<T>& all);
   // Runs `work` so that a member's failure is every member's (ranks: comm::together; threads: the
@@ -229,6 +241,11 @@ class BrickStep {
   std::vector<std::uint32_t> owned_, owned_pairs_, owned_walls_;   // part indices this rank reports
   // Per rank: the whole model's balls it owns, pairs whose ball i it owns, its balls' wall contacts.
   std::vector<std::vector<std::uint32_t>> rank_balls_, rank_pairs_, rank_walls_;
+  // Per rank: the whole model's rows of the intact bonds (at the split) whose ball i it owns, by
+  // (id_i, id_j); whether there were any (the same on every member).
+  std::vector<std::vector<std::uint32_t>> rank_bonds_;
+  bool bonded_ = false;
+  std::size_t bonds_across_ = 0;
   // Per rank: the part's balls sent to it each step (its ghosts), and the ghosts it sends.
   std::vector<std::vector<std::uint32_t>> send_, recv_;
   std::vector<std::vector<double>> send_buf_, recv_buf_;
