@@ -162,6 +162,8 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   const Bonds& bt = full.bonds;
   std::vector<std::uint32_t> bonds;
   rank_bonds_.assign(ranks, {});
+  split_bond_rows_.clear();
+  split_bond_ball_i_.clear();
   bonded_ = false;
   bonds_across_ = 0;
   for (std::size_t q : bt.empty() ? std::vector<std::size_t>{} : bond_rows_by_id(bt)) {
@@ -172,6 +174,8 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
     const int oi = owner_[i], oj = owner_[j];
     bonded_ = true;
     rank_bonds_[oi].push_back(static_cast<std::uint32_t>(q));
+    split_bond_rows_.push_back(static_cast<std::uint32_t>(q));
+    split_bond_ball_i_.push_back(i);
     bonds_across_ += oi != oj;
     if (oi != me && oj != me) continue;
     bonds.push_back(static_cast<std::uint32_t>(q));

@@ -238,6 +238,7 @@ void BrickStep::release() {
   step_ = ParallelStep{*policy_};
   ref_ = VerletReference{};
   free(owner_); free(global_ball_); free(owned_); free(owned_pairs_); free(owned_walls_);
+  free(rank_bonds_); free(split_bond_rows_); free(split_bond_ball_i_);
   free(rank_balls_); free(rank_pairs_); free(rank_walls_); free(send_); free(recv_); free(send_buf_); free(recv_buf_);
   free(sums_out_); free(sums_in_);
 }

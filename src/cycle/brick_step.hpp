@@ -25,9 +25,11 @@
 //   across them is, and both keep the same state; its owner is the owner of its ball i (the rule
 //   of LAMMPS's bonds, kept by the atom whose tag comes first there): that member alone books its
 //   energies and the servo's moments, and reports its state and fate to sync(). A broken bond
-//   carries nothing and stays in the whole model's table. The pair list of a bonded scene is
-//   rebuilt through the whole model (rebuild_local declines), so the parts' bonds are those of
-//   the split until the next one.
+//   carries nothing and stays in the whole model's table. The parts' bonds are those intact at
+//   the split until the next one: a ball that changes owner at a rebuild on the parts takes its
+//   bonds with it (broken or not), and where some intact bond is longer than the list's reach
+//   (its other ball may be outside the halo a rebuild receives) the list is rebuilt through the
+//   whole model instead.
 // - Anything else the step cannot do on its own part (a ball outside a START box, an edit between
 //   steps, a decomposition whose balls have spread) goes
 //   through the whole model: sync() gathers every rank's balls, pairs and wall contacts into rank
@@ -103,7 +105,8 @@ class BrickStep {
   void reduce_tilt(const Space& before);
   // A new pair list on the parts alone, for the positions now (a collective call, on every rank):
   // a ball in another rank's brick of the split now (owner_at) moves to that rank with the history of
-  // its pairs and wall contacts (unless a rank's count would then be a tenth off its share: false);
+  // its pairs and wall contacts and with its bonds (unless a rank's count would then be a tenth off
+  // its share: false);
   // each rank keeps its other balls, receives the others' balls that may be within reach of them
   // (those in the bins around its balls' bins, the bins as wide as the largest reach with `skin`,
   // through the periodic faces too; each rank marks the bins of its balls), searches its pairs as the serial search
@@ -111,7 +114,8 @@ class BrickStep {
   // made afresh from the whole model instead (the same answer on every member): a decomposition
   // whose balls have spread (the shell of balls received grew past twice its size at the first
   // such rebuild), members whose speeds would move their shares by a tenth, results not yet
-  // gathered, TRUBAL_REBUILD_WHOLE (StepPolicy::local_rule). The walls' contacts of the member's own balls are
+  // gathered, an intact bond longer than the reach (its other ball may lie beyond the bins
+  // around), TRUBAL_REBUILD_WHOLE (StepPolicy::local_rule). The walls' contacts of the member's own balls are
   // found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
@@ -200,6 +204,7 @@ class BrickStep {
   // Rebuild it is handed (the comments at their definitions say which).
   struct Rebuild;
   bool may_rebuild_local(const Model& full);
+  bool bonds_within(const Space& space, double reach);
   void fit_shell_bins(Rebuild& r, const Space& space) const;
   void find_moves(Rebuild& r) const;
   bool balanced_after_moves(Rebuild& r) const;
@@ -244,6 +249,8 @@ class BrickStep {
   // Per rank: the whole model's rows of the intact bonds (at the split) whose ball i it owns, by
   // (id_i, id_j); whether there were any (the same on every member).
   std::vector<std::vector<std::uint32_t>> rank_bonds_;
+  // The split's intact bonds by (id_i, id_j): their rows in the whole model, their balls i there.
+  std::vector<std::uint32_t> split_bond_rows_, split_bond_ball_i_;
   bool bonded_ = false;
   std::size_t bonds_across_ = 0;
   // Per rank: the part's balls sent to it each step (its ghosts), and the ghosts it sends.
