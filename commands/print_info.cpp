@@ -151,6 +151,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("ghosts", c.parts.ghosts);
   line("least_part_balls", c.parts.least_balls);
   line("most_part_balls", c.parts.most_balls);
+  line("part_bonds_across", c.parts.bonds_across);
   if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
     std::vector<double> mine{static_cast<double>(m.contacts.result_bytes()) / (1 << 20), c.whole_arrays_mib,
                              c.part_arrays_mib}, all;

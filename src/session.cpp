@@ -7,7 +7,6 @@
 #include <cstring>
 #include <filesystem>
 #include <cmath>
-#include <optional>
 #include <random>
 #include <stdexcept>
 #include <unordered_map>
@@ -200,12 +199,6 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   require_started();
   check_ready(model_);
   update_mass(model_);
-  // Bonds do not travel with the balls of the spatial decomposition: under BACKEND mpi on several
-  // ranks every rank steps a bonded scene whole (each holds the whole model at a CYCLE's start; the
-  // same arithmetic gives every rank the same bits), the rules of a distributed run (rank 0 writes,
-  // the ranks agree on failures and Ctrl-C) kept.
-  std::optional<Pipeline::Alone> whole;
-  if (!model_.bonds.empty() && pipeline_->distributed()) whole.emplace(*pipeline_);
   interrupt_requested() = false;
   CycleControl control;
   control.interrupt = &interrupt_requested();

@@ -19,21 +19,16 @@ namespace {
 
 constexpr std::uint32_t kNoBall = std::numeric_limits<std::uint32_t>::max();
 
-std::size_t intact_bonds(const Bonds& t) {
-  return static_cast<std::size_t>(std::count(t.fate.begin(), t.fate.end(), std::uint8_t{0}));
-}
-
 // Whether the index in `scratch` is of this table and these balls: made for the pair list now (every
 // change of the balls or the table between steps goes through Session::edit, which has the next
-// step search afresh, a new list), with the table's rows as it left them and as many of them intact
-// (a step taken again from a copy may find bonds whole that broke since: the index is made again),
-// its first and last bonds naming their balls.
+// step search afresh, a new list) and for the table's edition now (Bonds::edition: any edit of its
+// rows, a copy restored over it as where a step is taken again), its first and last bonds naming
+// their balls. (Bonds that broke since the index was made are known to it: bond_holds.)
 bool index_current(const Model& model, const StepScratch& scratch) {
   const Bonds& t = model.bonds;
   const Balls& b = model.balls;
   if (scratch.bond_version == 0 || scratch.bond_version != model.contacts.list_version ||
-      scratch.bond_run_begin.size() != b.size() + 1 || scratch.bond_id_i != t.id_i || scratch.bond_id_j != t.id_j ||
-      scratch.bond_intact != intact_bonds(t))
+      scratch.bond_edition != t.edition.value() || scratch.bond_run_begin.size() != b.size() + 1)
     return false;
   const std::size_t places = scratch.bond_ball_i.size();
   for (std::size_t q : {std::size_t{0}, places - 1}) {
@@ -134,9 +129,8 @@ void prepare_bonds(Model& model, StepScratch& scratch, int shares) {
   by_ball(scratch.bond_ball_j, scratch.bond_partner_begin, scratch.bond_partners);
   scratch.ball_bond_stiffness.resize(balls);
   for (std::size_t k = 0; k < balls; ++k) scratch.ball_bond_stiffness[k] = ball_stiffness(scratch, k);
-  scratch.bond_id_i = t.id_i;
-  scratch.bond_id_j = t.id_j;
-  scratch.bond_intact = intact_bonds(t);
+  scratch.bond_intact = places;
+  scratch.bond_edition = t.edition.value();
   scratch.bond_version = model.contacts.list_version;
 }
 
@@ -245,8 +239,7 @@ void settle_broken_bonds(StepScratch& scratch) {
     }
 }
 
-void add_bonds(const Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end) {
-  (void)model;
+void add_bonds(StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end) {
   const bool stiffness = k.sums_stiffness();
   const BondPush* pushes = scratch.bond_push.data();
   for (std::size_t i = begin; i < end; ++i) {

@@ -41,6 +41,6 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
 // Step 2, after every share of step 1.
 void settle_broken_bonds(StepScratch& scratch);
 // Balls [begin, end): step 2.
-void add_bonds(const Model& model, StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end);
+void add_bonds(StepScratch& scratch, const StepKernels& k, std::size_t begin, std::size_t end);
 
 }  // namespace trubal

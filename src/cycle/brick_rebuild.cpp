@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <new>
 #include <numeric>
+#include <stdexcept>
 
 #include "cycle/pair_list.hpp"
 #include "cycle/wall_list.hpp"
+#include "model/edit.hpp"
 #include "physics/pair_laws.hpp"
 
 namespace trubal {
@@ -22,6 +25,9 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   r.me = team_->rank();
   r.skin = skin;
   r.reach = 2 * max_radius_ + skin;   // the farthest any pair's balls may be apart
+  // A bonded scene: its bonds' other balls come in the halo where no intact bond is longer than
+  // a pair may be; else the parts are made afresh from the whole model. (collective)
+  if (bonded_ && !bonds_within(full.space, r.reach)) return false;
 
   // Who owns each ball from now on: the brick of the split that holds it (brick_split.cpp).
   fit_shell_bins(r, full.space);   // (collective)
@@ -77,6 +83,28 @@ bool BrickStep::may_rebuild_local(const Model& full) {
   return true;
 }
 
+bool BrickStep::bonds_within(const Space& space, double reach) {
+  // The longest intact bond of this member's part, at its balls' nearest images; over every member.
+  std::vector<double> longest{0.0};
+  together([&] {
+    const Balls& b = part_.balls;
+    const Bonds& t = part_.bonds;
+    const CellFrame frame = cell_frame(space);
+    for (std::size_t q = 0; q < t.size(); ++q) {
+      if (t.fate[q] != 0) continue;
+      const std::int64_t i = find_ball(part_, t.id_i[q]), j = find_ball(part_, t.id_j[q]);
+      if (i < 0 || j < 0) throw std::logic_error("a bond's ball is not in its part");
+      std::int8_t ix, iy, iz;
+      const auto [dx, dy, dz] = nearest_separation(frame, space.periodic, b, static_cast<std::size_t>(i),
+                                                   static_cast<std::size_t>(j), ix, iy, iz);
+      const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+      longest[0] = std::max(longest[0], std::isfinite(d) ? d : std::numeric_limits<double>::infinity());
+    }
+  }, "measuring the bonds of its part");
+  team_->max_all(longest);
+  return longest[0] <= reach;
+}
+
 void BrickStep::search_part(Rebuild& r, const Space& space, Backend& search) const {
   // The serial test on the entries (a pair's result depends on its two balls alone), keeping the
   // pairs of this rank's balls; their partners from elsewhere are the ghosts. The search reads the
@@ -98,6 +126,40 @@ void BrickStep::search_part(Rebuild& r, const Space& space, Backend& search) con
     r.pairs.push_back(static_cast<std::uint32_t>(p));
     if (kind[i] != 1) kind[i] = 2;
     if (kind[j] != 1) kind[j] = 2;
+  }
+  if (bonded_) {
+    // The bonds of the balls this member owns from now on: its part's and those that came with the
+    // balls that move here, each once (a bond held by two members has the same state on both),
+    // broken or not; the other balls of the intact ones are ghosts.
+    Bonds all = part_.bonds;
+    const std::size_t held = all.size();
+    merge_in_order(visit_bonds, all, held, r.arrived_bonds, [&](std::uint32_t p, std::uint32_t q) {
+      return all.id_i[p] < all.id_i[q] || (all.id_i[p] == all.id_i[q] && all.id_j[p] < all.id_j[q]);
+    });
+    r.arrived_bonds = Bonds{};
+    const std::vector<std::int64_t>& id = scan.balls.id;
+    std::vector<std::uint32_t> by_id(count);
+    std::iota(by_id.begin(), by_id.end(), 0u);
+    std::sort(by_id.begin(), by_id.end(), [&](std::uint32_t p, std::uint32_t q) { return id[p] < id[q]; });
+    auto entry_of = [&](std::int64_t want) {
+      const auto at = std::lower_bound(by_id.begin(), by_id.end(), want, [&](std::uint32_t q, std::int64_t v) { return id[q] < v; });
+      return at != by_id.end() && id[*at] == want ? *at : kAbsent;
+    };
+    std::vector<std::uint32_t> rows;
+    for (std::size_t q = 0; q < all.size(); ++q) {
+      if (q > 0 && all.id_i[q] == all.id_i[q - 1] && all.id_j[q] == all.id_j[q - 1]) continue;
+      const std::uint32_t ei = entry_of(all.id_i[q]), ej = entry_of(all.id_j[q]);
+      const bool own_i = ei != kAbsent && kind[ei] == 1, own_j = ej != kAbsent && kind[ej] == 1;
+      if (!own_i && !own_j) continue;
+      rows.push_back(static_cast<std::uint32_t>(q));
+      if (all.fate[q] != 0) continue;
+      if (ei == kAbsent || ej == kAbsent) throw std::logic_error("a bond's other ball is not within its halo");
+      if (!own_i) kind[ei] = 2;
+      if (!own_j) kind[ej] = 2;
+      r.bond_ends.push_back(ei);
+      r.bond_ends.push_back(ej);
+    }
+    gather(visit_bonds, &all, &r.next_bonds, rows);
   }
   r.local.assign(count, kAbsent);
   for (std::size_t q = 0; q < count; ++q)
@@ -176,6 +238,13 @@ void BrickStep::make_next_balls(Rebuild& r) const {
       else r.next_send[owner[i]].push_back(j);
     }
   }
+  for (std::size_t q = 0; q + 1 < r.bond_ends.size(); q += 2) {   // (a bonded scene's)
+    const std::uint32_t i = r.local[r.bond_ends[q]], j = r.local[r.bond_ends[q + 1]];
+    if (r.next_ghost[i] != r.next_ghost[j]) {
+      if (r.next_ghost[j]) r.next_send[owner[j]].push_back(i);
+      else r.next_send[owner[i]].push_back(j);
+    }
+  }
   for (auto& v : r.next_send) {
     std::sort(v.begin(), v.end());
     v.erase(std::unique(v.begin(), v.end()), v.end());
@@ -197,11 +266,19 @@ void BrickStep::commit_rebuild(Rebuild& r) {
   ref_.x.swap(r.next_ref.x);
   ref_.y.swap(r.next_ref.y);
   ref_.z.swap(r.next_ref.z);
+  if (bonded_) {
+    std::swap(part_.bonds, r.next_bonds);
+    part_.bonds.changed();
+    part_.balls.index_ids();
+  }
   if (r.moved > 0) {   // every rank's record of the owners (sync gathers each rank's balls by it)
     for (std::size_t t = 0; t < r.moved; ++t)
       owner_[static_cast<std::size_t>(r.all_moves[3 * t])] = static_cast<int>(r.all_moves[3 * t + 1]);
     for (auto& v : rank_balls_) v.clear();
     for (std::size_t k = 0; k < owner_.size(); ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
+    for (auto& v : rank_bonds_) v.clear();   // (by their balls i's owners, in the split's order)
+    for (std::size_t t = 0; t < split_bond_rows_.size(); ++t)
+      rank_bonds_[owner_[split_bond_ball_i_[t]]].push_back(split_bond_rows_[t]);
     most_balls_ = *std::max_element(r.count.begin(), r.count.end());
     least_balls_ = *std::min_element(r.count.begin(), r.count.end());
     migrations_ += r.moved;

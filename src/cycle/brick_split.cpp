@@ -12,6 +12,8 @@
 
 #include <fmt/format.h>
 
+#include "model/bond_table.hpp"
+#include "model/edit.hpp"
 #include "physics/pair_laws.hpp"
 
 namespace trubal {
@@ -155,6 +157,32 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
     if (oi == me) { in_part[j] = 2; sends[oj].push_back(i); }
     else { in_part[i] = 2; sends[oi].push_back(j); }
   }
+  // The intact bonds of the owned balls, by (id_i, id_j), and their other balls as ghosts; every
+  // member lists every member's bonds by ball i (sync writes their state there).
+  const Bonds& bt = full.bonds;
+  std::vector<std::uint32_t> bonds;
+  rank_bonds_.assign(ranks, {});
+  split_bond_rows_.clear();
+  split_bond_ball_i_.clear();
+  bonded_ = false;
+  bonds_across_ = 0;
+  for (std::size_t q : bt.empty() ? std::vector<std::size_t>{} : bond_rows_by_id(bt)) {
+    if (bt.fate[q] != 0) continue;
+    const std::int64_t bi = find_ball(full, bt.id_i[q]), bj = find_ball(full, bt.id_j[q]);
+    if (bi < 0 || bj < 0) continue;
+    const auto i = static_cast<std::uint32_t>(bi), j = static_cast<std::uint32_t>(bj);
+    const int oi = owner_[i], oj = owner_[j];
+    bonded_ = true;
+    rank_bonds_[oi].push_back(static_cast<std::uint32_t>(q));
+    split_bond_rows_.push_back(static_cast<std::uint32_t>(q));
+    split_bond_ball_i_.push_back(i);
+    bonds_across_ += oi != oj;
+    if (oi != me && oj != me) continue;
+    bonds.push_back(static_cast<std::uint32_t>(q));
+    if (oi == oj) continue;
+    if (oi == me) { in_part[j] = 2; sends[oj].push_back(i); }
+    else { in_part[i] = 2; sends[oi].push_back(j); }
+  }
   global_ball_.clear();
   std::vector<std::uint32_t> local(n, kAbsent);
   rank_balls_.assign(ranks, {});
@@ -174,6 +202,10 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   part_.started = full.started;
   gather(visit_balls, &full.balls, &part_.balls, global_ball_);
   part_.contacts.set_history_laws(full.contacts.history_laws);   // (the same parts: visit_pairs)
+  // (Bonds name their balls by id: the step finds them by the part's index of ids.)
+  gather([](void* p, auto&& f) { static_cast<Bonds*>(p)->for_each_array(f); }, &full.bonds, &part_.bonds, bonds);
+  part_.bonds.changed();
+  if (bonded_) part_.balls.index_ids();
   gather(visit_pairs, &full.contacts, &part_.contacts, pairs);
   for (std::size_t q = 0; q < pairs.size(); ++q) {
     part_.contacts.i[q] = local[part_.contacts.i[q]];

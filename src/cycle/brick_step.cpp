@@ -242,6 +242,7 @@ void BrickStep::release() {
   step_ = ParallelStep{*policy_};
   ref_ = VerletReference{};
   free(owner_); free(global_ball_); free(owned_); free(owned_pairs_); free(owned_walls_);
+  free(rank_bonds_); free(split_bond_rows_); free(split_bond_ball_i_);
   free(rank_balls_); free(rank_pairs_); free(rank_walls_); free(send_); free(recv_); free(send_buf_); free(recv_buf_);
   free(sums_out_); free(sums_in_);
 }
@@ -267,6 +268,9 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   for (double share : shares_) fmt::format_to(std::back_inserter(shares), "{}{:.2f}", shares.empty() ? "" : " ", share);
   lines.emplace_back("shares of the balls", shares + " (by " + member + ", in proportion to the speed each stepped its own balls at)");
   lines.emplace_back("decompositions made", std::to_string(splits_));
+  if (bonded_)
+    lines.emplace_back("bonds across " + member + "s", std::to_string(bonds_across_) + " intact at the last split (each stepped on both " +
+                                                   member + "s, reported by its ball i's)");
   {
     lines.emplace_back("pair lists rebuilt on the parts",
                        std::to_string(local_rebuilds_) + " (each rank searching its own balls and those within reach of them)");

@@ -19,6 +19,17 @@
 //   bins next to its own balls' bins, searches them with the serial search's test and carries its
 //   pairs' history over; a ball leaving the periodic cell is wrapped on every part that holds it
 //   (wrap); the whole model's list is made from the ranks' lists at the next sync.
+// - Bonds (model/bonds.hpp) go with the balls: a part holds the intact bonds of its owned balls,
+//   their other balls as ghosts however far (a bond is kept by topology, not found in the list's
+//   reach). A bond between two members' balls is stepped on both, from the same inputs, as a pair
+//   across them is, and both keep the same state; its owner is the owner of its ball i (the rule
+//   of LAMMPS's bonds, kept by the atom whose tag comes first there): that member alone books its
+//   energies and the servo's moments, and reports its state and fate to sync(). A broken bond
+//   carries nothing and stays in the whole model's table. The parts' bonds are those intact at
+//   the split until the next one: a ball that changes owner at a rebuild on the parts takes its
+//   bonds with it (broken or not), and where some intact bond is longer than the list's reach
+//   (its other ball may be outside the halo a rebuild receives) the list is rebuilt through the
+//   whole model instead.
 // - Anything else the step cannot do on its own part (a ball outside a START box, an edit between
 //   steps, a decomposition whose balls have spread) goes
 //   through the whole model: sync() gathers every rank's balls, pairs and wall contacts into rank
@@ -94,7 +105,8 @@ class BrickStep {
   void reduce_tilt(const Space& before);
   // A new pair list on the parts alone, for the positions now (a collective call, on every rank):
   // a ball in another rank's brick of the split now (owner_at) moves to that rank with the history of
-  // its pairs and wall contacts (unless a rank's count would then be a tenth off its share: false);
+  // its pairs and wall contacts and with its bonds (unless a rank's count would then be a tenth off
+  // its share: false);
   // each rank keeps its other balls, receives the others' balls that may be within reach of them
   // (those in the bins around its balls' bins, the bins as wide as the largest reach with `skin`,
   // through the periodic faces too; each rank marks the bins of its balls), searches its pairs as the serial search
@@ -102,7 +114,8 @@ class BrickStep {
   // made afresh from the whole model instead (the same answer on every member): a decomposition
   // whose balls have spread (the shell of balls received grew past twice its size at the first
   // such rebuild), members whose speeds would move their shares by a tenth, results not yet
-  // gathered, TRUBAL_REBUILD_WHOLE (StepPolicy::local_rule). The walls' contacts of the member's own balls are
+  // gathered, an intact bond longer than the reach (its other ball may lie beyond the bins
+  // around), TRUBAL_REBUILD_WHOLE (StepPolicy::local_rule). The walls' contacts of the member's own balls are
   // found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
@@ -160,9 +173,10 @@ class BrickStep {
   struct Counts {
     std::size_t decompositions = 0, list_rebuilds = 0, wraps = 0, migrations = 0;
     std::size_t ghosts = 0, least_balls = 0, most_balls = 0;
+    std::size_t bonds_across = 0;   // intact bonds whose balls two members owned at the last split
   };
   Counts counts() const {
-    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_};
+    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_, bonds_across_};
   }
   // The bytes of the part's arrays of balls, pairs and wall contacts.
   std::size_t part_bytes() const;
@@ -174,6 +188,8 @@ class BrickStep {
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.
   void install_local_walls(Model& full);
+  // sync()'s part for a bonded scene: the state and fate of every member's bonds into full's.
+  void gather_bonds(Model& full, std::vector<double>& out, std::vector<double>& in);
   // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
   template <class T> void gather_whole(const std::vector<T>& mine, std::vector<T>& all);
   // Runs `work` so that a member's failure is every member's (ranks: comm::together; threads: the
@@ -188,6 +204,7 @@ class BrickStep {
   // Rebuild it is handed (the comments at their definitions say which).
   struct Rebuild;
   bool may_rebuild_local(const Model& full);
+  bool bonds_within(const Space& space, double reach);
   void fit_shell_bins(Rebuild& r, const Space& space) const;
   void find_moves(Rebuild& r) const;
   bool balanced_after_moves(Rebuild& r) const;
@@ -229,6 +246,13 @@ class BrickStep {
   std::vector<std::uint32_t> owned_, owned_pairs_, owned_walls_;   // part indices this rank reports
   // Per rank: the whole model's balls it owns, pairs whose ball i it owns, its balls' wall contacts.
   std::vector<std::vector<std::uint32_t>> rank_balls_, rank_pairs_, rank_walls_;
+  // Per rank: the whole model's rows of the intact bonds (at the split) whose ball i it owns, by
+  // (id_i, id_j); whether there were any (the same on every member).
+  std::vector<std::vector<std::uint32_t>> rank_bonds_;
+  // The split's intact bonds by (id_i, id_j): their rows in the whole model, their balls i there.
+  std::vector<std::uint32_t> split_bond_rows_, split_bond_ball_i_;
+  bool bonded_ = false;
+  std::size_t bonds_across_ = 0;
   // Per rank: the part's balls sent to it each step (its ghosts), and the ghosts it sends.
   std::vector<std::vector<std::uint32_t>> send_, recv_;
   std::vector<std::vector<double>> send_buf_, recv_buf_;

@@ -88,8 +88,8 @@ template <class T> T from_word(double w) {
 }
 
 // What travels between the members at a rebuild on the parts, as records of words: a ball (to
-// each rank whose shell holds it, to its new owner where it moves), and the pairs and wall
-// contacts of a ball that changes owner, with their history. Each kind lists its arrays once,
+// each rank whose shell holds it, to its new owner where it moves), and the pairs, wall contacts
+// and bonds of a ball that changes owner, with their history and state. Each kind lists its arrays once,
 // from the model's own declarations, and every side walks that one list: pack_records sends,
 // unpack_record and Rebuild::fill read, and a part's tables are cut (gather) and merged
 // (merge_in_order) by it. So an array added to Balls::for_each_array, ContactTable's list or
@@ -129,6 +129,13 @@ template <> struct Travels<WallContacts> {
   template <class F> static void each(WallContacts& w, F&& f) {
     w.for_each_array([&](auto& v) { f(v, same_array(v, w.ball)); });
   }
+};
+
+// A bond (model/bonds.hpp): every array, its state and fate too. Its balls are named by their ids,
+// which mean the same on every member.
+template <> struct Travels<Bonds> {
+  static constexpr std::size_t kHead = 0;
+  template <class F> static void each(Bonds& t, F&& f) { t.for_each_array([&](auto& v) { f(v, false); }); }
 };
 
 // f(array, word, ball) for each array of T's record, with the word it takes there.
@@ -185,6 +192,9 @@ const auto visit_balls = [](void* p, auto&& f) {
 };
 const auto visit_pairs = [](void* p, auto&& f) {
   Travels<ContactTable>::each(*static_cast<ContactTable*>(p), [&](auto& v, bool) { f(v); });
+};
+const auto visit_bonds = [](void* p, auto&& f) {
+  Travels<Bonds>::each(*static_cast<Bonds*>(p), [&](auto& v, bool) { f(v); });
 };
 const auto visit_walls = [](void* p, auto&& f) {
   Travels<WallContacts>::each(*static_cast<WallContacts*>(p), [&](auto& v, bool) { f(v); });
@@ -259,11 +269,11 @@ struct BrickStep::Rebuild {
   // find_leaving: per ball of the part, the rank it moves to (-1: none; empty: no moves); per rank,
   // the moving balls' pairs and wall contacts it is sent (in the part's order).
   std::vector<int> part_dest;
-  std::vector<std::vector<std::uint32_t>> pair_rows, wall_rows;
+  std::vector<std::vector<std::uint32_t>> pair_rows, wall_rows, bond_rows;
   // The messages, and what each rank sends this one (shells_within_bounds): its balls, the moving
   // balls' pairs and wall contacts; the balls received over every rank.
   std::vector<std::vector<double>> out, in;
-  std::vector<std::size_t> shell_in, in_pairs, in_walls;
+  std::vector<std::size_t> shell_in, in_pairs, in_walls, in_bonds;
   double received = 0;
   // list_entries: this rank's balls and those received, in the whole model's order. from: -1 this
   // rank's (at: part index), else the rank whose message holds it (at: its record there); owner:
@@ -274,13 +284,17 @@ struct BrickStep::Rebuild {
   // whole model's numbers), and their wall contacts.
   ContactTable arrived_pairs;
   WallContacts arrived_walls;
+  Bonds arrived_bonds;
   // search_part: the pairs found among the entries, those kept (touching a ball of this rank), the
   // entries the part keeps and each entry's index in it (kAbsent: not kept).
   PairCandidates found;
   std::vector<std::uint32_t> pairs, keep, local;
+  // A bonded scene's: the entries of each intact bond of the new part, two by two.
+  std::vector<std::uint32_t> bond_ends;
   // carry_history and make_next_balls: the new part.
   Balls next_balls;
   ContactTable next_table;
+  Bonds next_bonds;   // a bonded scene's: the bonds of the balls this member owns from now on
   std::vector<std::uint32_t> next_global, next_owned, next_owned_pairs;
   std::vector<std::vector<std::uint32_t>> next_send, next_recv;
   std::vector<std::uint8_t> next_ghost;

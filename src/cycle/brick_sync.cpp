@@ -5,8 +5,11 @@
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 #include "cycle/pair_list.hpp"
+#include "model/bond_table.hpp"
+#include "model/edit.hpp"
 #include "support/comm.hpp"
 
 namespace trubal {
@@ -21,6 +24,10 @@ template <class F> void each_moving_ball_array(Balls& b, F&& f) {
 }
 template <class F> void each_history_array(ContactTable& c, F&& f) {
   c.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
+}
+template <class F> void each_moving_bond_array(Bonds& t, F&& f) {
+  for (auto* v : {&t.fn, &t.fsx, &t.fsy, &t.fsz, &t.mt, &t.mbx, &t.mby, &t.mbz}) f(*v);
+  f(t.fate);
 }
 template <class F> void each_moving_wall_array(WallContacts& w, F&& f) {
   w.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
@@ -221,7 +228,27 @@ void BrickStep::sync(Model& full, VerletReference* whole_ref) {
   }
   gather_set(*team_, [](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
              full.wall_contacts, owned_walls_, rank_walls_, out, in);
+  if (bonded_) gather_bonds(full, out, in);
   current_ = true;
+}
+
+void BrickStep::gather_bonds(Model& full, std::vector<double>& out, std::vector<double>& in) {
+  // The bonds this member owns (its ball i's), by (id_i, id_j) as rank_bonds_ lists them: the
+  // step keeps the part's rows in an order of its own (cycle/bond_pass.hpp), found again by ids.
+  std::vector<std::uint32_t> mine;
+  together([&] {
+    const Bonds& t = part_.bonds;
+    for (std::size_t q : bond_rows_by_id(t)) {
+      const std::int64_t i = find_ball(part_, t.id_i[q]);
+      if (i >= 0 && !scratch_.ghost[static_cast<std::size_t>(i)]) mine.push_back(static_cast<std::uint32_t>(q));
+    }
+    if (mine.size() != rank_bonds_[team_->rank()].size())
+      throw std::logic_error("its part holds other bonds than the split gave it");
+  }, "gathering the bonds of its part");
+  gather_set(*team_, [](Bonds& t, auto&& f) { each_moving_bond_array(t, f); }, part_.bonds, full.bonds, mine,
+             rank_bonds_, out, in);
+  // (The whole model's index of its bonds holds which broke: the table is a new edition.)
+  if (team_->shares_whole() ? team_->rank() == 0 : comm::root()) full.bonds.changed();
 }
 
 template <class T> void BrickStep::gather_whole(const std::vector<T>& mine, std::vector<T>& all) {
@@ -256,11 +283,13 @@ void broadcast_arrays(Model& m) {
   m.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
   comm::broadcast(m.contacts.results_cycle);
   m.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
+  m.bonds.for_each_array([](auto& v) { comm::broadcast(v); });
   // What came from rank 0 is new here: new versions, so that no index of the old arrays passes for
   // one of these (Pipeline::prepare has rank 0 decide whether to search).
   if (!comm::root()) {
     m.contacts.list_version = fresh_list_version();
     m.wall_contacts.list_version = fresh_list_version();
+    m.bonds.changed();
     m.balls.index_ids();
   }
 }

@@ -234,7 +234,7 @@ void ParallelStep::run(ThreadPool& pool, Model& model, StepScratch& scratch, con
     const std::size_t ball0 = std::min(balls, first * kReduceBlock), ball1 = std::min(balls, last * kReduceBlock);
     if (kernels.features.rolling) add_rolling(model.balls, scratch, ball0, ball1, part(t));
     if (kernels.features.bridges) add_bridges(model, scratch, ball0, ball1);
-    if (kernels.features.bonds) add_bonds(model, scratch, kernels, ball0, ball1);
+    if (kernels.features.bonds) add_bonds(scratch, kernels, ball0, ball1);
     kernels.motion(model, scratch, kernels, ball0, ball1, part(t));
     if (kernels.features.bridges) bridge_work(model, scratch, kernels, ball0, ball1, part(t));
     if (moved) moved_[t] = moved->max_displacement2(model.balls, ball0, ball1);

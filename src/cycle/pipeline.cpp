@@ -73,8 +73,7 @@ Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* po
 }
 
 bool Pipeline::threads_in_space(const Model& model) {
-  // (Bonds do not travel with the parts' balls: a bonded scene is shared by ball numbers.)
-  if (distributed() || bricks_.size() < 2 || !backend_->keeps_list() || !model.bonds.empty()) return false;
+  if (distributed() || bricks_.size() < 2 || !backend_->keeps_list()) return false;
   const int rule = policy_->split_rule;
   if (rule != 0) return rule > 0;
   const ContactTable& c = model.contacts;

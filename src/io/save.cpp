@@ -275,6 +275,7 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
       if constexpr (std::is_same_v<IO, Reader>)
         if (v.size() != nbonds) io.corrupt();
     });
+    if constexpr (std::is_same_v<IO, Reader>) m.bonds.changed();
   }
 }
 

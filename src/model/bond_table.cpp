@@ -1,6 +1,7 @@
 #include "model/bond_table.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numeric>
 #include <utility>
@@ -9,6 +10,11 @@
 #include "model/periodic_cell.hpp"
 
 namespace trubal {
+
+std::uint64_t next_bonds_edition() {
+  static std::atomic<std::uint64_t> last{0};
+  return ++last;
+}
 
 namespace {
 
@@ -20,6 +26,7 @@ void keep_rows(Bonds& bonds, const std::vector<bool>& keep) {
       if (keep[k]) v[w++] = v[k];
     v.resize(w);
   });
+  bonds.changed();
 }
 
 }  // namespace
@@ -44,6 +51,7 @@ void sort_bonds(Bonds& bonds) {
     for (std::size_t k = 0; k < n; ++k) out[k] = v[order[k]];
     v.swap(out);
   });
+  bonds.changed();
 }
 
 std::size_t add_bonds(Model& model, const std::vector<std::size_t>& selected, const BondSpec& spec) {

@@ -14,6 +14,26 @@
 
 namespace trubal {
 
+// A number no table of bonds has had before in this process (model/bond_table.cpp).
+std::uint64_t next_bonds_edition();
+
+// The edition of a table of bonds: a number of its own, new with every edit of the table (changed())
+// and with every copy, so that what is indexed by a table (the step's, cycle/bond_pass.hpp) knows it
+// in one comparison, without reading its rows: a table restored from a copy (a step taken again, a
+// rescue) is a new edition, as is one read from a file or handed over between the members of a
+// spatial decomposition.
+class BondsEdition {
+ public:
+  BondsEdition() : value_(next_bonds_edition()) {}
+  BondsEdition(const BondsEdition&) : value_(next_bonds_edition()) {}
+  BondsEdition& operator=(const BondsEdition&) { value_ = next_bonds_edition(); return *this; }
+  std::uint64_t value() const { return value_; }
+  void renew() { value_ = next_bonds_edition(); }
+
+ private:
+  std::uint64_t value_;
+};
+
 struct Bonds {
   std::vector<std::int64_t> id_i, id_j;                 // the balls' ids, id_i < id_j
   // The law of each bond (BOND's words): stiffness per area, strengths, tan of the friction angle,
@@ -23,6 +43,12 @@ struct Bonds {
   // values that broke it.
   std::vector<double> fn, fsx, fsy, fsz, mt, mbx, mby, mbz;
   std::vector<std::uint8_t> fate;                       // physics/bond.hpp BondFate: 0 intact, 1, 2 broken
+
+  // Every edit of the table's rows (which bonds, their order, their law; not the state a step
+  // writes, nor a bond breaking in a step) calls changed(): BOND, BOND delete, DELETE, RENUMBER,
+  // a file read, a hand-over between members. A copy is a new edition by itself.
+  BondsEdition edition;
+  void changed() { edition.renew(); }
 
   std::size_t size() const { return id_i.size(); }
   bool empty() const { return id_i.empty(); }

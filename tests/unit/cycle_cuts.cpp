@@ -407,7 +407,7 @@ TEST_CASE("cycle cuts: a cemented block with parallel bonds breaking in tension 
 
 TEST_CASE("cycle cuts: threads sharing the step in space on 2 and 3 threads give the serial bits, every scene",
           "[cuts][backends][system][threads]") {
-  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox, &kWetBox}) {
+  for (const Scene* scene : {&kServoShear, &kHertzDrop, &kMembrane, &kWalls, &kShearBox, &kWetBox, &kBondedBlock}) {
     check_scene(*scene, true);   // (and every run's PRINT info says the threads shared it in space)
   }
 }

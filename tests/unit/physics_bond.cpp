@@ -4,6 +4,7 @@
 // springs predicts; the energy a breaking bond held is booked.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -257,11 +258,87 @@ TEST_CASE("bond: a breaking bonded block gives the same bits on every backend an
     INFO(backend << " on " << threads << " threads");
     StepPolicy policy;
     policy.share_rule = 1;     // shared even where one thread would be faster: the split is what is tested
-    policy.split_rule = 1;     // asked in space: a bonded scene is shared by ball numbers all the same
+    policy.split_rule = 1;     // in space where the backend keeps a list (a part of the decomposition a thread)
     Model model = start;
     auto pipeline = make_pipeline(backend, threads, 0, &policy);
     REQUIRE(run_cycles(model, *pipeline, 300, {}).done == 300);
     same_bits(reference, model);
+    if (std::string(backend) == "threaded") {   // in parts, the lists rebuilt on them
+      CHECK(pipeline->counters().parts.bonds_across > 20);
+      CHECK(pipeline->counters().parts.list_rebuilds >= 1);
+    }
+  }
+}
+
+TEST_CASE("bond: the step's index of the bonds follows every edit and copy of the table", "[bond]") {
+  // The table's edition: new with each copy and each edit, so that the step knows its index of the
+  // rows stale in one comparison.
+  Harness h;
+  REQUIRE(h.deck(bonded_block(0)));
+  Model model = h.session.model();
+  const std::uint64_t first = model.bonds.edition.value();
+  const Bonds copy = model.bonds;
+  CHECK(copy.edition.value() != first);
+  CHECK(model.bonds.edition.value() == first);
+  sort_bonds(model.bonds);
+  CHECK(model.bonds.edition.value() != first);
+  // A copy of the table whose broken bonds hold again, its rows in the step's order, put over the
+  // table in the same model stepped by the same pipeline on the same pair list: the step must index
+  // it afresh (its index says which bonds broke), and so step as a fresh pipeline does from the
+  // same state.
+  StepPolicy policy;
+  auto pipeline = make_pipeline("serial", 1, 0, &policy);
+  REQUIRE(run_cycles(model, *pipeline, 200, {}).done == 200);
+  REQUIRE(count_bonds(model.bonds).broken() > 10);
+  Bonds whole_again = model.bonds;
+  std::fill(whole_again.fate.begin(), whole_again.fate.end(), std::uint8_t{0});
+  model.bonds = whole_again;
+  Model fresh = model;
+  REQUIRE(run_cycles(model, *pipeline, 20, {}).done == 20);
+  auto other = make_pipeline("serial", 1, 0, &policy);
+  REQUIRE(run_cycles(fresh, *other, 20, {}).done == 20);
+  same_bits(fresh, model);
+}
+
+namespace {
+
+// A bar of 40 balls along x (ids 1 to 40 at x = 0 to 39), bonded strongly but for one weak bond in
+// its middle, between ids 20 and 21, and pulled slowly from both ends: the weak bond alone breaks.
+// Two members split it there (the bisection cuts it at its median, between x = 19 and 20).
+std::string pulled_bar(const std::string& backend) {
+  std::string deck = backend + "start box -2 42 -2 2 -2 2\nprop kn 1e9 ks 1e9 mu 0.5 dens 1000\n";
+  for (int k = 0; k < 40; ++k) deck += fmt::format("ball {} 0 0 0.5 id {}\n", k, k + 1);
+  return deck + "bond range x -1 19.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
+                "bond range x 19.5 41 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
+                "bond range x 18.5 20.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e6 coh 1e9\n"
+                "fix vel spin range x -1 0.5\nfix vel spin range x 38.5 41\n"
+                "init xvel -1e-2 range x -1 0.5\ninit xvel 1e-2 range x 38.5 41\ncycle 3000\n";
+}
+
+}  // namespace
+
+TEST_CASE("bond: threads sharing the step in space step a bond across their parts, broken there, as serial does",
+          "[bond][threads]") {
+  Harness serial;
+  REQUIRE(serial.deck(pulled_bar("")));
+  const Bonds& bonds = serial.session.model().bonds;
+  REQUIRE(bonds.size() == 39);
+  const std::vector<std::size_t> by_id = bond_rows_by_id(bonds);
+  for (std::size_t k = 0; k < by_id.size(); ++k) {   // the weak bond alone broke, in tension
+    INFO("bond " << bonds.id_i[by_id[k]] << "-" << bonds.id_j[by_id[k]]);
+    CHECK(int(bonds.fate[by_id[k]]) == (bonds.id_i[by_id[k]] == 20 ? 1 : 0));
+  }
+  for (int threads : {2, 3}) {
+    INFO(threads << " threads");
+    Harness h;
+    h.session.policy().split_rule = 1;   // in space, however few the balls
+    h.session.policy().share_rule = 1;
+    REQUIRE(h.deck(pulled_bar(fmt::format("backend threaded threads {}\n", threads))));
+    same_bits(serial.session.model(), h.session.model());
+    const auto counts = h.session.pipeline().counters().parts;
+    CHECK(counts.decompositions >= 1);
+    // On two, the one bond across the parts is the weak one, stepped on both and broken there.
+    if (threads == 2) CHECK(counts.bonds_across == 1);
   }
 }
 
