@@ -23,7 +23,9 @@ CHILD = textwrap.dedent("""
         print("not interrupted")
     except KeyboardInterrupt:
         stopped = s.step
-        assert 10 < stopped < 10**9, stopped
+        # (at 10 where the signal came before the first step: a machine busy with other work can
+        # hold this process back for the parent's whole wait)
+        assert 10 <= stopped < 10**9, stopped
         assert np.all(np.isfinite(s.positions))
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
         assert s.cycle(5) == 5 and s.step == stopped + 5   # the model goes on from where it stopped
@@ -32,7 +34,7 @@ CHILD = textwrap.dedent("""
         s.command("cycle 1000000000")   # the language's CYCLE: the same
         print("not interrupted")
     except KeyboardInterrupt:
-        assert stopped + 5 < s.step < stopped + 10**9, s.step
+        assert stopped + 5 <= s.step < stopped + 10**9, s.step
         print("interrupted again", flush=True)
 """)
 

@@ -110,11 +110,11 @@ TEST_CASE("fuzz: mutated decks fail cleanly or run, never crash, hang or run awa
 }
 
 TEST_CASE("fuzz: the memory limit stops a deck that allocates far past it", "[hard][fuzz][system]") {
-  // 125,000 balls and their contacts take about 390 MB under ASan (a small deck about 90 MB), 210 MB
-  // without; under a 192 MB limit the run must end as a runaway allocation would: by ASan's report,
-  // or (without ASan) by the program's own clean error.
+  // 343,000 balls and their contacts take about 430 MB without ASan (a small deck about 90 MB under
+  // ASan), more than twice the limit; under a 192 MB limit the run must end as a runaway allocation
+  // would: by ASan's report, or (without ASan) by the program's own clean error.
   Mutant m;
-  m.lines = {"start 40 40 40", "prop kn 1e5 ks 1e5 dens 1000", "lattice fcc 1 50 50 50", "cycle 2"};
+  m.lines = {"start 56 56 56", "prop kn 1e5 ks 1e5 dens 1000", "lattice fcc 1 70 70 70", "cycle 2"};
   Limits small;
   small.memory_mb = 192;
   const Outcome o = run_mutant(m, small);
