@@ -13,6 +13,7 @@
 #include "interp_support.hpp"
 #include "mpi_launch.hpp"
 #include "skip.hpp"
+#include "scene_decks.hpp"
 
 using namespace trubal;
 using namespace trubal::test;
@@ -22,18 +23,6 @@ namespace {
 const char* kBlock = "start box -3 8 -3 8 -3 8 destroy\nprop kn 1e8 ks 5e7 mu 0.5 dens 2000\nlattice fcc 1 5 5 7\n"
                      "bond gap 1e-6 kn 2e8 ks 1e8 ten 2e5 coh 4e5 fa 30\ngroup top range z 3.5 10\n"
                      "fix vel spin range group top\nfix vel spin range z -1 0.1\ninit zvel -0.3 range group top\n";
-// A bar of 40 balls along x (ids 1 to 40 at x = 0 to 39), bonded strongly but for one weak bond in
-// its middle, between ids 20 and 21, and pulled slowly from both ends: the weak bond alone breaks.
-// Two ranks' parts meet there (the bisection cuts the bar at its median, between x = 19 and 20).
-std::string pulled_bar() {
-  std::string deck = "start box -2 42 -2 2 -2 2\nprop kn 1e9 ks 1e9 mu 0.5 dens 1000\n";
-  for (int k = 0; k < 40; ++k) deck += fmt::format("ball {} 0 0 0.5 id {}\n", k, k + 1);
-  return deck + "bond range x -1 19.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
-                "bond range x 19.5 41 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
-                "bond range x 18.5 20.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e6 coh 1e9\n"
-                "fix vel spin range x -1 0.5\nfix vel spin range x 38.5 41\n"
-                "init xvel -1e-2 range x -1 0.5\ninit xvel 1e-2 range x 38.5 41\ncycle 3000\n";
-}
 
 const char* kBondOutputs = "print balls file balls.csv\nprint bonds file bonds.csv\nprint counters file counters.txt\n";
 
@@ -80,7 +69,7 @@ TEST_CASE("distributed: a bond across two ranks' parts is stepped on both and br
           "[mpi][system][bond]") {
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   TempDir serial;
-  serial.write("deck.dat", pulled_bar() + kBondOutputs);
+  serial.write("deck.dat", pulled_bar_deck() + kBondOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
   const std::string balls = slurp(serial.path() / "balls.csv"), bonds = slurp(serial.path() / "bonds.csv");
   REQUIRE(bonds.find("\n20,21,") != std::string::npos);
@@ -89,7 +78,7 @@ TEST_CASE("distributed: a bond across two ranks' parts is stepped on both and br
   REQUIRE(bonds.find("tension") < bonds.find("\n21,22,"));
   for (int ranks : {2, 3}) {
     TempDir dir;
-    dir.write("deck.dat", "backend mpi\n" + pulled_bar() + kBondOutputs);
+    dir.write("deck.dat", "backend mpi\n" + pulled_bar_deck() + kBondOutputs);
     REQUIRE(run_deck(dir, ranks) == 0);
     INFO(ranks << " ranks: " << slurp(dir.path() / "out.txt"));
     const Counters counters = read_counters(dir.path() / "counters.txt");

@@ -21,6 +21,7 @@
 #include "model/bond_table.hpp"
 #include "physics/bond.hpp"
 #include "physics/measure.hpp"
+#include "scene_decks.hpp"
 
 using namespace trubal;
 using namespace trubal::test;
@@ -300,27 +301,10 @@ TEST_CASE("bond: the step's index of the bonds follows every edit and copy of th
   same_bits(fresh, model);
 }
 
-namespace {
-
-// A bar of 40 balls along x (ids 1 to 40 at x = 0 to 39), bonded strongly but for one weak bond in
-// its middle, between ids 20 and 21, and pulled slowly from both ends: the weak bond alone breaks.
-// Two members split it there (the bisection cuts it at its median, between x = 19 and 20).
-std::string pulled_bar(const std::string& backend) {
-  std::string deck = backend + "start box -2 42 -2 2 -2 2\nprop kn 1e9 ks 1e9 mu 0.5 dens 1000\n";
-  for (int k = 0; k < 40; ++k) deck += fmt::format("ball {} 0 0 0.5 id {}\n", k, k + 1);
-  return deck + "bond range x -1 19.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
-                "bond range x 19.5 41 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
-                "bond range x 18.5 20.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e6 coh 1e9\n"
-                "fix vel spin range x -1 0.5\nfix vel spin range x 38.5 41\n"
-                "init xvel -1e-2 range x -1 0.5\ninit xvel 1e-2 range x 38.5 41\ncycle 3000\n";
-}
-
-}  // namespace
-
 TEST_CASE("bond: threads sharing the step in space step a bond across their parts, broken there, as serial does",
           "[bond][threads]") {
   Harness serial;
-  REQUIRE(serial.deck(pulled_bar("")));
+  REQUIRE(serial.deck(pulled_bar_deck()));
   const Bonds& bonds = serial.session.model().bonds;
   REQUIRE(bonds.size() == 39);
   const std::vector<std::size_t> by_id = bond_rows_by_id(bonds);
@@ -333,7 +317,7 @@ TEST_CASE("bond: threads sharing the step in space step a bond across their part
     Harness h;
     h.session.policy().split_rule = 1;   // in space, however few the balls
     h.session.policy().share_rule = 1;
-    REQUIRE(h.deck(pulled_bar(fmt::format("backend threaded threads {}\n", threads))));
+    REQUIRE(h.deck(pulled_bar_deck(fmt::format("backend threaded threads {}\n", threads))));
     same_bits(serial.session.model(), h.session.model());
     const auto counts = h.session.pipeline().counters().parts;
     CHECK(counts.decompositions >= 1);

@@ -18,20 +18,6 @@ using namespace trubal;
 
 namespace {
 
-// A dense FCC block (overlap 1% of d), the outer cells held, the inside free to vibrate.
-Model vibrating_block(int n) {
-  Model model;
-  model.materials[1] = test::linear_material(1e8, 1e8, 0.3, 2500);
-  const double r = 0.01, a = 0.99 * 2 * r * std::sqrt(2.0);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> jitter(-2e-5, 2e-5);
-  test::for_each_fcc_site(n, n, n, a, 0, [&](const test::FccSite& site) {
-    const std::size_t ball = add_ball(model, 0, 1, site.x + jitter(rng), site.y + jitter(rng), site.z + jitter(rng), r);
-    if (site.on_surface) model.balls.fixed[ball] = kVel | kSpin;
-  });
-  return model;
-}
-
 // The cycle an "unstable at cycle N" message names.
 std::int64_t unstable_cycle(const std::string& message) {
   const std::string key = "unstable at cycle ";
@@ -43,7 +29,7 @@ std::int64_t unstable_cycle(const std::string& message) {
 // The block squeezed 1%, released but for its bottom layer: it springs apart and falls under
 // gravity, with friction and local damping, so every work and energy term moves.
 Model falling_heap() {
-  Model model = vibrating_block(3);
+  Model model = test::held_fcc_block(3);
   model.materials[1] = test::linear_material(1e6, 5e5, 0.4, 2500);
   model.settings.gravity = {0, 0, -9.81};
   model.settings.damping.kind = DampKind::Local;
@@ -110,7 +96,7 @@ TEST_CASE("guard: checking every 8th cycle still stops an unstable block within 
       model.balls.fixed[0] = kVel | kSpin;
       model.settings.frac = 3;
     } else {
-      model = vibrating_block(4);
+      model = test::held_fcc_block(4);
       model.settings.frac = damped ? 5 : 2;
     }
     if (damped) {   // DAMP 0.05 0.5: alpha = lambda omega, beta = lambda / omega, omega = 2 pi f
@@ -143,7 +129,7 @@ TEST_CASE("guard: a stable vibrating block is not stopped by checks that see its
   // The held block at FRAC 0.8, undamped: its kinetic term goes negative at the turning points of
   // each vibration, which checks 8 cycles apart could see at every check; the test of velocities
   // that flip sign asks for the step before each check too.
-  Model model = vibrating_block(4);
+  Model model = test::held_fcc_block(4);
   model.settings.frac = 0.8;
   auto backend = make_pipeline("serial", 1);
   const CycleResult r = run_cycles(model, *backend, 4000, {});

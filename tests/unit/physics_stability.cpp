@@ -11,20 +11,6 @@ using namespace trubal;
 
 namespace {
 
-// A dense FCC block (overlap 1% of d), the outer cells held, the inside free to vibrate.
-Model fcc_pack(int n, double ks) {
-  Model model;
-  model.materials[1] = test::linear_material(1e8, ks, 0.3, 2500);
-  const double r = 0.01, a = 0.99 * 2 * r * std::sqrt(2.0);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> jitter(-2e-5, 2e-5);
-  test::for_each_fcc_site(n, n, n, a, 0, [&](const test::FccSite& site) {
-    const std::size_t ball = add_ball(model, 0, 1, site.x + jitter(rng), site.y + jitter(rng), site.z + jitter(rng), r);
-    if (site.on_surface) model.balls.fixed[ball] = kVel | kSpin;
-  });
-  return model;
-}
-
 void cundall_damping(Model& model) {
   // DAMP 0.05 0.5: alpha = lambda omega, beta = lambda / omega, omega = 2 pi f.
   const double omega = 2 * M_PI * 0.5;
@@ -36,7 +22,7 @@ void cundall_damping(Model& model) {
 }  // namespace
 
 TEST_CASE("physics: Cundall's Rayleigh damping runs stably with the automatic step", "[physics]") {
-  Model model = fcc_pack(4, 1e8);
+  Model model = test::held_fcc_block(4, 1e8);
   cundall_damping(model);
   auto backend = make_pipeline("serial", 1);
   const CycleResult r = run_cycles(model, *backend, 3000, {});
@@ -53,7 +39,7 @@ TEST_CASE("physics: an unstable step is caught by the guard and the model is lef
   // The step bound is Gershgorin's, conservative by about 1.75 in frequency on this pack: measured
   // limits are FRAC 1.5-2 undamped and FRAC 3-4 with Cundall's damping (over-damped: squared).
   const bool damped = GENERATE(false, true);
-  Model model = fcc_pack(4, 1e8);
+  Model model = test::held_fcc_block(4, 1e8);
   if (damped) cundall_damping(model);
   model.settings.frac = damped ? 5 : 2;
   auto backend = make_pipeline("serial", 1);

@@ -64,4 +64,18 @@ inline std::string scrambled_in_memory_deck() {
   return out + deck.substr(last);
 }
 
+// A bar of 40 balls along x (ids 1 to 40 at x = 0 to 39), bonded strongly but for one weak bond in
+// its middle, between ids 20 and 21, and pulled slowly from both ends: the weak bond alone breaks.
+// Two threads' or ranks' parts meet there (the bisection cuts the bar at its median, between x = 19
+// and 20). `before`: lines ahead of START (a BACKEND). For physics_bond.cpp, distributed_bonds.cpp.
+inline std::string pulled_bar_deck(const std::string& before = "") {
+  std::string deck = before + "start box -2 42 -2 2 -2 2\nprop kn 1e9 ks 1e9 mu 0.5 dens 1000\n";
+  for (int k = 0; k < 40; ++k) deck += fmt::format("ball {} 0 0 0.5 id {}\n", k, k + 1);
+  return deck + "bond range x -1 19.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
+                "bond range x 19.5 41 gap 1e-6 kn 1e10 ks 1e10 ten 1e9 coh 1e9\n"
+                "bond range x 18.5 20.5 gap 1e-6 kn 1e10 ks 1e10 ten 1e6 coh 1e9\n"
+                "fix vel spin range x -1 0.5\nfix vel spin range x 38.5 41\n"
+                "init xvel -1e-2 range x -1 0.5\ninit xvel 1e-2 range x 38.5 41\ncycle 3000\n";
+}
+
 }  // namespace trubal::test
