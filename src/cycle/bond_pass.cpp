@@ -53,10 +53,6 @@ BondStiffness ball_stiffness(const StepScratch& s, std::size_t ball) {
 
 }  // namespace
 
-bool has_intact_bonds(const Model& model) {
-  return std::any_of(model.bonds.fate.begin(), model.bonds.fate.end(), [](std::uint8_t f) { return f == 0; });
-}
-
 void prepare_bonds(Model& model, StepScratch& scratch, int shares) {
   scratch.bond_broken.resize(static_cast<std::size_t>(std::max(shares, 1)));
   if (index_current(model, scratch)) return;
@@ -129,7 +125,6 @@ void prepare_bonds(Model& model, StepScratch& scratch, int shares) {
   by_ball(scratch.bond_ball_j, scratch.bond_partner_begin, scratch.bond_partners);
   scratch.ball_bond_stiffness.resize(balls);
   for (std::size_t k = 0; k < balls; ++k) scratch.ball_bond_stiffness[k] = ball_stiffness(scratch, k);
-  scratch.bond_intact = places;
   scratch.bond_edition = t.edition.value();
   scratch.bond_version = model.contacts.list_version;
 }
@@ -233,7 +228,6 @@ void bond_forces(Model& model, StepScratch& scratch, const StepKernels& k, std::
 void settle_broken_bonds(StepScratch& scratch) {
   for (const std::vector<std::uint32_t>& list : scratch.bond_broken)
     for (std::uint32_t at : list) {
-      --scratch.bond_intact;
       for (std::uint32_t ball : {scratch.bond_ball_i[at], scratch.bond_ball_j[at]})
         scratch.ball_bond_stiffness[ball] = ball_stiffness(scratch, ball);
     }

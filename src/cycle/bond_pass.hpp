@@ -25,8 +25,6 @@
 
 namespace trubal {
 
-// Whether the model has a bond that still holds: the step then runs the pass.
-bool has_intact_bonds(const Model& model);
 // Puts the table's rows in the step's order (its intact bonds first, by their balls' places in
 // memory) and indexes them by ball, again where the balls, the table's rows or which bonds hold
 // changed; for `shares` shares of step 1.

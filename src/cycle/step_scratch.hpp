@@ -89,7 +89,7 @@ struct StepScratch {
   // the first at bond_partner_begin[b]) and as i (ascending j, from bond_run_begin[b] in bond_runs),
   // as places: the order by ids, in which every ball sums. Each bond's share of the stiffness sums
   // (physics/bond.hpp) and each ball's sum of its intact bonds' (changed only where a bond breaks:
-  // bond_broken). How many of the places hold (less those settle_broken_bonds counts broken).
+  // bond_broken).
   std::vector<std::uint32_t> bond_ball_i, bond_ball_j, bond_run_begin, bond_runs, bond_partner_begin, bond_partners;
   std::vector<std::uint8_t> bond_holds;
   std::vector<BondLawRow> bond_laws;           // the distinct laws but the radius: kn ks tension cohesion tan_friction mcf
@@ -97,7 +97,6 @@ struct StepScratch {
   std::vector<BondPush> bond_push;
   std::vector<BondStiffness> bond_stiffness, ball_bond_stiffness;
   std::vector<std::vector<std::uint32_t>> bond_broken;   // the places of the bonds each share broke this step
-  std::size_t bond_intact = 0;
   std::uint64_t bond_edition = 0;              // the Bonds::edition the index is of
   std::uint64_t bond_version = 0;              // the ContactTable::list_version the bonds' index is of
   // StepKernels::moments only (sized by the pipeline for servo steps, empty otherwise): each ball's
