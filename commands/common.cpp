@@ -1,4 +1,5 @@
 #include "commands/common.hpp"
+#include "support/comm.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -154,6 +155,8 @@ void ProgressReporter::finish() {
 // Overlaps past kOverlapWarning of the smaller radius at the end of a run (physics/overlap.hpp):
 // said once, and again only where the largest doubles or after they all came back below.
 static void warn_of_overlaps(Context& ctx) {
+  // (Rank 0's model alone is whole where the ranks keep their parts, and rank 0 alone warns.)
+  if (comm::size() > 1 && !comm::root()) return;
   const Model& m = ctx.session.state();   // (the positions: no contact result is read or made)
   const LargestOverlap big = largest_overlap(m);
   double& warned = ctx.session.overlap_warned;

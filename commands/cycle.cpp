@@ -71,6 +71,7 @@ static void run_cycle_until(Context& ctx, Args& args, std::int64_t limit) {
   if (args.accept("every")) every = args.count("every (cycles between checks)", 1);
   args.done();
   ctx.session.require_started();
+  ctx.session.whole_everywhere();   // (the measure reads the whole model on every rank between pieces)
   const auto measure = until_measure(ctx, args, which);
   const auto start = std::chrono::steady_clock::now();
   ProgressReporter progress(ctx, true);
@@ -103,7 +104,7 @@ static void run_cycle(Context& ctx, Args& args) {
   args.done();
   auto start = std::chrono::steady_clock::now();
   ProgressReporter progress(ctx);
-  CycleResult r = ctx.session.cycle(n, progress.callback(), true);
+  CycleResult r = ctx.session.cycle(n, progress.callback(), true, true);
   finish_run(ctx, progress, r, n, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
@@ -132,7 +133,7 @@ const Command cycle_command = {
     "otherwise (SET progress). At the end one line gives the cycle, time, step and speed, and in batch "
     "where the time went (contact detection, forces, motion, output).",
     "cycle 1000",
-    {"until", "axial", "volumetric", "q", "p", "sig1", "sig3", "time", "every"}, run_cycle};
+    {"until", "axial", "volumetric", "q", "p", "sig1", "sig3", "time", "every"}, run_cycle, false, false, OnRanks::Parts};
 
 static void run_solve(Context& ctx, Args& args) {
   double ratio = 1e-3;

@@ -96,13 +96,25 @@ void print_info(Context& ctx) {
   o << fmt::format("backend: {}\n", s.pipeline().backend().name());
   o << fmt::format("threads: {}\n", s.pipeline().threads());
   if (comm::launched()) o << fmt::format("ranks: {}\n", comm::size());   // (under mpirun, one rank included)
-  // The process's peak resident memory so far (every rank's, gathered: every rank runs PRINT).
-  o << fmt::format("peak memory: {} MiB{}\n", mib_list(peak_memory_per_rank()), comm::size() > 1 ? " (per rank)" : "");
-  if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
-    std::vector<double> mine{static_cast<double>(m.contacts.result_bytes()) / (1 << 20)}, all;
-    comm::allgather(mine, all);
-    o << fmt::format("contact results held: {} MiB (per rank: rank 0 alone makes those a command reads after a "
-                     "CYCLE, for what it prints and writes)\n", mib_list(all));
+  // The process's peak resident memory so far, and the model's arrays held now (every rank's,
+  // gathered before rank 0 runs PRINT: Session::gather_rank_figures).
+  const auto ranks = s.rank_figures();
+  auto each = [&](double Session::RankFigures::*f) {
+    std::vector<double> v;
+    for (const auto& r : ranks) v.push_back(r.*f);
+    return mib_list(v);
+  };
+  o << fmt::format("peak memory: {} MiB{}\n", each(&Session::RankFigures::peak_mib), comm::size() > 1 ? " (per rank)" : "");
+  if (comm::size() > 1) {
+    o << fmt::format("arrays held in the last step: whole model {} MiB, part {} MiB (per rank: rank 0 keeps the whole "
+                     "model for the output and the rescue copy; the others hold their part, and the whole model's ids, "
+                     "types and radii)\n",
+                     each(&Session::RankFigures::whole_arrays_mib), each(&Session::RankFigures::part_arrays_mib));
+    o << fmt::format("model held now: {} MiB (per rank: {})\n", each(&Session::RankFigures::model_arrays_mib),
+                     s.parts_kept() ? "each its part of the model, rank 0 the whole model too"
+                                    : "the whole model on every rank");
+    o << fmt::format("contact results held: {} MiB (per rank: rank 0 gathers those a command reads after a "
+                     "CYCLE, for what it prints and writes)\n", each(&Session::RankFigures::results_mib));
   }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);
@@ -123,8 +135,8 @@ void print_info(Context& ctx) {
 }
 
 // PRINT counters: the counts PRINT info tells in words, one `name value` line each under a name that
-// stays (HELP lists them), for scripts and tests to read. Every rank runs it (the per-rank values
-// are gathered); rank 0 alone prints or writes.
+// stays (HELP lists them), for scripts and tests to read. Rank 0 alone runs it (the other ranks'
+// values were gathered before: Session::gather_rank_figures).
 void print_counters(Context& ctx, const std::string& file) {
   const Session& s = ctx.session;
   const Model& m = s.model();
@@ -152,18 +164,18 @@ void print_counters(Context& ctx, const std::string& file) {
   line("least_part_balls", c.parts.least_balls);
   line("most_part_balls", c.parts.most_balls);
   line("part_bonds_across", c.parts.bonds_across);
-  if (comm::size() > 1) {   // (gathered: every rank runs PRINT)
-    std::vector<double> mine{static_cast<double>(m.contacts.result_bytes()) / (1 << 20), c.whole_arrays_mib,
-                             c.part_arrays_mib}, all;
-    comm::allgather(mine, all);
-    for (std::size_t r = 0; 3 * r + 2 < all.size(); ++r) {
-      line(fmt::format("rank{}_contact_results_mib", r), all[3 * r]);
-      line(fmt::format("rank{}_whole_arrays_mib", r), all[3 * r + 1]);
-      line(fmt::format("rank{}_part_arrays_mib", r), all[3 * r + 2]);
+  line("parts_kept", s.parts_kept() ? 1 : 0);
+  if (comm::size() > 1) {   // (gathered before rank 0 runs PRINT: Session::gather_rank_figures)
+    const auto ranks = s.rank_figures();
+    for (std::size_t r = 0; r < ranks.size(); ++r) {
+      line(fmt::format("rank{}_contact_results_mib", r), ranks[r].results_mib);
+      line(fmt::format("rank{}_whole_arrays_mib", r), ranks[r].whole_arrays_mib);
+      line(fmt::format("rank{}_part_arrays_mib", r), ranks[r].part_arrays_mib);
+      line(fmt::format("rank{}_model_held_mib", r), ranks[r].model_arrays_mib);
+      line(fmt::format("rank{}_peak_mib", r), ranks[r].peak_mib);
     }
     for (std::size_t r = 0; r < c.cycle_peaks_mib.size(); ++r) line(fmt::format("rank{}_cycle_peak_mib", r), c.cycle_peaks_mib[r]);
   }
-  if (!comm::root()) return;
   if (file.empty()) {
     ctx.out << text;
     return;

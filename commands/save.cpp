@@ -21,7 +21,7 @@ const Command save_command = {
     "histories (HIST) are saved with their settings and the rows they hold in memory; the backend choice is not "
     "saved.",
     "save dense.sav",
-    {}, run_save};
+    {}, run_save, false, false, OnRanks::RankZero};
 
 static void run_restart(Context& ctx, Args& args) {
   std::string file = args.word("file name");

@@ -2,6 +2,7 @@
 #include "cycle/pipeline.hpp"
 
 #include "support/comm.hpp"
+#include "support/peak_memory.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -47,6 +48,32 @@ void Session::set_backend(const std::string& name, int threads, std::uint64_t ma
   auto pipeline = make_pipeline(name, threads, max_memory, &policy_);
   make_results_to_read(model_, *pipeline_);   // the old pipeline holds the copy they are made from
   pipeline_ = std::move(pipeline);
+}
+
+bool Session::parts_kept() const { return pipeline_->parts_live(model_); }
+
+void Session::whole_everywhere() { pipeline_->share_whole(model_); }
+
+void Session::gather_rank_figures() {
+  const PipelineCounters c = pipeline_->counters();
+  const std::vector<double> peaks = peak_memory_per_rank();
+  constexpr double kMiB = 1 << 20;
+  std::vector<double> mine{static_cast<double>(model_.contacts.result_bytes()) / kMiB, c.whole_arrays_mib,
+                           c.part_arrays_mib,
+                           static_cast<double>(array_bytes(model_) + pipeline_->part_bytes_now()) / kMiB},
+      all;
+  comm::allgather(mine, all);
+  rank_figures_.assign(peaks.size(), {});
+  for (std::size_t r = 0; r < rank_figures_.size() && 4 * r + 3 < all.size(); ++r)
+    rank_figures_[r] = {peaks[r], all[4 * r], all[4 * r + 1], all[4 * r + 2], all[4 * r + 3]};
+}
+
+std::vector<Session::RankFigures> Session::rank_figures() const {
+  if (comm::size() > 1) return rank_figures_;
+  const PipelineCounters c = pipeline_->counters();
+  constexpr double kMiB = 1 << 20;
+  return {{peak_memory_per_rank()[0], static_cast<double>(model_.contacts.result_bytes()) / kMiB, c.whole_arrays_mib,
+           c.part_arrays_mib, static_cast<double>(array_bytes(model_) + pipeline_->part_bytes_now()) / kMiB}};
 }
 
 void Session::require_started() const {
@@ -192,18 +219,22 @@ double Session::stress_volume() const {
 }
 
 CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress,
-                           bool defer_results) {
+                           bool defer_results, bool keep_parts) {
   ++changes_;   // the balls move
   decltype(centres_)().swap(centres_);   // (a million balls' map is 50 MB; the next BALL makes it again)
   unsaved_ = true;
   require_started();
   check_ready(model_);
-  update_mass(model_);
+  if (!parts_kept() || comm::root()) update_mass(model_);   // (the ranks' parts keep theirs: CycleRun)
   interrupt_requested() = false;
   CycleControl control;
   control.interrupt = &interrupt_requested();
   control.progress = progress;
-  control.defer_results = defer_results;
+  // Under mpirun the last step's results are made on the ranks' parts and gathered to rank 0 at the
+  // end, not deferred: what rank 0 alone then prints or writes needs no step taken again (which
+  // would be a collective call, or rank 0's alone through the whole model).
+  control.keep_parts = keep_parts && comm::size() > 1;
+  control.defer_results = defer_results && comm::size() == 1;
   const double vol = stress_volume();
   const bool histories = !history_->tables().empty();
   VtkSeries* dumps = dumps_ && dumps_->every() > 0 ? dumps_.get() : nullptr;

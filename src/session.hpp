@@ -75,6 +75,25 @@ class Session {
     return model_.settings;
   }
 
+  // Under mpirun, after a CYCLE: each rank holds its own part of the model, and the ranks other than
+  // 0 no more of the whole than its balls' ids, types and radii (rank 0 holds the whole model as
+  // well, current). The next CYCLE goes on from the parts; a command that needs the whole model on
+  // every rank has it handed over first (whole_everywhere: a collective call, made by the
+  // interpreter for each command as Command::on_ranks says).
+  bool parts_kept() const;
+  void whole_everywhere();
+  // Each rank's memory figures (PRINT info, PRINT counters), gathered by a collective call under
+  // mpirun (gather_rank_figures, before a command that rank 0 alone runs); this process's alone on
+  // one rank.
+  struct RankFigures {
+    double peak_mib = 0;           // peak resident memory so far
+    double results_mib = 0;        // the contact results held
+    double whole_arrays_mib = 0, part_arrays_mib = 0;   // the arrays held in the last distributed step
+    double model_arrays_mib = 0;   // the arrays of the model this rank holds now (its part's included)
+  };
+  void gather_rank_figures();
+  std::vector<RankFigures> rank_figures() const;
+
   // The step pipeline: its backend (pair finding) and threads.
   const Pipeline& pipeline() const { return *pipeline_; }
   // How the steps are shared where the default is a timed choice, and the faults a test injects
@@ -129,8 +148,10 @@ class Session {
 
   // CYCLE / SOLVE. The interrupt flag is the process's Ctrl-C flag.
   // defer_results: the last step's contact results are made when next read (CycleControl).
+  // keep_parts: under mpirun, each rank keeps its part after the run (parts_kept; CYCLE's way),
+  // the last step's results then made on the parts and gathered to rank 0 rather than deferred.
   CycleResult cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress = {},
-                    bool defer_results = false);
+                    bool defer_results = false, bool keep_parts = false);
   struct SolveResult { CycleResult run; double ratio = 0; bool converged = false; };
   SolveResult solve(double ratio, std::int64_t limit,
                     const std::function<void(std::int64_t, std::int64_t)>& progress = {});
@@ -186,6 +207,7 @@ class Session {
   void start(const Space& space);   // a fresh model in this space; histories and dumps end
   // mutable: model() makes deferred results (a cache of what the state determines).
   mutable Model model_;
+  std::vector<RankFigures> rank_figures_;   // gathered by gather_rank_figures (several ranks)
   StepPolicy policy_;   // (before pipeline_, which reads it to the end)
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<History> history_;

@@ -66,9 +66,11 @@ void apply_field_change(Balls& balls, const FieldChange& change, std::size_t beg
 
 // The bytes of a model's arrays of balls, pairs and wall contacts (their capacity).
 std::size_t array_bytes(const Model& m);
-// Rank 0's arrays of balls, pairs (their results where kept) and wall contacts, to every rank (a
-// collective call); the others' pair and wall lists take fresh versions.
-void broadcast_arrays(Model& m);
+// Rank 0's arrays of balls, pairs (their results where kept, and with_results) and wall contacts,
+// to every rank (a collective call); the others' pair and wall lists take fresh versions. Without
+// the results, the others' are dropped (ContactTable::results_kept false): rank 0 alone prints and
+// writes what they feed.
+void broadcast_arrays(Model& m, bool with_results = true);
 
 class BrickStep {
  public:

@@ -263,8 +263,9 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
   shared_ = true;
   if (release_parts) release();   // (before the whole model comes: the two are never held together)
   if (done) return;
-  // Rank 0's whole model, current, to the others, and the list's reference positions.
-  broadcast_arrays(full);
+  // Rank 0's whole model, current, to the others, and the list's reference positions; not the
+  // contact results, which rank 0 alone reads (it alone prints and writes).
+  broadcast_arrays(full, false);
   if (whole_ref && whole_ref->x.size() == full.balls.size()) {
     comm::broadcast(whole_ref->x);
     comm::broadcast(whole_ref->y);
@@ -274,13 +275,21 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
   wall_version_ = full.wall_contacts.list_version;
 }
 
-void broadcast_arrays(Model& m) {
+void broadcast_arrays(Model& m, bool with_results) {
   m.balls.for_each_array([](auto& v) { comm::broadcast(v); });
   // (The history parts in use first: the arrays that follow are those.)
   std::int64_t laws = (m.contacts.history_laws.rolling ? 1 : 0) + (m.contacts.history_laws.bridge ? 2 : 0);
   comm::broadcast(laws);
   m.contacts.set_history_laws(HistoryLaws{(laws & 1) != 0, (laws & 2) != 0});
-  m.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
+  std::int64_t results = with_results ? 1 : 0;   // (rank 0's word)
+  comm::broadcast(results);
+  if (results != 0) {
+    m.contacts.for_each_pair_array([](auto& v) { comm::broadcast(v); });
+  } else {
+    m.contacts.for_each_list_array([](auto& v) { comm::broadcast(v); });
+    m.contacts.for_each_history([](auto& v, const HistoryPart&) { comm::broadcast(v); });
+    if (!comm::root()) m.contacts.drop_results();
+  }
   comm::broadcast(m.contacts.results_cycle);
   m.wall_contacts.for_each_array([](auto& v) { comm::broadcast(v); });
   m.bonds.for_each_array([](auto& v) { comm::broadcast(v); });

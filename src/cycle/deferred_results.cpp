@@ -34,35 +34,12 @@ void make_results(Model& model, Pipeline& pipeline, bool keep_rescue) {
 
 void make_results_to_read(Model& model, Pipeline& pipeline) {
   if (!pipeline.distributed() || comm::size() < 2) return make_results(model, pipeline);
-  if (!pipeline.results_deferred(model)) {   // (the same answer on every rank)
-    if (comm::root()) model.contacts.keep_results();
-    return;
-  }
-  std::exception_ptr failure;
-  try {
-    comm::together([&] {
-      if (!comm::root()) return;
-      // The list every rank holds (rank 0's, handed over at the CYCLE's end): the step taken again
-      // searches on its own and may keep other candidates beside the same touching pairs.
-      const PairCandidates held = pair_list_of(model.contacts);
-      {
-        comm::Alone alone;
-        Pipeline::Alone serial(pipeline);
-        make_results(model, pipeline, true);
-      }
-      if (!holds_pairs(model.contacts, held)) install_pairs(model.contacts, held);
-    }, "making the contact results");
-  } catch (...) {
-    failure = std::current_exception();
-  }
-  pipeline.clear_deferred();
-  pipeline.invalidate();
-  if (!failure) return;
-  // Rank 0 may have put its model back to the step before, or be part way through it: every rank
-  // goes back to rank 0's rescue copy (a collective call), then the failure is every rank's.
-  pipeline.restore_rescue(model);
-  pipeline.invalidate();
-  std::rethrow_exception(failure);
+  // Under mpirun no run defers its results (Session::cycle): its last step made them on the ranks'
+  // parts, gathered to rank 0, which alone prints and writes them. Where the parts are kept, the
+  // others hold no whole model to read (Session::whole_everywhere hands it over first).
+  if (pipeline.results_deferred(model) || (pipeline.parts_live(model) && !comm::root()))
+    throw std::logic_error("internal error: the whole model was read on a rank that does not hold it");
+  if (comm::root()) model.contacts.keep_results();
 }
 
 }  // namespace trubal

@@ -6,9 +6,11 @@
 
 namespace trubal {
 
-StepKernels make_kernels(const Model& model) {
+StepKernels make_kernels(const Model& model) { return make_kernels(model, scene_features(model)); }
+
+StepKernels make_kernels(const Model& model, const Features& features) {
   StepKernels k;
-  k.features = scene_features(model);
+  k.features = features;
   const Features& f = k.features;
   const Damping& damping = model.settings.damping;
   if (damping.kind == DampKind::Rayleigh) { k.alpha = damping.alpha; k.beta = damping.beta; }

@@ -234,5 +234,8 @@ struct StepKernels {
 
 // The kernels for the model as it is now (materials, damping, fixities, loads).
 StepKernels make_kernels(const Model& model);
+// The same with the scene's features given (scene_features: a distributed run going on from its
+// parts has them from rank 0, whose model alone holds every ball's state).
+StepKernels make_kernels(const Model& model, const Features& features);
 
 }  // namespace trubal

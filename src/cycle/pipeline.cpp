@@ -58,7 +58,8 @@ Pipeline::Pipeline(std::unique_ptr<Backend> backend, int threads, StepPolicy* po
       backend_(std::move(backend)),
       pool_(threads > 0 ? threads : default_threads(backend_->name())),
       step_(*policy_) {
-  if (backend_->distributed() && comm::size() > 1) mode_ = StepMode::Ranks;
+  comm_ranks_ = comm::size();
+  if (backend_->distributed() && comm_ranks_ > 1) mode_ = StepMode::Ranks;
   const int members = distributed() ? 1 : pool_.size();
   for (int t = 0; t < members; ++t) bricks_.push_back(std::make_unique<BrickStep>(*policy_));
   if (members > 1) {
@@ -180,11 +181,21 @@ void Pipeline::sync_all(Model& model) {
   each_part([&](BrickStep& part, int) { part.share(model, &ref_); });
 }
 
-void Pipeline::end_cycle(Model& model) {
+void Pipeline::end_cycle(Model& model, bool keep_parts) {
   if (!bricks().live_for(model)) return;
   list_from_parts_ = true;
   // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
   if (distributed()) cycle_peaks_ = peak_memory_per_rank();
+  if (keep_parts && parts_live(model)) {
+    sync(model);
+    return;
+  }
+  share_whole(model);
+}
+
+void Pipeline::share_whole(Model& model) {
+  if (!bricks().live_for(model)) return;
+  list_from_parts_ = true;
   each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed()); });
 }
 
@@ -369,19 +380,6 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   if (!shared_by_.empty()) lines.emplace_back("last step shared by", shared_by_);
   if (shared_by_.starts_with("the spatial decomposition"))
     for (auto& line : bricks().info()) lines.push_back(std::move(line));
-  if (distributed() && comm::size() > 1) {   // (a collective call: every rank runs PRINT info)
-    std::vector<double> mine{static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20)}, all;
-    comm::allgather(mine, all);
-    std::string whole, part;
-    for (std::size_t r = 0; r + 1 < all.size(); r += 2) {
-      whole += fmt::format("{}{:.3g}", whole.empty() ? "" : " ", all[r]);
-      part += fmt::format("{}{:.3g}", part.empty() ? "" : " ", all[r + 1]);
-    }
-    lines.emplace_back("arrays held in the last step",
-                       "whole model " + whole + " MiB, part " + part +
-                           " MiB (per rank: rank 0 keeps the whole model for the output and the rescue copy; the others "
-                           "hold their part, and the whole model's ids and radii)");
-  }
   if (!cycle_peaks_.empty()) {
     lines.emplace_back("peak memory by the last CYCLE's end",
                        mib_list(cycle_peaks_) + " MiB (per rank; the whole model's list is searched on the parts, so that in a CYCLE "

@@ -63,9 +63,19 @@ class Pipeline {
   // every rank's (what every rank acts on: the whole model stepped through, the CYCLE's end).
   void sync(Model& model);
   void sync_all(Model& model);
-  // sync_all at the CYCLE's end: a distributed run's parts are released before rank 0 hands the
-  // whole model to the others (the next CYCLE's prepare would drop them in any case).
-  void end_cycle(Model& model);
+  // At the CYCLE's end. keep_parts, in a distributed run on several ranks: sync (rank 0's model
+  // made current), and each rank keeps its part, which the next CYCLE goes on from (parts_live);
+  // else share_whole.
+  void end_cycle(Model& model, bool keep_parts = false);
+  // sync_all, the parts released before rank 0 hands the whole model to the others (the next
+  // CYCLE's prepare would drop them in any case): a collective call where parts_live.
+  void share_whole(Model& model);
+  // Whether a distributed run's ranks hold their live parts of this model (between CYCLEs: after an
+  // end_cycle that kept them), the ranks other than 0 no more of the whole model than the balls'
+  // ids, types and radii (hollow). The same answer on every rank.
+  bool parts_live(const Model& model) const { return distributed() && comm_ranks_ > 1 && bricks().live_for(model); }
+  // The bytes of this rank's part (0 where none is live).
+  std::size_t part_bytes_now() const { return bricks().live() ? bricks().part_bytes() : 0; }
   // Between steps: the velocity field change of new strain rates (cell_before_step's, deferred), on
   // the balls wherever they are stepped; the tilts of the cell kept within half an edge
   // (reduce_cell_tilt) on every copy of the pair list.
@@ -99,23 +109,6 @@ class Pipeline {
   // them no more (make_results).
   void release_rescue() { rescue_.release(); }
   bool distributed() const { return mode_ == StepMode::Ranks; }
-  // While one lives, a distributed pipeline steps as a serial one does: the whole model, searched on
-  // this process alone (rank 0's own work under comm::Alone: make_results_to_read).
-  class Alone {
-   public:
-    explicit Alone(Pipeline& p) : p_(p), ranks_(p.distributed()) {
-      if (ranks_) p.mode_ = StepMode::Numbers;
-    }
-    ~Alone() {
-      if (ranks_) p_.mode_ = StepMode::Ranks;
-    }
-    Alone(const Alone&) = delete;
-    Alone& operator=(const Alone&) = delete;
-
-   private:
-    Pipeline& p_;
-    bool ranks_;
-  };
   // The critical step of the model's state (physics/timestep.hpp, `cap` the Hertz cap), before the
   // CYCLE's first step: where a distributed run's list is to be searched on the parts, they are made
   // and searched now and each rank's own balls give their steps (a collective call), so that no rank
@@ -190,7 +183,6 @@ class Pipeline {
   //                                                     (timed_choice.hpp between the two), else
   //                                                     Numbers; brick_step -> Numbers where the
   //                                                     list it searched is better shared by numbers
-  //   Alone                                          Ranks -> Numbers while it lives, then back
   //   step with whole_next_                          OneThread -> Numbers (the whole pool takes
   //                                                  it); the others stay
   // whole_next_: the next step on the whole model (rewind_step sets it; step and invalidate clear
@@ -258,6 +250,7 @@ class Pipeline {
   std::vector<std::unique_ptr<ThreadPool>> solo_pools_;   // per thread: its part's pool of one
   std::vector<PhaseTimes> member_times_;                 // threads 1..: their parts' times (not reported)
   StepMode mode_ = StepMode::Numbers;
+  int comm_ranks_ = 1;              // the ranks of the run (comm::size() when made)
   bool whole_next_ = false;         // the next step on the whole model, on every rank (rewind_step)
   // threads_in_space's answer for one list (a memo of a function of the list, not a state).
   struct SpaceVerdict {

@@ -156,10 +156,12 @@ void Pipeline::hollow(Model& model) {
   Balls& b = model.balls;
   if (b.x.empty() && model.contacts.i.empty() && b.size() > 0) return;   // (hollow already)
   auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
-  // What stays: the ids (the count of balls: BrickStep::live_for) and the radii (the skin and the
-  // displacement test read them; they do not change in a CYCLE).
+  // What stays: the ids (the count of balls: BrickStep::live_for), the radii (the skin and the
+  // displacement test read them) and the types (a CYCLE that goes on from the parts reads them for
+  // its laws and checks): none changes in a CYCLE.
   b.for_each_array([&](auto& v) {
-    if (static_cast<const void*>(&v) != &b.id && static_cast<const void*>(&v) != &b.rad) free(v);
+    const void* a = &v;
+    if (a != &b.id && a != &b.rad && a != &b.type) free(v);
   });
   model.contacts.for_each_pair_array(free);              // (its list_version stays: live_for)
   model.wall_contacts.for_each_array(free);

@@ -31,6 +31,20 @@ constexpr std::int64_t kAgreeEvery = 16;   // steps between the ranks' checks of
 
 using Clock = std::chrono::steady_clock;
 
+// The scene's features (scene_features) as rank 0 finds them, on every rank: a collective call,
+// for a run going on from the ranks' parts (the others hold no ball's state but its type and radius).
+Features features_from_root(const Model& model) {
+  Features f;
+  if (comm::root()) f = scene_features(model);
+  std::vector<std::int64_t> v{f.rotation, f.friction, f.hertz, f.rolling, f.bridges, f.bonds, f.stiffness_damping,
+                              static_cast<std::int64_t>(f.mass_damping), f.gravity, f.applied, f.periodic};
+  comm::broadcast(v);
+  f.rotation = v[0] != 0; f.friction = v[1] != 0; f.hertz = v[2] != 0; f.rolling = v[3] != 0; f.bridges = v[4] != 0;
+  f.bonds = v[5] != 0; f.stiffness_damping = v[6] != 0; f.mass_damping = static_cast<DampKind>(v[7]);
+  f.gravity = v[8] != 0; f.applied = v[9] != 0; f.periodic = v[10] != 0;
+  return f;
+}
+
 // START box (its bounded axes, in a mixed space): the first ball (by index) whose centre is outside
 // across a `stop` face, and every ball outside across a `destroy` face (marked). A NaN centre is
 // the guard's, not this.
@@ -149,9 +163,22 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
     : model_(model), pipeline_(pipeline), n_(n), control_(control) {
   if (model.balls.size() == 0)
     throw std::runtime_error("there are no balls to cycle (GEN, BALL or LATTICE first)");
+  // The parts a distributed CYCLE left (Pipeline::parts_live) are gone on from where nothing needs
+  // the whole model first: the first step's sort, a servo's first reading of the contact table, a
+  // step estimated afresh. Then the ranks other than 0 hold no more of the whole model than the
+  // balls' ids, types and radii, and rank 0's is current; nothing that sets a mass, a law or a
+  // fixity ran since the last CYCLE checked them (such a command has the whole model handed over
+  // first, which ends the parts: Session::whole_everywhere).
+  const Space& cell = model.space;
+  servo_reads_table_ =
+      cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
+  if (pipeline.parts_live(model) && (sort_due(model) || servo_reads_table_ || !(model.critical_dt > 0)))
+    pipeline.share_whole(model);
+  const bool from_parts = pipeline.parts_live(model);
+  const bool whole_here = !from_parts || comm::root();
   check_ready(model);
-  update_mass(model);
-  for (std::size_t k = 0; k < model.balls.size(); ++k)
+  if (whole_here) update_mass(model);
+  for (std::size_t k = 0; k < model.balls.size() && !from_parts; ++k)
     if (!(model.balls.mass[k] > 0 && std::isfinite(1 / model.balls.mass[k]) && model.balls.inertia[k] > 0))
       throw std::runtime_error(fmt::format(
           "ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger radius or "
@@ -165,18 +192,20 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   }
   // The history parts the laws of this run use, zero where a law is new since the pairs were found.
   model.contacts.use_history(laws_with_history(model));
-  kernels_ = make_kernels(model);
+  kernels_ = from_parts ? make_kernels(model, features_from_root(model)) : make_kernels(model);
   cap_ = hertz_step_cap(model);
   // The estimate between contact episodes, below which the held critical step is kept (the whole
-  // model's, before a distributed run's parts take their balls).
-  free_step_ = contact_free_step(model, kernels_.features, cap_);
+  // model's, before a distributed run's parts take their balls; going on from them, rank 0's).
+  if (whole_here) free_step_ = contact_free_step(model, kernels_.features, cap_);
+  if (from_parts) {
+    std::vector<double> free_step{free_step_};
+    comm::broadcast(free_step);
+    free_step_ = free_step[0];
+  }
   // A servo not yet run reads its first stress from the contact table (cell_before_step): the whole
   // model's list is then searched before the first step, where a distributed run's parts would
-  // search it at their split.
-  const Space& cell = model.space;
-  servo_reads_table_ =
-      cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
-  pipeline.prepare(model, !servo_reads_table_);
+  // search it at their split. (Parts gone on from need no search: their steps test their lists.)
+  if (!from_parts) pipeline.prepare(model, !servo_reads_table_);
   // (Before the critical step, which may leave the ranks other than 0 with their parts alone.)
   guard_.emplace(model);
   if (!(model.critical_dt > 0)) {
@@ -491,7 +520,7 @@ void CycleRun::defer_last_results() {
 
 // Copies the timings into the result whichever way the loop ends.
 CycleResult& CycleRun::finish() {
-  pipeline_.end_cycle(model_);   // a distributed run's last step, on every rank
+  pipeline_.end_cycle(model_, control_.keep_parts);   // a distributed run's last step, on every rank
   result_.seconds = std::chrono::duration<double>(Clock::now() - loop_start_).count();
   result_.times = pipeline_.times();
   if (!result_.unstable) result_.energy_warning = balance_warning(model_, result_, guard_->floor());

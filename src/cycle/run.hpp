@@ -28,13 +28,16 @@ struct CycleControl {
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the
   // result arrays are freed, and make_results takes the last step again from the rescue copy when
-  // they are read (CYCLE's way: their memory is two fifths of the model's). On several ranks rank 0
-  // alone makes them (make_results_to_read), as it alone prints and writes. One stopped early and
+  // they are read (CYCLE's way: their memory is two fifths of the model's). Under mpirun no run
+  // defers them (Session::cycle): rank 0 gathers them from the parts. One stopped early and
   // one whose last step an observer reads write them as usual.
   bool defer_results = false;
   // The step a CYCLE deferred, taken again from the rescue copy put back and released (make_results):
   // it takes no copy of its own, as it gave these bits once already; a failure is an internal error.
   bool replay = false;
+  // A distributed run on several ranks: each rank keeps its part at the end (Pipeline::end_cycle),
+  // and a run that starts with the parts live goes on from them (Session::parts_kept).
+  bool keep_parts = false;
 };
 
 inline constexpr double kBalanceWarning = 0.01;   // of the energy that moved: CycleResult::energy_warning
@@ -86,14 +89,10 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
 // fails); else it is freed before the results take their memory.
 void make_results(Model& model, Pipeline& pipeline, bool keep_rescue = false);
 
-// make_results for what a command reads (the Session's model()), called by every rank at the same
-// points. A distributed run's deferred results are made by rank 0 alone, which alone prints and
-// writes what they feed: it takes the step again on its own, searching serially, and puts back the
-// pair list every rank holds; the other ranks leave their results unmade (ContactTable::results_kept
-// false: the measurements read nothing there), so that their memory stays at their share between
-// CYCLEs too. Every rank's next step searches afresh (the same pairs touch either way). Should
-// rank 0 fail (out of memory), every rank goes back to the rescue copy, the step before, and the
-// command fails everywhere with rank 0's message.
+// make_results for what a command reads (the Session's model()). Under mpirun no run defers its
+// results: its last step made them on the ranks' parts and rank 0 gathered them, which alone prints
+// and writes what they feed (Command::on_ranks); the others' results stay unmade. A rank that holds
+// its part alone reading here is an internal error.
 void make_results_to_read(Model& model, Pipeline& pipeline);
 
 }  // namespace trubal

@@ -55,6 +55,15 @@ struct Context {
   void warn(const std::string& message) const;
 };
 
+// What a command needs of the model under mpirun. A CYCLE leaves each rank holding its own part
+// of the model (cycle/brick_step.hpp), the ranks other than 0 no more of the whole than its balls'
+// ids, types and radii, rank 0 the whole model as well, current: its output reads that.
+enum class OnRanks : std::uint8_t {
+  Whole,      // every rank gets the whole model first (Session::whole_everywhere), then runs it
+  RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
+  Parts,      // every rank runs it on the model as it is (CYCLE; the commands that do not read the balls)
+};
+
 struct Command {
   std::string_view name;                     // canonical keyword, capitals
   std::vector<std::string_view> aliases;     // other full keywords (CREATE for BALL)
@@ -72,6 +81,7 @@ struct Command {
   // Reads the rest of its line as typed, one word (TITLE): commas, `=` and parentheses are kept,
   // not taken as separators (the lexer's text_after_keyword).
   bool raw_text = false;
+  OnRanks on_ranks = OnRanks::Whole;
 };
 
 // The command table (commands/table.cpp): the dispatcher, HELP, completion and the man-page test

@@ -1,4 +1,5 @@
 #include "interp/interpreter.hpp"
+#include "session.hpp"
 
 #include <charconv>
 #include <cstdio>
@@ -203,7 +204,8 @@ void Interpreter::execute(const std::string& line) {
   // Flushed before it runs: a long or hung command shows its own line (a quick one's waits for the
   // next command that is not, or for an error: Command::quick).
   const bool flush = interactive || !command.quick;
-  const bool lazily = comm::size() > 1 && agree_lazily && command.quick && !interactive;
+  // (Not where the ranks' parts are kept: the whole model is handed over first, a collective call.)
+  const bool lazily = comm::size() > 1 && agree_lazily && command.quick && !interactive && !session_.parts_kept();
   // The quick commands before it agreed on first (it may make collective calls), before its echo:
   // a deck that failed earlier on another rank does not show this command as run.
   if (comm::size() > 1 && !lazily) settle_agreement();
@@ -247,7 +249,20 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
   try {
     if (fail_line_for_test > 0 && !frames_.empty() && frames_.back().line == fail_line_for_test)
       throw std::runtime_error(fmt::format("rank {} fails here for a test (TRUBAL_TEST_FAIL_AT)", comm::rank()));
-    command.run(ctx, args);
+    // What the command needs of the model (Command::on_ranks): the same on every rank.
+    switch (command.on_ranks) {
+      case OnRanks::Whole:
+        session_.whole_everywhere();
+        command.run(ctx, args);
+        break;
+      case OnRanks::RankZero:
+        session_.gather_rank_figures();
+        if (comm::root()) command.run(ctx, args);
+        break;
+      case OnRanks::Parts:
+        command.run(ctx, args);
+        break;
+    }
   } catch (const ReportedError&) {
     failed = reported = true;
   } catch (const std::exception& e) {

@@ -117,15 +117,6 @@ bool launched() {
 int rank() { return g_rank; }
 int size() { return g_size; }
 
-Alone::Alone() : rank_(g_rank), size_(g_size) {
-  if (g_rank != 0) throw std::logic_error("internal error: a rank other than 0 cannot act alone");
-  g_size = 1;
-}
-Alone::~Alone() {
-  g_rank = rank_;
-  g_size = size_;
-}
-
 void broadcast(std::string& text) {
 #ifdef TRUBAL_HAVE_MPI
   if (!g_started || g_size == 1) return;

@@ -28,20 +28,6 @@ int rank();
 int size();
 inline bool root() { return rank() == 0; }
 
-// While one lives, this process (rank 0) acts as the only rank: rank() 0, size() 1, and every
-// collective call below returns at once. For work rank 0 does alone while the others wait or go on
-// (the contact results a command reads, cycle/run.hpp make_results_to_read). Not nested; rank 0 only.
-class Alone {
- public:
-  Alone();
-  ~Alone();
-  Alone(const Alone&) = delete;
-  Alone& operator=(const Alone&) = delete;
-
- private:
-  int rank_, size_;
-};
-
 // Rank 0's value to every rank.
 void broadcast(std::string& text);
 void broadcast(std::int64_t& value);
