@@ -55,6 +55,7 @@ bool Session::parts_kept() const { return pipeline_->parts_live(model_); }
 void Session::whole_everywhere() { pipeline_->share_whole(model_); }
 
 void Session::gather_rank_figures() {
+  pipeline_->refresh_whole(model_);   // (a collective call rank 0's reads follow)
   const PipelineCounters c = pipeline_->counters();
   const std::vector<double> peaks = peak_memory_per_rank();
   constexpr double kMiB = 1 << 20;
@@ -230,11 +231,8 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   CycleControl control;
   control.interrupt = &interrupt_requested();
   control.progress = progress;
-  // Under mpirun the last step's results are made on the ranks' parts and gathered to rank 0 at the
-  // end, not deferred: what rank 0 alone then prints or writes needs no step taken again (which
-  // would be a collective call, or rank 0's alone through the whole model).
   control.keep_parts = keep_parts && comm::size() > 1;
-  control.defer_results = defer_results && comm::size() == 1;
+  control.defer_results = defer_results;
   const double vol = stress_volume();
   const bool histories = !history_->tables().empty();
   VtkSeries* dumps = dumps_ && dumps_->every() > 0 ? dumps_.get() : nullptr;

@@ -148,8 +148,7 @@ class Session {
 
   // CYCLE / SOLVE. The interrupt flag is the process's Ctrl-C flag.
   // defer_results: the last step's contact results are made when next read (CycleControl).
-  // keep_parts: under mpirun, each rank keeps its part after the run (parts_kept; CYCLE's way),
-  // the last step's results then made on the parts and gathered to rank 0 rather than deferred.
+  // keep_parts: under mpirun, each rank keeps its part after the run (parts_kept; CYCLE's way).
   CycleResult cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress = {},
                     bool defer_results = false, bool keep_parts = false);
   struct SolveResult { CycleResult run; double ratio = 0; bool converged = false; };

@@ -84,6 +84,8 @@ class BrickStep {
   // The parts hold the current state of `full` (which may be older).
   bool live_for(const Model& full) const;
   bool live() const { return live_; }
+  // The whole model no longer holds the part's state: the next sync gathers it again.
+  void mark_stale() { current_ = false; }
   // Makes this rank's part of `full` (current, its list installed; `ref` the list's reference
   // positions). Every rank computes every rank's owners, so nothing is exchanged.
   void split(const Model& full, const VerletReference& ref);

@@ -1,6 +1,8 @@
 // The contact results a CYCLE deferred, made when read (cycle/run.hpp: make_results,
 // make_results_to_read).
 #include <exception>
+#include <memory>
+#include <new>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -32,14 +34,91 @@ void make_results(Model& model, Pipeline& pipeline, bool keep_rescue) {
   model.contacts.keep_results();
 }
 
+namespace {
+
+// Whether the deferred results were made already (by make_results_alone, which leaves the step
+// deferred on every rank alike).
+bool made_already(const Model& model) {
+  return model.contacts.results_kept() && model.contacts.results_cycle == model.cycle;
+}
+
+// Rank 0 alone, under mpirun: the step a CYCLE deferred taken again through its whole model, from
+// its rescue copy, by a serial pipeline of its own, so that nothing the ranks share changes: the
+// ranks' parts (kept or not), the pipeline's list state and reference, the step left deferred on
+// every rank (the next CYCLE reuses the copy, as every rank decides alike). The pair list every
+// rank holds is put back after it, under its own versions (the search may keep other candidates
+// beside the same touching pairs). On failure rank 0's model is put back to the list it held and
+// marked stale (Pipeline::mark_whole_stale): the next collective call gathers it again.
+void make_results_alone(Model& model, Pipeline& pipeline) {
+  if (made_already(model)) return;
+  const Pipeline::Deferred left = pipeline.deferred();
+  const PairCandidates held = pair_list_of(model.contacts);
+  const std::uint64_t pairs_version = model.contacts.list_version, walls_version = model.wall_contacts.list_version;
+  auto put_back_list = [&] {
+    if (!holds_pairs(model.contacts, held)) install_pairs(model.contacts, held);
+    model.contacts.list_version = pairs_version;
+    model.wall_contacts.list_version = walls_version;
+  };
+  try {
+    if (pipeline.policy().fail_results == 0) {   // (a test's fault: TRUBAL_TEST_FAIL_AT "0 results")
+      pipeline.policy().fail_results = -1;
+      throw std::bad_alloc();
+    }
+    pipeline.rescue().restore(model);
+    const std::unique_ptr<Pipeline> serial = make_pipeline("serial", 1, 0, &pipeline.policy());
+    CycleControl control;
+    control.replay = true;   // (no copy of its own: it gave these bits once already)
+    const CycleResult r = run_cycles(model, *serial, 1, control);   // its one step writes the results
+    if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
+      throw std::logic_error(fmt::format(
+          "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));
+    put_back_list();
+    pipeline.count_results_made();
+  } catch (const std::bad_alloc&) {
+    put_back_list();
+    model.contacts.drop_results();
+    pipeline.mark_whole_stale();
+    throw std::runtime_error("rank 0 ran out of memory making the contact results (taking the CYCLE's last step "
+                             "again); the model is as the CYCLE left it");
+  } catch (...) {
+    put_back_list();
+    model.contacts.drop_results();
+    pipeline.mark_whole_stale();
+    throw;
+  }
+}
+
+}  // namespace
+
 void make_results_to_read(Model& model, Pipeline& pipeline) {
   if (!pipeline.distributed() || comm::size() < 2) return make_results(model, pipeline);
-  // Under mpirun no run defers its results (Session::cycle): its last step made them on the ranks'
-  // parts, gathered to rank 0, which alone prints and writes them. Where the parts are kept, the
-  // others hold no whole model to read (Session::whole_everywhere hands it over first).
-  if (pipeline.results_deferred(model) || (pipeline.parts_live(model) && !comm::root()))
-    throw std::logic_error("internal error: the whole model was read on a rank that does not hold it");
-  if (comm::root()) model.contacts.keep_results();
+  // The ranks keep their parts: rank 0 alone reads its whole model (Command::on_ranks), the others
+  // hold none (Session::whole_everywhere hands it over first).
+  if (pipeline.parts_live(model)) {
+    if (!comm::root())
+      throw std::logic_error("internal error: the whole model was read on a rank that holds its part alone");
+    if (pipeline.results_deferred(model)) make_results_alone(model, pipeline);
+    else model.contacts.keep_results();
+    return;
+  }
+  // Every rank holds the whole model and reads it at the same points: rank 0 makes the results,
+  // the others leave theirs unmade (ContactTable::results_kept false: the measurements read nothing
+  // there; rank 0 alone prints and writes what they feed), so that their memory stays at the model's.
+  if (!pipeline.results_deferred(model)) {   // (the same answer on every rank)
+    if (comm::root()) model.contacts.keep_results();
+    return;
+  }
+  try {
+    comm::together([&] { if (comm::root()) make_results_alone(model, pipeline); }, "making the contact results");
+  } catch (...) {
+    // Rank 0's model may be part way through the step taken again: every rank goes back to rank
+    // 0's rescue copy, the step before (a collective call), and the failure is every rank's.
+    pipeline.clear_deferred();
+    pipeline.restore_rescue(model);
+    pipeline.invalidate();
+    throw;
+  }
+  pipeline.clear_deferred();
 }
 
 }  // namespace trubal

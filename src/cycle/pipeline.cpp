@@ -193,7 +193,18 @@ void Pipeline::end_cycle(Model& model, bool keep_parts) {
   share_whole(model);
 }
 
+void Pipeline::refresh_whole(Model& model) {
+  if (!parts_live(model)) return;   // (the same answer on every rank)
+  std::int64_t stale = whole_stale_ ? 1 : 0;
+  comm::broadcast(stale);
+  whole_stale_ = false;
+  if (stale == 0) return;
+  for (auto& part : bricks_) part->mark_stale();
+  sync(model);
+}
+
 void Pipeline::share_whole(Model& model) {
+  refresh_whole(model);
   if (!bricks().live_for(model)) return;
   list_from_parts_ = true;
   each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed()); });

@@ -74,6 +74,10 @@ class Pipeline {
   // end_cycle that kept them), the ranks other than 0 no more of the whole model than the balls'
   // ids, types and radii (hollow). The same answer on every rank.
   bool parts_live(const Model& model) const { return distributed() && comm_ranks_ > 1 && bricks().live_for(model); }
+  // Rank 0's whole model no longer holds the parts' state (a failed make_results_to_read put it
+  // part way back); refresh_whole, a collective call where parts_live, gathers it again.
+  void mark_whole_stale() { whole_stale_ = true; }
+  void refresh_whole(Model& model);
   // The bytes of this rank's part (0 where none is live).
   std::size_t part_bytes_now() const { return bricks().live() ? bricks().part_bytes() : 0; }
   // Between steps: the velocity field change of new strain rates (cell_before_step's, deferred), on
@@ -251,6 +255,7 @@ class Pipeline {
   std::vector<PhaseTimes> member_times_;                 // threads 1..: their parts' times (not reported)
   StepMode mode_ = StepMode::Numbers;
   int comm_ranks_ = 1;              // the ranks of the run (comm::size() when made)
+  bool whole_stale_ = false;        // mark_whole_stale (rank 0's word counts)
   bool whole_next_ = false;         // the next step on the whole model, on every rank (rewind_step)
   // threads_in_space's answer for one list (a memo of a function of the list, not a state).
   struct SpaceVerdict {

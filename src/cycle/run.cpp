@@ -172,6 +172,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   const Space& cell = model.space;
   servo_reads_table_ =
       cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
+  pipeline.refresh_whole(model);
   if (pipeline.parts_live(model) && (sort_due(model) || servo_reads_table_ || !(model.critical_dt > 0)))
     pipeline.share_whole(model);
   const bool from_parts = pipeline.parts_live(model);

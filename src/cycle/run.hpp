@@ -28,8 +28,8 @@ struct CycleControl {
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the
   // result arrays are freed, and make_results takes the last step again from the rescue copy when
-  // they are read (CYCLE's way: their memory is two fifths of the model's). Under mpirun no run
-  // defers them (Session::cycle): rank 0 gathers them from the parts. One stopped early and
+  // they are read (CYCLE's way: their memory is two fifths of the model's). Under mpirun rank 0
+  // alone makes them (make_results_to_read), as it alone prints and writes. One stopped early and
   // one whose last step an observer reads write them as usual.
   bool defer_results = false;
   // The step a CYCLE deferred, taken again from the rescue copy put back and released (make_results):
@@ -89,10 +89,15 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
 // fails); else it is freed before the results take their memory.
 void make_results(Model& model, Pipeline& pipeline, bool keep_rescue = false);
 
-// make_results for what a command reads (the Session's model()). Under mpirun no run defers its
-// results: its last step made them on the ranks' parts and rank 0 gathered them, which alone prints
-// and writes what they feed (Command::on_ranks); the others' results stay unmade. A rank that holds
-// its part alone reading here is an internal error.
+// make_results for what a command reads (the Session's model()). Under mpirun rank 0 alone takes
+// the deferred step again, through its whole model with a serial pipeline of its own, for what it
+// alone prints and writes: where the ranks keep their parts, rank 0 alone reads (Command::on_ranks);
+// where every rank holds the whole model, every rank calls this at the same points and the others
+// leave their results unmade (ContactTable::results_kept false: the measurements read nothing
+// there), so that their memory stays at the model's. Should rank 0 fail (out of memory), its
+// model is gathered from the parts again at the next collective call where they are kept; else
+// every rank goes back to the rescue copy, the step before, and the command fails everywhere with
+// rank 0's message.
 void make_results_to_read(Model& model, Pipeline& pipeline);
 
 }  // namespace trubal

@@ -35,6 +35,8 @@ struct StepPolicy {
   int fail_split = -1;
   int fail_part_search = -1;
   int fail_search = -1;
+  // Rank 0's next step taken again alone to make the contact results a command reads ("0 results").
+  int fail_results = -1;
   // (A deck's line that fails on one rank, "R L", is the interpreter's: Interpreter::fail_line_for_test.)
 };
 

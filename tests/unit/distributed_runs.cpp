@@ -86,9 +86,9 @@ cycle 1500
     // Each rank searched its own range of balls and the lists were joined, or searched its own part:
     // the files below are serial's only if the joined lists are the serial list.
     CHECK_THAT(out, Catch::Contains("pair search: a stale list on each rank's part"));
-    // Each CYCLE's last step made its results on the parts, gathered to rank 0 (serial makes them
-    // when read, taking that step again): none was taken again here.
-    CHECK(counter(counters, "results_made") == 0);
+    // Each CYCLE left its last step's results to be made when read, as serial does (SAVE after the
+    // first, PRINT balls after the second): rank 0 alone took that step again.
+    CHECK(counter(counters, "results_made") == 2);
     // SAVE and PRINT, which rank 0 alone runs, left the ranks their parts.
     CHECK(counter(counters, "parts_kept") == 1);
     CHECK(slurp(dir.path() / "s.sav") == slurp(serial.path() / "s.sav"));
@@ -249,12 +249,12 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
 
 TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone the whole model for the output",
           "[mpi][system]") {
-  // A CYCLE's last step makes its contact results on the parts, gathered to rank 0, which alone
-  // runs PRINT and SAVE (Command::on_ranks); the other ranks keep their part and no more of the
-  // whole model than its balls' ids, types and radii, and the next CYCLE goes on from the parts. A
-  // command that changes the model (DAMP) has rank 0's whole model handed to every rank first,
-  // without the results (129 bytes a pair: 28 MiB for this block's 226,800 pairs). The files, and the
-  // CYCLEs after each, give the serial bits.
+  // A CYCLE leaves its last step's contact results to be made when read: rank 0 alone runs PRINT
+  // and SAVE (Command::on_ranks) and takes that step again for them, while the other ranks keep
+  // their part and no more of the whole model than its balls' ids, types and radii; the next CYCLE
+  // goes on from the parts. A command that changes the model (DAMP) has rank 0's whole model handed
+  // to every rank first, without the results (129 bytes a pair: 28 MiB for this block's 226,800
+  // pairs). The files, and the CYCLEs after each, give the serial bits.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
                            "lattice fcc 1 30 30 42\ninit xvel 0.01 range x 0 10\ncycle 20\n"
@@ -272,11 +272,10 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
     CHECK(slurp(two.path() / file) == slurp(serial.path() / file));
   CHECK(lines_of(slurp(serial.path() / "first.csv")).size() > 100000);   // most pairs of the block touch
   // After the second CYCLE and its PRINTs: the parts kept, rank 1 holding its part (about half the
-  // balls and pairs, 8.8 MiB when written) and no result, rank 0 the whole model with its results
-  // (43 MiB) and its part.
+  // balls and pairs) and no result, rank 0 the whole model with its results (43 MiB) and its part.
   const Counters kept = read_counters(two.path() / "kept.txt");
   CHECK(counter(kept, "parts_kept") == 1);
-  CHECK(counter(kept, "results_made") == 0);
+  CHECK(counter(kept, "results_made") == 2);   // (for first.csv and balls.csv: rank 0's)
   CHECK(counter(kept, "rank0_contact_results_mib") >= 20);
   CHECK(counter(kept, "rank1_contact_results_mib") == 0);
   CHECK(counter(kept, "rank0_model_held_mib") >= 40);

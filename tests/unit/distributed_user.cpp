@@ -94,6 +94,31 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
     CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
   }
+  SECTION("rank 0 out of memory making the contact results a command reads: the PRINT fails, and the shell goes on") {
+    // Rank 0 alone takes the CYCLE's last step again for the PRINT (make_results_to_read), the
+    // other ranks keeping their parts; it fails (TRUBAL_TEST_FAIL_AT "0 results"). Rank 0's model
+    // is gathered from the parts again at the next command (it was part way back to the step
+    // before): PRINT counters finds cycle 30, and the next CYCLE and the files give the serial bits.
+    TempDir dir, serial;
+    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    dir.write("deck.dat", setup);
+    dir.write("more.txt", "cycle 30\nprint contacts file first.csv\n" + std::string(kCounters) + "cycle 30\nprint balls file balls.csv\n"
+                          "print contacts file contacts.csv\nquit\n");
+    const int status = run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='0 results'");
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    CHECK(status != 124);
+    const std::string message = "rank 0 ran out of memory making the contact results";
+    const auto at = out.find(message);
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find(message, at + 1) == std::string::npos);
+    CHECK(counter(counters_of(dir), "cycle") == 30);
+    CHECK(counter(counters_of(dir), "parts_kept") == 1);
+    serial.write("deck.dat", setup + "cycle 30\ncycle 30\n" + kOutputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+    CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+  }
   SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
     // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks
     // alone made their CYCLE record, and wait for rank 0, on steps rank 0 did not (it hung).
