@@ -11,6 +11,7 @@
 #include "model/bond_table.hpp"
 #include "model/edit.hpp"
 #include "support/comm.hpp"
+#include "support/peak_memory.hpp"
 
 namespace trubal {
 namespace {
@@ -261,7 +262,10 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
   sync(full, whole_ref);
   const bool done = shared_ || team_->shares_whole() || team_->size() < 2;
   shared_ = true;
-  if (release_parts) release();   // (before the whole model comes: the two are never held together)
+  if (release_parts) {   // (before the whole model comes: the two are never held together)
+    release();
+    return_free_memory();
+  }
   if (done) return;
   // Rank 0's whole model, current, to the others, and the list's reference positions; not the
   // contact results, which rank 0 alone reads (it alone prints and writes).

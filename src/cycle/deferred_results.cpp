@@ -11,6 +11,7 @@
 #include "cycle/pipeline.hpp"
 #include "cycle/run.hpp"
 #include "support/comm.hpp"
+#include "support/peak_memory.hpp"
 
 namespace trubal {
 
@@ -86,6 +87,7 @@ void make_results_alone(Model& model, Pipeline& pipeline) {
     pipeline.mark_whole_stale();
     throw;
   }
+  return_free_memory();   // (the serial pipeline's list and index, freed)
 }
 
 }  // namespace
@@ -119,6 +121,10 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
     throw;
   }
   pipeline.clear_deferred();
+  // The next step searches afresh (the same pairs touch either way): the ranks then search on
+  // their parts once split (Pipeline::prepare's PartsToSearch), not split the whole model's list
+  // while they still hold it.
+  pipeline.invalidate();
 }
 
 }  // namespace trubal

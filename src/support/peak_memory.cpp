@@ -1,5 +1,6 @@
 #include "support/peak_memory.hpp"
 
+#include <malloc.h>
 #include <sys/resource.h>
 
 #include <fmt/format.h>
@@ -20,6 +21,12 @@ std::string mib_list(const std::vector<double>& mib) {
   std::string line;
   for (double v : mib) line += fmt::format("{}{:.0f}", line.empty() ? "" : " ", v);
   return line;
+}
+
+void return_free_memory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
 }
 
 }  // namespace trubal
