@@ -54,6 +54,13 @@ bool Session::parts_kept() const { return pipeline_->parts_live(model_); }
 
 void Session::whole_everywhere() { pipeline_->share_whole(model_); }
 
+void Session::results_before_setting() {
+  if (!parts_kept()) return make_results_to_read(model_, *pipeline_);
+  comm::together([&] { if (comm::root()) make_results_to_read(model_, *pipeline_); }, "making the contact results");
+  // (The next CYCLE takes a copy of its own on every rank, of the new settings, as serial does.)
+  pipeline_->clear_deferred();
+}
+
 void Session::gather_rank_figures() {
   pipeline_->refresh_whole(model_);   // (a collective call rank 0's reads follow)
   const PipelineCounters c = pipeline_->counters();

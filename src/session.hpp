@@ -68,7 +68,7 @@ class Session {
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
   // estimated afresh, and PRINT energy takes the state as it is until the next step.
   Settings& settings() {
-    make_results_to_read(model_, *pipeline_);   // the step taken again reads the settings
+    results_before_setting();   // the step taken again reads the settings
     model_.critical_dt = 0;
     model_.energy_at_step.valid = false;   // gravity's potential, say, is no longer the last step's
     unsaved_ = true;
@@ -204,6 +204,10 @@ class Session {
 
  private:
   void start(const Space& space);   // a fresh model in this space; histories and dumps end
+  // The contact results a CYCLE deferred, made before a setting changes (the step taken again
+  // reads the settings). Where the ranks keep their parts, rank 0's alone, agreed by every rank
+  // (each runs the setting's command: Command::on_ranks).
+  void results_before_setting();
   // mutable: model() makes deferred results (a cache of what the state determines).
   mutable Model model_;
   std::vector<RankFigures> rank_figures_;   // gathered by gather_rank_figures (several ranks)

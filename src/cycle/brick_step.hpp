@@ -84,6 +84,8 @@ class BrickStep {
   // The parts hold the current state of `full` (which may be older).
   bool live_for(const Model& full) const;
   bool live() const { return live_; }
+  // The whole model's settings to the part (they change between CYCLEs on the kept parts).
+  void take_settings(const Model& full) { part_.settings = full.settings; }
   // The whole model no longer holds the part's state: the next sync gathers it again.
   void mark_stale() { current_ = false; }
   // Makes this rank's part of `full` (current, its list installed; `ref` the list's reference

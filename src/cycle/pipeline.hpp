@@ -78,6 +78,15 @@ class Pipeline {
   // part way back); refresh_whole, a collective call where parts_live, gathers it again.
   void mark_whole_stale() { whole_stale_ = true; }
   void refresh_whole(Model& model);
+  // The settings (Model::settings: DAMP, FRAC, TSTEP, GRAV, which leave the parts kept) to each
+  // part from the model, at a CYCLE's start from kept parts.
+  void parts_take_settings(const Model& model) {
+    for (auto& part : bricks_) part->take_settings(model);
+  }
+  // Whether the parts can take the next step as they are (a collective call; false where none is
+  // live): the balls across a periodic face wrapped on the parts, a stale list rebuilt on them,
+  // where they can; false where that step must go through the whole model.
+  bool parts_go_on(Model& model);
   // The bytes of this rank's part (0 where none is live).
   std::size_t part_bytes_now() const { return bricks().live() ? bricks().part_bytes() : 0; }
   // Between steps: the velocity field change of new strain rates (cell_before_step's, deferred), on

@@ -28,38 +28,40 @@
 
 namespace trubal {
 
+bool Pipeline::parts_go_on(Model& model) {
+  if (!bricks().live_for(model)) return false;   // (every rank decides alike: each input is the same on all)
+  bool outside = false;                          // a collective call, made unconditionally
+  each_part([&](BrickStep& part, int t) {
+    const bool mine = part.outside_cell(model);
+    if (t == 0) outside = mine;
+  });
+  // A ball across a periodic face: the members wrap their parts' balls where they can.
+  if (outside) {
+    bool wrapped = false;
+    each_part([&](BrickStep& part, int t) {
+      const bool done = part.wrap(model);   // (the same answer on every member)
+      if (t == 0) wrapped = done;
+    });
+    outside = !wrapped;
+  }
+  const double limit2 = ref_.displacement_limit2(model);
+  const bool stale =
+      outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
+  if (!stale) return true;
+  if (outside) return false;
+  // A stale list alone: the members rebuild it on their parts where they can.
+  const double skin = list_skin(model);
+  if (!rebuild_parts(model, list_reach(model, skin))) return false;
+  ref_.record_cell(model, skin);
+  wall_travel_ = 0;
+  return true;
+}
+
 void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& sums) {
   // The last step's findings (every rank's): the parts go on where the serial pipeline would only
   // step; a wrap or a rebuild goes through the whole model.
   const auto t0 = std::chrono::steady_clock::now();
-  bool whole = true;
-  if (bricks().live_for(model)) {   // (every rank decides alike: each input is the same on all)
-    bool outside = false;           // a collective call, made unconditionally
-    each_part([&](BrickStep& part, int t) {
-      const bool mine = part.outside_cell(model);
-      if (t == 0) outside = mine;
-    });
-    // A ball across a periodic face: the members wrap their parts' balls where they can.
-    if (outside) {
-      bool wrapped = false;
-      each_part([&](BrickStep& part, int t) {
-        const bool done = part.wrap(model);   // (the same answer on every member)
-        if (t == 0) wrapped = done;
-      });
-      outside = !wrapped;
-    }
-    const double limit2 = ref_.displacement_limit2(model);
-    whole = outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
-    // A stale list alone: the members rebuild it on their parts where they can.
-    if (whole && !outside) {
-      const double skin = list_skin(model);
-      if (rebuild_parts(model, list_reach(model, skin))) {
-        ref_.record_cell(model, skin);
-        wall_travel_ = 0;
-        whole = false;
-      }
-    }
-  }
+  bool whole = !parts_go_on(model);
   times_.detect += seconds_since(t0);
   if (whole) {
     if (bricks().live() || !prepared_for(model)) prepare(model);   // syncs and drops the parts first
@@ -143,6 +145,9 @@ bool Pipeline::rebuild_parts(const Model& model, double skin) {
 }
 
 double Pipeline::critical_timestep(Model& model, const Features& features, double cap) {
+  // Kept parts (a CYCLE going on from them after a setting changed): each rank's own balls, their
+  // list made current first (parts_go_on; the CYCLE hands the whole model over where it cannot be).
+  if (parts_live(model)) return std::min(bricks().critical_step(features), cap);
   // (PartsToSearch: a distributed run's alone)
   if (list_ != ListState::PartsToSearch) return trubal::critical_timestep(model);
   // The parts search the stale list now, and each rank's own balls give their steps.

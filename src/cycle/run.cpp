@@ -164,8 +164,8 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   if (model.balls.size() == 0)
     throw std::runtime_error("there are no balls to cycle (GEN, BALL or LATTICE first)");
   // The parts a distributed CYCLE left (Pipeline::parts_live) are gone on from where nothing needs
-  // the whole model first: the first step's sort, a servo's first reading of the contact table, a
-  // step estimated afresh. Then the ranks other than 0 hold no more of the whole model than the
+  // the whole model first: the first step's sort, a servo's first reading of the contact table (a
+  // step estimated afresh is estimated on the parts). Then the ranks other than 0 hold no more of the whole model than the
   // balls' ids, types and radii, and rank 0's is current; nothing that sets a mass, a law or a
   // fixity ran since the last CYCLE checked them (such a command has the whole model handed over
   // first, which ends the parts: Session::whole_everywhere).
@@ -173,9 +173,12 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   servo_reads_table_ =
       cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
   pipeline.refresh_whole(model);
-  if (pipeline.parts_live(model) && (sort_due(model) || servo_reads_table_ || !(model.critical_dt > 0)))
+  // (A step estimated afresh reads the pairs touching now: the parts' list made current first.)
+  if (pipeline.parts_live(model) &&
+      (sort_due(model) || servo_reads_table_ || (!(model.critical_dt > 0) && !pipeline.parts_go_on(model))))
     pipeline.share_whole(model);
   const bool from_parts = pipeline.parts_live(model);
+  if (from_parts) pipeline.parts_take_settings(model);
   const bool whole_here = !from_parts || comm::root();
   check_ready(model);
   if (whole_here) update_mass(model);
