@@ -69,6 +69,6 @@ const Command plot_command = {
     "runs of different decks share one figure. Drawn by gnuplot (Debian: gnuplot-nox), run "
     "with a generated script; the picture is written under a temporary name and renamed.",
     "plot s33 vs e33 from tri.csv file q.png",
-    {"vs", "from", "file", "line", "title", "xlabel", "ylabel", "size"}, run_plot};
+    {"vs", "from", "file", "line", "title", "xlabel", "ylabel", "size"}, run_plot, false, false, OnRanks::RankZero};
 
 }  // namespace trubal

@@ -61,6 +61,7 @@ struct Context {
 enum class OnRanks : std::uint8_t {
   Whole,      // every rank gets the whole model first (Session::whole_everywhere), then runs it
   RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
+              // (PRINT, SAVE, PLOT)
   Parts,      // every rank runs it on the model as it is (CYCLE; the settings: DAMP, FRAC, TSTEP, GRAV;
               // the commands that do not read the balls)
 };
