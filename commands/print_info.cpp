@@ -104,17 +104,22 @@ void print_info(Context& ctx) {
     for (const auto& r : ranks) v.push_back(r.*f);
     return mib_list(v);
   };
+  auto each_array = [&](double Session::RankFigures::*f) {   // (3 digits: a small model's arrays are under 1 MiB)
+    std::string line;
+    for (const auto& r : ranks) line += fmt::format("{}{:.3g}", line.empty() ? "" : " ", r.*f);
+    return line;
+  };
   o << fmt::format("peak memory: {} MiB{}\n", each(&Session::RankFigures::peak_mib), comm::size() > 1 ? " (per rank)" : "");
   if (comm::size() > 1) {
     o << fmt::format("arrays held in the last step: whole model {} MiB, part {} MiB (per rank: rank 0 keeps the whole "
                      "model for the output and the rescue copy; the others hold their part, and the whole model's ids, "
                      "types and radii)\n",
-                     each(&Session::RankFigures::whole_arrays_mib), each(&Session::RankFigures::part_arrays_mib));
-    o << fmt::format("model held now: {} MiB (per rank: {})\n", each(&Session::RankFigures::model_arrays_mib),
+                     each_array(&Session::RankFigures::whole_arrays_mib), each_array(&Session::RankFigures::part_arrays_mib));
+    o << fmt::format("model held now: {} MiB (per rank: {})\n", each_array(&Session::RankFigures::model_arrays_mib),
                      s.parts_kept() ? "each its part of the model, rank 0 the whole model too"
                                     : "the whole model on every rank");
     o << fmt::format("contact results held: {} MiB (per rank: rank 0 gathers those a command reads after a "
-                     "CYCLE, for what it prints and writes)\n", each(&Session::RankFigures::results_mib));
+                     "CYCLE, for what it prints and writes)\n", each_array(&Session::RankFigures::results_mib));
   }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);

@@ -65,9 +65,10 @@ class MpiBackend final : public Backend {
                                       "range of ball indices, and every rank joins the ranks' lists in order (the serial list)");
     lines.emplace_back("decomposition",
                        "recursive bisection of the balls, each rank's share in proportion to its speed; each rank steps "
-                       "its own balls with ghost copies of their partners, and keeps them until the whole model is "
-                       "stepped through (an edit, a START box's escape, balls spread far from their parts, the ranks' "
-                       "speeds drifting from their shares)");
+                       "its own balls with ghost copies of their partners, and keeps them, between CYCLEs too, until the "
+                       "whole model is stepped through or handed to every rank (an edit, a START box's escape, balls "
+                       "spread far from their parts, the ranks' speeds drifting from their shares, the balls put in "
+                       "space order)");
     return lines;
   }
 
