@@ -53,6 +53,11 @@ TEST_CASE("distributed: 4 ranks, and a save on 3 ranks restarted on 2, give the 
   CHECK(slurp(cut.path() / "contacts.csv") == contacts);
 }
 
+// A periodic cell of 500 balls squeezed at a constant strain rate, with friction and local damping.
+constexpr const char* kSqueezedCell =
+    "start 0.007 0.007 0.007\nprop kn 1e5 ks 1e5 fric 26.57 dens 2650\ngen 500 0.0003 0.0005 seed 5\n"
+    "damp local 0.7\nstrain xx 100 yy 100 zz 150\n";
+
 TEST_CASE("distributed: the spatial decomposition on 2, 3 and 4 ranks, and its save restarted on other rank counts, give the serial bits",
           "[mpi][system]") {
   // A periodic cell squeezed at a constant strain rate (no servo: the ranks step their own balls
@@ -61,13 +66,7 @@ TEST_CASE("distributed: the spatial decomposition on 2, 3 and 4 ranks, and its s
   // cell leaves balls outside it after a step: the first version missed them (it looked before the
   // cell moved) and parted from serial at cycle 505.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
-  const std::string deck = R"(start 0.007 0.007 0.007
-prop kn 1e5 ks 1e5 fric 26.57 dens 2650
-gen 500 0.0003 0.0005 seed 5
-damp local 0.7
-strain xx 100 yy 100 zz 150
-cycle 1500
-)";
+  const std::string deck = std::string(kSqueezedCell) + "cycle 1500\n";
   TempDir serial;
   serial.write("deck.dat", deck + "save s.sav\ncycle 500\n" + kOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
@@ -299,12 +298,7 @@ TEST_CASE("distributed: DAMP, FRAC, TSTEP and GRAV between CYCLEs leave the rank
   // afresh on the parts, their list made current first (it read a stale list, and the estimate went
   // 14% long, when it was not: the third CYCLE parted from serial).
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
-  const std::string deck = R"(start 0.007 0.007 0.007
-prop kn 1e5 ks 1e5 fric 26.57 dens 2650
-gen 500 0.0003 0.0005 seed 5
-damp local 0.7
-strain xx 100 yy 100 zz 150
-set sort 0
+  const std::string deck = std::string(kSqueezedCell) + R"(set sort 0
 cycle 700
 print contacts file first.csv
 damp 0.05 2000
