@@ -17,14 +17,14 @@ Model& periodic_model(Context& ctx, Args& args, std::string_view command);
 static void servo_wall(Context& ctx, Args& args) {
   ctx.session.require_started();
   const std::int64_t id = args.count("wall id", 1);
-  const Model& now = ctx.session.model();
+  const Model& now = ctx.session.state();   // (the walls alone are read)
   const Wall* found = find_wall(now, id);
   if (!found) args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
   const std::size_t k = static_cast<std::size_t>(found - now.walls.data());
   Wall w = *found;
   if (args.accept("off")) {
     args.done();
-    Model& m = ctx.session.edit();
+    Model& m = ctx.session.edit_cell();
     m.walls[k].servo_on = false;
     m.walls[k].servo_integral = 0;
     stop_servo_motion(m.walls[k]);   // the servo's motion stops with it
@@ -67,7 +67,7 @@ static void servo_wall(Context& ctx, Args& args) {
     args.fail("an infinite plane has no area of its own: give `area a` (the platen's loaded area) or `in c` "
               "(the cross-section of cylinder c)");
   w.servo_on = true;
-  Model& m = ctx.session.edit();
+  Model& m = ctx.session.edit_cell();
   m.walls[k] = w;
   ctx.out << fmt::format("wall {}: servo to stress {:.6g} over area {:.6g}, gain {}, max speed {}\n", id,
                          w.servo_target, wall_servo_area(probe, w),
@@ -77,7 +77,7 @@ static void servo_wall(Context& ctx, Args& args) {
 
 static void run_servo(Context& ctx, Args& args) {
   if (args.accept("wall")) return servo_wall(ctx, args);
-  const Model& now = ctx.session.model();
+  const Model& now = ctx.session.state();   // (the cell's settings alone are read)
   std::array<bool, 3> on = now.space.servo_on;
   std::array<double, 3> target = now.space.servo_target;
   double gain = now.space.servo_gain, most = now.space.servo_max_rate;
@@ -88,7 +88,8 @@ static void run_servo(Context& ctx, Args& args) {
     for (int a = 0; a < 3; ++a)
       if (m.space.servo_on[a]) rates[a] = 0;   // the servo's axes stop; STRAIN axes keep their rate
     m.space.servo_on = {false, false, false};
-    set_strain_rates(m, rates);
+    const auto& r = m.space.strain_rate;
+    ctx.session.set_cell_rates({rates[0], rates[1], rates[2], r[3], r[4], r[5]});
     ctx.out << "servo off\n";
     return;
   }
@@ -171,6 +172,6 @@ const Command servo_command = {
     "wall touching nothing approaches. The other velocity components stay as WALL set them. `SERVO wall n "
     "off` stops it (and its motion along the normal).",
     "servo 1e5 1e5 1e5",
-    {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area", "in", "between"}, run_servo};
+    {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area", "in", "between"}, run_servo, false, false, OnRanks::Parts};
 
 }  // namespace trubal

@@ -12,15 +12,17 @@ namespace trubal {
 // The periodic model, or an InputError saying why not.
 Model& periodic_model(Context& ctx, Args& args, std::string_view command);
 
+// (The cell's settings alone are read and changed: Session::edit_cell, which leaves a distributed
+// run's kept parts as they are.)
 Model& periodic_model(Context& ctx, Args& args, std::string_view command) {
-  if (!ctx.session.model().started) args.fail(fmt::format("{} needs a model: START first", command));
-  if (!ctx.session.model().space.periodic)
+  if (!ctx.session.state().started) args.fail(fmt::format("{} needs a model: START first", command));
+  if (!ctx.session.state().space.periodic)
     args.fail(fmt::format("{} acts on the periodic space (START x y z); this model is in a box", command));
-  return ctx.session.edit();
+  return ctx.session.edit_cell();
 }
 
 static void run_strain(Context& ctx, Args& args) {
-  const Model& now = ctx.session.model();
+  const Model& now = ctx.session.state();
   std::array<double, 6> rates = now.space.strain_rate;
   std::array<bool, 3> given{false, false, false};
   if (args.accept("reset")) {   // the accumulated strain starts again at 0 (a new stage); the rates stay
@@ -69,7 +71,7 @@ static void run_strain(Context& ctx, Args& args) {
   Model& m = periodic_model(ctx, args, "STRAIN");
   for (int a = 0; a < 3; ++a)
     if (given[a]) m.space.servo_on[a] = false;   // STRAIN takes an axis back from the servo
-  set_all_strain_rates(m, rates);
+  ctx.session.set_cell_rates(rates);
   const auto& r = m.space.strain_rate;
   const bool shear = r[3] != 0 || r[4] != 0 || r[5] != 0;
   ctx.out << fmt::format("strain rates: xx {:.6g}  yy {:.6g}  zz {:.6g}{}{}\n", r[0], r[1], r[2],
@@ -102,6 +104,6 @@ const Command strain_command = {
     "accumulated strain to 0 and leaves the rates and the cell as they are, so that a new stage (shear after "
     "the isotropic compression) is measured from its own start.",
     "strain 0 0 1e-3",
-    {"xx", "yy", "zz", "xy", "xz", "yz", "off", "reset"}, run_strain};
+    {"xx", "yy", "zz", "xy", "xz", "yz", "off", "reset"}, run_strain, false, false, OnRanks::Parts};
 
 }  // namespace trubal

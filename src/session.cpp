@@ -19,6 +19,7 @@
 #include "gen/region.hpp"
 #include "io/save.hpp"
 #include "model/edit.hpp"
+#include "physics/cell.hpp"
 #include "physics/measure.hpp"
 
 namespace trubal {
@@ -36,6 +37,23 @@ Model& Session::edit() {
   pipeline_->invalidate();
   model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
   return model_;
+}
+
+Model& Session::edit_cell() {
+  results_before_setting();   // (of the state before the change)
+  ++changes_;
+  unsaved_ = true;
+  model_.energy_at_step.valid = false;
+  model_.critical_dt = 0;   // (as an edit: the step estimated afresh)
+  if (!parts_kept()) pipeline_->invalidate();
+  return model_;
+}
+
+void Session::set_cell_rates(const std::array<double, 6>& rates) {
+  if (!parts_kept()) return set_all_strain_rates(model_, rates);
+  FieldChange field;
+  set_all_strain_rates(model_, rates, &field);
+  pipeline_->apply_field_kept(model_, field);   // (on the parts and rank 0's model: a collective call)
 }
 
 const Model& Session::model_with_masses() {

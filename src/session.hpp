@@ -60,6 +60,13 @@ class Session {
     model_.order.every = every;
     unsaved_ = true;
   }
+  // STRAIN and SERVO: the cell's and walls' settings (the space's strain rates and servo, a wall's
+  // servo), with the balls unchanged; the next step is estimated afresh. Where the ranks keep their
+  // parts, every rank calls it (Command::on_ranks) and the parts stay.
+  Model& edit_cell();
+  // New strain rates of the periodic cell, and the change of the velocity field they make on the
+  // balls, wherever the balls are (the ranks' kept parts; rank 0's whole model made current).
+  void set_cell_rates(const std::array<double, 6>& rates);
   // SAMPLE: the specimen's walls and reference (no change to the balls or the step).
   Sample& edit_sample() {
     unsaved_ = true;

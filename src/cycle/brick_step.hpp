@@ -71,6 +71,8 @@ std::size_t array_bytes(const Model& m);
 // the results, the others' are dropped (ContactTable::results_kept false): rank 0 alone prints and
 // writes what they feed.
 void broadcast_arrays(Model& m, bool with_results = true);
+// Rank 0's contact results to every rank, whose pair list is rank 0's (a collective call).
+void broadcast_results(Model& m);
 
 class BrickStep {
  public:
@@ -86,6 +88,8 @@ class BrickStep {
   bool live() const { return live_; }
   // The whole model's settings to the part (they change between CYCLEs on the kept parts).
   void take_settings(const Model& full) { part_.settings = full.settings; }
+  // The whole model holds the part's state again (Pipeline::apply_field_kept made the same change there).
+  void mark_current() { current_ = true; }
   // The whole model no longer holds the part's state: the next sync gathers it again.
   void mark_stale() { current_ = false; }
   // Makes this rank's part of `full` (current, its list installed; `ref` the list's reference

@@ -279,6 +279,13 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
   wall_version_ = full.wall_contacts.list_version;
 }
 
+void broadcast_results(Model& m) {
+  ContactTable& c = m.contacts;
+  if (comm::root()) c.keep_results();
+  c.for_each_result_array([](auto& v) { comm::broadcast(v); });
+  comm::broadcast(c.results_cycle);
+}
+
 void broadcast_arrays(Model& m, bool with_results) {
   m.balls.for_each_array([](auto& v) { comm::broadcast(v); });
   // (The history parts in use first: the arrays that follow are those.)

@@ -243,6 +243,17 @@ void Pipeline::apply_field(Model& model, const FieldChange& change) {
   model.space.gross_work += gross.value();
 }
 
+void Pipeline::apply_field_kept(Model& model, const FieldChange& change) {
+  if (!change.any || !parts_live(model)) return apply_field(model, change);
+  apply_field(model, change);
+  if (comm::root())
+    for (std::size_t k = 0; k < model.balls.size(); ++k) {
+      double work, gross;   // (summed on the parts)
+      apply_field_change(model.balls, change, k, work, gross);
+    }
+  for (auto& part : bricks_) part->mark_current();
+}
+
 void Pipeline::loads_changed(Model& model) {
   if (bricks().live_for(model)) each_part([&](BrickStep& part, int) { part.loads_changed(model); });
 }

@@ -93,6 +93,10 @@ class Pipeline {
   // the balls wherever they are stepped; the tilts of the cell kept within half an edge
   // (reduce_cell_tilt) on every copy of the pair list.
   void apply_field(Model& model, const FieldChange& change);
+  // Between CYCLEs, on kept parts (parts_live): the change on the parts' balls (their work summed,
+  // a collective call) and on rank 0's whole model alike, so that it stays current without a gather
+  // (which would bring the parts' unbalanced forces of a lean last step over those rank 0 made).
+  void apply_field_kept(Model& model, const FieldChange& change);
   // The balls' applied loads changed between steps (a following membrane's): on every copy.
   void loads_changed(Model& model);
   void reduce_cell_tilt(Model& model);

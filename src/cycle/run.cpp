@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "cycle/brick_step.hpp"
 #include "cycle/energy_guard.hpp"
 #include "cycle/kernels.hpp"
 #include "cycle/pipeline.hpp"
@@ -220,7 +221,12 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
       throw;
     }
   }
-  if (servo_reads_table_) make_results(model, pipeline);
+  if (servo_reads_table_) {
+    make_results(model, pipeline);
+    // (Under mpirun rank 0 alone may hold them, made for what a command read: every rank's servo
+    // reads them, from the one list every rank searched.)
+    if (pipeline.distributed() && comm::size() > 1) broadcast_results(model);
+  }
   output_on_root_ = pipeline.distributed() && comm::size() > 1;
   observes_ = !output_on_root_ || comm::root();
   // A CYCLE right after one that deferred its last step's results: the rescue copy, of the step

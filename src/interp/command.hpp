@@ -63,7 +63,7 @@ enum class OnRanks : std::uint8_t {
   RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
               // (PRINT, SAVE, PLOT)
   Parts,      // every rank runs it on the model as it is (CYCLE; the settings: DAMP, FRAC, TSTEP, GRAV;
-              // the commands that do not read the balls)
+              // the cell's: STRAIN, SERVO; the commands that do not read the balls)
 };
 
 struct Command {

@@ -11,6 +11,7 @@
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
 #include "physics/measure.hpp"
+#include "support/exact_sum.hpp"
 
 namespace trubal {
 
@@ -63,14 +64,17 @@ void set_all_strain_rates(Model& model, const std::array<double, 6>& rates, Fiel
     for (int e = 0; e < 3; ++e) field.g[a][e] = g[a][e];
   if (defer) { *defer = field; return; }
   update_mass(model);   // STRAIN may come before the first CYCLE: the energy needs the masses
-  double work = 0;
+  // Summed exactly, as the step's field changes are: the same bits however the balls are shared
+  // (a distributed run's kept parts sum their own, Pipeline::apply_field).
+  ExactSum work, gross;
   for (std::size_t k = 0; k < b.size(); ++k) {
     double ball_work, ball_gross;
     apply_field_change(b, field, k, ball_work, ball_gross);
-    work += ball_work;
-    s.gross_work += ball_gross;
+    work.add(ball_work);
+    gross.add(ball_gross);
   }
-  model.energy.boundary_work += work;
+  model.energy.boundary_work += work.value();
+  s.gross_work += gross.value();
 }
 
 void set_strain_rates(Model& model, const std::array<double, 3>& rates, FieldChange* defer) {
