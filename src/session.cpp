@@ -79,16 +79,21 @@ void Session::results_before_setting() {
   pipeline_->clear_deferred();
 }
 
+namespace {
+// This process's memory figures but its peak, in RankFigures' order after peak_mib.
+std::vector<double> own_figures(const Model& model, const Pipeline& pipeline) {
+  const PipelineCounters c = pipeline.counters();
+  constexpr double kMiB = 1 << 20;
+  return {static_cast<double>(model.contacts.result_bytes()) / kMiB, c.whole_arrays_mib, c.part_arrays_mib,
+          static_cast<double>(array_bytes(model) + pipeline.part_bytes_now()) / kMiB};
+}
+}  // namespace
+
 void Session::gather_rank_figures() {
   pipeline_->refresh_whole(model_);   // (a collective call rank 0's reads follow)
-  const PipelineCounters c = pipeline_->counters();
   const std::vector<double> peaks = peak_memory_per_rank();
-  constexpr double kMiB = 1 << 20;
-  std::vector<double> mine{static_cast<double>(model_.contacts.result_bytes()) / kMiB, c.whole_arrays_mib,
-                           c.part_arrays_mib,
-                           static_cast<double>(array_bytes(model_) + pipeline_->part_bytes_now()) / kMiB},
-      all;
-  comm::allgather(mine, all);
+  std::vector<double> all;
+  comm::allgather(own_figures(model_, *pipeline_), all);
   rank_figures_.assign(peaks.size(), {});
   for (std::size_t r = 0; r < rank_figures_.size() && 4 * r + 3 < all.size(); ++r)
     rank_figures_[r] = {peaks[r], all[4 * r], all[4 * r + 1], all[4 * r + 2], all[4 * r + 3]};
@@ -96,10 +101,8 @@ void Session::gather_rank_figures() {
 
 std::vector<Session::RankFigures> Session::rank_figures() const {
   if (comm::size() > 1) return rank_figures_;
-  const PipelineCounters c = pipeline_->counters();
-  constexpr double kMiB = 1 << 20;
-  return {{peak_memory_per_rank()[0], static_cast<double>(model_.contacts.result_bytes()) / kMiB, c.whole_arrays_mib,
-           c.part_arrays_mib, static_cast<double>(array_bytes(model_) + pipeline_->part_bytes_now()) / kMiB}};
+  const std::vector<double> f = own_figures(model_, *pipeline_);
+  return {{peak_memory_per_rank()[0], f[0], f[1], f[2], f[3]}};
 }
 
 void Session::require_started() const {
