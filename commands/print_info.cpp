@@ -170,6 +170,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("most_part_balls", c.parts.most_balls);
   line("part_bonds_across", c.parts.bonds_across);
   line("parts_kept", s.parts_kept() ? 1 : 0);
+  line("whole_hand_overs", c.hand_overs);
   if (comm::size() > 1) {   // (gathered before rank 0 runs PRINT: Session::gather_rank_figures)
     const auto ranks = s.rank_figures();
     for (std::size_t r = 0; r < ranks.size(); ++r) {

@@ -70,7 +70,7 @@ void Session::set_backend(const std::string& name, int threads, std::uint64_t ma
 
 bool Session::parts_kept() const { return pipeline_->parts_live(model_); }
 
-void Session::whole_everywhere() { pipeline_->share_whole(model_); }
+void Session::whole_everywhere() { pipeline_->share_whole(model_, true); }
 
 void Session::results_before_setting() {
   if (!parts_kept()) return make_results_to_read(model_, *pipeline_);

@@ -203,9 +203,10 @@ void Pipeline::refresh_whole(Model& model) {
   sync(model);
 }
 
-void Pipeline::share_whole(Model& model) {
+void Pipeline::share_whole(Model& model, bool for_command) {
   refresh_whole(model);
   if (!bricks().live_for(model)) return;
+  if (for_command && parts_live(model)) ++hand_overs_;
   list_from_parts_ = true;
   each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed()); });
 }
@@ -394,7 +395,7 @@ bool Pipeline::Deferred::same(const Deferred& o) const {
 PipelineCounters Pipeline::counters() const {
   return {ref_.rebuilds(),    mode_ == StepMode::Space ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
           backend_->pair_tests(), results_made_, bricks().counts(), cycle_peaks_,
-          static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20)};
+          static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20), hand_overs_};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {

@@ -34,6 +34,7 @@ struct PipelineCounters {
   BrickStep::Counts parts;         // the spatial decomposition's (the ranks' or the threads')
   std::vector<double> cycle_peaks_mib;   // per rank: peak memory by the end of the last distributed CYCLE
   double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
+  std::int64_t hand_overs = 0;     // the whole model handed to every rank for a command, from kept parts
 };
 
 class Pipeline {
@@ -69,7 +70,9 @@ class Pipeline {
   void end_cycle(Model& model, bool keep_parts = false);
   // sync_all, the parts released before rank 0 hands the whole model to the others (the next
   // CYCLE's prepare would drop them in any case): a collective call where parts_live.
-  void share_whole(Model& model);
+  // for_command: a command needs the whole model (Session::whole_everywhere), counted where the
+  // parts were kept (PipelineCounters::hand_overs).
+  void share_whole(Model& model, bool for_command = false);
   // Whether a distributed run's ranks hold their live parts of this model (between CYCLEs: after an
   // end_cycle that kept them), the ranks other than 0 no more of the whole model than the balls'
   // ids, types and radii (hollow). The same answer on every rank.
@@ -269,6 +272,7 @@ class Pipeline {
   StepMode mode_ = StepMode::Numbers;
   int comm_ranks_ = 1;              // the ranks of the run (comm::size() when made)
   bool whole_stale_ = false;        // mark_whole_stale (rank 0's word counts)
+  std::int64_t hand_overs_ = 0;     // PipelineCounters::hand_overs
   bool whole_next_ = false;         // the next step on the whole model, on every rank (rewind_step)
   // threads_in_space's answer for one list (a memo of a function of the list, not a state).
   struct SpaceVerdict {

@@ -286,6 +286,8 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   // After INIT and one more CYCLE: the parts kept again; rank 1 got no results with the whole model.
   const Counters counters = counters_of(two);
   CHECK(counter(counters, "parts_kept") == 1);
+  CHECK(counter(counters, "whole_hand_overs") == 1);   // (INIT's: PRINT and SAVE needed none)
+  CHECK(counter(kept, "whole_hand_overs") == 0);
   CHECK(counter(counters, "rank1_contact_results_mib") == 0);
   CHECK(counter(counters, "rank1_model_held_mib") < 0.3 * counter(counters, "rank0_model_held_mib"));
 }
@@ -339,10 +341,9 @@ cycle 100
       CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
     const Counters counters = counters_of(dir);
     CHECK(counter(counters, "parts_kept") == 1);
-    // Nine CYCLEs: a hand-over of the whole model before each would split it nine times (the servo's
-    // first reading hands it over once; one more split or two are the run's own, where the squeezed
-    // cell spreads balls far from their parts).
-    CHECK(counter(counters, "decompositions") <= 4);
+    // No command between the CYCLEs had the whole model handed over (the split count follows the
+    // ranks' measured speeds, so it depends on the machine's load: the hand-overs do not).
+    CHECK(counter(counters, "whole_hand_overs") == 0);
     // Rank 0 took a CYCLE's last step again for first.csv and for the first change after each of the
     // eight CYCLEs that a change follows.
     CHECK(counter(counters, "results_made") == 9);
