@@ -100,7 +100,8 @@ int run(int argc, char** argv) {
   trubal::install_interrupt_handler();
 
   // Tests: "R L" makes rank R's command at line L of the deck fail there alone, "R split" rank R's
-  // first split of the spatial decomposition, "R search" its first share of a pair search through
+  // first split of the spatial decomposition, "R cut" rank 0's cut of rank R's part at its first
+  // split, "R search" its first share of a pair search through
   // the whole model, "R part" its first search on its part, "0 results" rank 0's first step taken
   // again to make the contact results (distributed_runs.cpp, distributed_user.cpp).
   trubal::StepPolicy& policy = session.policy();
@@ -111,6 +112,7 @@ int run(int argc, char** argv) {
       if (rank == trubal::comm::rank()) interp.fail_line_for_test = line;
     } else if (std::sscanf(at, "%d %7s", &rank, word) == 2) {
       if (std::strcmp(word, "split") == 0) policy.fail_split = rank;
+      if (std::strcmp(word, "cut") == 0) policy.fail_cut = rank;
       if (std::strcmp(word, "search") == 0) policy.fail_search = rank;
       if (std::strcmp(word, "part") == 0) policy.fail_part_search = rank;
       if (std::strcmp(word, "results") == 0) policy.fail_results = rank;

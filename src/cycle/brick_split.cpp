@@ -115,19 +115,31 @@ void BrickStep::update_shares() {
 
 void BrickStep::split(const Model& full, const VerletReference& ref) {
   update_shares();   // (a collective call)
+  const std::string doing = fmt::format("making its part of the decomposition ({} balls in the whole model)", full.balls.size());
   // A rank that cannot make its part (out of memory) must not leave the others stepping theirs and
   // waiting for its ghosts: the ranks agree here, and every one stops with that rank's message.
-  together([&] {
+  auto fault = [&] {
     if (!team_->shares_whole() && team_->rank() == policy_->fail_split) {   // (a rank's test fault)
       policy_->fail_split = -1;
       throw std::bad_alloc();
     }
-    make_part(full, ref);
-  }, fmt::format("making its part of the decomposition ({} balls in the whole model)", full.balls.size()));
+  };
+  if (!scatters()) {
+    together([&] {
+      fault();
+      decompose(full);
+      cut_part(full, ref, team_->rank());
+    }, doing);
+  } else {
+    scatter_parts(full, ref, fault, doing);   // (cycle/brick_scatter.cpp)
+  }
+  finish_part(full);
 }
 
-void BrickStep::make_part(const Model& full, const VerletReference& ref) {
-  const int ranks = team_->size(), me = team_->rank();
+void BrickStep::decompose(const Model& full) {
+  // Every rank's balls, pairs (by ball i), wall contacts and intact bonds (by ball i) in the whole
+  // model's order: what sync() gathers, and where a rebuild on the parts finds a ball's owner.
+  const int ranks = team_->size();
   const Balls& b = full.balls;
   const std::size_t n = b.size();
   const ContactTable& c = full.contacts;
@@ -139,28 +151,9 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
     cuts_.clear();
     bisect(b, order, 0, n, ranks, 0, shares_, owner_, cuts_);
   }
-  // The part: owned balls (1) and their partners owned elsewhere (2, ghosts); the pairs touching
-  // an owned ball; for each other rank, the owned balls that are its ghosts.
-  std::vector<std::uint8_t> in_part(n, 0);
-  for (std::size_t k = 0; k < n; ++k)
-    if (owner_[k] == me) in_part[k] = 1;
-  std::vector<std::uint32_t> pairs;
-  std::vector<std::vector<std::uint32_t>> sends(ranks);
   rank_pairs_.assign(ranks, {});
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    const std::uint32_t i = c.i[p], j = c.j[p];
-    const int oi = owner_[i], oj = owner_[j];
-    rank_pairs_[oi].push_back(static_cast<std::uint32_t>(p));
-    if (oi != me && oj != me) continue;
-    pairs.push_back(static_cast<std::uint32_t>(p));
-    if (oi == oj) continue;
-    if (oi == me) { in_part[j] = 2; sends[oj].push_back(i); }
-    else { in_part[i] = 2; sends[oi].push_back(j); }
-  }
-  // The intact bonds of the owned balls, by (id_i, id_j), and their other balls as ghosts; every
-  // member lists every member's bonds by ball i (sync writes their state there).
+  for (std::size_t p = 0; p < c.size(); ++p) rank_pairs_[owner_[c.i[p]]].push_back(static_cast<std::uint32_t>(p));
   const Bonds& bt = full.bonds;
-  std::vector<std::uint32_t> bonds;
   rank_bonds_.assign(ranks, {});
   split_bond_rows_.clear();
   split_bond_ball_i_.clear();
@@ -170,61 +163,80 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
     if (bt.fate[q] != 0) continue;
     const std::int64_t bi = find_ball(full, bt.id_i[q]), bj = find_ball(full, bt.id_j[q]);
     if (bi < 0 || bj < 0) continue;
-    const auto i = static_cast<std::uint32_t>(bi), j = static_cast<std::uint32_t>(bj);
-    const int oi = owner_[i], oj = owner_[j];
+    const int oi = owner_[static_cast<std::size_t>(bi)], oj = owner_[static_cast<std::size_t>(bj)];
     bonded_ = true;
     rank_bonds_[oi].push_back(static_cast<std::uint32_t>(q));
     split_bond_rows_.push_back(static_cast<std::uint32_t>(q));
-    split_bond_ball_i_.push_back(i);
+    split_bond_ball_i_.push_back(static_cast<std::uint32_t>(bi));
     bonds_across_ += oi != oj;
-    if (oi != me && oj != me) continue;
-    bonds.push_back(static_cast<std::uint32_t>(q));
-    if (oi == oj) continue;
+  }
+  rank_balls_.assign(ranks, {});
+  for (std::size_t k = 0; k < n; ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
+  rank_walls_.assign(ranks, {});
+  for (std::size_t q = 0; q < wc.size(); ++q) rank_walls_[owner_[wc.ball[q]]].push_back(static_cast<std::uint32_t>(q));
+  max_radius_ = b.max_radius();
+  full_balls_ = n;
+  walls_any_ = !full.walls.empty() || wc.size() > 0;
+}
+
+void BrickStep::cut_part(const Model& full, const VerletReference& ref, int me) {
+  // Member `me`'s part: its owned balls (1) and their partners owned elsewhere (2, ghosts); the
+  // pairs touching an owned ball; for each other member, the owned balls that are its ghosts.
+  const int ranks = team_->size();
+  const std::size_t n = full.balls.size();
+  const ContactTable& c = full.contacts;
+  const WallContacts& wc = full.wall_contacts;
+  std::vector<std::uint8_t> in_part(n, 0);
+  for (std::uint32_t k : rank_balls_[me]) in_part[k] = 1;
+  std::vector<std::uint32_t> pairs;
+  std::vector<std::vector<std::uint32_t>> sends(ranks);
+  auto touch = [&](std::uint32_t i, std::uint32_t j) {   // (i's or j's owner is me)
+    const int oi = owner_[i], oj = owner_[j];
+    if (oi == oj) return;
     if (oi == me) { in_part[j] = 2; sends[oj].push_back(i); }
     else { in_part[i] = 2; sends[oi].push_back(j); }
+  };
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    const std::uint32_t i = c.i[p], j = c.j[p];
+    if (owner_[i] != me && owner_[j] != me) continue;
+    pairs.push_back(static_cast<std::uint32_t>(p));
+    touch(i, j);
+  }
+  // The intact bonds of the owned balls, by (id_i, id_j), and their other balls as ghosts.
+  std::vector<std::uint32_t> bonds;
+  for (std::size_t t = 0; t < split_bond_rows_.size(); ++t) {
+    const std::uint32_t q = split_bond_rows_[t], i = split_bond_ball_i_[t];
+    const auto j = static_cast<std::uint32_t>(find_ball(full, full.bonds.id_j[q]));
+    if (owner_[i] != me && owner_[j] != me) continue;
+    bonds.push_back(q);
+    touch(i, j);
   }
   global_ball_.clear();
   std::vector<std::uint32_t> local(n, kAbsent);
-  rank_balls_.assign(ranks, {});
   for (std::size_t k = 0; k < n; ++k) {
-    rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
     if (!in_part[k]) continue;
     local[k] = static_cast<std::uint32_t>(global_ball_.size());
     global_ball_.push_back(static_cast<std::uint32_t>(k));
   }
   const std::size_t m = global_ball_.size();
 
-  // The part's model: its balls, pairs and wall contacts, and what the step reads of the rest.
-  part_.space = full.space;
-  part_.materials = full.materials;
-  part_.walls = full.walls;
-  part_.settings = full.settings;
-  part_.started = full.started;
+  // The part's model: its balls, pairs, bonds and wall contacts.
   gather(visit_balls, &full.balls, &part_.balls, global_ball_);
   part_.contacts.set_history_laws(full.contacts.history_laws);   // (the same parts: visit_pairs)
   // (Bonds name their balls by id: the step finds them by the part's index of ids.)
   gather([](void* p, auto&& f) { static_cast<Bonds*>(p)->for_each_array(f); }, &full.bonds, &part_.bonds, bonds);
-  part_.bonds.changed();
-  if (bonded_) part_.balls.index_ids();
   gather(visit_pairs, &full.contacts, &part_.contacts, pairs);
   for (std::size_t q = 0; q < pairs.size(); ++q) {
     part_.contacts.i[q] = local[part_.contacts.i[q]];
     part_.contacts.j[q] = local[part_.contacts.j[q]];
   }
-  part_.contacts.drop_results();   // (a step that writes them makes them: Travels<ContactTable>)
-  results_written_ = false;
-  part_.contacts.list_version = next_part_version();
   std::vector<std::uint32_t> walls;
-  rank_walls_.assign(ranks, {});
-  for (std::size_t q = 0; q < wc.size(); ++q) {
-    rank_walls_[owner_[wc.ball[q]]].push_back(static_cast<std::uint32_t>(q));
+  for (std::size_t q = 0; q < wc.size(); ++q)
     if (owner_[wc.ball[q]] == me) walls.push_back(static_cast<std::uint32_t>(q));
-  }
   gather(visit_walls, &full.wall_contacts, &part_.wall_contacts, walls);
   for (std::size_t q = 0; q < walls.size(); ++q) part_.wall_contacts.ball[q] = local[part_.wall_contacts.ball[q]];
-  part_.wall_contacts.list_version = next_part_version();
 
-  // What this rank reports to sync(), as part indices, in the order of rank_balls_ etc.
+  // What this member reports to sync(), as part indices, in the order of rank_balls_ etc.
   owned_.clear();
   for (std::uint32_t k : rank_balls_[me]) owned_.push_back(local[k]);
   owned_pairs_.clear();
@@ -238,7 +250,7 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
   owned_walls_.resize(walls.size());
   std::iota(owned_walls_.begin(), owned_walls_.end(), 0u);
 
-  // The ghost exchange: to each rank, its ghosts this rank owns; from each, the ghosts it owns.
+  // The ghost exchange: to each member, its ghosts this member owns; from each, the ghosts it owns.
   send_.assign(ranks, {});
   recv_.assign(ranks, {});
   for (int r = 0; r < ranks; ++r) {
@@ -256,12 +268,6 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
     recv_[owner_[k]].push_back(static_cast<std::uint32_t>(q));
     ++ghosts_;
   }
-  send_buf_.assign(ranks, {});
-  recv_buf_.assign(ranks, {});
-  for (int r = 0; r < ranks; ++r) {
-    send_buf_[r].resize(kHalo * send_[r].size());
-    recv_buf_[r].resize(kHalo * recv_[r].size());
-  }
 
   // The list's reference positions, for the part's displacement test.
   ref_.x.clear(); ref_.y.clear(); ref_.z.clear();
@@ -271,31 +277,53 @@ void BrickStep::make_part(const Model& full, const VerletReference& ref) {
       ref_.y.push_back(ref.y[k]);
       ref_.z.push_back(ref.z[k]);
     }
+}
+
+void BrickStep::finish_part(const Model& full) {
+  // What the step reads of the rest: the whole model's (every member holds it, hollow or not).
+  const int ranks = team_->size();
+  const std::size_t m = part_.balls.size();
+  part_.space = full.space;
+  part_.materials = full.materials;
+  part_.walls = full.walls;
+  part_.settings = full.settings;
+  part_.started = full.started;
+  part_.bonds.changed();
+  if (bonded_) part_.balls.index_ids();
+  part_.contacts.drop_results();   // (a step that writes them makes them: Travels<ContactTable>)
+  results_written_ = false;
+  part_.contacts.list_version = next_part_version();
+  part_.wall_contacts.list_version = next_part_version();
+  send_buf_.assign(ranks, {});
+  recv_buf_.assign(ranks, {});
+  for (int r = 0; r < ranks; ++r) {
+    send_buf_[r].resize(kHalo * send_[r].size());
+    recv_buf_[r].resize(kHalo * recv_[r].size());
+  }
   scratch_.index(part_.contacts, m);
   scratch_.index_walls(part_.wall_contacts, m);
   kernels_.laws = make_pair_laws(part_);
   step_.set_part_only(true);
 
   most_balls_ = 0;
-  least_balls_ = n;
+  least_balls_ = full_balls_;
   for (int r = 0; r < ranks; ++r) {
     most_balls_ = std::max(most_balls_, rank_balls_[r].size());
     least_balls_ = std::min(least_balls_, rank_balls_[r].size());
   }
   ++splits_;
-  max_radius_ = b.max_radius();
   shell_base_ = 0;
   list_local_ = false;
   moved2_ = 0;
   outside_box_ = false;
   model_ = &full;
-  full_balls_ = n;
-  list_version_ = c.list_version;
-  wall_version_ = wc.list_version;
-  walls_any_ = !full.walls.empty() || wc.size() > 0;
+  // (This member's own: a rank's whole model takes versions of its own.)
+  list_version_ = full.contacts.list_version;
+  wall_version_ = full.wall_contacts.list_version;
   live_ = true;
   current_ = true;
-  shared_ = true;
+  // (Scattered: the ranks other than 0 freed their whole model's arrays first.)
+  shared_ = !scatters();
 }
 
 int BrickStep::owner_at(double x, double y, double z, std::uint32_t k) const {

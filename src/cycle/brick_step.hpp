@@ -92,8 +92,10 @@ class BrickStep {
   void mark_current() { current_ = true; }
   // The whole model no longer holds the part's state: the next sync gathers it again.
   void mark_stale() { current_ = false; }
-  // Makes this rank's part of `full` (current, its list installed; `ref` the list's reference
-  // positions). Every rank computes every rank's owners, so nothing is exchanged.
+  // Makes this member's part of `full` (current, its list installed; `ref` the list's reference
+  // positions). Threads: every member computes every member's owners from the one whole model.
+  // Ranks: rank 0 makes every rank's part and sends it (scatters); the others need no more of
+  // `full` than its light state and the balls' count.
   void split(const Model& full, const VerletReference& ref);
   // One step on this rank's part: forces, motion of the owned balls, the ghosts' new state from
   // their owners, the global sums (merged over the ranks into `sums`) and the walls' loads (into
@@ -192,8 +194,23 @@ class BrickStep {
   std::size_t part_bytes() const;
 
  private:
-  // split()'s work: the owners, and this member's part.
-  void make_part(const Model& full, const VerletReference& ref);
+  // split()'s work. decompose: the owners and every member's lists (rank_balls_ and the like), from
+  // the whole model; cut_part: member `me`'s part and its lists (owned_, send_ and the like), into
+  // this one's; finish_part: what every member then sets alike.
+  void decompose(const Model& full);
+  void cut_part(const Model& full, const VerletReference& ref, int me);
+  void finish_part(const Model& full);
+  // The ranks of a run scatter (cycle/brick_scatter.cpp): rank 0 alone reads the whole model,
+  // decomposes it and hands the others the lists every member keeps, then cuts each rank's part and
+  // sends it; the others have freed their whole model's arrays before (Pipeline::split_parts), so
+  // that no rank but 0 ever holds the whole model and a part at once. `fault`: a test's fault, run
+  // where split() agrees on failures.
+  bool scatters() const { return !team_->shares_whole() && team_->size() > 1; }
+  void scatter_parts(const Model& full, const VerletReference& ref, const std::function<void()>& fault,
+                     const std::string& doing);
+  void share_decomposition();
+  std::vector<std::uint8_t> pack_part() const;
+  void unpack_part(const std::vector<std::uint8_t>& bytes);
   // sync()'s first work after rebuild_local: full's list from every rank's (a collective call).
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.

@@ -90,17 +90,30 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
 }
 
 void Pipeline::split_parts(Model& model) {
-  each_part([&](BrickStep& part, int) { part.split(model, ref_); });
-  if (list_ != ListState::PartsToSearch) return;
-  // The list prepare() left stale is searched on the parts just made (they carry its history): the
-  // ranks other than 0 need the whole model no further.
-  const double skin = list_skin(model);
-  ref_.record(model, skin);   // (the positions the parts search at)
-  wall_travel_ = 0;
-  if (distributed()) {
-    if (!comm::root()) hollow(model);
-    for (auto& part : bricks_) part->whole_freed();   // (on every rank: share() is collective)
+  // A list prepare() left stale is searched on the parts about to be made (they carry its history),
+  // at the positions now.
+  const bool search = list_ == ListState::PartsToSearch;
+  double skin = 0;
+  if (search) {
+    skin = list_skin(model);
+    ref_.record(model, skin);
+    wall_travel_ = 0;
   }
+  // The ranks other than 0 free their whole model's arrays before their part comes: rank 0 makes
+  // every part and sends it (BrickStep::scatter_parts). Should that fail, rank 0 hands the whole
+  // model back to them.
+  const bool scatter = distributed() && comm::size() > 1;
+  if (scatter) {
+    if (!comm::root()) hollow(model);
+    for (auto& part : bricks_) part->whole_freed();
+  }
+  try {
+    each_part([&](BrickStep& part, int) { part.split(model, ref_); });
+  } catch (...) {
+    if (scatter) broadcast_arrays(model, false);   // (the ranks agreed on the failure: every one is here)
+    throw;
+  }
+  if (!search) return;
   const bool rebuilt = rebuild_parts(model, list_reach(model, skin));
   list_ = ListState::Current;
   if (rebuilt) return;

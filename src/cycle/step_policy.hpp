@@ -33,6 +33,9 @@ struct StepPolicy {
   // rank's next split of the decomposition ("R split"), next search on its part ("R part") and
   // next share of a search through the whole model ("R search") fail as if out of memory.
   int fail_split = -1;
+  // Rank 0 fails as out of memory cutting rank R's part at its next split of the ranks ("R cut";
+  // R > 0: the ranks before have theirs, the ones after are told to go without).
+  int fail_cut = -1;
   int fail_part_search = -1;
   int fail_search = -1;
   // Rank 0's next step taken again alone to make the contact results a command reads ("0 results").

@@ -225,6 +225,59 @@ void together(const std::function<void()>& work, const std::string& doing) {
   if (first_failure(!failure.empty(), failure) >= 0) throw std::runtime_error(failure);
 }
 
+namespace {
+constexpr int kPointTag = 7;   // (the one tag of this program's point-to-point messages)
+[[noreturn]] void no_peer() { throw std::logic_error("internal error: a point-to-point message without MPI ranks"); }
+}  // namespace
+
+void send_word([[maybe_unused]] int to, [[maybe_unused]] std::int64_t value) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    MPI_Send(&value, 1, MPI_INT64_T, to, kPointTag, MPI_COMM_WORLD);
+    return;
+  }
+#endif
+  no_peer();
+}
+
+std::int64_t receive_word([[maybe_unused]] int from) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    std::int64_t value = 0;
+    MPI_Recv(&value, 1, MPI_INT64_T, from, kPointTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    return value;
+  }
+#endif
+  no_peer();
+}
+
+// (In pieces: an MPI count is an int.)
+constexpr std::size_t kPiece = std::size_t{1} << 30;
+
+void send_bytes([[maybe_unused]] int to, [[maybe_unused]] const std::vector<std::uint8_t>& bytes) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    for (std::size_t at = 0; at < bytes.size(); at += kPiece)
+      MPI_Send(bytes.data() + at, static_cast<int>(std::min(kPiece, bytes.size() - at)), MPI_BYTE, to, kPointTag,
+               MPI_COMM_WORLD);
+    return;
+  }
+#endif
+  no_peer();
+}
+
+void receive_bytes([[maybe_unused]] int from, [[maybe_unused]] std::vector<std::uint8_t>& bytes) {
+#ifdef TRUBAL_HAVE_MPI
+  if (g_started && g_size > 1) {
+    for (std::size_t at = 0; at < bytes.size(); at += kPiece)
+      MPI_Recv(bytes.data() + at, static_cast<int>(std::min(kPiece, bytes.size() - at)), MPI_BYTE, from, kPointTag,
+               MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    return;
+  }
+#endif
+  no_peer();
+}
+
 void max_all([[maybe_unused]] std::vector<double>& values) {
 #ifdef TRUBAL_HAVE_MPI
   if (g_started && g_size > 1)

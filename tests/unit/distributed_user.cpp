@@ -59,40 +59,48 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     // its first split (TRUBAL_TEST_FAIL_AT "1 part", "1 search", "1 split"): the others must not go
     // on into the exchange of the balls or the gather of the lists, or step their parts and wait
     // for its ghosts.
-    for (const std::string where : {"part", "search", "split"}) {
+    // Rank 0 makes every rank's part and sends it: where it fails cutting rank 2's ("2 cut"), rank
+    // 1 has its part already and rank 2 is told to go without; each must stop with rank 0's message.
+    for (const std::string where : {"part", "search", "split", "cut"}) {
       INFO(where);
       TempDir dir;
       dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
                             "cycle 30\nprint info\n");
-      CHECK(run_deck(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='1 {}'{}", where,
+      CHECK(run_deck(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{} {}'{}", where == "cut" ? 2 : 1, where,
                                          where == "search" ? " TRUBAL_REBUILD_WHOLE=1" : "")) == 1);   // not 124
       const std::string out = slurp(dir.path() / "out.txt");
       INFO(out);
-      const auto at = out.find(fmt::format("deck.dat:4: error: rank 1 ran out of memory {}",
+      const auto at = out.find(fmt::format("deck.dat:4: error: rank {} ran out of memory {}", where == "cut" ? 0 : 1,
                                            where == "search"  ? "searching its share of the pairs"
                                            : where == "part" ? "making a new pair list for its part"
+                                           : where == "cut"  ? "making the ranks' parts of the decomposition"
                                                              : "making its part of the decomposition"));
       REQUIRE(at != std::string::npos);
       CHECK(out.find("deck.dat:4:", at + 1) == std::string::npos);
       CHECK(out.find("cycle: ") == std::string::npos);
     }
   }
-  SECTION("after a rank ran out of memory in its first search on its part, the shell goes on with the whole model") {
-    // The ranks other than 0 freed their whole model before that search (Pipeline::split_parts):
+  SECTION("after a rank ran out of memory in its first search on its part or at the split, the shell goes on with the whole model") {
+    // The ranks other than 0 freed their whole model before their parts came (Pipeline::split_parts):
     // the failure hands it back, so the next CYCLE and the files are serial's (they crashed or hung).
-    TempDir dir, serial;
-    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
-    dir.write("deck.dat", setup);
-    dir.write("more.txt", "cycle 30\ncycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
-    const int status = run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='1 part'");
-    const std::string out = slurp(dir.path() / "out.txt");
-    INFO(out);
-    CHECK(status != 124);
-    CHECK_THAT(out, Catch::Contains("rank 1 ran out of memory making a new pair list for its part"));
-    serial.write("deck.dat", setup + "cycle 30\n" + kOutputs);
-    REQUIRE(run_deck(serial, 0) == 0);
-    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
-    CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+    for (const auto& [fault, said] : {std::pair{"1 part", "rank 1 ran out of memory making a new pair list for its part"},
+                                      std::pair{"1 split", "rank 1 ran out of memory making its part of the decomposition"},
+                                      std::pair{"2 cut", "rank 0 ran out of memory making the ranks' parts"}}) {
+      INFO(fault);
+      TempDir dir, serial;
+      const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+      dir.write("deck.dat", setup);
+      dir.write("more.txt", "cycle 30\ncycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+      const int status = run_shell(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{}'", fault));
+      const std::string out = slurp(dir.path() / "out.txt");
+      INFO(out);
+      CHECK(status != 124);
+      CHECK_THAT(out, Catch::Contains(said));
+      serial.write("deck.dat", setup + "cycle 30\n" + kOutputs);
+      REQUIRE(run_deck(serial, 0) == 0);
+      CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+      CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+    }
   }
   SECTION("rank 0 out of memory making the contact results a command reads: the PRINT fails, and the shell goes on") {
     // Rank 0 alone takes the CYCLE's last step again for the PRINT (make_results_to_read), the
