@@ -57,6 +57,6 @@ const Command ball_command = {
     "`outside` cylinder) is placed as asked, with a warning naming the ball, the wall and the gap from the "
     "ball's surface to the wall (the first CYCLE would push it off hard; GEN places no ball there).",
     "ball 0.05 0.05 0.1 0.003 id 1001",
-    {"id", "type"}, run_ball, true};
+    {"id", "type"}, run_ball, true, false, OnRanks::ModelOnZero};
 
 }  // namespace trubal

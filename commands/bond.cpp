@@ -79,6 +79,6 @@ const Command bond_command = {
     "counts them, HIST bonds records the counts, PRINT energy books the energy the broken bonds held as "
     "`bond breakage`, DUMP vtk draws them.",
     "bond gap 1e-3 kn 2e12 ks 1e12 ten 5e6 coh 10e6 fa 30 range group platens",
-    {"delete", "gap", "kn", "ks", "ten", "coh", "fa", "rmul", "mcf", "range"}, run_bond};
+    {"delete", "gap", "kn", "ks", "ten", "coh", "fa", "rmul", "mcf", "range"}, run_bond, false, false, OnRanks::ModelOnZero};
 
 }  // namespace trubal

@@ -35,12 +35,12 @@ const Command fix_command = {
     "with INIT), and the force the ball would have received is recorded as its reaction (PRINT balls, HIST "
     "platen).",
     "fix vel spin range group platens",
-    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_fix};
+    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_fix, false, false, OnRanks::ModelOnZero};
 
 const Command free_command = {
     "FREE", {}, "FREE xvel|yvel|zvel|xspin|yspin|zspin|vel|spin ... [range ...]", "free velocity components",
     "Frees the named velocity components of the balls in the range (undoes FIX).",
     "free zvel range group platens",
-    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_free};
+    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_free, false, false, OnRanks::ModelOnZero};
 
 }  // namespace trubal

@@ -27,7 +27,7 @@ const Command init_command = {
     "INIT", {}, "INIT xvel|yvel|zvel|xspin|yspin|zspin v ... [range ...]", "set velocities",
     "Sets velocity and spin components of the balls in the range (a fixed component keeps this value).",
     "init zvel -0.01 range group platens",
-    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "range"}, run_init};
+    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "range"}, run_init, false, false, OnRanks::ModelOnZero};
 
 static void run_apply(Context& ctx, Args& args) {
   ctx.session.require_started();
@@ -58,6 +58,6 @@ const Command apply_command = {
     "Applies constant forces and moments to the balls in the range (added to contact forces and gravity "
     "every cycle). `APPLY off` removes all applied loads from the range.",
     "apply zforce -10 range id 1",
-    {"xforce", "yforce", "zforce", "xmom", "ymom", "zmom", "off", "range"}, run_apply};
+    {"xforce", "yforce", "zforce", "xmom", "ymom", "zmom", "off", "range"}, run_apply, false, false, OnRanks::ModelOnZero};
 
 }  // namespace trubal

@@ -76,6 +76,6 @@ const Command membrane_command = {
     "times its area, and HIST ratio's A follows the widest layer's extent. `MEMBRANE 0` removes them. "
     "Balls must be of one size, each loaded layer on a square grid.",
     "membrane 1e5 follow every 10",
-    {"follow", "every", "range"}, run_membrane};
+    {"follow", "every", "range"}, run_membrane, false, false, OnRanks::ModelOnZero};
 
 }  // namespace trubal

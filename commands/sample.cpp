@@ -86,6 +86,6 @@ const Command sample_command = {
     "`sample reset` after consolidation, `hist sample every 100 file triax.csv`, `cycle 500000 until axial 0.1`, "
     "`plot q vs ea`.",
     "sample platens 1 2 cylinder 3",
-    {"platens", "cylinder", "sides", "reset", "off"}, run_sample};
+    {"platens", "cylinder", "sides", "reset", "off"}, run_sample, false, false, OnRanks::ModelOnZero};
 
 }  // namespace trubal

@@ -86,6 +86,6 @@ const Command set_command = {
     "box). PFC's settings are commands here: `SET gravity`, `dt`, `timestep`, `damp`, `damping`, `backend` or "
     "`threads` makes a variable, with a warning naming the command that sets it (GRAV, TSTEP or FRAC, DAMP, BACKEND).",
     "set seed 42",
-    {"echo", "seed", "log", "progress", "sort", "volume", "on", "off"}, run_set};
+    {"echo", "seed", "log", "progress", "sort", "volume", "on", "off"}, run_set, false, false, OnRanks::Parts};
 
 }  // namespace trubal

@@ -187,6 +187,6 @@ const Command wall_command = {
     "wall plane 0 0 0 0 0 1",
     {"id", "plane", "polygon", "cylinder", "radius", "length", "inside", "outside", "type", "velocity", "spin", "about",
      "rrate", "delete", "all"},
-    run_wall};
+    run_wall, false, false, OnRanks::ModelOnZero};
 
 }  // namespace trubal

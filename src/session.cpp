@@ -50,6 +50,12 @@ Model& Session::edit_cell() {
 }
 
 void Session::set_cell_rates(const std::array<double, 6>& rates) {
+  if (pipeline_->others_hollow()) {   // (the others hold no balls: rank 0 changes its own, a collective call)
+    FieldChange field;
+    set_all_strain_rates(model_, rates, &field);
+    if (comm::root()) update_mass(model_);   // (before the first CYCLE: the work needs the masses)
+    return pipeline_->apply_field(model_, field);
+  }
   if (!parts_kept()) return set_all_strain_rates(model_, rates);
   FieldChange field;
   set_all_strain_rates(model_, rates, &field);
@@ -70,7 +76,44 @@ void Session::set_backend(const std::string& name, int threads, std::uint64_t ma
 
 bool Session::parts_kept() const { return pipeline_->parts_live(model_); }
 
-void Session::whole_everywhere() { pipeline_->share_whole(model_, true); }
+void Session::whole_everywhere() {
+  light_everywhere();
+  pipeline_->share_whole(model_, true);   // (from the light state too: Pipeline::others_hollow)
+}
+
+void Session::model_on_zero() {
+  light_pending_ = true;
+  // The results a CYCLE deferred, of the state before the change, made where every rank agrees
+  // (rank 0's edit would make them alone, where every rank holds the whole model a collective call).
+  results_before_setting();
+  pipeline_->release_parts(model_);   // (where they are kept)
+}
+
+void Session::light_everywhere() {
+  if (!light_pending_ || comm::size() < 2) return;
+  // (Any failure is every rank's: the ranks other than 0 may then hold a part of it, and take the
+  // whole model at the next hand-over, which others_hollow asks for.)
+  pipeline_->set_others_hollow();
+  std::string bytes;
+  comm::together([&] { if (comm::root()) bytes = light_state(model_); }, "writing its model for the other ranks");
+  comm::broadcast(bytes);
+  comm::together([&] {
+    if (!comm::root()) {
+      take_light_state(model_, bytes);
+      decltype(centres_)().swap(centres_);
+    }
+  }, "taking rank 0's model");
+  // The balls' ids, types and radii (the split, the skin and the laws read them on every rank).
+  Balls& b = model_.balls;
+  comm::broadcast(b.id);
+  comm::broadcast(b.type);
+  comm::broadcast(b.rad);
+  comm::together([&] { if (!comm::root()) b.index_ids(); }, "taking rank 0's model");
+  pipeline_->invalidate();
+  light_pending_ = false;
+  return_free_memory();
+}
+
 
 void Session::results_before_setting() {
   if (!parts_kept()) return make_results_to_read(model_, *pipeline_);
@@ -249,12 +292,17 @@ double Session::stress_volume() const {
 
 CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& progress,
                            bool defer_results, bool keep_parts) {
+  light_everywhere();   // (a CYCLE of the python module's: not through the interpreter)
+  // (Where the ranks do not split the model, each steps all of it: rank 0 hands it over. Where they
+  // do, the ranks other than 0 take their parts from rank 0: CycleRun.)
+  if (!pipeline_->distributed()) pipeline_->share_whole(model_);
   ++changes_;   // the balls move
   decltype(centres_)().swap(centres_);   // (a million balls' map is 50 MB; the next BALL makes it again)
   unsaved_ = true;
   require_started();
   check_ready(model_);
-  if (!parts_kept() || comm::root()) update_mass(model_);   // (the ranks' parts keep theirs: CycleRun)
+  // (The ranks' parts keep theirs, and rank 0 sets the others' at the split: CycleRun.)
+  if (!(parts_kept() || pipeline_->others_hollow()) || comm::root()) update_mass(model_);
   interrupt_requested() = false;
   CycleControl control;
   control.interrupt = &interrupt_requested();

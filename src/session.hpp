@@ -89,6 +89,16 @@ class Session {
   // interpreter for each command as Command::on_ranks says).
   bool parts_kept() const;
   void whole_everywhere();
+  // Under mpirun, a command that changes the model alone (its balls, materials, walls, groups,
+  // bonds: OnRanks::ModelOnZero) runs on rank 0 alone, on its whole model. model_on_zero, made
+  // first on every rank: where the ranks keep their parts, rank 0's model takes their state and the
+  // parts end (a collective call); then the others hold only the balls' ids, types and radii of the
+  // model, and the rest of rank 0's state after it (light_everywhere: a collective call where such
+  // a command ran since, made before any command of another kind) until a command or a CYCLE needs
+  // the whole model (whole_everywhere, or the CYCLE's split: rank 0 sends each rank its part).
+  void model_on_zero();
+  void light_everywhere();
+
   // Each rank's memory figures (PRINT info, PRINT counters), gathered by a collective call under
   // mpirun (gather_rank_figures, before a command that rank 0 alone runs); this process's alone on
   // one rank.
@@ -238,6 +248,8 @@ class Session {
                               const std::function<bool()>& stop);
   std::uint64_t changes_ = 0, centres_changes_ = ~std::uint64_t{0};
   mutable bool unsaved_ = false;   // (SAVE is const: it changes nothing in the model)
+  // model_on_zero ran since the last light_everywhere (every rank alike).
+  bool light_pending_ = false;
 };
 
 }  // namespace trubal

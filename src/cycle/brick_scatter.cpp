@@ -4,6 +4,7 @@
 // holds one part beside the whole model at a time and the others never hold the whole model.
 #include "cycle/brick_step_parts.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <exception>
 #include <new>
@@ -18,47 +19,6 @@
 namespace trubal {
 namespace {
 
-// A part as bytes: each array as its length (8 bytes) and its values, in one fixed order that both
-// sides walk (BrickStep::pack_part and unpack_part list it once).
-class PartBytes {
- public:
-  PartBytes() = default;
-  explicit PartBytes(const std::vector<std::uint8_t>& from) : in_(&from) {}
-  template <class T> void put(const std::vector<T>& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    word(v.size());
-    const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
-    out_.insert(out_.end(), p, p + v.size() * sizeof(T));
-  }
-  template <class T> void take(std::vector<T>& v) {
-    const std::uint64_t count = word();
-    if (count > (in_->size() - at_) / sizeof(T)) throw std::logic_error("internal error: a part's bytes end early");
-    v.resize(count);
-    std::memcpy(v.data(), in_->data() + at_, count * sizeof(T));
-    at_ += count * sizeof(T);
-  }
-  void put_word(std::uint64_t w) { word(w); }
-  std::uint64_t take_word() { return word(); }
-  std::vector<std::uint8_t>& bytes() { return out_; }
-  bool at_end() const { return at_ == in_->size(); }
-
- private:
-  void word(std::uint64_t w) {
-    const auto* p = reinterpret_cast<const std::uint8_t*>(&w);
-    out_.insert(out_.end(), p, p + sizeof w);
-  }
-  std::uint64_t word() {
-    std::uint64_t w = 0;
-    if (in_->size() - at_ < sizeof w) throw std::logic_error("internal error: a part's bytes end early");
-    std::memcpy(&w, in_->data() + at_, sizeof w);
-    at_ += sizeof w;
-    return w;
-  }
-  std::vector<std::uint8_t> out_;
-  const std::vector<std::uint8_t>* in_ = nullptr;
-  std::size_t at_ = 0;
-};
-
 // (Each of a list of lists, in order.)
 template <class T> void broadcast_lists(std::vector<std::vector<T>>& lists, int count) {
   lists.resize(static_cast<std::size_t>(count));
@@ -66,6 +26,24 @@ template <class T> void broadcast_lists(std::vector<std::vector<T>>& lists, int 
 }
 
 }  // namespace
+
+template <class F> void BrickStep::each_sent_array(F&& f) {
+  // What cut_part makes of a rank's part, in one order both sides walk: the balls, the pairs (their
+  // history parts those of the whole model's laws, the same on every rank), the bonds, the wall
+  // contacts, then the lists of the part and the reference positions.
+  send_.resize(static_cast<std::size_t>(team_->size()));
+  recv_.resize(static_cast<std::size_t>(team_->size()));
+  part_.contacts.set_history_laws(split_laws_);
+  visit_balls(&part_.balls, f);
+  visit_pairs(&part_.contacts, f);
+  visit_bonds(&part_.bonds, f);
+  visit_walls(&part_.wall_contacts, f);
+  for (auto* v : {&global_ball_, &owned_, &owned_pairs_, &owned_walls_}) f(*v);
+  for (auto& v : send_) f(v);
+  for (auto& v : recv_) f(v);
+  f(scratch_.ghost);
+  for (auto* v : {&ref_.x, &ref_.y, &ref_.z}) f(*v);
+}
 
 void BrickStep::scatter_parts(const Model& full, const VerletReference& ref, const std::function<void()>& fault,
                               const std::string& doing) {
@@ -76,12 +54,13 @@ void BrickStep::scatter_parts(const Model& full, const VerletReference& ref, con
     if (root) decompose(full);
   }, doing);
   share_decomposition();
-  // Each rank's part from rank 0: the length first (-1: rank 0 failed, and the rank goes without),
-  // then the rank's word that it could make room (0: it could not), then the bytes.
+  // Each rank's part from rank 0, straight into its arrays: their lengths first (none: rank 0
+  // failed, and the rank goes without), then the rank's word that it could size them (0: it could
+  // not), then each array's values.
   std::exception_ptr failure;
   if (root) {
     for (int r = 1; r < ranks; ++r) {
-      std::vector<std::uint8_t> bytes;
+      std::vector<std::uint64_t> lengths;
       if (!failure) {
         try {
           if (r == policy_->fail_cut) {   // (a test's fault)
@@ -89,14 +68,16 @@ void BrickStep::scatter_parts(const Model& full, const VerletReference& ref, con
             throw std::bad_alloc();
           }
           cut_part(full, ref, r);
-          bytes = pack_part();
+          each_sent_array([&](auto& v) { lengths.push_back(v.size()); });
         } catch (...) {
           failure = std::current_exception();
         }
       }
-      comm::send_word(r, failure ? -1 : static_cast<std::int64_t>(bytes.size()));
+      comm::send_word(r, failure ? -1 : static_cast<std::int64_t>(lengths.size()));
       if (failure) continue;
-      if (comm::receive_word(r) != 0) comm::send_bytes(r, bytes);
+      comm::send_bytes(r, lengths.data(), lengths.size() * sizeof(std::uint64_t));
+      if (comm::receive_word(r) == 0) continue;
+      each_sent_array([&](auto& v) { comm::send_bytes(r, v.data(), v.size() * sizeof(v[0])); });
     }
     if (!failure) {
       try {
@@ -106,24 +87,26 @@ void BrickStep::scatter_parts(const Model& full, const VerletReference& ref, con
       }
     }
   } else {
-    const std::int64_t length = comm::receive_word(0);
-    if (length < 0) {
+    const std::int64_t count = comm::receive_word(0);
+    if (count < 0) {
       failure = std::make_exception_ptr(std::runtime_error("rank 0 could not make the parts"));
     } else {
-      std::vector<std::uint8_t> bytes;
+      std::vector<std::uint64_t> lengths(static_cast<std::size_t>(count));
+      comm::receive_bytes(0, lengths.data(), lengths.size() * sizeof(std::uint64_t));
       try {
-        bytes.resize(static_cast<std::size_t>(length));
+        std::size_t a = 0;
+        each_sent_array([&](auto& v) {
+          if (a >= lengths.size()) throw std::logic_error("internal error: a part's arrays differ between the ranks");
+          v.resize(lengths[a++]);
+        });
+        if (a != lengths.size()) throw std::logic_error("internal error: a part's arrays differ between the ranks");
       } catch (...) {
         failure = std::current_exception();
       }
       comm::send_word(0, failure ? 0 : 1);
       if (!failure) {
-        comm::receive_bytes(0, bytes);
-        try {
-          unpack_part(bytes);
-        } catch (...) {
-          failure = std::current_exception();
-        }
+        each_sent_array([&](auto& v) { comm::receive_bytes(0, v.data(), v.size() * sizeof(v[0])); });
+        ghosts_ = static_cast<std::size_t>(std::count(scratch_.ghost.begin(), scratch_.ghost.end(), 1));
       }
     }
   }
@@ -149,52 +132,15 @@ void BrickStep::share_decomposition() {
   comm::broadcast(split_bond_rows_);
   comm::broadcast(split_bond_ball_i_);
   std::vector<double> values{bonded_ ? 1.0 : 0.0, static_cast<double>(bonds_across_), max_radius_,
-                             static_cast<double>(full_balls_), walls_any_ ? 1.0 : 0.0};
+                             static_cast<double>(full_balls_), walls_any_ ? 1.0 : 0.0,
+                             split_laws_.rolling ? 1.0 : 0.0, split_laws_.bridge ? 1.0 : 0.0};
   comm::broadcast(values);
   bonded_ = values[0] != 0;
   bonds_across_ = static_cast<std::size_t>(values[1]);
   max_radius_ = values[2];
   full_balls_ = static_cast<std::size_t>(values[3]);
   walls_any_ = values[4] != 0;
-}
-
-std::vector<std::uint8_t> BrickStep::pack_part() const {
-  // What cut_part made of a rank's part, in the order unpack_part reads it.
-  PartBytes out;
-  Model& part = const_cast<Model&>(part_);
-  visit_balls(&part.balls, [&](const auto& v) { out.put(v); });
-  out.put_word((part.contacts.history_laws.rolling ? 1 : 0) + (part.contacts.history_laws.bridge ? 2 : 0));
-  visit_pairs(&part.contacts, [&](const auto& v) { out.put(v); });
-  visit_bonds(&part.bonds, [&](const auto& v) { out.put(v); });
-  visit_walls(&part.wall_contacts, [&](const auto& v) { out.put(v); });
-  for (const auto* v : {&global_ball_, &owned_, &owned_pairs_, &owned_walls_}) out.put(*v);
-  for (const auto& v : send_) out.put(v);
-  for (const auto& v : recv_) out.put(v);
-  out.put(scratch_.ghost);
-  out.put_word(ghosts_);
-  for (const auto* v : {&ref_.x, &ref_.y, &ref_.z}) out.put(*v);
-  return std::move(out.bytes());
-}
-
-void BrickStep::unpack_part(const std::vector<std::uint8_t>& bytes) {
-  PartBytes in(bytes);
-  const int ranks = team_->size();
-  visit_balls(&part_.balls, [&](auto& v) { in.take(v); });
-  const std::uint64_t laws = in.take_word();
-  part_.contacts.set_history_laws(HistoryLaws{(laws & 1) != 0, (laws & 2) != 0});
-  visit_pairs(&part_.contacts, [&](auto& v) { in.take(v); });
-  part_.contacts.drop_results();
-  visit_bonds(&part_.bonds, [&](auto& v) { in.take(v); });
-  visit_walls(&part_.wall_contacts, [&](auto& v) { in.take(v); });
-  for (auto* v : {&global_ball_, &owned_, &owned_pairs_, &owned_walls_}) in.take(*v);
-  send_.assign(ranks, {});
-  recv_.assign(ranks, {});
-  for (auto& v : send_) in.take(v);
-  for (auto& v : recv_) in.take(v);
-  in.take(scratch_.ghost);
-  ghosts_ = in.take_word();
-  for (auto* v : {&ref_.x, &ref_.y, &ref_.z}) in.take(*v);
-  if (!in.at_end()) throw std::logic_error("internal error: a part's bytes go on past its last array");
+  split_laws_ = HistoryLaws{values[5] != 0, values[6] != 0};
 }
 
 }  // namespace trubal

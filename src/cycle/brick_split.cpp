@@ -177,6 +177,7 @@ void BrickStep::decompose(const Model& full) {
   max_radius_ = b.max_radius();
   full_balls_ = n;
   walls_any_ = !full.walls.empty() || wc.size() > 0;
+  split_laws_ = c.history_laws;
 }
 
 void BrickStep::cut_part(const Model& full, const VerletReference& ref, int me) {

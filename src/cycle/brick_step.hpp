@@ -209,8 +209,9 @@ class BrickStep {
   void scatter_parts(const Model& full, const VerletReference& ref, const std::function<void()>& fault,
                      const std::string& doing);
   void share_decomposition();
-  std::vector<std::uint8_t> pack_part() const;
-  void unpack_part(const std::vector<std::uint8_t>& bytes);
+  // f(vector&) on each array of the part and its lists that cut_part makes, in the order rank 0
+  // sends them and a rank receives them.
+  template <class F> void each_sent_array(F&& f);
   // sync()'s first work after rebuild_local: full's list from every rank's (a collective call).
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.
@@ -280,6 +281,7 @@ class BrickStep {
   std::vector<std::uint32_t> split_bond_rows_, split_bond_ball_i_;
   bool bonded_ = false;
   std::size_t bonds_across_ = 0;
+  HistoryLaws split_laws_;                  // the whole model's pairs' history parts at the split
   // Per rank: the part's balls sent to it each step (its ghosts), and the ghosts it sends.
   std::vector<std::vector<std::uint32_t>> send_, recv_;
   std::vector<std::vector<double>> send_buf_, recv_buf_;

@@ -145,7 +145,7 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
   if (team_->shares_whole()) team_->barrier();
   list_version_ = full.contacts.list_version;   // (ranks other than 0: unchanged, until share)
   if (walls_any_) install_local_walls(full);
-  if (whole_ref && whole_ref->x.size() == full.balls.size()) {
+  if (whole_ref && whole_ref->balls() == full.balls.size()) {
     std::vector<double> out, in;
     gather_array(*team_, ref_.x, whole_ref->x, owned_, rank_balls_, out, in);
     gather_array(*team_, ref_.y, whole_ref->y, owned_, rank_balls_, out, in);
@@ -270,7 +270,7 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
   // Rank 0's whole model, current, to the others, and the list's reference positions; not the
   // contact results, which rank 0 alone reads (it alone prints and writes).
   broadcast_arrays(full, false);
-  if (whole_ref && whole_ref->x.size() == full.balls.size()) {
+  if (whole_ref && whole_ref->balls() == full.balls.size()) {
     comm::broadcast(whole_ref->x);
     comm::broadcast(whole_ref->y);
     comm::broadcast(whole_ref->z);

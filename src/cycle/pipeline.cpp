@@ -128,6 +128,8 @@ bool Pipeline::needs_rebuild(const Model& model) {
   const double limit2 = ref_.displacement_limit2(model);
   if (!(limit2 >= 0)) return true;
   if (known) return !(step_.moved2() <= limit2);
+  // (A distributed run's rank other than 0 that holds no reference positions: rank 0 decides.)
+  if (ref_.x.size() != model.balls.size()) return true;
   const Balls& b = model.balls;
   const std::size_t n = b.size();
   ThreadPool& pool = pool_now();
@@ -176,6 +178,7 @@ void Pipeline::sync(Model& model) {
 }
 
 void Pipeline::sync_all(Model& model) {
+  hand_over_to_hollow(model);
   if (!bricks().live_for(model)) return;
   list_from_parts_ = true;
   each_part([&](BrickStep& part, int) { part.share(model, &ref_); });
@@ -204,11 +207,34 @@ void Pipeline::refresh_whole(Model& model) {
 }
 
 void Pipeline::share_whole(Model& model, bool for_command) {
+  if (others_hollow_ && for_command) ++hand_overs_;
+  hand_over_to_hollow(model);
   refresh_whole(model);
   if (!bricks().live_for(model)) return;
   if (for_command && parts_live(model)) ++hand_overs_;
   list_from_parts_ = true;
   each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed()); });
+}
+
+void Pipeline::release_parts(Model& model) {
+  refresh_whole(model);
+  if (!parts_live(model)) return;
+  sync(model);
+  for (auto& part : bricks_) part->release();
+  return_free_memory();
+  invalidate();
+  others_hollow_ = true;   // (they were hollow while their parts were live)
+}
+
+void Pipeline::hand_over_to_hollow(Model& model) {
+  if (!others_hollow_) return;
+  others_hollow_ = false;
+  broadcast_arrays(model, false);
+  if (ref_.balls() == model.balls.size()) {   // (the same answer on every rank)
+    comm::broadcast(ref_.x);
+    comm::broadcast(ref_.y);
+    comm::broadcast(ref_.z);
+  }
 }
 
 namespace {
@@ -229,6 +255,7 @@ bool Pipeline::restore_rescue(Model& model) {
   if (comm::root()) current = rescue_.restore(model);
   else rescue_.restore_light(model);
   broadcast_arrays(model);   // (rank 0 decides whether the next step searches: prepare)
+  others_hollow_ = false;
   std::int64_t flag = current ? 1 : 0;
   comm::broadcast(flag);
   for (auto& part : bricks_) part->drop();   // (they are of another state)
@@ -238,6 +265,19 @@ bool Pipeline::restore_rescue(Model& model) {
 void Pipeline::apply_field(Model& model, const FieldChange& change) {
   if (!change.any) return;
   if (bricks().live_for(model)) return each_part([&](BrickStep& part, int) { part.apply_field(model, change); });
+  if (others_hollow_) {   // rank 0 alone holds the balls: every rank takes its work
+    if (comm::root()) {
+      ExactSum work, gross;
+      apply_field_change(model.balls, change, 0, model.balls.size(), nullptr, work, gross);
+      model.energy.boundary_work += work.value();
+      model.space.gross_work += gross.value();
+    }
+    std::vector<double> works{model.energy.boundary_work, model.space.gross_work};
+    comm::broadcast(works);
+    model.energy.boundary_work = works[0];
+    model.space.gross_work = works[1];
+    return;
+  }
   ExactSum work, gross;
   apply_field_change(model.balls, change, 0, model.balls.size(), nullptr, work, gross);
   model.energy.boundary_work += work.value();
@@ -277,16 +317,18 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
     if (list_ == ListState::Measured) list_ = ListState::Unchecked;   // (not of the parts' steps)
   }
   const auto t0 = std::chrono::steady_clock::now();
+  // (The ranks other than 0 holding the balls' ids, types and radii alone: rank 0 wraps and decides.)
+  const bool hollow_here = others_hollow_ && !comm::root();
   // The rare wrap itself is serial; the test for it is shared out.
-  if (model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
-  bool search = !backend_->keeps_list() || needs_rebuild(model);
+  if (!hollow_here && model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
+  bool search = hollow_here || !backend_->keeps_list() || needs_rebuild(model);
   if (distributed() && comm::size() > 1) {
     // Rank 0 decides: the others' lists take new versions whenever rank 0 hands them over
     // (BrickStep::share, restore_rescue), so their own index would search where rank 0's need not.
     std::int64_t flag = search ? 1 : 0;
     comm::broadcast(flag);
     search = flag != 0;
-    if (!search) {   // (the list is rank 0's, bit for bit: only its index may be of an older version)
+    if (!search && !hollow_here) {   // (the list is rank 0's, bit for bit: only its index may be of an older version)
       const std::size_t n = model.balls.size();
       if (!scratch_.fits(model.contacts, n)) scratch_.index(model.contacts, n);
       if (!scratch_.fits_walls(model.wall_contacts, n)) scratch_.index_walls(model.wall_contacts, n);
@@ -298,7 +340,10 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
     list_ = ListState::PartsToSearch;
     model_ = &model;
   } else {
-    if (search) rebuild(model);
+    if (search) {
+      hand_over_to_hollow(model);   // (the search goes through the whole model on every rank)
+      rebuild(model);
+    }
     list_ = ListState::Current;
   }
   times_.detect += seconds_since(t0);
@@ -366,6 +411,7 @@ void Pipeline::step(Model& model, const StepKernels& kernels, StepSums& sums) {
 }
 
 void Pipeline::whole_step(Model& model, const StepKernels& kernels, StepSums& sums) {
+  hand_over_to_hollow(model);
   if (bricks().live()) prepare(model);   // the parts' state into the whole model, the parts dropped
   // The first step of a CYCLE follows the loop's prepare(): the balls have not moved since.
   if (!prepared_for(model)) prepare(model);

@@ -73,6 +73,17 @@ class Pipeline {
   // for_command: a command needs the whole model (Session::whole_everywhere), counted where the
   // parts were kept (PipelineCounters::hand_overs).
   void share_whole(Model& model, bool for_command = false);
+  // Rank 0's model made current from the kept parts, which every rank then releases (a collective
+  // call where parts_live): a command that rank 0 alone runs changes the model next
+  // (Session::model_on_zero).
+  void release_parts(Model& model);
+  // The ranks other than 0 hold the model's balls' ids, types and radii alone, and no part (after
+  // release_parts, or the light state of a command rank 0 alone ran: Session::light_everywhere); the
+  // same answer on every rank. Whatever needs the whole model on every rank (sync_all, share_whole,
+  // a search or a step through it) hands it over first (hand_over_to_hollow, a collective call); a
+  // CYCLE's split does not need it: rank 0 sends each rank its part.
+  bool others_hollow() const { return others_hollow_; }
+  void set_others_hollow() { others_hollow_ = comm_ranks_ > 1; }
   // Whether a distributed run's ranks hold their live parts of this model (between CYCLEs: after an
   // end_cycle that kept them), the ranks other than 0 no more of the whole model than the balls'
   // ids, types and radii (hollow). The same answer on every rank.
@@ -237,6 +248,7 @@ class Pipeline {
   // next rebuild; the rebuild rule stays the skin's (a ball moved half the skin).
   double list_reach(const Model& model, double skin) const;
   bool rebuild_parts(const Model& model, double skin);
+  void hand_over_to_hollow(Model& model);
   std::size_t held_whole_ = 0, held_part_ = 0;   // bytes of arrays in the last distributed step (PRINT info)
   std::vector<double> cycle_peaks_;              // per rank: peak MiB by the end of the last distributed CYCLE
 
@@ -272,6 +284,7 @@ class Pipeline {
   StepMode mode_ = StepMode::Numbers;
   int comm_ranks_ = 1;              // the ranks of the run (comm::size() when made)
   bool whole_stale_ = false;        // mark_whole_stale (rank 0's word counts)
+  bool others_hollow_ = false;      // others_hollow
   std::int64_t hand_overs_ = 0;     // PipelineCounters::hand_overs
   bool whole_next_ = false;         // the next step on the whole model, on every rank (rewind_step)
   // threads_in_space's answer for one list (a memo of a function of the list, not a state).

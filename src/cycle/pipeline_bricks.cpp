@@ -111,8 +111,10 @@ void Pipeline::split_parts(Model& model) {
     each_part([&](BrickStep& part, int) { part.split(model, ref_); });
   } catch (...) {
     if (scatter) broadcast_arrays(model, false);   // (the ranks agreed on the failure: every one is here)
+    others_hollow_ = false;
     throw;
   }
+  others_hollow_ = false;   // (they hold their parts)
   if (!search) return;
   const bool rebuilt = rebuild_parts(model, list_reach(model, skin));
   list_ = ListState::Current;
@@ -121,6 +123,7 @@ void Pipeline::split_parts(Model& model) {
   // whole model, which rank 0 hands back to the others.
   for (auto& part : bricks_) part->drop();
   if (distributed()) broadcast_arrays(model);
+  others_hollow_ = false;
   rebuild(model);
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
 }
@@ -161,8 +164,9 @@ double Pipeline::critical_timestep(Model& model, const Features& features, doubl
   // Kept parts (a CYCLE going on from them after a setting changed): each rank's own balls, their
   // list made current first (parts_go_on; the CYCLE hands the whole model over where it cannot be).
   if (parts_live(model)) return std::min(bricks().critical_step(features), cap);
-  // (PartsToSearch: a distributed run's alone)
-  if (list_ != ListState::PartsToSearch) return trubal::critical_timestep(model);
+  // (PartsToSearch: a distributed run's alone. The ranks other than 0 holding no balls but their
+  // ids, types and radii: the parts are made now, rank 0 sending each rank its own.)
+  if (list_ != ListState::PartsToSearch && !others_hollow_) return trubal::critical_timestep(model);
   // The parts search the stale list now, and each rank's own balls give their steps.
   const auto t0 = std::chrono::steady_clock::now();
   split_parts(model);

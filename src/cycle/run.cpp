@@ -174,20 +174,31 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   servo_reads_table_ =
       cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
   pipeline.refresh_whole(model);
+  // The first step's sort: rank 0 alone sorts (sort_balls), the parts given back to it first.
+  if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model)) pipeline.release_parts(model);
   // (A step estimated afresh reads the pairs touching now: the parts' list made current first.)
-  if (pipeline.parts_live(model) &&
-      (sort_due(model) || servo_reads_table_ || (!(model.critical_dt > 0) && !pipeline.parts_go_on(model))))
+  if (pipeline.parts_live(model) && (servo_reads_table_ || (!(model.critical_dt > 0) && !pipeline.parts_go_on(model))))
     pipeline.share_whole(model);
+  // The ranks other than 0 may hold no more of the model than its balls' ids, types and radii, and
+  // no part (after a command rank 0 alone ran: Pipeline::others_hollow): rank 0 then checks, sorts
+  // and decides alone, and sends each rank its part at the split. A servo's first reading of the
+  // contact table needs the whole model's list searched on every rank: handed over first.
+  if (servo_reads_table_) pipeline.share_whole(model);
   const bool from_parts = pipeline.parts_live(model);
+  const bool from_root = pipeline.others_hollow();
   if (from_parts) pipeline.parts_take_settings(model);
-  const bool whole_here = !from_parts || comm::root();
+  const bool whole_here = !(from_parts || from_root) || comm::root();
   check_ready(model);
   if (whole_here) update_mass(model);
-  for (std::size_t k = 0; k < model.balls.size() && !from_parts; ++k)
-    if (!(model.balls.mass[k] > 0 && std::isfinite(1 / model.balls.mass[k]) && model.balls.inertia[k] > 0))
-      throw std::runtime_error(fmt::format(
-          "ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger radius or "
-          "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
+  auto check_masses = [&] {
+    for (std::size_t k = 0; k < model.balls.size(); ++k)
+      if (!(model.balls.mass[k] > 0 && std::isfinite(1 / model.balls.mass[k]) && model.balls.inertia[k] > 0))
+        throw std::runtime_error(fmt::format(
+            "ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger radius or "
+            "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
+  };
+  if (from_root) comm::together([&] { if (comm::root()) check_masses(); }, "checking the balls' masses");
+  else if (!from_parts) check_masses();
   // The first step's sort (Model::order) before the run's first search; not where a step a CYCLE
   // deferred is to be taken again first (make_results: it is of the order before), which the first
   // step then sorts after.
@@ -197,12 +208,12 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   }
   // The history parts the laws of this run use, zero where a law is new since the pairs were found.
   model.contacts.use_history(laws_with_history(model));
-  kernels_ = from_parts ? make_kernels(model, features_from_root(model)) : make_kernels(model);
+  kernels_ = from_parts || from_root ? make_kernels(model, features_from_root(model)) : make_kernels(model);
   cap_ = hertz_step_cap(model);
   // The estimate between contact episodes, below which the held critical step is kept (the whole
   // model's, before a distributed run's parts take their balls; going on from them, rank 0's).
   if (whole_here) free_step_ = contact_free_step(model, kernels_.features, cap_);
-  if (from_parts) {
+  if (from_parts || from_root) {
     std::vector<double> free_step{free_step_};
     comm::broadcast(free_step);
     free_step_ = free_step[0];
@@ -393,8 +404,25 @@ StepTotals CycleRun::advance(const StepPlan& step) {
 // The balls in space order (Model::order). Where none moves (the first step's order, put before
 // the run's first search: CycleRun's start), the pipeline keeps what it holds.
 void CycleRun::sort_balls() {
-  pipeline_.sync_all(model_);
-  if (!sort_in_space(model_)) return;
+  // (A distributed run's parts: their state to rank 0, which alone sorts; the ranks split afresh.)
+  if (pipeline_.distributed()) pipeline_.release_parts(model_);
+  if (pipeline_.others_hollow()) {
+    // Rank 0 alone holds the balls: it sorts them, and the others take their ids, types and radii
+    // in the new order.
+    std::int64_t moved = 0;
+    comm::together([&] { if (comm::root()) moved = sort_in_space(model_) ? 1 : 0; }, "putting the balls in space order");
+    comm::broadcast(moved);
+    model_.order.pending = false;
+    if (moved == 0) return;
+    Balls& b = model_.balls;
+    comm::broadcast(b.id);
+    comm::broadcast(b.type);
+    comm::broadcast(b.rad);
+    if (!comm::root()) b.index_ids();
+  } else {
+    pipeline_.sync_all(model_);
+    if (!sort_in_space(model_)) return;
+  }
   pipeline_.invalidate();
   kernels_.laws = make_pair_laws(model_);   // per-ball type indices
 }

@@ -11,7 +11,7 @@ namespace trubal {
 double VerletReference::displacement_limit2(const Model& model) const {
   const Balls& b = model.balls;
   const std::size_t n = b.size();
-  if (!valid_ || x.size() != n) return -1;
+  if (!valid_ || count_ != n) return -1;
   if (n && std::memcmp(rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return -1;
   // Periodic space: an image pair also closes by the change of the cell's edge vectors (per axis,
   // the change of the edge length plus those of the tilts that shift that axis).
@@ -46,6 +46,7 @@ double VerletReference::skin_for(const Balls& b) {
 void VerletReference::record(const Model& model, double skin) {
   const Balls& b = model.balls;
   x = b.x; y = b.y; z = b.z; rad_ = b.rad;
+  count_ = b.size();
   cell_ = model.space.length();
   tilt_ = model.space.tilt;
   skin_ = skin;

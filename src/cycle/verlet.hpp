@@ -34,6 +34,9 @@ class VerletReference {
   // there until a sync gathers them into x, y, z: the cell and the skin of the new list.
   void record_cell(const Model& model, double skin);
   void invalidate() { valid_ = false; }
+  // The balls the reference was recorded for (x, y, z hold their positions, but on a distributed
+  // run's rank that held the balls' ids, types and radii alone: then they are empty).
+  std::size_t balls() const { return count_; }
   double skin() const { return skin_; }
   std::size_t rebuilds() const { return rebuilds_; }
 
@@ -42,6 +45,7 @@ class VerletReference {
   std::array<double, 3> cell_{0, 0, 0};   // periodic cell edges at the last rebuild
   std::array<double, 3> tilt_{0, 0, 0};   // and its tilts
   double skin_ = 0;
+  std::size_t count_ = 0;
   bool valid_ = false;
   std::size_t rebuilds_ = 0;
 };

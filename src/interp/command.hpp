@@ -64,6 +64,11 @@ enum class OnRanks : std::uint8_t {
               // (PRINT, SAVE, PLOT)
   Parts,      // every rank runs it on the model as it is (CYCLE; the settings: DAMP, FRAC, TSTEP, GRAV;
               // the cell's: STRAIN, SERVO; the commands that do not read the balls)
+  ModelOnZero,   // changes the model alone: rank 0 alone runs it, on its whole model, the parts' state
+                 // given to it first (Session::model_on_zero); the others take rank 0's model but the
+                 // balls' arrays before the next command of another kind (Session::light_everywhere)
+                 // (BALL, GEN, LATTICE, PROP, INIT, APPLY, FIX, FREE, GROUP, DELETE, WALL, BOND,
+                 // MEMBRANE, SAMPLE)
 };
 
 struct Command {

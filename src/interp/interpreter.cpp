@@ -36,8 +36,13 @@ struct FileText {
 FileText read_on_root(const std::function<FileText()>& read) {
   FileText f;
   if (comm::root()) f = read();
-  if (comm::size() == 1) return f;
-  std::string packed = f.ok ? "1" + f.canonical + '\0' + f.text : "0" + f.error;
+  if (comm::size() == 1 || rank_alone()) return f;
+  // (A deck of a million BALL lines is 65 MB: one copy of its text at a time, not three.)
+  std::string packed = f.ok ? "1" + f.canonical + '\0' : "0" + f.error;
+  if (f.ok) {
+    packed += f.text;
+    std::string().swap(f.text);
+  }
   comm::broadcast(packed);
   FileText out;
   out.ok = !packed.empty() && packed[0] == '1';
@@ -47,7 +52,8 @@ FileText read_on_root(const std::function<FileText()>& read) {
   }
   const std::size_t cut = packed.find('\0', 1);
   out.canonical = packed.substr(1, cut - 1);
-  out.text = packed.substr(cut + 1);
+  packed.erase(0, cut + 1);
+  out.text = std::move(packed);
   return out;
 }
 
@@ -250,6 +256,7 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
     if (fail_line_for_test > 0 && !frames_.empty() && frames_.back().line == fail_line_for_test)
       throw std::runtime_error(fmt::format("rank {} fails here for a test (TRUBAL_TEST_FAIL_AT)", comm::rank()));
     // What the command needs of the model (Command::on_ranks): the same on every rank.
+    if (command.on_ranks != OnRanks::ModelOnZero) session_.light_everywhere();
     switch (command.on_ranks) {
       case OnRanks::Whole:
         session_.whole_everywhere();
@@ -257,10 +264,22 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
         break;
       case OnRanks::RankZero:
         session_.gather_rank_figures();
-        if (comm::root()) command.run(ctx, args);
+        if (comm::root()) {
+          RankAlone alone;
+          command.run(ctx, args);
+        }
         break;
       case OnRanks::Parts:
         command.run(ctx, args);
+        break;
+      case OnRanks::ModelOnZero:
+        // (Quick, agreed lazily: rank 0 alone may fail, and waits in the agreement for the others,
+        // which go on to the next command that is not quick, or the deck's end, and agree there.)
+        session_.model_on_zero();
+        if (comm::root()) {
+          RankAlone alone;
+          command.run(ctx, args);
+        }
         break;
     }
   } catch (const ReportedError&) {

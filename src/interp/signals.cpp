@@ -36,8 +36,16 @@ void install_interrupt_handler() {
   }
 }
 
+namespace {
+bool g_rank_alone = false;   // (the interpreter's thread alone runs commands)
+}  // namespace
+
+RankAlone::RankAlone() : before_(g_rank_alone) { g_rank_alone = true; }
+RankAlone::~RankAlone() { g_rank_alone = before_; }
+bool rank_alone() { return g_rank_alone; }
+
 bool interrupt_now() {
-  if (comm::size() == 1) return interrupt_requested().load();
+  if (comm::size() == 1 || g_rank_alone) return interrupt_requested().load();
   const bool any = comm::any_all(interrupt_requested().load());
   if (any) interrupt_requested().store(true);
   return any;

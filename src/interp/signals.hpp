@@ -17,4 +17,19 @@ void install_interrupt_handler();
 // point of the same computation (GEN's placement, a CYCLE's step).
 bool interrupt_now();
 
+// While one lives, this rank runs a command alone (OnRanks::ModelOnZero, RankZero: rank 0), which
+// then makes no collective call: interrupt_now asks this rank's flag alone, and an input file
+// rank 0 reads is not handed to the others (Interpreter::read_file_on_root).
+class RankAlone {
+ public:
+  RankAlone();
+  ~RankAlone();
+  RankAlone(const RankAlone&) = delete;
+  RankAlone& operator=(const RankAlone&) = delete;
+
+ private:
+  bool before_;
+};
+bool rank_alone();
+
 }  // namespace trubal

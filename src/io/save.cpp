@@ -379,6 +379,46 @@ void save_model(const Model& model, const std::string& path, const History* hist
   tmp.rename_over_target(" (nothing was replaced)");
 }
 
+std::string light_state(const Model& model) {
+  Model& m = const_cast<Model&>(model);
+  Balls balls = std::move(m.balls);
+  ContactTable contacts = std::move(m.contacts);
+  WallContacts walls = std::move(m.wall_contacts);
+  Bonds bonds = std::move(m.bonds);
+  auto put_back = [&] {
+    m.balls = std::move(balls);
+    m.contacts = std::move(contacts);
+    m.wall_contacts = std::move(walls);
+    m.bonds = std::move(bonds);
+  };
+  std::string bytes;
+  try {
+    m.balls = Balls{};
+    m.contacts = ContactTable{};
+    m.contacts.history_laws = contacts.history_laws;
+    m.contacts.results_cycle = contacts.results_cycle;
+    m.wall_contacts = WallContacts{};
+    m.bonds = Bonds{};
+    Writer w(&bytes);
+    transfer(w, m, kVersion);
+    w.flush();
+  } catch (...) {
+    put_back();
+    throw;
+  }
+  put_back();
+  return bytes;
+}
+
+void take_light_state(Model& model, const std::string& bytes) {
+  Model light;
+  Reader r(bytes, "rank 0's model");
+  transfer(r, light, kVersion);
+  if (!r.at_end()) r.corrupt();
+  light.contacts.set_history_laws(laws_with_history(light));
+  model = std::move(light);
+}
+
 Model load_model(const std::string& path, History* history) {
   // Rank 0 reads the file, every rank restarts from its bytes (an error travels as "E" + message).
   std::string data;

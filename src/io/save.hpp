@@ -23,4 +23,12 @@ void save_model(const Model& model, const std::string& path, const History* hist
 // yet opened (History::resume_files).
 Model load_model(const std::string& path, History* history = nullptr);
 
+// The model but its bulk (the balls, the pairs, the walls' contacts, the bonds), as bytes in SAVE's
+// layout, and a model made of them (without balls): what the ranks other than 0 of a distributed
+// run hold of rank 0's model after a command that rank 0 alone ran, with the balls' ids, types and
+// radii (Session::light_everywhere). It goes through SAVE's list of what a model holds, so nothing
+// SAVE keeps is left behind. light_state changes nothing (the bulk is set aside while it writes).
+std::string light_state(const Model& model);
+void take_light_state(Model& model, const std::string& bytes);
+
 }  // namespace trubal

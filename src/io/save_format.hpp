@@ -77,6 +77,8 @@ static_assert(sizeof(MaterialV9) == 8 * sizeof(double) + 8, "MaterialV9 has hidd
 class Writer {
  public:
   explicit Writer(int fd) : fd_(fd) { buf_.reserve(kBuffer); }
+  // Into memory (light_state): the bytes are appended to *sink.
+  explicit Writer(std::string* sink) : fd_(-1), sink_(sink) {}
   // A struct written whole must have no padding (its bytes would be whatever the stack held, and a
   // save's bytes must not depend on the run): Damping and Material name theirs.
   template <class T> void pod(const T& v) {
@@ -115,6 +117,10 @@ class Writer {
     else if (!error_) put(p, n);   // a large array straight from its memory
   }
   void put(const char* p, std::size_t n) {
+    if (sink_) {
+      sink_->append(p, n);
+      return;
+    }
     while (n > 0) {
       const ssize_t w = ::write(fd_, p, n);
       if (w < 0) {
@@ -127,6 +133,7 @@ class Writer {
     }
   }
   int fd_;
+  std::string* sink_ = nullptr;
   std::string buf_;
   std::uint64_t size_ = 0, sum_ = 1469598103934665603ull;
   int error_ = 0;

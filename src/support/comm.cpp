@@ -254,24 +254,25 @@ std::int64_t receive_word([[maybe_unused]] int from) {
 // (In pieces: an MPI count is an int.)
 constexpr std::size_t kPiece = std::size_t{1} << 30;
 
-void send_bytes([[maybe_unused]] int to, [[maybe_unused]] const std::vector<std::uint8_t>& bytes) {
+void send_bytes([[maybe_unused]] int to, [[maybe_unused]] const void* data, [[maybe_unused]] std::size_t bytes) {
 #ifdef TRUBAL_HAVE_MPI
   if (g_started && g_size > 1) {
-    for (std::size_t at = 0; at < bytes.size(); at += kPiece)
-      MPI_Send(bytes.data() + at, static_cast<int>(std::min(kPiece, bytes.size() - at)), MPI_BYTE, to, kPointTag,
-               MPI_COMM_WORLD);
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t at = 0; at < bytes; at += kPiece)
+      MPI_Send(p + at, static_cast<int>(std::min(kPiece, bytes - at)), MPI_BYTE, to, kPointTag, MPI_COMM_WORLD);
     return;
   }
 #endif
   no_peer();
 }
 
-void receive_bytes([[maybe_unused]] int from, [[maybe_unused]] std::vector<std::uint8_t>& bytes) {
+void receive_bytes([[maybe_unused]] int from, [[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes) {
 #ifdef TRUBAL_HAVE_MPI
   if (g_started && g_size > 1) {
-    for (std::size_t at = 0; at < bytes.size(); at += kPiece)
-      MPI_Recv(bytes.data() + at, static_cast<int>(std::min(kPiece, bytes.size() - at)), MPI_BYTE, from, kPointTag,
-               MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    auto* p = static_cast<unsigned char*>(data);
+    for (std::size_t at = 0; at < bytes; at += kPiece)
+      MPI_Recv(p + at, static_cast<int>(std::min(kPiece, bytes - at)), MPI_BYTE, from, kPointTag, MPI_COMM_WORLD,
+               MPI_STATUS_IGNORE);
     return;
   }
 #endif

@@ -54,11 +54,11 @@ void allgather(const std::vector<std::uint8_t>& mine, std::vector<std::uint8_t>&
 void exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& recv);
 
 // One rank to another, blocking: the other rank calls the matching half, in the same order. A word;
-// bytes (the receiver's vector sized to what comes, as a word before said).
+// bytes (the receiver's memory as long as what comes, as a word before said).
 void send_word(int to, std::int64_t value);
 std::int64_t receive_word(int from);
-void send_bytes(int to, const std::vector<std::uint8_t>& bytes);
-void receive_bytes(int from, std::vector<std::uint8_t>& bytes);
+void send_bytes(int to, const void* data, std::size_t bytes);
+void receive_bytes(int from, void* data, std::size_t bytes);
 
 // Runs `work` on every rank, where a rank's failure would otherwise leave the others waiting in the
 // next collective call: an exception on any rank becomes every rank's, a std::runtime_error with the

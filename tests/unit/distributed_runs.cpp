@@ -255,19 +255,23 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   // A CYCLE leaves its last step's contact results to be made when read: rank 0 alone runs PRINT
   // and SAVE (Command::on_ranks) and takes that step again for them, while the other ranks keep
   // their part and no more of the whole model than its balls' ids, types and radii; the next CYCLE
-  // goes on from the parts. A command that changes the balls (INIT) has rank 0's whole model handed
-  // to every rank first, without the results (129 bytes a pair: 28 MiB for this block's 226,800
-  // pairs). The files, and the CYCLEs after each, give the serial bits.
+  // goes on from the parts. A command that changes the balls (LATTICE, INIT) runs on rank 0 alone,
+  // the parts' state given to it first, and the others take rank 0's model but the balls' arrays
+  // (their ids, types and radii alone): the next CYCLE's split sends each rank its part, so the
+  // whole model is never handed over (it went to every rank, 28 MiB of this block's pairs). The
+  // files, and the CYCLEs after each, give the serial bits.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
-  const std::string deck = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
-                           "lattice fcc 1 30 30 42\ninit xvel 0.01 range x 0 10\ncycle 20\n"
+  const std::string built = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                            "lattice fcc 1 30 30 42\n";
+  const std::string deck = "init xvel 0.01 range x 0 10\ncycle 20\n"
                            "print contacts file first.csv\nprint stress\nprint energy\ncycle 30\n" +
                            std::string(kOutputs);
-  const std::string after = "init xvel 0.02 range x 0 10\ncycle 10\nprint balls file last.csv\n";
+  const std::string init = "init xvel 0.02 range x 0 10\n", after = "cycle 10\nprint balls file last.csv\n";
   TempDir serial, two;
-  serial.write("deck.dat", deck + after);
+  serial.write("deck.dat", built + deck + init + after);
   REQUIRE(run_deck(serial, 0) == 0);
-  two.write("deck.dat", "backend mpi\n" + deck + "print counters file kept.txt\n" + after + kCounters);
+  two.write("deck.dat", "backend mpi\n" + built + "print counters file built.txt\n" + deck +
+                            "print counters file kept.txt\n" + init + "print counters file init.txt\n" + after + kCounters);
   REQUIRE(run_deck(two, 2) == 0);
   const std::string out = slurp(two.path() / "out.txt");
   INFO(out);
@@ -283,10 +287,19 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   CHECK(counter(kept, "rank1_contact_results_mib") == 0);
   CHECK(counter(kept, "rank0_model_held_mib") >= 40);
   CHECK(counter(kept, "rank1_model_held_mib") < 0.3 * counter(kept, "rank0_model_held_mib"));
-  // After INIT and one more CYCLE: the parts kept again; rank 1 got no results with the whole model.
+  // After LATTICE, and after INIT: rank 1 holds the balls' ids, types and radii alone (20 of rank
+  // 0's 216 bytes a ball), and no part.
+  for (const char* file : {"built.txt", "init.txt"}) {
+    INFO(file);
+    const Counters light = read_counters(two.path() / file);
+    CHECK(counter(light, "parts_kept") == 0);
+    CHECK(counter(light, "rank1_model_held_mib") < 0.15 * counter(light, "rank0_model_held_mib"));
+  }
+  // After INIT and one more CYCLE: the parts kept again; rank 1 got no results, and no command or
+  // CYCLE handed the whole model over.
   const Counters counters = counters_of(two);
   CHECK(counter(counters, "parts_kept") == 1);
-  CHECK(counter(counters, "whole_hand_overs") == 1);   // (INIT's: PRINT and SAVE needed none)
+  CHECK(counter(counters, "whole_hand_overs") == 0);
   CHECK(counter(kept, "whole_hand_overs") == 0);
   CHECK(counter(counters, "rank1_contact_results_mib") == 0);
   CHECK(counter(counters, "rank1_model_held_mib") < 0.3 * counter(counters, "rank0_model_held_mib"));

@@ -29,6 +29,37 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     REQUIRE(at != std::string::npos);
     CHECK(out.find("deck.dat:3:", at + 1) == std::string::npos);   // rank 0 alone reports it
   }
+  SECTION("a BALL line that rank 0 alone runs fails among others: one message, and the shell goes on with rank 0's model") {
+    // BALL runs on rank 0 alone (OnRanks::ModelOnZero) and agrees lazily: rank 0 fails at line 6 and
+    // waits in the agreement while the others skip the next BALL lines to the first command that is
+    // not quick. Every rank then stops with line 6's message; in the shell the model is rank 0's
+    // (the three balls before the failure), and the next CYCLE gives serial's bits.
+    const std::string setup = "backend mpi\nstart 0.01 0.01 0.01\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\n"
+                              "ball 0.004 0.005 0.005 0.0006 id 1\nball 0.005 0.005 0.005 0.0006 id 2\n";
+    const std::string bad = "ball 0.004 0.005 0.005 0.0006 id 3\nball 0.006 0.005 0.005 0.0006 id 4\n";
+    TempDir dir;
+    dir.write("deck.dat", setup + bad + "cycle 10\n");
+    CHECK(run_deck(dir, 3) == 1);   // not 124
+    std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    const auto at = out.find("deck.dat:6: error:");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:6:", at + 1) == std::string::npos);
+    CHECK(out.find("cycle: ") == std::string::npos);
+    TempDir shell, serial;
+    shell.write("deck.dat", setup + bad);
+    shell.write("more.txt", "ball 0.0055 0.0061 0.005 0.0006 id 5\ncycle 40\n" + std::string(kOutputs) + "quit\n");
+    CHECK(run_shell(shell, 3) == 0);
+    out = slurp(shell.path() / "out.txt");
+    INFO(out);
+    CHECK(out.find("deck.dat:6: error:") != std::string::npos);
+    serial.write("deck.dat", setup.substr(setup.find('\n') + 1) + "ball 0.0055 0.0061 0.005 0.0006 id 5\ncycle 40\n" +
+                                 kOutputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    CHECK(lines_of(slurp(serial.path() / "balls.csv")).size() == 4);   // (a header and balls 1, 2 and 5)
+    CHECK(slurp(shell.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
+    CHECK(slurp(shell.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+  }
   SECTION("a failure on rank 0 alone (its file write) stops the others too") {
     TempDir dir;
     dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nsave no/such/folder/s.sav\ncycle 10\n");
