@@ -117,7 +117,9 @@ void print_info(Context& ctx) {
                      each_array(&Session::RankFigures::whole_arrays_mib), each_array(&Session::RankFigures::part_arrays_mib));
     o << fmt::format("model held now: {} MiB (per rank: {})\n", each_array(&Session::RankFigures::model_arrays_mib),
                      s.parts_kept() ? "each its part of the model, rank 0 the whole model too"
-                                    : "the whole model on every rank");
+                     : s.pipeline().others_hollow()
+                         ? "rank 0 the whole model, the others its settings, walls and balls' ids, types and radii"
+                         : "the whole model on every rank");
     o << fmt::format("contact results held: {} MiB (per rank: rank 0 gathers those a command reads after a "
                      "CYCLE, for what it prints and writes)\n", each_array(&Session::RankFigures::results_mib));
   }

@@ -55,11 +55,13 @@ struct Context {
   void warn(const std::string& message) const;
 };
 
-// What a command needs of the model under mpirun. A CYCLE leaves each rank holding its own part
-// of the model (cycle/brick_step.hpp), the ranks other than 0 no more of the whole than its balls'
-// ids, types and radii, rank 0 the whole model as well, current: its output reads that.
+// What a command needs of the model under mpirun. Rank 0 holds the whole model, current: its
+// output reads that. The others hold no more of the whole than its light state (settings,
+// materials, walls, groups) and its balls' ids, types and radii, and after a CYCLE their own part
+// of the model (cycle/brick_step.hpp).
 enum class OnRanks : std::uint8_t {
   Whole,      // every rank gets the whole model first (Session::whole_everywhere), then runs it
+              // (RESTART, START, HIST, DUMP, BACKEND, RENUMBER, TABLE)
   RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
               // (PRINT, SAVE, PLOT)
   Parts,      // every rank runs it on the model as it is (CYCLE; the settings: DAMP, FRAC, TSTEP, GRAV;
