@@ -96,6 +96,45 @@ class TextStream : public std::istream {
   } buf_;
 };
 
+// A deck under mpirun, handed by rank 0 to the others in pieces as the interpreter reads it (a
+// million BALL lines are 65 MB, which no rank then holds whole). Every rank reads the same lines at
+// the same points, so each piece is a collective call; `before` runs first on every rank (the lines
+// agreed lazily before it are agreed on there: a rank that failed at one waits in that agreement,
+// not in this call). A failed read on rank 0 is every rank's InputError.
+class RootPieces : public std::streambuf {
+ public:
+  RootPieces(std::istream* file, std::string what, std::function<void()> before)
+      : file_(file), what_(std::move(what)), before_(std::move(before)) {}
+
+ protected:
+  int_type underflow() override {
+    if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
+    before_();
+    constexpr std::size_t kPiece = std::size_t{1} << 20;
+    std::string piece;
+    if (comm::root()) {
+      piece.resize(kPiece + 1);
+      piece[0] = 'D';
+      file_->read(piece.data() + 1, static_cast<std::streamsize>(kPiece));
+      piece.resize(1 + static_cast<std::size_t>(file_->gcount()));
+      if (file_->bad()) piece = fmt::format("Ecannot read {}: a read error", what_);
+    }
+    comm::broadcast(piece);
+    if (piece.empty() || piece[0] == 'E') throw InputError(piece.empty() ? "cannot read " + what_ : piece.substr(1));
+    piece.erase(0, 1);
+    held_ = std::move(piece);
+    if (held_.empty()) return traits_type::eof();
+    setg(held_.data(), held_.data(), held_.data() + held_.size());
+    return traits_type::to_int_type(*gptr());
+  }
+
+ private:
+  std::istream* file_;   // rank 0's (the others': none)
+  std::string what_;
+  std::function<void()> before_;
+  std::string held_;
+};
+
 }  // namespace
 
 std::optional<std::string> Interpreter::read_file_on_root(const std::string& path) {
@@ -380,8 +419,8 @@ bool Interpreter::run_text(const std::string& text, const std::string& name, con
 }
 
 bool Interpreter::run_file(const std::string& path) {
-  // One process reads its deck as it runs it (a million BALL lines are 65 MB); under mpirun rank 0
-  // reads it whole and hands it to the others.
+  // Each process reads its deck as it runs it (a million BALL lines are 65 MB): under mpirun rank 0
+  // reads it and hands it to the others in pieces (RootPieces).
   std::ifstream streamed;
   const FileText file = read_on_root([&] {
     FileText f;
@@ -397,17 +436,7 @@ bool Interpreter::run_file(const std::string& path) {
     }
     std::error_code ec;
     f.canonical = fs::weakly_canonical(path, ec).string();
-    if (comm::size() == 1) {
-      streamed = std::move(in);
-      f.ok = true;
-      return f;
-    }
-    try {
-      f.text = read_all(in, fmt::format("the deck '{}'", path));
-    } catch (const InputError& e) {
-      f.error = e.what();
-      return f;
-    }
+    streamed = std::move(in);
     f.ok = true;
     return f;
   });
@@ -416,8 +445,10 @@ bool Interpreter::run_file(const std::string& path) {
     if (report_errors) output_.err() << "error: " << file.error << '\n';
     return false;
   }
-  TextStream text(file.text);
-  std::istream& in = streamed.is_open() ? static_cast<std::istream&>(streamed) : text;
+  RootPieces pieces(comm::root() ? &streamed : nullptr, fmt::format("the deck '{}'", path), [this] { settle_agreement(); });
+  std::istream handed(&pieces);
+  handed.exceptions(std::ios::badbit);   // (what the pieces throw reaches run_frames as thrown)
+  std::istream& in = comm::size() == 1 ? static_cast<std::istream&>(streamed) : handed;
   try {
     return run_frames(in, path, file.canonical);
   } catch (const ReportedError&) {

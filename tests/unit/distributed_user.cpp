@@ -60,6 +60,26 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     CHECK(slurp(shell.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
     CHECK(slurp(shell.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
   }
+  SECTION("a BALL line fails on rank 0 alone in a deck longer than the pieces rank 0 hands over") {
+    // Rank 0 hands the deck to the others in pieces of 1 MiB as they read it, a collective call: rank
+    // 0 fails at line 6 and waits in the lines' agreement, which the others must meet before they
+    // ask for the next piece (2 MB of BALL lines follow, and the CYCLE after them).
+    std::string deck = "backend mpi\nstart 1 1 1\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\n"
+                       "ball 0.5 0.5 0.5 0.001 id 1\nball 0.6 0.5 0.5 0.001 id 2\nball 0.5 0.5 0.5 0.001 id 3\n";
+    for (int k = 0; k < 50000; ++k)
+      deck += fmt::format("ball {:.6f} {:.6f} {:.6f} 0.001 id {}\n", 0.01 + 0.005 * (k % 190), 0.01 + 0.005 * (k / 190 % 190),
+                          0.1 + 0.005 * (k / 36100), k + 10);
+    REQUIRE(deck.size() > 2 * (std::size_t{1} << 20));
+    TempDir dir;
+    dir.write("deck.dat", deck + "cycle 10\n");
+    CHECK(run_deck(dir, 3) == 1);   // not 124
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out.substr(0, 2000));
+    const auto at = out.find("deck.dat:6: error:");
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find("deck.dat:6:", at + 1) == std::string::npos);
+    CHECK(out.find("cycle: ") == std::string::npos);
+  }
   SECTION("a failure on rank 0 alone (its file write) stops the others too") {
     TempDir dir;
     dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 10 0.0004 0.0006\nsave no/such/folder/s.sav\ncycle 10\n");
