@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <functional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -8,8 +9,17 @@
 #include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
 #include "physics/walls.hpp"
+#include "support/comm.hpp"
 
 namespace trubal {
+
+// Under mpirun HIST runs on every rank (OnRanks::Parts), which may hold no more of the model than
+// its light state and the balls' ids (Session::light_everywhere): what reads the balls themselves
+// (a measurement sphere's check, the platen balls of a range) is rank 0's, its failure every rank's.
+static void on_rank_zero(const std::function<void()>& work) {
+  if (comm::size() == 1) return work();
+  comm::together([&] { if (comm::root()) work(); }, "reading the balls for HIST");
+}
 
 static void run_hist(Context& ctx, Args& args) {
   ctx.session.require_started();
@@ -36,12 +46,12 @@ static void run_hist(Context& ctx, Args& args) {
     std::string item(names[args.expect(names, "history item")]);
     if (item == "wall") {
       const std::int64_t id = args.count("wall id", 1);
-      if (!find_wall(ctx.session.model(), id))
+      if (!find_wall(ctx.session.state(), id))
         args.fail(fmt::format("there is no wall {} (PRINT walls lists them)", id));
       item = fmt::format("wall {}", id);
     } else if (item == "ball") {
       const std::int64_t id = args.count("ball id", 1);
-      if (find_ball(ctx.session.model(), id) < 0)
+      if (find_ball(ctx.session.state(), id) < 0)
         args.fail(fmt::format("there is no ball {} (PRINT balls lists them)", id));
       const auto& quantities = History::ball_quantities();
       std::vector<std::string_view> asked;
@@ -73,7 +83,7 @@ static void run_hist(Context& ctx, Args& args) {
           for (const auto& it : t->items) id += it.rfind("measure ", 0) == 0;
         for (const auto& it : items) id += it.rfind("measure ", 0) == 0;
       }
-      measure_sphere(ctx.session.model(), sphere);   // a sphere the cell cannot hold is refused now
+      on_rank_zero([&] { measure_sphere(ctx.session.model(), sphere); });   // a sphere the cell cannot hold is refused now
       item = measure_item(id, sphere);
     }
     items.push_back(std::move(item));
@@ -91,24 +101,35 @@ static void run_hist(Context& ctx, Args& args) {
   const bool rowe = has("ratio") || has("axial");
   if (!range.empty() && !has("platen") && !rowe)
     args.fail("a RANGE goes with `platen`, `ratio` or `axial` (the platen balls)");
-  const Model& model = ctx.session.model();
   std::vector<std::int64_t> ids;
   double gap0 = 0;
   if (!range.empty()) {
-    auto sel = ctx.session.select(range);
-    if (sel.empty()) args.fail("the range holds for no ball: name the platen balls (e.g. range group platens)");
-    for (auto k : sel) ids.push_back(model.balls.id[k]);
-    const Platens p = platens(model, sel);
-    if (rowe && !p.two)
-      args.fail("`ratio` and `axial` with a range need both platens in it (balls at two heights)");
-    gap0 = p.gap;
-    if (area == 0) { area = model.membrane.area; membrane_area = area > 0; }
-    if (pressure == 0) pressure = model.membrane.pressure;
-    if (has("ratio") && !(area > 0 && pressure > 0))
-      args.fail("`ratio` with a range needs the area and the confining pressure: give MEMBRANE first, or "
-                "`area a pressure p`");
+    on_rank_zero([&] {
+      const Model& model = ctx.session.model();
+      auto sel = ctx.session.select(range);
+      if (sel.empty()) args.fail("the range holds for no ball: name the platen balls (e.g. range group platens)");
+      for (auto k : sel) ids.push_back(model.balls.id[k]);
+      const Platens p = platens(model, sel);
+      if (rowe && !p.two)
+        args.fail("`ratio` and `axial` with a range need both platens in it (balls at two heights)");
+      gap0 = p.gap;
+      if (area == 0) { area = model.membrane.area; membrane_area = area > 0; }
+      if (pressure == 0) pressure = model.membrane.pressure;
+      if (has("ratio") && !(area > 0 && pressure > 0))
+        args.fail("`ratio` with a range needs the area and the confining pressure: give MEMBRANE first, or "
+                  "`area a pressure p`");
+    });
+    if (comm::size() > 1) {   // (rank 0's answer)
+      comm::broadcast(ids);
+      std::vector<double> got{gap0, area, pressure, membrane_area ? 1.0 : 0.0};
+      comm::broadcast(got);
+      gap0 = got[0];
+      area = got[1];
+      pressure = got[2];
+      membrane_area = got[3] != 0;
+    }
   }
-  auto added = ctx.session.history().add(items, every, file, range, mode, model.cycle);
+  auto added = ctx.session.history().add(items, every, file, range, mode, ctx.session.state().cycle);
   if (added.continued) {
     ctx.out << fmt::format("recording {} every {} cycles to {} (going on: {} rows so far)\n",
                            fmt::join(added.table.columns, ","), every, file, added.table.recorded);
@@ -185,6 +206,6 @@ const Command hist_command = {
     {"sample", "stress", "pq", "strain", "volumetric", "ratio", "sratio", "axial", "platen", "energy", "rolling", "bridges", "bonds", "unbal", "contacts", "time", "wall", "ball",
      "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz", "fx", "fy", "fz",
      "porosity", "measure", "sphere", "id", "every", "file", "area", "pressure", "reset", "new", "append", "range"},
-    run_hist};
+    run_hist, false, false, OnRanks::Parts};
 
 }  // namespace trubal

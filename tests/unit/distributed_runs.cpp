@@ -263,8 +263,10 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string built = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
                             "lattice fcc 1 30 30 42\n";
+  // (HIST runs on every rank, rank 0 reading the balls for it: no hand-over either.)
   const std::string deck = "init xvel 0.01 range x 0 10\ncycle 20\n"
-                           "print contacts file first.csv\nprint stress\nprint energy\ncycle 30\n" +
+                           "print contacts file first.csv\nprint stress\nprint energy\n"
+                           "hist energy ball 7 x vx every 5 file h.csv\ncycle 30\n" +
                            std::string(kOutputs);
   const std::string init = "init xvel 0.02 range x 0 10\n", after = "cycle 10\nprint balls file last.csv\n";
   TempDir serial, two;
@@ -275,14 +277,16 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   REQUIRE(run_deck(two, 2) == 0);
   const std::string out = slurp(two.path() / "out.txt");
   INFO(out);
-  for (const char* file : {"first.csv", "balls.csv", "contacts.csv", "last.csv"})
+  for (const char* file : {"first.csv", "balls.csv", "contacts.csv", "last.csv", "h.csv"})
     CHECK(slurp(two.path() / file) == slurp(serial.path() / file));
   CHECK(lines_of(slurp(serial.path() / "first.csv")).size() > 100000);   // most pairs of the block touch
+  CHECK(lines_of(slurp(serial.path() / "h.csv")).size() > 8);
   // After the second CYCLE and its PRINTs: the parts kept, rank 1 holding its part (about half the
   // balls and pairs) and no result, rank 0 the whole model with its results (43 MiB) and its part.
   const Counters kept = read_counters(two.path() / "kept.txt");
   CHECK(counter(kept, "parts_kept") == 1);
-  CHECK(counter(kept, "results_made") == 2);   // (for first.csv and balls.csv: rank 0's)
+  // (For first.csv, rank 0's; the second CYCLE's last step is one HIST records, which makes them.)
+  CHECK(counter(kept, "results_made") == 1);
   CHECK(counter(kept, "rank0_contact_results_mib") >= 20);
   CHECK(counter(kept, "rank1_contact_results_mib") == 0);
   CHECK(counter(kept, "rank0_model_held_mib") >= 40);
