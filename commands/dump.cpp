@@ -19,8 +19,8 @@ static void run_dump(Context& ctx, Args& args) {
   args.done();
   ctx.session.dump_vtk(file, every);
   const VtkSeries& d = *ctx.session.dumps();
-  const auto cycle = ctx.session.model().cycle;
-  const std::string files = ctx.session.model().walls.empty()
+  const auto cycle = ctx.session.state().cycle;
+  const std::string files = ctx.session.state().walls.empty()
                                 ? fmt::format("{}, {} and {}", d.balls_path(cycle), d.contacts_path(cycle),
                                               d.domain_path(cycle))
                                 : fmt::format("{}, {}, {} and {}", d.balls_path(cycle), d.contacts_path(cycle),
@@ -47,6 +47,6 @@ const Command dump_command = {
     "it is rewritten after each dump. Arrays are binary (appended raw, little-endian); every file is written "
     "under a temporary name and renamed. START and RESTART stop periodic dumps.",
     "dump vtk out/run every 1000",
-    {"vtk", "every", "off"}, run_dump};
+    {"vtk", "every", "off"}, run_dump, false, false, OnRanks::Parts};
 
 }  // namespace trubal

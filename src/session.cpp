@@ -344,11 +344,23 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
     std::filesystem::create_directories(folder, ec);
     if (ec) throw std::runtime_error(fmt::format("cannot make the folder '{}' for the dumps: {}", folder.string(), ec.message()));
   }, "making the dumps' folder");
-  // The same files again continue their collection; other files start a new one.
-  make_results_to_read(model_, *pipeline_);
+  // The same files again continue their collection; other files start a new one. (Every rank keeps
+  // the schedule: a CYCLE's steps that dump make their results on every rank alike.)
   if (!dumps_ || dumps_->base() != VtkSeries(base).base()) dumps_ = std::make_unique<VtkSeries>(base, every);
   else dumps_->set_every(every);
-  dumps_->write(model_);
+  // The dump now, rank 0's to write from its whole model (under mpirun the others may hold their
+  // parts, or the model's light state alone: OnRanks::Parts).
+  if (comm::size() == 1) {
+    make_results_to_read(model_, *pipeline_);
+    return dumps_->write(model_);
+  }
+  const bool zero_alone = parts_kept() || pipeline_->others_hollow();
+  if (!zero_alone) make_results_to_read(model_, *pipeline_);   // (every rank holds the whole model: with every rank)
+  comm::together([&] {
+    if (!comm::root()) return;
+    if (zero_alone) make_results_to_read(model_, *pipeline_);
+    dumps_->write(model_);
+  }, "writing the dump");
 }
 
 CycleResult Session::cycle_in_chunks(std::int64_t limit, std::int64_t chunk,

@@ -61,7 +61,7 @@ struct Context {
 // of the model (cycle/brick_step.hpp).
 enum class OnRanks : std::uint8_t {
   Whole,      // every rank gets the whole model first (Session::whole_everywhere), then runs it
-              // (RESTART, START, DUMP, BACKEND, RENUMBER, TABLE)
+              // (RESTART, START, BACKEND, RENUMBER, TABLE)
   RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
               // (PRINT, SAVE, PLOT)
   Parts,      // every rank runs it on the model as it is (CYCLE; the settings: DAMP, FRAC, TSTEP, GRAV;

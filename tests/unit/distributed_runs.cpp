@@ -263,10 +263,10 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string built = "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
                             "lattice fcc 1 30 30 42\n";
-  // (HIST runs on every rank, rank 0 reading the balls for it: no hand-over either.)
+  // (HIST and DUMP run on every rank, rank 0 reading the balls for them: no hand-over either.)
   const std::string deck = "init xvel 0.01 range x 0 10\ncycle 20\n"
                            "print contacts file first.csv\nprint stress\nprint energy\n"
-                           "hist energy ball 7 x vx every 5 file h.csv\ncycle 30\n" +
+                           "hist energy ball 7 x vx every 5 file h.csv\ndump vtk d/s\ncycle 30\n" +
                            std::string(kOutputs);
   const std::string init = "init xvel 0.02 range x 0 10\n", after = "cycle 10\nprint balls file last.csv\n";
   TempDir serial, two;
@@ -281,6 +281,13 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
     CHECK(slurp(two.path() / file) == slurp(serial.path() / file));
   CHECK(lines_of(slurp(serial.path() / "first.csv")).size() > 100000);   // most pairs of the block touch
   CHECK(lines_of(slurp(serial.path() / "h.csv")).size() > 8);
+  int dumped = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(serial.path() / "d")) {
+    INFO(entry.path().filename().string());
+    CHECK(slurp(two.path() / "d" / entry.path().filename()) == slurp(entry.path()));
+    ++dumped;
+  }
+  CHECK(dumped >= 4);   // (balls, contacts, domain and the collection)
   // After the second CYCLE and its PRINTs: the parts kept, rank 1 holding its part (about half the
   // balls and pairs) and no result, rank 0 the whole model with its results (43 MiB) and its part.
   const Counters kept = read_counters(two.path() / "kept.txt");
