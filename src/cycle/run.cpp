@@ -221,7 +221,12 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // A servo not yet run reads its first stress from the contact table (cell_before_step): the whole
   // model's list is then searched before the first step, where a distributed run's parts would
   // search it at their split. (Parts gone on from need no search: their steps test their lists.)
-  if (!from_parts) pipeline.prepare(model, !servo_reads_table_);
+  // Not where the first step sorts before anything reads the list (a CYCLE after one that deferred
+  // its last step's results, on a cycle of the sort): the step prepares after its sort, as the
+  // unbroken run's does. Prepared here, the balls across a periodic face were wrapped before the
+  // sort, whose order (and so the sums' order) then differed from the unbroken run's.
+  const bool sorts_first = sort_due(model) && !sorted_at_start_ && model.critical_dt > 0 && !servo_reads_table_;
+  if (!from_parts && !sorts_first) pipeline.prepare(model, !servo_reads_table_);
   // (Before the critical step, which may leave the ranks other than 0 with their parts alone.)
   guard_.emplace(model);
   if (!(model.critical_dt > 0)) {
