@@ -1,5 +1,4 @@
 #include <algorithm>
-#include <functional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -15,11 +14,8 @@ namespace trubal {
 
 // Under mpirun HIST runs on every rank (OnRanks::Parts), which may hold no more of the model than
 // its light state and the balls' ids (Session::light_everywhere): what reads the balls themselves
-// (a measurement sphere's check, the platen balls of a range) is rank 0's, its failure every rank's.
-static void on_rank_zero(const std::function<void()>& work) {
-  if (comm::size() == 1) return work();
-  comm::together([&] { if (comm::root()) work(); }, "reading the balls for HIST");
-}
+// (a measurement sphere's check, the platen balls of a range) is rank 0's, its failure every rank's
+// (comm::on_root).
 
 static void run_hist(Context& ctx, Args& args) {
   ctx.session.require_started();
@@ -83,7 +79,8 @@ static void run_hist(Context& ctx, Args& args) {
           for (const auto& it : t->items) id += it.rfind("measure ", 0) == 0;
         for (const auto& it : items) id += it.rfind("measure ", 0) == 0;
       }
-      on_rank_zero([&] { measure_sphere(ctx.session.model(), sphere); });   // a sphere the cell cannot hold is refused now
+      // A sphere the cell cannot hold is refused now.
+      comm::on_root([&] { measure_sphere(ctx.session.model(), sphere); }, "checking the measurement sphere");
       item = measure_item(id, sphere);
     }
     items.push_back(std::move(item));
@@ -104,7 +101,7 @@ static void run_hist(Context& ctx, Args& args) {
   std::vector<std::int64_t> ids;
   double gap0 = 0;
   if (!range.empty()) {
-    on_rank_zero([&] {
+    comm::on_root([&] {
       const Model& model = ctx.session.model();
       auto sel = ctx.session.select(range);
       if (sel.empty()) args.fail("the range holds for no ball: name the platen balls (e.g. range group platens)");
@@ -118,7 +115,7 @@ static void run_hist(Context& ctx, Args& args) {
       if (has("ratio") && !(area > 0 && pressure > 0))
         args.fail("`ratio` with a range needs the area and the confining pressure: give MEMBRANE first, or "
                   "`area a pressure p`");
-    });
+    }, "choosing the platen balls");
     if (comm::size() > 1) {   // (rank 0's answer)
       comm::broadcast(ids);
       std::vector<double> got{gap0, area, pressure, membrane_area ? 1.0 : 0.0};

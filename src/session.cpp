@@ -50,16 +50,14 @@ Model& Session::edit_cell() {
 }
 
 void Session::set_cell_rates(const std::array<double, 6>& rates) {
-  if (pipeline_->others_hollow()) {   // (the others hold no balls: rank 0 changes its own, a collective call)
-    FieldChange field;
-    set_all_strain_rates(model_, rates, &field);
-    if (comm::root()) update_mass(model_);   // (before the first CYCLE: the work needs the masses)
-    return pipeline_->apply_field(model_, field);
-  }
-  if (!parts_kept()) return set_all_strain_rates(model_, rates);
+  const bool hollow = pipeline_->others_hollow();
+  if (!parts_kept() && !hollow) return set_all_strain_rates(model_, rates);
+  // The change on the parts and rank 0's model, or where the others hold no balls on rank 0's alone
+  // (before the first CYCLE: the work needs the masses), its work every rank's: a collective call.
   FieldChange field;
   set_all_strain_rates(model_, rates, &field);
-  pipeline_->apply_field_kept(model_, field);   // (on the parts and rank 0's model: a collective call)
+  if (hollow && comm::root()) update_mass(model_);
+  pipeline_->apply_field_kept(model_, field);
 }
 
 const Model& Session::model_with_masses() {
@@ -95,7 +93,7 @@ void Session::light_everywhere() {
   // whole model at the next hand-over, which others_hollow asks for.)
   pipeline_->set_others_hollow();
   std::string bytes;
-  comm::together([&] { if (comm::root()) bytes = light_state(model_); }, "writing its model for the other ranks");
+  comm::on_root([&] { bytes = light_state(model_); }, "writing its model for the other ranks");
   comm::broadcast(bytes);
   comm::together([&] {
     if (!comm::root()) {
@@ -104,11 +102,7 @@ void Session::light_everywhere() {
     }
   }, "taking rank 0's model");
   // The balls' ids, types and radii (the split, the skin and the laws read them on every rank).
-  Balls& b = model_.balls;
-  comm::broadcast(b.id);
-  comm::broadcast(b.type);
-  comm::broadcast(b.rad);
-  comm::together([&] { if (!comm::root()) b.index_ids(); }, "taking rank 0's model");
+  broadcast_ball_names(model_.balls);
   pipeline_->invalidate();
   light_pending_ = false;
   return_free_memory();
@@ -117,7 +111,7 @@ void Session::light_everywhere() {
 
 void Session::results_before_setting() {
   if (!parts_kept()) return make_results_to_read(model_, *pipeline_);
-  comm::together([&] { if (comm::root()) make_results_to_read(model_, *pipeline_); }, "making the contact results");
+  comm::on_root([&] { make_results_to_read(model_, *pipeline_); }, "making the contact results");
   // (The next CYCLE takes a copy of its own on every rank, of the new settings, as serial does.)
   pipeline_->clear_deferred();
 }
@@ -356,8 +350,7 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
   }
   const bool zero_alone = parts_kept() || pipeline_->others_hollow();
   if (!zero_alone) make_results_to_read(model_, *pipeline_);   // (every rank holds the whole model: with every rank)
-  comm::together([&] {
-    if (!comm::root()) return;
+  comm::on_root([&] {
     if (zero_alone) make_results_to_read(model_, *pipeline_);
     dumps_->write(model_);
   }, "writing the dump");

@@ -73,6 +73,13 @@ std::size_t array_bytes(const Model& m);
 void broadcast_arrays(Model& m, bool with_results = true);
 // Rank 0's contact results to every rank, whose pair list is rank 0's (a collective call).
 void broadcast_results(Model& m);
+// Rank 0's whole model to every rank without the contact results (broadcast_arrays), and the
+// positions its pair list was made at, where `ref` holds them for its balls (the same answer on
+// every rank).
+void broadcast_whole(Model& m, VerletReference* ref);
+// Rank 0's balls' ids, types and radii to every rank, indexed by id there (what a rank that holds
+// no balls keeps of them: Pipeline::hollow).
+void broadcast_ball_names(Balls& b);
 
 class BrickStep {
  public:

@@ -269,14 +269,25 @@ void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_part
   if (done) return;
   // Rank 0's whole model, current, to the others, and the list's reference positions; not the
   // contact results, which rank 0 alone reads (it alone prints and writes).
-  broadcast_arrays(full, false);
-  if (whole_ref && whole_ref->balls() == full.balls.size()) {
-    comm::broadcast(whole_ref->x);
-    comm::broadcast(whole_ref->y);
-    comm::broadcast(whole_ref->z);
-  }
+  broadcast_whole(full, whole_ref);
   list_version_ = full.contacts.list_version;
   wall_version_ = full.wall_contacts.list_version;
+}
+
+void broadcast_whole(Model& m, VerletReference* ref) {
+  broadcast_arrays(m, false);
+  if (ref && ref->balls() == m.balls.size()) {
+    comm::broadcast(ref->x);
+    comm::broadcast(ref->y);
+    comm::broadcast(ref->z);
+  }
+}
+
+void broadcast_ball_names(Balls& b) {
+  comm::broadcast(b.id);
+  comm::broadcast(b.type);
+  comm::broadcast(b.rad);
+  comm::together([&] { if (!comm::root()) b.index_ids(); }, "indexing rank 0's balls");
 }
 
 void broadcast_results(Model& m) {

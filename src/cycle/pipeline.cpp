@@ -207,11 +207,10 @@ void Pipeline::refresh_whole(Model& model) {
 }
 
 void Pipeline::share_whole(Model& model, bool for_command) {
-  if (others_hollow_ && for_command) ++hand_overs_;
+  if (for_command && (others_hollow_ || parts_live(model))) ++hand_overs_;
   hand_over_to_hollow(model);
   refresh_whole(model);
   if (!bricks().live_for(model)) return;
-  if (for_command && parts_live(model)) ++hand_overs_;
   list_from_parts_ = true;
   each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed()); });
 }
@@ -229,12 +228,7 @@ void Pipeline::release_parts(Model& model) {
 void Pipeline::hand_over_to_hollow(Model& model) {
   if (!others_hollow_) return;
   others_hollow_ = false;
-  broadcast_arrays(model, false);
-  if (ref_.balls() == model.balls.size()) {   // (the same answer on every rank)
-    comm::broadcast(ref_.x);
-    comm::broadcast(ref_.y);
-    comm::broadcast(ref_.z);
-  }
+  broadcast_whole(model, &ref_);
 }
 
 namespace {
@@ -265,23 +259,18 @@ bool Pipeline::restore_rescue(Model& model) {
 void Pipeline::apply_field(Model& model, const FieldChange& change) {
   if (!change.any) return;
   if (bricks().live_for(model)) return each_part([&](BrickStep& part, int) { part.apply_field(model, change); });
-  if (others_hollow_) {   // rank 0 alone holds the balls: every rank takes its work
-    if (comm::root()) {
-      ExactSum work, gross;
-      apply_field_change(model.balls, change, 0, model.balls.size(), nullptr, work, gross);
-      model.energy.boundary_work += work.value();
-      model.space.gross_work += gross.value();
-    }
-    std::vector<double> works{model.energy.boundary_work, model.space.gross_work};
-    comm::broadcast(works);
-    model.energy.boundary_work = works[0];
-    model.space.gross_work = works[1];
-    return;
+  if (!others_hollow_ || comm::root()) {
+    ExactSum work, gross;
+    apply_field_change(model.balls, change, 0, model.balls.size(), nullptr, work, gross);
+    model.energy.boundary_work += work.value();
+    model.space.gross_work += gross.value();
   }
-  ExactSum work, gross;
-  apply_field_change(model.balls, change, 0, model.balls.size(), nullptr, work, gross);
-  model.energy.boundary_work += work.value();
-  model.space.gross_work += gross.value();
+  if (!others_hollow_) return;
+  // Rank 0 alone holds the balls: every rank takes its work.
+  std::vector<double> works{model.energy.boundary_work, model.space.gross_work};
+  comm::broadcast(works);
+  model.energy.boundary_work = works[0];
+  model.space.gross_work = works[1];
 }
 
 void Pipeline::apply_field_kept(Model& model, const FieldChange& change) {

@@ -123,7 +123,6 @@ void Pipeline::split_parts(Model& model) {
   // whole model, which rank 0 hands back to the others.
   for (auto& part : bricks_) part->drop();
   if (distributed()) broadcast_arrays(model);
-  others_hollow_ = false;
   rebuild(model);
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
 }

@@ -176,14 +176,14 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   pipeline.refresh_whole(model);
   // The first step's sort: rank 0 alone sorts (sort_balls), the parts given back to it first.
   if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model)) pipeline.release_parts(model);
+  // A servo's first reading of the contact table needs the whole model's list searched on every
+  // rank: handed over first, from the parts or from rank 0.
+  if (servo_reads_table_) pipeline.share_whole(model);
   // (A step estimated afresh reads the pairs touching now: the parts' list made current first.)
-  if (pipeline.parts_live(model) && (servo_reads_table_ || (!(model.critical_dt > 0) && !pipeline.parts_go_on(model))))
-    pipeline.share_whole(model);
+  if (pipeline.parts_live(model) && !(model.critical_dt > 0) && !pipeline.parts_go_on(model)) pipeline.share_whole(model);
   // The ranks other than 0 may hold no more of the model than its balls' ids, types and radii, and
   // no part (after a command rank 0 alone ran: Pipeline::others_hollow): rank 0 then checks, sorts
-  // and decides alone, and sends each rank its part at the split. A servo's first reading of the
-  // contact table needs the whole model's list searched on every rank: handed over first.
-  if (servo_reads_table_) pipeline.share_whole(model);
+  // and decides alone, and sends each rank its part at the split.
   const bool from_parts = pipeline.parts_live(model);
   const bool from_root = pipeline.others_hollow();
   if (from_parts) pipeline.parts_take_settings(model);
@@ -197,7 +197,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
             "ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger radius or "
             "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
   };
-  if (from_root) comm::together([&] { if (comm::root()) check_masses(); }, "checking the balls' masses");
+  if (from_root) comm::on_root(check_masses, "checking the balls' masses");
   else if (!from_parts) check_masses();
   // The first step's sort (Model::order) before the run's first search; not where a step a CYCLE
   // deferred is to be taken again first (make_results: it is of the order before), which the first
@@ -415,15 +415,11 @@ void CycleRun::sort_balls() {
     // Rank 0 alone holds the balls: it sorts them, and the others take their ids, types and radii
     // in the new order.
     std::int64_t moved = 0;
-    comm::together([&] { if (comm::root()) moved = sort_in_space(model_) ? 1 : 0; }, "putting the balls in space order");
+    comm::on_root([&] { moved = sort_in_space(model_) ? 1 : 0; }, "putting the balls in space order");
     comm::broadcast(moved);
     model_.order.pending = false;
     if (moved == 0) return;
-    Balls& b = model_.balls;
-    comm::broadcast(b.id);
-    comm::broadcast(b.type);
-    comm::broadcast(b.rad);
-    if (!comm::root()) b.index_ids();
+    broadcast_ball_names(model_.balls);
   } else {
     pipeline_.sync_all(model_);
     if (!sort_in_space(model_)) return;

@@ -225,6 +225,11 @@ void together(const std::function<void()>& work, const std::string& doing) {
   if (first_failure(!failure.empty(), failure) >= 0) throw std::runtime_error(failure);
 }
 
+void on_root(const std::function<void()>& work, const std::string& doing) {
+  if (g_size == 1) return work();
+  together([&] { if (g_rank == 0) work(); }, doing);
+}
+
 namespace {
 constexpr int kPointTag = 7;   // (the one tag of this program's point-to-point messages)
 [[noreturn]] void no_peer() { throw std::logic_error("internal error: a point-to-point message without MPI ranks"); }

@@ -65,6 +65,9 @@ void receive_bytes(int from, void* data, std::size_t bytes);
 // message of the lowest failing rank (running out of memory named as such, `doing` saying while
 // doing what). A collective call; on one rank, only the message changes (for std::bad_alloc).
 void together(const std::function<void()>& work, const std::string& doing);
+// `work` on rank 0 alone, its failure every rank's (together: a collective call). On one rank it
+// runs as it is.
+void on_root(const std::function<void()>& work, const std::string& doing);
 
 // The largest of each rank's values, element by element, on every rank (exact in any order).
 void max_all(std::vector<double>& values);
