@@ -79,6 +79,20 @@ class TmuxShell {
     }
     return false;
   }
+  // Waits until the shell shows a fresh, empty prompt on its last line: readline is reading
+  // again. A control key sent earlier, while a command still runs, reaches the terminal in
+  // its line mode, where Ctrl-D is no end of input to readline once it takes the terminal.
+  bool wait_prompt(double seconds = 15) {
+    auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < until) {
+      std::string last;
+      for (const auto& l : lines_of(screen()))
+        if (l.find_first_not_of(' ') != std::string::npos) last = l;
+      if (last.substr(0, last.find_last_not_of(' ') + 1) == "trubal>") return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  }
   bool wait_exit(double seconds = 15) {
     auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (std::chrono::steady_clock::now() < until) {
@@ -207,6 +221,7 @@ TEST_CASE("interp shell: history is kept between sessions", "[interp][shell][sys
     sh.type("echo remembered 123");
     sh.key("Enter");
     REQUIRE(sh.wait_for("remembered 123", true));
+    REQUIRE(sh.wait_prompt());
     sh.key("C-d");
     CHECK_SCREEN(sh, sh.wait_exit());
   }
@@ -256,6 +271,7 @@ TEST_CASE("interp shell: Ctrl-D or STOP with the model changed since the last SA
   sh.type("start box 0 1 0 1 0 1");
   sh.key("Enter");
   CHECK_SCREEN(sh, sh.wait_for("new model in the box"));
+  CHECK_SCREEN(sh, sh.wait_prompt());
   sh.key("C-d");
   CHECK_SCREEN(sh, sh.wait_for("the model changed since the last SAVE; quit anyway? [y/N]"));
   sh.key("Enter");   // no, by default: back at the prompt with the model
@@ -263,6 +279,7 @@ TEST_CASE("interp shell: Ctrl-D or STOP with the model changed since the last SA
   sh.key("Enter");
   CHECK_SCREEN(sh, sh.wait_for("balls 0"));
   CHECK(sh.alive());
+  CHECK_SCREEN(sh, sh.wait_prompt());
   sh.key("C-d");
   CHECK_SCREEN(sh, sh.wait_for("quit anyway? [y/N]"));
   sh.type("y");
@@ -308,7 +325,8 @@ TEST_CASE("interp shell: Ctrl-D or STOP with the model changed since the last SA
   saved.key("Enter");
   saved.type("save run.sav");
   saved.key("Enter");
-  CHECK_SCREEN(saved, saved.wait_for("run.sav"));
+  CHECK_SCREEN(saved, saved.wait_for("saved to run.sav"));   // SAVE's message, not the line typed
+  CHECK_SCREEN(saved, saved.wait_prompt());
   saved.key("C-d");
   CHECK(saved.wait_exit());
 }
