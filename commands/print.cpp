@@ -82,13 +82,16 @@ static void run_print(Context& ctx, Args& args) {
   if (args.accept("file")) file = args.word("file name");
   if (!file.empty() && item != 1 && item != 2 && item != 11 && item != 12 && item != 15 && item != 17)
     args.fail("`file` goes with PRINT balls, contacts, bonds, walls, psd and counters");
-  const Model& m = ctx.session.model();
+  // (These read of the contact results no more than they need: Session::model_but_results.)
   switch (item) {
     case 0: args.done(); print_info(ctx); return;
-    case 16: args.done(); print_sample(ctx); return;
     case 15: args.done(); print_counters(ctx, file); return;
     case 1: print_balls(ctx, read_range(args, ctx.session), file); return;
     case 2: print_contacts(ctx, read_range(args, ctx.session), file); return;
+  }
+  const Model& m = ctx.session.model();
+  switch (item) {
+    case 16: args.done(); print_sample(ctx); return;
     case 17: print_bonds(ctx, read_range(args, ctx.session), file); return;
     case 3: {
       double volume = 0;

@@ -45,7 +45,7 @@ static double memory_gap_in_diameters(const Balls& b) {
 
 void print_info(Context& ctx) {
   const Session& s = ctx.session;
-  const Model& m = s.model();
+  const Model& m = s.model_but_results();
   auto& o = ctx.out;
   if (!m.title.empty()) o << "title: " << m.title << '\n';
   if (m.started) {
@@ -73,7 +73,7 @@ void print_info(Context& ctx) {
                                                                               : std::string("never (SET sort 0)"),
                      gap > 3 && m.order.every == 0 ? ": the contact loop reads memory slowly; SET sort 1000 puts them in space order" : "");
   }
-  o << fmt::format("contacts: {}\n", contact_count(m));
+  o << fmt::format("contacts: {}\n", s.touching_pairs());
   if (!m.walls.empty()) {
     std::size_t touching = 0;
     for (auto st : m.wall_contacts.state) touching += st != 0;
@@ -120,8 +120,8 @@ void print_info(Context& ctx) {
                      : s.pipeline().others_hollow()
                          ? "rank 0 the whole model, the others its settings, walls and balls' ids, types and radii"
                          : "the whole model on every rank");
-    o << fmt::format("contact results held: {} MiB (per rank: rank 0 gathers those a command reads after a "
-                     "CYCLE, for what it prints and writes)\n", each_array(&Session::RankFigures::results_mib));
+    o << fmt::format("contact results held: {} MiB (per rank: each its part's, which a CYCLE's last step leaves "
+                     "there, and rank 0 those a command gathered)\n", each_array(&Session::RankFigures::results_mib));
   }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);
@@ -146,7 +146,7 @@ void print_info(Context& ctx) {
 // values were gathered before: Session::gather_rank_figures).
 void print_counters(Context& ctx, const std::string& file) {
   const Session& s = ctx.session;
-  const Model& m = s.model();
+  const Model& m = s.model_but_results();
   const PipelineCounters c = s.pipeline().counters();
   std::size_t wall_touching = 0;
   for (auto st : m.wall_contacts.state) wall_touching += st != 0;
@@ -154,7 +154,7 @@ void print_counters(Context& ctx, const std::string& file) {
   auto line = [&](std::string_view name, auto value) { text += fmt::format("{} {}\n", name, value); };
   line("cycle", m.cycle);
   line("balls", m.balls.size());
-  line("contacts", contact_count(m));
+  line("contacts", s.touching_pairs());
   line("wall_contacts", wall_touching);
   line("balls_destroyed", m.space.destroyed);
   line("ranks", comm::size());
@@ -163,6 +163,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("pair_list_rebuilds", c.rebuilds);
   line("pair_tests", c.pair_tests);
   line("results_made", c.results_made);
+  line("results_gathered", c.results_gathered);
   line("decompositions", c.parts.decompositions);
   line("part_list_rebuilds", c.parts.list_rebuilds);
   line("part_wraps", c.parts.wraps);

@@ -28,7 +28,7 @@
 namespace trubal {
 
 void print_balls(Context& ctx, const Range& range, const std::string& file) {
-  const Model& m = ctx.session.model();
+  const Model& m = ctx.session.model_but_results();   // (the unbalanced forces are the balls')
   const Balls& b = m.balls;
   auto sel = ctx.session.select(range);
   if (!comm::root()) return;   // (the table or file is rank 0's to print or write: the others' would go nowhere)
@@ -56,16 +56,27 @@ void print_balls(Context& ctx, const Range& range, const std::string& file) {
 }
 
 void print_contacts(Context& ctx, const Range& range, const std::string& file) {
-  const Model& m = ctx.session.model();
+  const Model& m = ctx.session.model_but_results();
   const ContactTable& c = m.contacts;
   std::vector<bool> in(m.balls.size(), range.empty());
   if (!range.empty())
     for (auto k : ctx.session.select(range)) in[k] = true;
   if (!comm::root()) return;   // (as print_balls)
+  // The results it prints, from the ranks' parts where the table does not hold them (the shear
+  // force, the rolling moment and the bridges are the table's history): six of its arrays, not all.
+  std::vector<std::uint8_t> state_fetched;
+  std::vector<double> fetched[5];
+  const std::vector<std::uint8_t>& state = ctx.session.results_of(c.state, state_fetched);
+  const std::vector<double>& nx = ctx.session.results_of(c.nx, fetched[0]);
+  const std::vector<double>& ny = ctx.session.results_of(c.ny, fetched[1]);
+  const std::vector<double>& nz = ctx.session.results_of(c.nz, fetched[2]);
+  const std::vector<double>& overlap = ctx.session.results_of(c.overlap, fetched[3]);
+  const std::vector<double>& fn = ctx.session.results_of(c.fn, fetched[4]);
+  const auto touching = [&](std::size_t p) { return p < state.size() && state[p] != 0; };
   // (Capillary bridges: the pairs they hold apart too, and a column saying which hold one.)
   const bool bridges = has_bridges(m) && c.bridge.size() == c.size();
   const auto printed = [&](std::size_t p) {
-    return (c.touching(p) || (bridges && c.bridge[p] != 0)) && (in[c.i[p]] || in[c.j[p]]);
+    return (touching(p) || (bridges && c.bridge[p] != 0)) && (in[c.i[p]] || in[c.j[p]]);
   };
   // The rows counted first and sorted in place: a million balls' list is no larger than it must be.
   std::size_t count = 0;
@@ -93,12 +104,12 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
           << (bridges ? ",bridge\n" : "\n");
       for (auto p : rows) {
         csv << low(p) << ',' << high(p);
-        for (const auto* v : {&c.nx, &c.ny, &c.nz}) csv << ',' << csv_real(s(p) * (*v)[p]);
-        for (const auto* v : {&c.overlap, &c.fn}) csv << ',' << csv_real((*v)[p]);
+        for (const auto* v : {&nx, &ny, &nz}) csv << ',' << csv_real(s(p) * (*v)[p]);
+        for (const auto* v : {&overlap, &fn}) csv << ',' << csv_real((*v)[p]);
         for (const auto* v : {&c.fsx, &c.fsy, &c.fsz}) csv << ',' << csv_real(s(p) * (*v)[p]);
         if (rolling)
           for (const auto* v : {&c.mrx, &c.mry, &c.mrz}) csv << ',' << csv_real(s(p) * moment(*v, p));
-        csv << ',' << (c.state[p] == 2 ? 1 : 0);
+        csv << ',' << (state[p] == 2 ? 1 : 0);
         if (bridges) csv << ',' << (c.bridge[p] != 0 ? 1 : 0);
         csv << '\n';
       }
@@ -111,13 +122,13 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
                          bridges ? "  bridge" : "");
   for (auto p : rows)
     ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", low(p),
-                           high(p), s(p) * c.nx[p], s(p) * c.ny[p], s(p) * c.nz[p], c.overlap[p], c.fn[p],
+                           high(p), s(p) * nx[p], s(p) * ny[p], s(p) * nz[p], overlap[p], fn[p],
                            std::sqrt(c.fsx[p] * c.fsx[p] + c.fsy[p] * c.fsy[p] + c.fsz[p] * c.fsz[p]),
                            rolling ? fmt::format("{:>11.4g} ", std::sqrt(moment(c.mrx, p) * moment(c.mrx, p) +
                                                                          moment(c.mry, p) * moment(c.mry, p) +
                                                                          moment(c.mrz, p) * moment(c.mrz, p)))
                                    : "",
-                           c.state[p] == 2 ? "yes" : "no",
+                           state[p] == 2 ? "yes" : "no",
                            bridges ? (c.bridge[p] != 0 ? "     yes" : "      no") : "");
 }
 

@@ -9,7 +9,7 @@ static void run_save(Context& ctx, Args& args) {
   args.done();
   ctx.session.require_started();
   ctx.session.save(file);
-  ctx.out << fmt::format("saved to {} (cycle {})\n", file, ctx.session.model().cycle);
+  ctx.out << fmt::format("saved to {} (cycle {})\n", file, ctx.session.state().cycle);
 }
 
 const Command save_command = {

@@ -102,8 +102,9 @@ int run(int argc, char** argv) {
   // Tests: "R L" makes rank R's command at line L of the deck fail there alone, "R split" rank R's
   // first split of the spatial decomposition, "R cut" rank 0's cut of rank R's part at its first
   // split, "R search" its first share of a pair search through
-  // the whole model, "R part" its first search on its part, "0 results" rank 0's first step taken
-  // again to make the contact results (distributed_runs.cpp, distributed_user.cpp).
+  // the whole model, "R part" its first search on its part, "R results" its first gather of the
+  // contact results a CYCLE left on the parts, "0 remake" rank 0's first step taken again to make
+  // them (distributed_runs.cpp, distributed_user.cpp).
   trubal::StepPolicy& policy = session.policy();
   if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
     int rank = -1, line = 0;
@@ -116,6 +117,7 @@ int run(int argc, char** argv) {
       if (std::strcmp(word, "search") == 0) policy.fail_search = rank;
       if (std::strcmp(word, "part") == 0) policy.fail_part_search = rank;
       if (std::strcmp(word, "results") == 0) policy.fail_results = rank;
+      if (std::strcmp(word, "remake") == 0) policy.fail_remake = rank;
     }
   }
   // Measurements: every stale pair list rebuilt through the whole model, as before the ranks

@@ -87,6 +87,19 @@ void Session::model_on_zero() {
   pipeline_->release_parts(model_);   // (where they are kept)
 }
 
+void Session::run_on_root(const std::function<void()>& work) {
+  if (comm::size() < 2) return work();
+  if (!comm::root()) return pipeline_->serve_root(model_);
+  pipeline_->start_requests();
+  try {
+    work();
+  } catch (...) {
+    pipeline_->end_requests();
+    throw;
+  }
+  pipeline_->end_requests();
+}
+
 void Session::light_everywhere() {
   if (!light_pending_ || comm::size() < 2) return;
   // (Any failure is every rank's: the ranks other than 0 may then hold a part of it, and take the
@@ -111,6 +124,7 @@ void Session::light_everywhere() {
 
 void Session::results_before_setting() {
   if (!parts_kept()) return make_results_to_read(model_, *pipeline_);
+  pipeline_->gather_part_results(model_);   // (where the CYCLE's last step left them on the parts)
   comm::on_root([&] { make_results_to_read(model_, *pipeline_); }, "making the contact results");
   // (The next CYCLE takes a copy of its own on every rank, of the new settings, as serial does.)
   pipeline_->clear_deferred();
@@ -121,7 +135,8 @@ namespace {
 std::vector<double> own_figures(const Model& model, const Pipeline& pipeline) {
   const PipelineCounters c = pipeline.counters();
   constexpr double kMiB = 1 << 20;
-  return {static_cast<double>(model.contacts.result_bytes()) / kMiB, c.whole_arrays_mib, c.part_arrays_mib,
+  return {static_cast<double>(model.contacts.result_bytes() + pipeline.part_result_bytes_now()) / kMiB,
+          c.whole_arrays_mib, c.part_arrays_mib,
           static_cast<double>(array_bytes(model) + pipeline.part_bytes_now()) / kMiB};
 }
 }  // namespace
@@ -431,8 +446,71 @@ Session::UntilResult Session::cycle_until(std::int64_t limit, const std::functio
   return out;
 }
 
+namespace {
+// The results a CYCLE's last step left on the ranks' parts, an array at a time, for rank 0's SAVE
+// while the others serve it (Pipeline::request_result_array).
+class PartResults final : public ResultSource {
+ public:
+  PartResults(Model& model, Pipeline& pipeline) : model_(model), pipeline_(pipeline) {}
+  void fetch(std::size_t k, std::vector<std::uint8_t>& into) override {
+    pipeline_.request_result_array(model_, k, nullptr, &into);
+  }
+  void fetch(std::size_t k, std::vector<double>& into) override { pipeline_.request_result_array(model_, k, &into, nullptr); }
+  std::int64_t cycle() const override { return model_.cycle; }
+
+ private:
+  Model& model_;
+  Pipeline& pipeline_;
+};
+}  // namespace
+
+const Model& Session::model_but_results() const {
+  if (pipeline_->results_on_parts(model_) && pipeline_->serving()) return model_;
+  return model();
+}
+
+std::size_t Session::touching_pairs() const {
+  if (!(pipeline_->results_on_parts(model_) && pipeline_->serving())) return contact_count(model());
+  std::vector<std::uint8_t> fetched;
+  const std::vector<std::uint8_t>& state = results_of(model_.contacts.state, fetched);
+  return static_cast<std::size_t>(std::count_if(state.begin(), state.end(), [](std::uint8_t s) { return s != 0; }));
+}
+
+namespace {
+// The place of the table's result array `of` in ContactTable::for_each_result_array's order.
+std::size_t result_index(const ContactTable& c, const void* of) {
+  std::size_t at = 0, found = SIZE_MAX;
+  const_cast<ContactTable&>(c).for_each_result_array([&](const auto& v) {
+    if (&v == of) found = at;
+    ++at;
+  });
+  if (found == SIZE_MAX) throw std::logic_error("internal error: not one of the contact table's result arrays");
+  return found;
+}
+}  // namespace
+
+const std::vector<double>& Session::results_of(const std::vector<double>& of, std::vector<double>& into) const {
+  if (model_.contacts.results_kept() || !(pipeline_->results_on_parts(model_) && pipeline_->serving())) return of;
+  pipeline_->request_result_array(model_, result_index(model_.contacts, &of), &into, nullptr);
+  return into;
+}
+
+const std::vector<std::uint8_t>& Session::results_of(const std::vector<std::uint8_t>& of,
+                                                     std::vector<std::uint8_t>& into) const {
+  if (model_.contacts.results_kept() || !(pipeline_->results_on_parts(model_) && pipeline_->serving())) return of;
+  pipeline_->request_result_array(model_, result_index(model_.contacts, &of), nullptr, &into);
+  return into;
+}
+
 void Session::save(const std::string& path) const {
-  save_model(model(), path, history_.get());
+  // (The results left on the parts go into the file from there, an array at a time: rank 0 never
+  // holds them all, and the parts keep them for what reads them next.)
+  if (pipeline_->results_on_parts(model_) && pipeline_->serving()) {
+    PartResults results(model_, *pipeline_);
+    save_model(model_, path, history_.get(), 0, &results);
+  } else {
+    save_model(model(), path, history_.get());
+  }
   unsaved_ = false;
 }
 

@@ -40,6 +40,18 @@ class Session {
     make_results_to_read(model_, *pipeline_);
     return model_;
   }
+  // The model for what reads of the contact results no more than which pairs touch
+  // (touching_pairs): under mpirun, where a CYCLE's last step left them on the ranks' parts and the
+  // others serve rank 0's command, without them (rank 0 never holding them all); else model().
+  const Model& model_but_results() const;
+  // The pairs of balls that touch (physics/measure.hpp contact_count): from the parts' results
+  // where model_but_results leaves them there (one array of bytes).
+  std::size_t touching_pairs() const;
+  // One of model_but_results().contacts' result arrays (`of`): itself where the table holds the
+  // results, else fetched from the ranks' parts into `into`, which is returned (one array at a
+  // time, so that a reader holds those it reads, not all).
+  const std::vector<double>& results_of(const std::vector<double>& of, std::vector<double>& into) const;
+  const std::vector<std::uint8_t>& results_of(const std::vector<std::uint8_t>& of, std::vector<std::uint8_t>& into) const;
   // The model as it is, its contact results and the balls' unbalanced forces perhaps not made
   // (ContactTable::results_kept): for what a CYCLE's report reads (cycle, time, counts).
   const Model& state() const { return model_; }
@@ -98,13 +110,18 @@ class Session {
   // the whole model (whole_everywhere, or the CYCLE's split: rank 0 sends each rank its part).
   void model_on_zero();
   void light_everywhere();
+  // A command that only reads the model (OnRanks::RankZero) under mpirun: rank 0 runs `work` alone
+  // while the others serve what it asks of them (the contact results a CYCLE's last step left on
+  // the parts, where the command reads them: Pipeline::serve_root), until it ends; one process
+  // runs it. Made on every rank.
+  void run_on_root(const std::function<void()>& work);
 
   // Each rank's memory figures (PRINT info, PRINT counters), gathered by a collective call under
   // mpirun (gather_rank_figures, before a command that rank 0 alone runs); this process's alone on
   // one rank.
   struct RankFigures {
     double peak_mib = 0;           // peak resident memory so far
-    double results_mib = 0;        // the contact results held
+    double results_mib = 0;        // the contact results held (its part's included)
     double whole_arrays_mib = 0, part_arrays_mib = 0;   // the arrays held in the last distributed step
     double model_arrays_mib = 0;   // the arrays of the model this rank holds now (its part's included)
   };

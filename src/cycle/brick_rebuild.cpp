@@ -17,6 +17,7 @@
 namespace trubal {
 
 bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool) {
+  results_left_ = false;   // (the list changes: rank 0's copy makes the results where read, make_results)
   // (Every test below reads what is the same on every rank, or is agreed on: every rank returns
   // alike. The calls on team_ and the stages said to be collective are made by every member.)
   if (!may_rebuild_local(full)) return false;

@@ -293,6 +293,7 @@ void BrickStep::finish_part(const Model& full) {
   if (bonded_) part_.balls.index_ids();
   part_.contacts.drop_results();   // (a step that writes them makes them: Travels<ContactTable>)
   results_written_ = false;
+  results_left_ = false;
   part_.contacts.list_version = next_part_version();
   part_.wall_contacts.list_version = next_part_version();
   send_buf_.assign(ranks, {});

@@ -91,6 +91,7 @@ void BrickStep::together(const std::function<void()>& work, const std::string& d
 }
 
 void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, StepSums& sums, PhaseTimes& times) {
+  results_left_ = false;   // (the step makes the state another)
   // (Members sharing one whole model read its space and walls here, before the exchange below;
   // member 0 writes its walls' loads after it.)
   // The space and the walls are the whole model's (the cell's strain and the walls' motion and
@@ -175,6 +176,7 @@ void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, 
 }
 
 bool BrickStep::wrap(Model& full) {
+  results_left_ = false;   // (the parts' images change: rank 0's copy makes the results where read, make_results)
   if (policy_->local_rule < 0 || !live_ || model_ != &full) return false;
   if (results_written_ && !current_) return false;
   part_.space = full.space;
@@ -236,6 +238,7 @@ void BrickStep::loads_changed(const Model& full) {
 
 void BrickStep::release() {
   live_ = false;
+  results_left_ = false;
   auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
   part_ = Model{};
   scratch_ = StepScratch{};

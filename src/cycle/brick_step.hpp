@@ -149,7 +149,21 @@ class BrickStep {
   // 0's `full` for the ranks of a run (share() then the others'), the one whole model for threads. Where
   // the parts rebuilt their list, full's list is made from theirs, and the positions it was built
   // at go into `whole_ref` (the pipeline's reference for the whole model).
-  void sync(Model& full, VerletReference* whole_ref = nullptr);
+  // leave_results (a CYCLE's end on kept parts): the contact results the parts' last step wrote
+  // stay on the parts (results_left), gathered only where a command reads them (gather_results).
+  void sync(Model& full, VerletReference* whole_ref = nullptr, bool leave_results = false);
+  // The parts hold the contact results of the state `full` holds, which full's table lacks (the
+  // same answer on every member): a sync left them, and no step, list nor split changed the parts
+  // since.
+  bool results_left() const { return live_ && results_left_; }
+  // Those results into full's table (rank 0's for the ranks; a collective call where
+  // results_left), of full's cycle; the parts' arrays of them are freed.
+  void gather_results(Model& full);
+  // Array k of those results (ContactTable::for_each_result_array's order: `state` bytes, the
+  // others reals) into *bytes or *reals on rank 0, of full's table's length; the parts keep theirs
+  // (a collective call of the ranks, where results_left).
+  void gather_result_array(const Model& full, std::size_t k, std::vector<double>* reals,
+                           std::vector<std::uint8_t>* bytes);
   // Brings `full` up to date on every rank (a collective call): sync() makes rank 0's whole model
   // current (the ranks' syncs gather to rank 0 alone: the rescue copies and the output read it
   // there), and this hands it to the others, for what every rank does on the whole model (a
@@ -165,7 +179,10 @@ class BrickStep {
   // rank alike): the part's copies take them.
   void loads_changed(const Model& full);
   // The parts are dropped (the whole model was changed, or is to be stepped another way).
-  void drop() { live_ = false; }
+  void drop() {
+    live_ = false;
+    results_left_ = false;
+  }
   // The ranks other than 0 freed their whole model's arrays (Pipeline::hollow; said on every rank
   // alike): the next share() hands rank 0's over again, whether or not a step has followed.
   void whole_freed() { shared_ = false; }
@@ -199,6 +216,8 @@ class BrickStep {
   }
   // The bytes of the part's arrays of balls, pairs and wall contacts.
   std::size_t part_bytes() const;
+  // The bytes of the part's contact results (ContactTable::result_bytes).
+  std::size_t part_result_bytes() const { return part_.contacts.result_bytes(); }
 
  private:
   // split()'s work. decompose: the owners and every member's lists (rank_balls_ and the like), from
@@ -225,6 +244,10 @@ class BrickStep {
   void install_local_walls(Model& full);
   // sync()'s part for a bonded scene: the state and fate of every member's bonds into full's.
   void gather_bonds(Model& full, std::vector<double>& out, std::vector<double>& in);
+  // The parts' contact results into full's table (sync, gather_results).
+  void gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in);
+  // A test's fault in gather_results and gather_result_array (StepPolicy::fail_results).
+  void results_fault();
   // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
   template <class T> void gather_whole(const std::vector<T>& mine, std::vector<T>& all);
   // Runs `work` so that a member's failure is every member's (ranks: comm::together; threads: the
@@ -272,6 +295,7 @@ class BrickStep {
   // The parts' last step wrote the pairs' results, not yet gathered (the same on every rank, which
   // a part's own results_kept() is not: an empty part's table counts as kept).
   bool results_written_ = false;
+  bool results_left_ = false;               // (results_left)
   const Model* model_ = nullptr;
   std::uint64_t list_version_ = 0, wall_version_ = 0;
   std::size_t full_balls_ = 0;

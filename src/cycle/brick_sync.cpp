@@ -4,6 +4,7 @@
 #include "cycle/brick_step_parts.hpp"
 
 #include <algorithm>
+#include <new>
 #include <numeric>
 #include <stdexcept>
 
@@ -49,13 +50,24 @@ void gather_array(Team& team, const std::vector<T>& part, std::vector<T>& whole,
     return;
   }
   // Ranks: to rank 0's whole model alone (BrickStep::share hands it to the others where they need it).
-  out.clear();
-  for (std::uint32_t q : mine) out.push_back(static_cast<double>(part[q]));
-  comm::gather_to_root(out, in);
-  if (!comm::root()) return;
-  const double* p = in.data();
-  for (const auto& ranks_own : by_rank)
-    for (std::uint32_t k : ranks_own) whole[k] = static_cast<T>(*p++);
+  if constexpr (std::is_same_v<T, std::uint8_t>) {   // (as bytes: an eighth of the reals' buffers)
+    std::vector<std::uint8_t> bytes_out, bytes_in;
+    bytes_out.reserve(mine.size());
+    for (std::uint32_t q : mine) bytes_out.push_back(part[q]);
+    comm::gather_to_root(bytes_out, bytes_in);
+    if (!comm::root()) return;
+    const std::uint8_t* p = bytes_in.data();
+    for (const auto& ranks_own : by_rank)
+      for (std::uint32_t k : ranks_own) whole[k] = *p++;
+  } else {
+    out.clear();
+    for (std::uint32_t q : mine) out.push_back(static_cast<double>(part[q]));
+    comm::gather_to_root(out, in);
+    if (!comm::root()) return;
+    const double* p = in.data();
+    for (const auto& ranks_own : by_rank)
+      for (std::uint32_t k : ranks_own) whole[k] = static_cast<T>(*p++);
+  }
 }
 
 // The arrays an each_moving_* lists, as pointers by element type (the same order for every object).
@@ -201,7 +213,7 @@ void BrickStep::install_local_walls(Model& full) {
   wall_version_ = full.wall_contacts.list_version;
 }
 
-void BrickStep::sync(Model& full, VerletReference* whole_ref) {
+void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results) {
   if (!live_ || current_ || model_ != &full) return;
   std::vector<double> out, in;
   if (list_local_) install_local_list(full, whole_ref);
@@ -214,23 +226,91 @@ void BrickStep::sync(Model& full, VerletReference* whole_ref) {
   // part's go once gathered: nothing reads them there, and the next step that writes results
   // makes them again (ParallelStep::run).
   if (results_written_) {
-    // (Members sharing one whole model: member 0 makes its arrays, then every member writes its own.)
-    // (Ranks: the results are the largest arrays a sync makes; a rank out of memory here alone
-    // must not leave the others in the gathers below.)
-    if (!team_->shares_whole()) {
-      comm::together([&] { if (comm::root()) full.contacts.keep_results(); }, "keeping the contact results");
-    } else {
-      if (team_->rank() == 0) full.contacts.keep_results();
-      team_->barrier();
-    }
-    gather_set(*team_, [](ContactTable& c, auto&& f) { c.for_each_result_array(f); }, part_.contacts, full.contacts,
-               owned_pairs_, rank_pairs_, out, in, true);
     results_written_ = false;
+    // (Left: where the whole model is the state of a CYCLE's end, which the next CYCLE may go on
+    // from without a command reading them, so that rank 0 need not hold them.)
+    if (leave_results) results_left_ = true;
+    else gather_result_arrays(full, out, in);
   }
   gather_set(*team_, [](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
              full.wall_contacts, owned_walls_, rank_walls_, out, in);
   if (bonded_) gather_bonds(full, out, in);
   current_ = true;
+}
+
+void BrickStep::gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in) {
+  // (Members sharing one whole model: member 0 makes its arrays, then every member writes its own.)
+  // (Ranks: the results are the largest arrays a sync makes; a rank out of memory here alone
+  // must not leave the others in the gathers below.)
+  if (team_->shares_whole()) {
+    if (team_->rank() == 0) full.contacts.keep_results();
+    team_->barrier();
+    gather_set(*team_, [](ContactTable& c, auto&& f) { c.for_each_result_array(f); }, part_.contacts, full.contacts,
+               owned_pairs_, rank_pairs_, out, in, true);
+    return;
+  }
+  // Ranks: rank 0 makes each of the whole table's arrays as the parts' array comes, which each
+  // rank then frees, so that it holds its part's results and the whole table's together one array
+  // at a time, not all.
+  ArrayList from, to;
+  part_.contacts.for_each_result_array(from);
+  full.contacts.for_each_result_array(to);
+  const std::size_t n = full.contacts.size();
+  if (comm::root()) full.contacts.results_cycle = -1;
+  auto each = [&](auto& parts, auto& wholes) {
+    for (std::size_t a = 0; a < parts.size(); ++a) {
+      comm::together([&] { if (comm::root()) wholes[a]->assign(n, {}); }, "keeping the contact results");
+      gather_array(*team_, *parts[a], *wholes[a], owned_pairs_, rank_pairs_, out, in);
+      std::decay_t<decltype(*parts[a])>().swap(*parts[a]);
+    }
+  };
+  each(from.bytes, to.bytes);
+  each(from.reals, to.reals);
+}
+
+void BrickStep::results_fault() {
+  if (policy_->fail_results != team_->rank()) return;   // (a test's fault: TRUBAL_TEST_FAIL_AT "R results")
+  policy_->fail_results = -1;
+  throw std::bad_alloc();
+}
+
+void BrickStep::gather_results(Model& full) {
+  if (!results_left() || model_ != &full) return;
+  results_left_ = false;   // (should a member fail below, rank 0's copy of the step before makes them)
+  together([&] { results_fault(); }, "gathering the contact results from the parts");
+  std::vector<double> out, in;
+  try {
+    gather_result_arrays(full, out, in);
+  } catch (...) {
+    if (team_->shares_whole() ? team_->rank() == 0 : comm::root()) full.contacts.drop_results();
+    throw;
+  }
+  // (keep_results marked the table's fresh arrays as of no step: they are of this state's.)
+  if (team_->shares_whole() ? team_->rank() == 0 : comm::root()) full.contacts.results_cycle = full.cycle;
+}
+
+void BrickStep::gather_result_array(const Model& full, std::size_t k, std::vector<double>* reals,
+                                    std::vector<std::uint8_t>* bytes) {
+  if (!results_left() || model_ != &full || team_->shares_whole())
+    throw std::logic_error("internal error: a result array asked of parts that hold none");
+  std::vector<double> out, in;
+  std::size_t at = 0;
+  part_.contacts.for_each_result_array([&](auto& v) {
+    if (at++ != k) return;
+    using T = typename std::decay_t<decltype(v)>::value_type;
+    std::vector<T> whole;
+    together([&] {
+      results_fault();
+      if (comm::root()) whole.assign(full.contacts.size(), T{});
+    }, "gathering the contact results from the parts");
+    gather_array(*team_, v, whole, owned_pairs_, rank_pairs_, out, in);
+    if constexpr (std::is_same_v<T, double>) {
+      if (reals) *reals = std::move(whole);
+    } else {
+      if (bytes) *bytes = std::move(whole);
+    }
+  });
+  if (at <= k) throw std::logic_error("internal error: a result array the table does not have");
 }
 
 void BrickStep::gather_bonds(Model& full, std::vector<double>& out, std::vector<double>& in) {

@@ -61,8 +61,8 @@ void make_results_alone(Model& model, Pipeline& pipeline) {
     model.wall_contacts.list_version = walls_version;
   };
   try {
-    if (pipeline.policy().fail_results == 0) {   // (a test's fault: TRUBAL_TEST_FAIL_AT "0 results")
-      pipeline.policy().fail_results = -1;
+    if (pipeline.policy().fail_remake == 0) {   // (a test's fault: TRUBAL_TEST_FAIL_AT "0 remake")
+      pipeline.policy().fail_remake = -1;
       throw std::bad_alloc();
     }
     pipeline.rescue().restore(model);
@@ -99,6 +99,9 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
   if (pipeline.parts_live(model)) {
     if (!comm::root())
       throw std::logic_error("internal error: the whole model was read on a rank that holds its part alone");
+    // The CYCLE's last step left them on the parts: gathered where the others serve rank 0's
+    // command (Pipeline::serve_root), else taken again here.
+    if (pipeline.results_on_parts(model) && pipeline.serving()) return pipeline.request_part_results(model);
     if (pipeline.results_deferred(model)) make_results_alone(model, pipeline);
     else model.contacts.keep_results();
     return;

@@ -190,10 +190,63 @@ void Pipeline::end_cycle(Model& model, bool keep_parts) {
   // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
   if (distributed()) cycle_peaks_ = peak_memory_per_rank();
   if (keep_parts && parts_live(model)) {
-    sync(model);
+    each_part([&](BrickStep& part, int) { part.sync(model, &ref_, true); });
     return;
   }
   share_whole(model);
+}
+
+void Pipeline::gather_part_results(Model& model) {
+  if (!results_on_parts(model)) return;   // (the same answer on every rank)
+  each_part([&](BrickStep& part, int) { part.gather_results(model); });
+  // (As make_results leaves a CYCLE's deferred results: made, and the next CYCLE takes a copy of its own.)
+  clear_deferred();
+  release_rescue();
+  ++results_gathered_;
+  return_free_memory();
+}
+
+namespace {
+// What rank 0 asks of the others while it runs a command alone (Pipeline::serve_root).
+enum RootRequest : std::int64_t { kCommandEnded = 0, kGatherResults = 1, kResultArray = 2 };
+}  // namespace
+
+void Pipeline::request_part_results(Model& model) {
+  std::int64_t word = kGatherResults;
+  comm::broadcast(word);
+  gather_part_results(model);
+}
+
+void Pipeline::request_result_array(Model& model, std::size_t k, std::vector<double>* reals,
+                                    std::vector<std::uint8_t>* bytes) {
+  std::int64_t word = kResultArray, array = static_cast<std::int64_t>(k);
+  comm::broadcast(word);
+  comm::broadcast(array);
+  bricks().gather_result_array(model, k, reals, bytes);
+}
+
+void Pipeline::end_requests() {
+  if (!serving_) return;
+  serving_ = false;
+  std::int64_t word = kCommandEnded;
+  comm::broadcast(word);
+}
+
+void Pipeline::serve_root(Model& model) {
+  for (;;) {
+    std::int64_t word = -1;
+    comm::broadcast(word);
+    if (word == kCommandEnded) return;
+    std::int64_t array = 0;
+    if (word == kResultArray) comm::broadcast(array);
+    else if (word != kGatherResults) throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
+    // (A failure here is every rank's, in the collective calls: rank 0's command reports it.)
+    try {
+      if (word == kGatherResults) gather_part_results(model);
+      else bricks().gather_result_array(model, static_cast<std::size_t>(array), nullptr, nullptr);
+    } catch (const std::exception&) {
+    }
+  }
 }
 
 void Pipeline::refresh_whole(Model& model) {
@@ -429,7 +482,7 @@ bool Pipeline::Deferred::same(const Deferred& o) const {
 
 PipelineCounters Pipeline::counters() const {
   return {ref_.rebuilds(),    mode_ == StepMode::Space ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
-          backend_->pair_tests(), results_made_, bricks().counts(), cycle_peaks_,
+          backend_->pair_tests(), results_made_, results_gathered_, bricks().counts(), cycle_peaks_,
           static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20), hand_overs_};
 }
 
@@ -450,6 +503,9 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   if (results_made_ > 0)
     lines.emplace_back("contact results made when read", std::to_string(results_made_) +
                                                              " (a CYCLE's last step taken again, since BACKEND)");
+  if (results_gathered_ > 0)
+    lines.emplace_back("contact results gathered from the parts", std::to_string(results_gathered_) +
+                                                                      " (those a CYCLE's last step wrote there, since BACKEND)");
   const int used = step_.active();
   if (shared_by_ == kOneThread)
     lines.emplace_back("threads used", "1 (the last trial of the split in space found one thread faster: another "

@@ -31,6 +31,7 @@ struct PipelineCounters {
   double skin = 0;                 // of the list now (0 for a backend that keeps none)
   std::uint64_t pair_tests = 0;    // the backend's count, where it keeps one
   std::int64_t results_made = 0;   // a CYCLE's last step taken again to make the contact results read
+  std::int64_t results_gathered = 0;   // the results a CYCLE's last step left on the parts, gathered to rank 0
   BrickStep::Counts parts;         // the spatial decomposition's (the ranks' or the threads')
   std::vector<double> cycle_peaks_mib;   // per rank: peak memory by the end of the last distributed CYCLE
   double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
@@ -65,8 +66,9 @@ class Pipeline {
   void sync(Model& model);
   void sync_all(Model& model);
   // At the CYCLE's end. keep_parts, in a distributed run on several ranks: sync (rank 0's model
-  // made current), and each rank keeps its part, which the next CYCLE goes on from (parts_live);
-  // else share_whole.
+  // made current but for the contact results the last step wrote, which stay on the parts:
+  // results_on_parts), and each rank keeps its part, which the next CYCLE goes on from
+  // (parts_live); else share_whole.
   void end_cycle(Model& model, bool keep_parts = false);
   // sync_all, the parts released before rank 0 hands the whole model to the others (the next
   // CYCLE's prepare would drop them in any case): a collective call where parts_live.
@@ -91,6 +93,25 @@ class Pipeline {
   // Rank 0's whole model no longer holds the parts' state (a failed make_results_to_read put it
   // part way back); refresh_whole, a collective call where parts_live, gathers it again.
   void mark_whole_stale() { whole_stale_ = true; }
+  // The kept parts hold the contact results of the model's state, which rank 0's table lacks: the
+  // last step of a CYCLE wrote them there (its results deferred all the same: rank 0 keeps the copy
+  // of the step before, make_results' way, should the parts end first). The same on every rank.
+  bool results_on_parts(const Model& model) const { return parts_live(model) && bricks().results_left(); }
+  // Those results into rank 0's table (a collective call where results_on_parts); the CYCLE's
+  // results are then made, as make_results leaves them, and its copy of the step before freed.
+  void gather_part_results(Model& model);
+  // Rank 0 runs a command alone (OnRanks::RankZero) while the others serve its requests
+  // (Session::run_on_root): serve_root, on the others, until rank 0's end_requests. What rank 0 may
+  // ask: gather_part_results, where a command reads the results (make_results_to_read).
+  void start_requests() { serving_ = true; }
+  void end_requests();
+  void serve_root(Model& model);
+  bool serving() const { return serving_; }
+  // Rank 0, serving(): every rank gathers the parts' results (the others in serve_root).
+  void request_part_results(Model& model);
+  // Rank 0, serving(), where results_on_parts: array k of them (BrickStep::gather_result_array)
+  // into *reals or *bytes, the parts keeping theirs (the others in serve_root).
+  void request_result_array(Model& model, std::size_t k, std::vector<double>* reals, std::vector<std::uint8_t>* bytes);
   void refresh_whole(Model& model);
   // The settings (Model::settings: DAMP, FRAC, TSTEP, GRAV, which leave the parts kept) to each
   // part from the model, at a CYCLE's start from kept parts.
@@ -103,6 +124,8 @@ class Pipeline {
   bool parts_go_on(Model& model);
   // The bytes of this rank's part (0 where none is live).
   std::size_t part_bytes_now() const { return bricks().live() ? bricks().part_bytes() : 0; }
+  // The bytes of the contact results this rank's part holds (0 where none is live).
+  std::size_t part_result_bytes_now() const { return bricks().live() ? bricks().part_result_bytes() : 0; }
   // Between steps: the velocity field change of new strain rates (cell_before_step's, deferred), on
   // the balls wherever they are stepped; the tilts of the cell kept within half an edge
   // (reduce_cell_tilt) on every copy of the pair list.
@@ -307,6 +330,8 @@ class Pipeline {
   Snapshot rescue_;
   Deferred deferred_;
   std::int64_t results_made_ = 0;
+  std::int64_t results_gathered_ = 0;
+  bool serving_ = false;   // (start_requests)
 };
 
 // A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument), both

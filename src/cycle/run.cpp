@@ -96,6 +96,11 @@ struct StepPlan {
   bool observed = false;   // an observer reads this step's contact results
   bool deferred = false;   // the CYCLE's last step, its results made when read (from a copy of the step before)
   bool details = false;    // the step writes the per-pair results
+  // A deferred last step on the parts a CYCLE keeps (CycleControl::keep_parts): it writes its
+  // results there all the same, and the parts keep them for the command that reads them next
+  // (Pipeline::gather_part_results), so that no step is taken again; rank 0's copy of the step
+  // before stays, should anything end the parts first.
+  bool leave_results = false;
   // The step forms the walls' loads (StepKernels::wall_loads): where it writes the results, at the
   // CYCLE's last step (deferred or not: what follows a CYCLE reads the walls), at each step a
   // rescue copy is taken after (the rescue may leave the model there: the 500th steps' and, where
@@ -312,8 +317,9 @@ StepPlan CycleRun::plan(std::int64_t s) const {
     p.stopping = s % kAgreeEvery == 0 && comm::any_all(control_.interrupt->load());
   p.observed = control_.after_step && (!control_.reads_contacts || control_.reads_contacts(model_.cycle + 1));
   p.deferred = control_.defer_results && s == n_ && !p.stopping && !p.observed;
+  p.leave_results = p.deferred && control_.keep_parts && pipeline_.distributed();
   p.details = (s == n_ && !p.deferred) || p.stopping || (!control_.defer_results && (s + 1) % kSnapshotEvery == 0) ||
-              p.observed;
+              p.observed || p.leave_results;
   p.wall_loads = p.details || s == n_ || (s + 1) % kSnapshotEvery == 0 || (control_.defer_results && s + 1 == n_);
   const std::int64_t reaches = model_.cycle + 1;   // the cycle this step reaches
   p.energies = s == 1 || p.wall_loads || reaches % EnergyGuard::kCheckEvery == 0;
@@ -367,7 +373,7 @@ StepTotals CycleRun::advance(const StepPlan& step) {
   if (!model.walls.empty()) walls_before_step(model, dt);
   pipeline_.step(model, kernels, step_sums);
   // A distributed run's ranks step their parts: the model is made current where it is read.
-  if (details) pipeline_.sync(model);
+  if (details && !step.leave_results) pipeline_.sync(model);   // (left: the CYCLE's end syncs, Pipeline::end_cycle)
   const StepTotals sums(step_sums);
   model.space.servo_measured_valid = kernels.moments;
   if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};

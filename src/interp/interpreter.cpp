@@ -303,10 +303,10 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
         break;
       case OnRanks::RankZero:
         session_.gather_rank_figures();
-        if (comm::root()) {
+        session_.run_on_root([&] {
           RankAlone alone;
           command.run(ctx, args);
-        }
+        });
         break;
       case OnRanks::Parts:
         command.run(ctx, args);

@@ -108,30 +108,57 @@ void transfer_contacts(IO& io, Table& t, std::uint32_t version, Put&& put) {
 // others are the search's spare candidates, all zero, which depend on when the list was last made
 // (a cut run, a rank count, results made again when read) while the state does not. The next step
 // finds them. (Results not kept, ContactTable::results_kept, are written as zero.)
-template <class IO> void transfer_pairs(IO& io, ContactTable& c, std::uint32_t version) {
+// `source`: the results, where the table holds none (ResultSource), each array fetched as it is
+// written.
+template <class IO> void transfer_pairs(IO& io, ContactTable& c, std::uint32_t version, ResultSource* source = nullptr) {
   if constexpr (std::is_same_v<IO, Reader>) {
     transfer_contacts(io, c, version, [&](auto& v) { io.vec(v); });
   } else {
-    const bool results = c.results_kept();
+    // Each result array's place in for_each_result_array's order, by its address: those a source
+    // holds are fetched in turn.
+    std::vector<const void*> result_arrays;
+    c.for_each_result_array([&](const auto& v) { result_arrays.push_back(&v); });
+    auto result_index = [&](const void* v) {
+      const auto at = std::find(result_arrays.begin(), result_arrays.end(), v);
+      return at == result_arrays.end() ? -1 : static_cast<int>(at - result_arrays.begin());
+    };
+    source = c.results_kept() ? nullptr : source;
+    std::vector<std::uint8_t> state;
+    if (source) source->fetch(0, state);
+    const std::vector<std::uint8_t>& touched = source ? state : c.state;
+    const bool results = c.results_kept() || source;
     std::vector<std::uint8_t> keep(c.size(), 1);
     std::size_t count = 0;
     for (std::size_t p = 0; p < c.size(); ++p) {
-      keep[p] = (results && c.state[p] != 0) || c.has_history(p);
+      keep[p] = (results && touched[p] != 0) || c.has_history(p);
       count += keep[p];
     }
-    transfer_contacts(io, c, version, [&](const auto& v) {
+    auto write_kept = [&](const auto& v) {
       if (count == c.size() && v.size() == c.size()) return io.vec(v);
       std::decay_t<decltype(v)> kept(count);
       if (v.size() == c.size())
         for (std::size_t p = 0, q = 0; p < v.size(); ++p)
           if (keep[p]) kept[q++] = v[p];
       io.vec(kept);
+    };
+    transfer_contacts(io, c, version, [&](const auto& v) {
+      using Array = std::decay_t<decltype(v)>;
+      const int k = source ? result_index(&v) : -1;
+      if (k == 0) return write_kept(state);
+      if constexpr (std::is_same_v<Array, std::vector<double>>) {
+        if (k > 0) {
+          Array fetched;
+          source->fetch(static_cast<std::size_t>(k), fetched);
+          return write_kept(fetched);
+        }
+      }
+      write_kept(v);
     });
   }
 }
 
 // One description of the layout serves both directions, so save and load cannot drift apart.
-template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
+template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, ResultSource* results = nullptr) {
   io.pod(m.space.periodic);
   io.pod(m.space.lo); io.pod(m.space.hi); io.pod(m.space.boxes);
   if (version >= 3) io.pod(m.space.tilt);
@@ -190,8 +217,15 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version) {
     }
   }
   m.balls.for_each_array([&](auto& v) { io.vec(v); });
-  transfer_pairs(io, m.contacts, version);
-  if (version >= 4) io.pod(m.contacts.results_cycle);
+  transfer_pairs(io, m.contacts, version, results);
+  if (version >= 4) {
+    if constexpr (std::is_same_v<IO, Reader>) {
+      io.pod(m.contacts.results_cycle);
+    } else {
+      const std::int64_t of = results && !m.contacts.results_kept() ? results->cycle() : m.contacts.results_cycle;
+      io.pod(of);
+    }
+  }
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
   io.pod(m.settings.damping);
   io.pod(m.energy.friction_work); io.pod(m.energy.damping_work); io.pod(m.energy.boundary_work);
@@ -341,7 +375,8 @@ template <class IO> void transfer_histories(IO& io, History& history) {
 
 }  // namespace
 
-void save_model(const Model& model, const std::string& path, const History* history, std::uint32_t version) {
+void save_model(const Model& model, const std::string& path, const History* history, std::uint32_t version,
+                ResultSource* results) {
   if (!comm::root()) return;   // a distributed run's files are rank 0's to write
   if (version == 0) version = kVersion;
   if (version < kOldestVersion || version > kVersion)
@@ -359,7 +394,7 @@ void save_model(const Model& model, const std::string& path, const History* hist
             ::lseek(fd, static_cast<off_t>(header.size()), SEEK_SET) >= 0;
   int err = ok ? 0 : errno;
   if (ok) {
-    transfer(w, const_cast<Model&>(model), version);
+    transfer(w, const_cast<Model&>(model), version, results);
     History none;
     if (version >= 6) transfer_histories(w, const_cast<History&>(history ? *history : none));
     ok = w.flush();

@@ -2,21 +2,38 @@
 // settings, energy, groups, histories) in a versioned binary file with a checksum, written atomically.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "io/history.hpp"
 #include "model/model.hpp"
 
 namespace trubal {
 
+// The contact results of a model whose table does not hold them: a distributed run's, which a
+// CYCLE's last step left on the ranks' parts (Pipeline::results_on_parts), fetched one array at a
+// time as SAVE writes it, so that rank 0 holds one of them at a time, not all. fetch: array k of
+// ContactTable::for_each_result_array's order (the first, `state`, bytes; the others reals), of
+// the table's length.
+class ResultSource {
+ public:
+  virtual ~ResultSource() = default;
+  virtual void fetch(std::size_t k, std::vector<std::uint8_t>& into) = 0;
+  virtual void fetch(std::size_t k, std::vector<double>& into) = 0;
+  // The cycle whose step's force pass they are of (ContactTable::results_cycle).
+  virtual std::int64_t cycle() const = 0;
+};
+
 // Writes to a temporary beside PATH (TemporaryFile, io/atomic_file.hpp), syncs, renames over PATH.
 // Throws std::runtime_error on failure (the old file, if any, is untouched).
 // With `history`, its tables (settings and the rows in memory) are saved too. `version` 0 writes
 // the current format; an older one writes what that format held (for the tests that check that
-// older files still read).
+// older files still read). `results`: where the table's results are, where it does not hold them
+// (the same bytes as from a table that does).
 void save_model(const Model& model, const std::string& path, const History* history = nullptr,
-                std::uint32_t version = 0);
+                std::uint32_t version = 0, ResultSource* results = nullptr);
 // Reads a file written by save_model. Throws std::runtime_error for a missing, truncated,
 // corrupted or foreign file, or one of another version; the model is not touched then. With
 // `history`, it receives the saved tables (none from a file older than version 6), their files not

@@ -153,30 +153,46 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
       CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
     }
   }
-  SECTION("rank 0 out of memory making the contact results a command reads: the PRINT fails, and the shell goes on") {
-    // Rank 0 alone takes the CYCLE's last step again for the PRINT (make_results_to_read), the
-    // other ranks keeping their parts; it fails (TRUBAL_TEST_FAIL_AT "0 results"). Rank 0's model
-    // is gathered from the parts again at the next command (it was part way back to the step
-    // before): PRINT counters finds cycle 30, and the next CYCLE and the files give the serial bits.
-    TempDir dir, serial;
-    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
-    dir.write("deck.dat", setup);
-    dir.write("more.txt", "cycle 30\nprint contacts file first.csv\n" + std::string(kCounters) + "cycle 30\nprint balls file balls.csv\n"
-                          "print contacts file contacts.csv\nquit\n");
-    const int status = run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='0 results'");
-    const std::string out = slurp(dir.path() / "out.txt");
-    INFO(out);
-    CHECK(status != 124);
-    const std::string message = "rank 0 ran out of memory making the contact results";
-    const auto at = out.find(message);
-    REQUIRE(at != std::string::npos);
-    CHECK(out.find(message, at + 1) == std::string::npos);
-    CHECK(counter(counters_of(dir), "cycle") == 30);
-    CHECK(counter(counters_of(dir), "parts_kept") == 1);
-    serial.write("deck.dat", setup + "cycle 30\ncycle 30\n" + kOutputs);
-    REQUIRE(run_deck(serial, 0) == 0);
-    CHECK(slurp(dir.path() / "balls.csv") == slurp(serial.path() / "balls.csv"));
-    CHECK(slurp(dir.path() / "contacts.csv") == slurp(serial.path() / "contacts.csv"));
+  SECTION("out of memory making the contact results a command reads: the command fails on every rank, and the shell goes on") {
+    // Two ways: rank 1 fails handing rank 0 the results the CYCLE's last step left on the parts,
+    // for a PRINT (TRUBAL_TEST_FAIL_AT "1 results"; the others serve rank 0's command,
+    // Pipeline::serve_root), and rank 0 fails taking that step again alone, for a DUMP, which does
+    // not ask the parts ("0 remake"; its model, part way back to the step before, is gathered from
+    // the parts again at the next command). Either way every rank stops the command with the one
+    // message, PRINT counters then finds cycle 30 with the parts kept, the next PRINT has the
+    // results from the parts, an array at a time (none gathered whole, no step taken again), and
+    // the next CYCLE and the files give the serial bits.
+    struct Way {
+      const char* fault;
+      const char* reader;
+      const char* message;
+    };
+    for (const Way& way : {Way{"1 results", "print contacts file first.csv\n",
+                               "rank 1 ran out of memory gathering the contact results from the parts"},
+                           Way{"0 remake", "dump vtk d/s\n", "rank 0 ran out of memory making the contact results"}}) {
+      INFO(way.fault);
+      TempDir dir, serial;
+      const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+      dir.write("deck.dat", setup);
+      dir.write("more.txt", "cycle 30\n" + std::string(way.reader) + "print contacts file first.csv\n" + kCounters +
+                                "cycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+      const int status = run_shell(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{}'", way.fault));
+      const std::string out = slurp(dir.path() / "out.txt");
+      INFO(out);
+      CHECK(status != 124);
+      const auto at = out.find(way.message);
+      REQUIRE(at != std::string::npos);
+      CHECK(out.find(way.message, at + 1) == std::string::npos);
+      const Counters counters = counters_of(dir);
+      CHECK(counter(counters, "cycle") == 30);
+      CHECK(counter(counters, "parts_kept") == 1);
+      CHECK(counter(counters, "results_made") == 0);
+      CHECK(counter(counters, "results_gathered") == 0);
+      serial.write("deck.dat", setup + "cycle 30\nprint contacts file first.csv\ncycle 30\n" + kOutputs);
+      REQUIRE(run_deck(serial, 0) == 0);
+      for (const char* file : {"first.csv", "balls.csv", "contacts.csv"})
+        CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
+    }
   }
   SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
     // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks
