@@ -154,14 +154,16 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     }
   }
   SECTION("out of memory making the contact results a command reads: the command fails on every rank, and the shell goes on") {
-    // Two ways: rank 1 fails handing rank 0 the results the CYCLE's last step left on the parts,
+    // Three ways: rank 1 fails handing rank 0 the results the CYCLE's last step left on the parts,
     // for a PRINT (TRUBAL_TEST_FAIL_AT "1 results"; the others serve rank 0's command,
-    // Pipeline::serve_root), and rank 0 fails taking that step again alone, for a DUMP, which does
+    // Pipeline::serve_root); rank 2 fails so for a SAVE, which writes them from the parts an
+    // array at a time and leaves no file, not even a part of one (ResultSource); and rank 0 fails
+    // taking that step again alone, for a DUMP, which does
     // not ask the parts ("0 remake"; its model, part way back to the step before, is gathered from
     // the parts again at the next command). Either way every rank stops the command with the one
     // message, PRINT counters then finds cycle 30 with the parts kept, the next PRINT has the
     // results from the parts, an array at a time (none gathered whole, no step taken again), and
-    // the next CYCLE and the files give the serial bits.
+    // the next CYCLE, its SAVE and the files give the serial bits.
     struct Way {
       const char* fault;
       const char* reader;
@@ -169,13 +171,14 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     };
     for (const Way& way : {Way{"1 results", "print contacts file first.csv\n",
                                "rank 1 ran out of memory gathering the contact results from the parts"},
+                           Way{"2 results", "save s.sav\n", "rank 2 ran out of memory gathering the contact results from the parts"},
                            Way{"0 remake", "dump vtk d/s\n", "rank 0 ran out of memory making the contact results"}}) {
       INFO(way.fault);
       TempDir dir, serial;
       const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
       dir.write("deck.dat", setup);
       dir.write("more.txt", "cycle 30\n" + std::string(way.reader) + "print contacts file first.csv\n" + kCounters +
-                                "cycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+                                "cycle 30\nprint balls file balls.csv\nprint contacts file contacts.csv\nsave end.sav\nquit\n");
       const int status = run_shell(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{}'", way.fault));
       const std::string out = slurp(dir.path() / "out.txt");
       INFO(out);
@@ -188,9 +191,11 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
       CHECK(counter(counters, "parts_kept") == 1);
       CHECK(counter(counters, "results_made") == 0);
       CHECK(counter(counters, "results_gathered") == 0);
-      serial.write("deck.dat", setup + "cycle 30\nprint contacts file first.csv\ncycle 30\n" + kOutputs);
+      for (const auto& entry : std::filesystem::directory_iterator(dir.path()))   // (the failed SAVE's)
+        CHECK(entry.path().filename().string().rfind("s.sav", 0) == std::string::npos);
+      serial.write("deck.dat", setup + "cycle 30\nprint contacts file first.csv\ncycle 30\n" + kOutputs + "save end.sav\n");
       REQUIRE(run_deck(serial, 0) == 0);
-      for (const char* file : {"first.csv", "balls.csv", "contacts.csv"})
+      for (const char* file : {"first.csv", "balls.csv", "contacts.csv", "end.sav"})
         CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
     }
   }
