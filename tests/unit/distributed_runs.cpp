@@ -287,6 +287,15 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   INFO(out);
   for (const char* file : {"first.csv", "balls.csv", "contacts.csv", "last.csv", "h.csv"})
     CHECK(slurp(two.path() / file) == slurp(serial.path() / file));
+  // PRINT stress and energy after the first CYCLE, which have the results gathered whole to rank 0
+  // from the parts (the others serving its command), print what serial prints.
+  auto readings = [](const std::string& text) {
+    const auto from = text.find("trubal> print stress"), to = text.find("trubal> hist");
+    return from == std::string::npos || to == std::string::npos ? std::string() : text.substr(from, to - from);
+  };
+  const std::string serial_readings = readings(slurp(serial.path() / "out.txt"));
+  CHECK_THAT(serial_readings, Catch::Contains("stress: xx ") && Catch::Contains("strain: "));
+  CHECK(readings(out) == serial_readings);
   CHECK(lines_of(slurp(serial.path() / "first.csv")).size() > 100000);   // most pairs of the block touch
   CHECK(lines_of(slurp(serial.path() / "h.csv")).size() > 8);
   int dumped = 0;
