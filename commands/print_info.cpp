@@ -120,8 +120,8 @@ void print_info(Context& ctx) {
                      : s.pipeline().others_hollow()
                          ? "rank 0 the whole model, the others its settings, walls and balls' ids, types and radii"
                          : "the whole model on every rank");
-    o << fmt::format("contact results held: {} MiB (per rank: each its part's, which a CYCLE's last step leaves "
-                     "there, and rank 0 those a command gathered)\n", each_array(&Session::RankFigures::results_mib));
+    o << fmt::format("contact results held: {} MiB (per rank: each its part's, made there for a command that "
+                     "read them, and rank 0 those a command gathered)\n", each_array(&Session::RankFigures::results_mib));
   }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);

@@ -103,8 +103,8 @@ int run(int argc, char** argv) {
   // first split of the spatial decomposition, "R cut" rank 0's cut of rank R's part at its first
   // split, "R search" its first share of a pair search through
   // the whole model, "R part" its first search on its part, "R results" its first gather of the
-  // contact results a CYCLE left on the parts, "0 remake" rank 0's first step taken again to make
-  // them (distributed_runs.cpp, distributed_user.cpp).
+  // contact results from the parts, "R remake" its first step taken again to make them
+  // (distributed_runs.cpp, distributed_user.cpp).
   trubal::StepPolicy& policy = session.policy();
   if (const char* at = std::getenv("TRUBAL_TEST_FAIL_AT")) {
     int rank = -1, line = 0;

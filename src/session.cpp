@@ -124,7 +124,9 @@ void Session::light_everywhere() {
 
 void Session::results_before_setting() {
   if (!parts_kept()) return make_results_to_read(model_, *pipeline_);
-  pipeline_->gather_part_results(model_);   // (where the CYCLE's last step left them on the parts)
+  // (Made on the parts, where the CYCLE deferred them, and gathered to rank 0.)
+  results_onto_parts(model_, *pipeline_);
+  pipeline_->gather_part_results(model_);
   comm::on_root([&] { make_results_to_read(model_, *pipeline_); }, "making the contact results");
   // (The next CYCLE takes a copy of its own on every rank, of the new settings, as serial does.)
   pipeline_->clear_deferred();
@@ -447,7 +449,7 @@ Session::UntilResult Session::cycle_until(std::int64_t limit, const std::functio
 }
 
 namespace {
-// The results a CYCLE's last step left on the ranks' parts, an array at a time, for rank 0's SAVE
+// The results made on the ranks' parts (results_onto_parts), an array at a time, for rank 0's SAVE
 // while the others serve it (Pipeline::request_result_array).
 class PartResults final : public ResultSource {
  public:
@@ -465,8 +467,9 @@ class PartResults final : public ResultSource {
 }  // namespace
 
 const Model& Session::model_but_results() const {
-  if (pipeline_->results_on_parts(model_) && pipeline_->serving()) return model_;
-  return model();
+  if (!pipeline_->serving()) return model();
+  pipeline_->request_results_onto_parts(model_);   // (the balls' unbalanced forces are made with them)
+  return pipeline_->results_on_parts(model_) ? model_ : model();
 }
 
 std::size_t Session::touching_pairs() const {
@@ -503,8 +506,9 @@ const std::vector<std::uint8_t>& Session::results_of(const std::vector<std::uint
 }
 
 void Session::save(const std::string& path) const {
-  // (The results left on the parts go into the file from there, an array at a time: rank 0 never
+  // (The results made on the parts go into the file from there, an array at a time: rank 0 never
   // holds them all, and the parts keep them for what reads them next.)
+  if (pipeline_->serving()) pipeline_->request_results_onto_parts(model_);
   if (pipeline_->results_on_parts(model_) && pipeline_->serving()) {
     PartResults results(model_, *pipeline_);
     save_model(model_, path, history_.get(), 0, &results);

@@ -41,7 +41,7 @@ class Session {
     return model_;
   }
   // The model for what reads of the contact results no more than which pairs touch
-  // (touching_pairs): under mpirun, where a CYCLE's last step left them on the ranks' parts and the
+  // (touching_pairs): under mpirun, where they are made on the ranks' parts (results_onto_parts) and the
   // others serve rank 0's command, without them (rank 0 never holding them all); else model().
   const Model& model_but_results() const;
   // The pairs of balls that touch (physics/measure.hpp contact_count): from the parts' results
@@ -111,7 +111,7 @@ class Session {
   void model_on_zero();
   void light_everywhere();
   // A command that only reads the model (OnRanks::RankZero) under mpirun: rank 0 runs `work` alone
-  // while the others serve what it asks of them (the contact results a CYCLE's last step left on
+  // while the others serve what it asks of them (the contact results made on
   // the parts, where the command reads them: Pipeline::serve_root), until it ends; one process
   // runs it. Made on every rank.
   void run_on_root(const std::function<void()>& work);

@@ -92,6 +92,41 @@ void make_results_alone(Model& model, Pipeline& pipeline) {
 
 }  // namespace
 
+void results_onto_parts(Model& model, Pipeline& pipeline) {
+  if (!pipeline.parts_live(model) || pipeline.results_on_parts(model) || !pipeline.results_deferred(model)) return;
+  const Pipeline::Deferred left = pipeline.deferred();
+  pipeline.clear_deferred();
+  // The parts' state to rank 0 (current already but for a failed reading's), the parts released,
+  // and the copy of the step before put back: rank 0's whole, the others' light state.
+  pipeline.release_parts(model);
+  pipeline.restore_rescue_on_root(model);
+  try {
+    comm::together([&] {   // (a test's fault: TRUBAL_TEST_FAIL_AT "R remake")
+      if (pipeline.policy().fail_remake != comm::rank()) return;
+      pipeline.policy().fail_remake = -1;
+      throw std::bad_alloc();
+    }, "making the contact results");
+    // One step from rank 0's copy, split among the ranks as a CYCLE's first is (the others hold
+    // no balls), its results left on the parts and deferred again, the copy kept.
+    CycleControl control;
+    control.replay = true;
+    control.defer_results = control.keep_parts = control.leave_results = true;
+    const CycleResult r = run_cycles(model, pipeline, 1, control);
+    // (Checked on rank 0, whose model is the one read: the others' light energies may differ from
+    // it in the last bits, which the next hand-over of rank 0's light state mends.)
+    comm::on_root([&] {
+      if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
+        throw std::logic_error(fmt::format(
+            "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));
+    }, "making the contact results");
+    pipeline.count_results_made();
+  } catch (...) {
+    // (Every rank: the failures in the step are agreed.) The step before, as the copy holds it.
+    pipeline.restore_rescue_on_root(model);
+    throw;
+  }
+}
+
 void make_results_to_read(Model& model, Pipeline& pipeline) {
   if (!pipeline.distributed() || comm::size() < 2) return make_results(model, pipeline);
   // The ranks keep their parts: rank 0 alone reads its whole model (Command::on_ranks), the others
@@ -99,9 +134,10 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
   if (pipeline.parts_live(model)) {
     if (!comm::root())
       throw std::logic_error("internal error: the whole model was read on a rank that holds its part alone");
-    // The CYCLE's last step left them on the parts: gathered where the others serve rank 0's
-    // command (Pipeline::serve_root), else taken again here.
-    if (pipeline.results_on_parts(model) && pipeline.serving()) return pipeline.request_part_results(model);
+    // Where the others serve rank 0's command (Pipeline::serve_root): made on the parts, the step
+    // taken again there, and gathered; else taken again here.
+    if (pipeline.serving() && (pipeline.results_on_parts(model) || pipeline.results_deferred(model)))
+      return pipeline.request_part_results(model);
     if (pipeline.results_deferred(model)) make_results_alone(model, pipeline);
     else model.contacts.keep_results();
     return;

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "cycle/pair_list.hpp"
+#include "cycle/run.hpp"
 #include "cycle/wall_list.hpp"
 #include "support/comm.hpp"
 #include "model/wall_shape.hpp"
@@ -208,13 +209,21 @@ void Pipeline::gather_part_results(Model& model) {
 
 namespace {
 // What rank 0 asks of the others while it runs a command alone (Pipeline::serve_root).
-enum RootRequest : std::int64_t { kCommandEnded = 0, kGatherResults = 1, kResultArray = 2 };
+enum RootRequest : std::int64_t { kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3 };
 }  // namespace
 
 void Pipeline::request_part_results(Model& model) {
   std::int64_t word = kGatherResults;
   comm::broadcast(word);
+  results_onto_parts(model, *this);
   gather_part_results(model);
+}
+
+void Pipeline::request_results_onto_parts(Model& model) {
+  if (!parts_live(model) || results_on_parts(model) || !results_deferred(model)) return;   // (rank 0's answer)
+  std::int64_t word = kOntoParts;
+  comm::broadcast(word);
+  results_onto_parts(model, *this);
 }
 
 void Pipeline::request_result_array(Model& model, std::size_t k, std::vector<double>* reals,
@@ -222,6 +231,7 @@ void Pipeline::request_result_array(Model& model, std::size_t k, std::vector<dou
   std::int64_t word = kResultArray, array = static_cast<std::int64_t>(k);
   comm::broadcast(word);
   comm::broadcast(array);
+  results_onto_parts(model, *this);
   bricks().gather_result_array(model, k, reals, bytes);
 }
 
@@ -239,11 +249,13 @@ void Pipeline::serve_root(Model& model) {
     if (word == kCommandEnded) return;
     std::int64_t array = 0;
     if (word == kResultArray) comm::broadcast(array);
-    else if (word != kGatherResults) throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
+    else if (word != kGatherResults && word != kOntoParts)
+      throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
     // (A failure here is every rank's, in the collective calls: rank 0's command reports it.)
     try {
+      results_onto_parts(model, *this);
       if (word == kGatherResults) gather_part_results(model);
-      else bricks().gather_result_array(model, static_cast<std::size_t>(array), nullptr, nullptr);
+      else if (word == kResultArray) bricks().gather_result_array(model, static_cast<std::size_t>(array), nullptr, nullptr);
     } catch (const std::exception&) {
     }
   }
@@ -307,6 +319,15 @@ bool Pipeline::restore_rescue(Model& model) {
   comm::broadcast(flag);
   for (auto& part : bricks_) part->drop();   // (they are of another state)
   return flag != 0;
+}
+
+void Pipeline::restore_rescue_on_root(Model& model) {
+  if (comm::root()) rescue_.restore(model);
+  else rescue_.restore_light(model);
+  for (auto& part : bricks_) part->release();
+  invalidate();
+  others_hollow_ = comm_ranks_ > 1;
+  broadcast_ball_names(model.balls);   // (the copy's: balls a step destroyed since come back)
 }
 
 void Pipeline::apply_field(Model& model, const FieldChange& change) {

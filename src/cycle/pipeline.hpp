@@ -31,7 +31,7 @@ struct PipelineCounters {
   double skin = 0;                 // of the list now (0 for a backend that keeps none)
   std::uint64_t pair_tests = 0;    // the backend's count, where it keeps one
   std::int64_t results_made = 0;   // a CYCLE's last step taken again to make the contact results read
-  std::int64_t results_gathered = 0;   // the results a CYCLE's last step left on the parts, gathered to rank 0
+  std::int64_t results_gathered = 0;   // the results made on the parts, gathered whole to rank 0
   BrickStep::Counts parts;         // the spatial decomposition's (the ranks' or the threads')
   std::vector<double> cycle_peaks_mib;   // per rank: peak memory by the end of the last distributed CYCLE
   double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
@@ -109,6 +109,9 @@ class Pipeline {
   bool serving() const { return serving_; }
   // Rank 0, serving(): every rank gathers the parts' results (the others in serve_root).
   void request_part_results(Model& model);
+  // Rank 0, serving(): the results made on the parts where the CYCLE deferred them
+  // (results_onto_parts, cycle/run.hpp), every rank taking part (the others in serve_root).
+  void request_results_onto_parts(Model& model);
   // Rank 0, serving(), where results_on_parts: array k of them (BrickStep::gather_result_array)
   // into *reals or *bytes, the parts keeping theirs (the others in serve_root).
   void request_result_array(Model& model, std::size_t k, std::vector<double>* reals, std::vector<std::uint8_t>* bytes);
@@ -159,6 +162,9 @@ class Pipeline {
   void take_rescue(const Model& model);
   // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
   bool restore_rescue(Model& model);
+  // The copy put back on rank 0 alone, the others taking its light state and its balls' ids, types
+  // and radii (they hold no balls: others_hollow); the parts dropped (a collective call).
+  void restore_rescue_on_root(Model& model);
   // The copy's arrays freed (Snapshot::release), after a one-process restore_rescue that needs
   // them no more (make_results).
   void release_rescue() { rescue_.release(); }

@@ -96,10 +96,9 @@ struct StepPlan {
   bool observed = false;   // an observer reads this step's contact results
   bool deferred = false;   // the CYCLE's last step, its results made when read (from a copy of the step before)
   bool details = false;    // the step writes the per-pair results
-  // A deferred last step on the parts a CYCLE keeps (CycleControl::keep_parts): it writes its
-  // results there all the same, and the parts keep them for the command that reads them next
-  // (Pipeline::gather_part_results), so that no step is taken again; rank 0's copy of the step
-  // before stays, should anything end the parts first.
+  // A deferred last step taken again on the parts (CycleControl::leave_results, results_onto_parts):
+  // it writes its results there, and the parts keep them for the command that reads them; rank 0's
+  // copy of the step before stays, should anything end the parts first.
   bool leave_results = false;
   // The step forms the walls' loads (StepKernels::wall_loads): where it writes the results, at the
   // CYCLE's last step (deferred or not: what follows a CYCLE reads the walls), at each step a
@@ -317,7 +316,7 @@ StepPlan CycleRun::plan(std::int64_t s) const {
     p.stopping = s % kAgreeEvery == 0 && comm::any_all(control_.interrupt->load());
   p.observed = control_.after_step && (!control_.reads_contacts || control_.reads_contacts(model_.cycle + 1));
   p.deferred = control_.defer_results && s == n_ && !p.stopping && !p.observed;
-  p.leave_results = p.deferred && control_.keep_parts && pipeline_.distributed();
+  p.leave_results = p.deferred && control_.leave_results && control_.keep_parts && pipeline_.distributed();
   p.details = (s == n_ && !p.deferred) || p.stopping || (!control_.defer_results && (s + 1) % kSnapshotEvery == 0) ||
               p.observed || p.leave_results;
   p.wall_loads = p.details || s == n_ || (s + 1) % kSnapshotEvery == 0 || (control_.defer_results && s + 1 == n_);

@@ -38,6 +38,9 @@ struct CycleControl {
   // A distributed run on several ranks: each rank keeps its part at the end (Pipeline::end_cycle),
   // and a run that starts with the parts live goes on from them (Session::parts_kept).
   bool keep_parts = false;
+  // With keep_parts and defer_results: the deferred last step writes its results on the parts,
+  // which keep them (results_onto_parts: the step taken again there).
+  bool leave_results = false;
 };
 
 inline constexpr double kBalanceWarning = 0.01;   // of the energy that moved: CycleResult::energy_warning
@@ -99,5 +102,12 @@ void make_results(Model& model, Pipeline& pipeline, bool keep_rescue = false);
 // every rank goes back to the rescue copy, the step before, and the command fails everywhere with
 // rank 0's message.
 void make_results_to_read(Model& model, Pipeline& pipeline);
+
+// Under mpirun, where the ranks keep their parts and a CYCLE deferred its last step's results
+// (a collective call; the same answer on every rank): the step taken again on the parts, from rank
+// 0's copy of the step before (Pipeline::restore_rescue_on_root), its results left there
+// (Pipeline::results_on_parts) for what reads them. Where it fails, every rank goes back to the copy,
+// the step before, and throws.
+void results_onto_parts(Model& model, Pipeline& pipeline);
 
 }  // namespace trubal

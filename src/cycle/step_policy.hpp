@@ -38,8 +38,8 @@ struct StepPolicy {
   int fail_cut = -1;
   int fail_part_search = -1;
   int fail_search = -1;
-  // Rank R's next gather of the contact results a CYCLE's last step left on the parts ("R results"),
-  // rank 0's next step taken again alone to make them ("0 remake").
+  // Rank R's next gather of the contact results from the parts ("R results"), its next step taken
+  // again to make them ("R remake": on the parts, or rank 0's alone).
   int fail_results = -1;
   int fail_remake = -1;
   // (A deck's line that fails on one rank, "R L", is the interpreter's: Interpreter::fail_line_for_test.)

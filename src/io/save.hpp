@@ -13,7 +13,7 @@
 namespace trubal {
 
 // The contact results of a model whose table does not hold them: a distributed run's, which a
-// CYCLE's last step left on the ranks' parts (Pipeline::results_on_parts), fetched one array at a
+// CYCLE deferred, made on the ranks' parts (Pipeline::results_on_parts), fetched one array at a
 // time as SAVE writes it, so that rank 0 holds one of them at a time, not all. fetch: array k of
 // ContactTable::for_each_result_array's order (the first, `state`, bytes; the others reals), of
 // the table's length.

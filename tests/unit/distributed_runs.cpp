@@ -85,12 +85,12 @@ TEST_CASE("distributed: the spatial decomposition on 2, 3 and 4 ranks, and its s
     // Each rank searched its own range of balls and the lists were joined, or searched its own part:
     // the files below are serial's only if the joined lists are the serial list.
     CHECK_THAT(out, Catch::Contains("pair search: a stale list on each rank's part"));
-    // Each CYCLE's last step left its results on the parts, where serial leaves them to be made
-    // when read (SAVE after the first, PRINT balls and contacts after the second): the ranks
-    // handed rank 0's command the arrays it read one at a time, none gathered whole, and no step
-    // was taken again.
+    // Each CYCLE left its last step's results to be made when read, as serial does (SAVE after the
+    // first, PRINT balls and contacts after the second): the ranks took that step again on their
+    // parts, once for each, and handed rank 0's command the arrays it read one at a time, none
+    // gathered whole.
+    CHECK(counter(counters, "results_made") == 2);
     CHECK(counter(counters, "results_gathered") == 0);
-    CHECK(counter(counters, "results_made") == 0);
     // SAVE and PRINT, which rank 0 alone runs, left the ranks their parts.
     CHECK(counter(counters, "parts_kept") == 1);
     CHECK(slurp(dir.path() / "s.sav") == slurp(serial.path() / "s.sav"));
@@ -241,7 +241,8 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
     CHECK(slurp(parts.path() / file) == slurp(serial.path() / file));
     CHECK(slurp(whole.path() / file) == slurp(serial.path() / file));
   }
-  CHECK(counter(counters_of(parts), "part_list_rebuilds") == 1);
+  // (The CYCLE's first list, and the list of the step taken again on the parts for the PRINTs.)
+  CHECK(counter(counters_of(parts), "part_list_rebuilds") == 2);
   const auto [parts0, parts1, results1] = peaks(parts);
   [[maybe_unused]] const auto [whole0, whole1, whole_results1] = peaks(whole);
   INFO("peak MiB by the CYCLE's end, ranks 0 and 1: searched on the parts " << parts0 << " " << parts1
@@ -309,10 +310,10 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   // balls and pairs) and no result, rank 0 the whole model with its results (43 MiB) and its part.
   const Counters kept = read_counters(two.path() / "kept.txt");
   CHECK(counter(kept, "parts_kept") == 1);
-  // (For first.csv, gathered from the parts; the second CYCLE's last step is one HIST records,
-  // whose results rank 0's model takes at that step.)
+  // (For first.csv, the step taken again on the parts, and gathered whole for PRINT stress; the
+  // second CYCLE's last step is one HIST records, whose results rank 0's model takes at that step.)
+  CHECK(counter(kept, "results_made") == 1);
   CHECK(counter(kept, "results_gathered") == 1);
-  CHECK(counter(kept, "results_made") == 0);
   CHECK(counter(kept, "rank0_contact_results_mib") >= 20);
   CHECK(counter(kept, "rank1_contact_results_mib") == 0);
   CHECK(counter(kept, "rank0_model_held_mib") >= 40);
@@ -388,11 +389,11 @@ cycle 100
     // No command between the CYCLEs had the whole model handed over (the split count follows the
     // ranks' measured speeds, so it depends on the machine's load: the hand-overs do not).
     CHECK(counter(counters, "whole_hand_overs") == 0);
-    // The ranks gathered a CYCLE's results from the parts for the first change after each of the
-    // eight CYCLEs that a change follows (first.csv read them from the parts, an array at a time);
-    // no step was taken again.
+    // The ranks took a CYCLE's last step again on their parts for first.csv and for the first
+    // change after each of the eight CYCLEs that a change follows, and gathered the results to
+    // rank 0 for the changes (first.csv read them from the parts, an array at a time).
+    CHECK(counter(counters, "results_made") == 9);
     CHECK(counter(counters, "results_gathered") == 8);
-    CHECK(counter(counters, "results_made") == 0);
   }
 }
 

@@ -162,8 +162,8 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     // not ask the parts ("0 remake"; its model, part way back to the step before, is gathered from
     // the parts again at the next command). Either way every rank stops the command with the one
     // message, PRINT counters then finds cycle 30 with the parts kept, the next PRINT has the
-    // results from the parts, an array at a time (none gathered whole, no step taken again), and
-    // the next CYCLE, its SAVE and the files give the serial bits.
+    // results made on the parts (the step taken again there once) and read from them an array at
+    // a time (none gathered whole), and the next CYCLE, its SAVE and the files give the serial bits.
     struct Way {
       const char* fault;
       const char* reader;
@@ -189,7 +189,7 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
       const Counters counters = counters_of(dir);
       CHECK(counter(counters, "cycle") == 30);
       CHECK(counter(counters, "parts_kept") == 1);
-      CHECK(counter(counters, "results_made") == 0);
+      CHECK(counter(counters, "results_made") == 1);
       CHECK(counter(counters, "results_gathered") == 0);
       for (const auto& entry : std::filesystem::directory_iterator(dir.path()))   // (the failed SAVE's)
         CHECK(entry.path().filename().string().rfind("s.sav", 0) == std::string::npos);
@@ -198,6 +198,25 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
       for (const char* file : {"first.csv", "balls.csv", "contacts.csv", "end.sav"})
         CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
     }
+    // Rank 1 failing the step taken again on the parts ("1 remake"): the model is the copy's, the
+    // step before (cycle 29), on every rank; 31 cycles more give serial's 60.
+    TempDir dir, serial;
+    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+    dir.write("deck.dat", setup);
+    dir.write("more.txt", "cycle 30\nprint contacts file first.csv\n" + std::string(kCounters) +
+                              "cycle 31\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+    CHECK(run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='1 remake'") != 124);
+    const std::string out = slurp(dir.path() / "out.txt");
+    INFO(out);
+    const std::string message = "rank 1 ran out of memory making the contact results";
+    const auto at = out.find(message);
+    REQUIRE(at != std::string::npos);
+    CHECK(out.find(message, at + 1) == std::string::npos);
+    CHECK(counter(counters_of(dir), "cycle") == 29);
+    serial.write("deck.dat", setup + "cycle 60\n" + kOutputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    for (const char* file : {"balls.csv", "contacts.csv"})
+      CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
   }
   SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
     // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks
