@@ -93,10 +93,11 @@ void BrickStep::together(const std::function<void()>& work, const std::string& d
 
 void BrickStep::step(ThreadPool& pool, Model& full, const StepKernels& kernels, StepSums& sums, PhaseTimes& times) {
   results_left_ = false;   // (the step makes the state another)
-  // A step about to make its results' arrays (a sixth of a part's pair's bytes each, mapped afresh):
-  // the memory a search or a split before it freed goes back first, so that the two do not add up
-  // in the peak (a step taken again on the parts searches and writes its results at once).
-  if (kernels.writes_results() && !part_.contacts.results_kept()) return_free_memory();
+  // A rank's step about to make its results' arrays (mapped afresh): the memory a search or a
+  // split before it freed goes back first, so that the two do not add up in the peak (a step taken
+  // again on the parts searches and writes its results at once). (Threads share one process's
+  // memory: not theirs to trim each.)
+  if (!team_->shares_whole() && kernels.writes_results() && !part_.contacts.results_kept()) return_free_memory();
   // (Members sharing one whole model read its space and walls here, before the exchange below;
   // member 0 writes its walls' loads after it.)
   // The space and the walls are the whole model's (the cell's strain and the walls' motion and
