@@ -211,6 +211,12 @@ class BrickStep {
     std::size_t ghosts = 0, least_balls = 0, most_balls = 0;
     std::size_t bonds_across = 0;   // intact bonds whose balls two members owned at the last split
   };
+  // The counts as they were (a step taken again on the parts is no decomposition of the run's:
+  // results_onto_parts keeps the CYCLE's).
+  void set_counts(const Counts& c) {
+    splits_ = c.decompositions; local_rebuilds_ = c.list_rebuilds; local_wraps_ = c.wraps; migrations_ = c.migrations;
+    ghosts_ = c.ghosts; least_balls_ = c.least_balls; most_balls_ = c.most_balls; bonds_across_ = c.bonds_across;
+  }
   Counts counts() const {
     return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_, bonds_across_};
   }

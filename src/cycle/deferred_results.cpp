@@ -111,7 +111,9 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
     CycleControl control;
     control.replay = true;
     control.defer_results = control.keep_parts = control.leave_results = true;
+    const BrickStep::Counts counts = pipeline.counters().parts;   // (the CYCLE's, which PRINT counters tells)
     const CycleResult r = run_cycles(model, pipeline, 1, control);
+    pipeline.set_part_counts(counts);
     // (Checked on rank 0, whose model is the one read: the others' light energies may differ from
     // it in the last bits, which the next hand-over of rank 0's light state mends.)
     comm::on_root([&] {

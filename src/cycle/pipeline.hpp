@@ -165,6 +165,10 @@ class Pipeline {
   // The copy put back on rank 0 alone, the others taking its light state and its balls' ids, types
   // and radii (they hold no balls: others_hollow); the parts dropped (a collective call).
   void restore_rescue_on_root(Model& model);
+  // The decomposition's counts (PipelineCounters::parts) set back to `c` on every part.
+  void set_part_counts(const BrickStep::Counts& c) {
+    for (auto& part : bricks_) part->set_counts(c);
+  }
   // The copy's arrays freed (Snapshot::release), after a one-process restore_rescue that needs
   // them no more (make_results).
   void release_rescue() { rescue_.release(); }

@@ -241,8 +241,8 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
     CHECK(slurp(parts.path() / file) == slurp(serial.path() / file));
     CHECK(slurp(whole.path() / file) == slurp(serial.path() / file));
   }
-  // (The CYCLE's first list, and the list of the step taken again on the parts for the PRINTs.)
-  CHECK(counter(counters_of(parts), "part_list_rebuilds") == 2);
+  // (The CYCLE's first list; the step taken again on the parts for the PRINTs keeps the CYCLE's counts.)
+  CHECK(counter(counters_of(parts), "part_list_rebuilds") == 1);
   const auto [parts0, parts1, results1] = peaks(parts);
   [[maybe_unused]] const auto [whole0, whole1, whole_results1] = peaks(whole);
   INFO("peak MiB by the CYCLE's end, ranks 0 and 1: searched on the parts " << parts0 << " " << parts1
