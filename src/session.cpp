@@ -469,47 +469,41 @@ class PartResults final : public ResultSource {
 const Model& Session::model_but_results() const {
   if (!pipeline_->serving()) return model();
   pipeline_->request_results_onto_parts(model_);   // (the balls' unbalanced forces are made with them)
-  return pipeline_->results_on_parts(model_) ? model_ : model();
+  return results_from_parts() ? model_ : model();
 }
 
 std::size_t Session::touching_pairs() const {
-  if (!(pipeline_->results_on_parts(model_) && pipeline_->serving())) return contact_count(model());
+  if (!results_from_parts()) return contact_count(model());
   std::vector<std::uint8_t> fetched;
   const std::vector<std::uint8_t>& state = results_of(model_.contacts.state, fetched);
   return static_cast<std::size_t>(std::count_if(state.begin(), state.end(), [](std::uint8_t s) { return s != 0; }));
 }
 
-namespace {
-// The place of the table's result array `of` in ContactTable::for_each_result_array's order.
-std::size_t result_index(const ContactTable& c, const void* of) {
-  std::size_t at = 0, found = SIZE_MAX;
-  const_cast<ContactTable&>(c).for_each_result_array([&](const auto& v) {
-    if (&v == of) found = at;
-    ++at;
-  });
-  if (found == SIZE_MAX) throw std::logic_error("internal error: not one of the contact table's result arrays");
-  return found;
+bool Session::results_from_parts() const { return pipeline_->serving() && pipeline_->results_on_parts(model_); }
+
+template <class T> const std::vector<T>& Session::fetch_results(const std::vector<T>& of, std::vector<T>& into) const {
+  if (model_.contacts.results_kept() || !results_from_parts()) return of;
+  const int k = model_.contacts.result_index(&of);
+  if (k < 0) throw std::logic_error("internal error: not one of the contact table's result arrays");
+  if constexpr (std::is_same_v<T, double>) pipeline_->request_result_array(model_, static_cast<std::size_t>(k), &into, nullptr);
+  else pipeline_->request_result_array(model_, static_cast<std::size_t>(k), nullptr, &into);
+  return into;
 }
-}  // namespace
 
 const std::vector<double>& Session::results_of(const std::vector<double>& of, std::vector<double>& into) const {
-  if (model_.contacts.results_kept() || !(pipeline_->results_on_parts(model_) && pipeline_->serving())) return of;
-  pipeline_->request_result_array(model_, result_index(model_.contacts, &of), &into, nullptr);
-  return into;
+  return fetch_results(of, into);
 }
 
 const std::vector<std::uint8_t>& Session::results_of(const std::vector<std::uint8_t>& of,
                                                      std::vector<std::uint8_t>& into) const {
-  if (model_.contacts.results_kept() || !(pipeline_->results_on_parts(model_) && pipeline_->serving())) return of;
-  pipeline_->request_result_array(model_, result_index(model_.contacts, &of), nullptr, &into);
-  return into;
+  return fetch_results(of, into);
 }
 
 void Session::save(const std::string& path) const {
   // (The results made on the parts go into the file from there, an array at a time: rank 0 never
   // holds them all, and the parts keep them for what reads them next.)
   if (pipeline_->serving()) pipeline_->request_results_onto_parts(model_);
-  if (pipeline_->results_on_parts(model_) && pipeline_->serving()) {
+  if (results_from_parts()) {
     PartResults results(model_, *pipeline_);
     save_model(model_, path, history_.get(), 0, &results);
   } else {

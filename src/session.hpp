@@ -242,6 +242,11 @@ class Session {
   // reads the settings). Where the ranks keep their parts, rank 0's alone, agreed by every rank
   // (each runs the setting's command: Command::on_ranks).
   void results_before_setting();
+  // Under mpirun, rank 0 running a command the others serve, the contact results on their parts
+  // (Pipeline::results_on_parts): what model_but_results leaves there.
+  bool results_from_parts() const;
+  // results_of's work, for either element type.
+  template <class T> const std::vector<T>& fetch_results(const std::vector<T>& of, std::vector<T>& into) const;
   // mutable: model() makes deferred results (a cache of what the state determines).
   mutable Model model_;
   std::vector<RankFigures> rank_figures_;   // gathered by gather_rank_figures (several ranks)

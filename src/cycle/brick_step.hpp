@@ -150,7 +150,8 @@ class BrickStep {
   // the parts rebuilt their list, full's list is made from theirs, and the positions it was built
   // at go into `whole_ref` (the pipeline's reference for the whole model).
   // leave_results (a CYCLE's end on kept parts): the contact results the parts' last step wrote
-  // stay on the parts (results_left), gathered only where a command reads them (gather_results).
+  // (a step taken again there, results_onto_parts) stay on the parts (results_left), gathered only
+  // where a command reads them (gather_results, gather_result_array).
   void sync(Model& full, VerletReference* whole_ref = nullptr, bool leave_results = false);
   // The parts hold the contact results of the state `full` holds, which full's table lacks (the
   // same answer on every member): a sync left them, and no step, list nor split changed the parts

@@ -50,23 +50,21 @@ void gather_array(Team& team, const std::vector<T>& part, std::vector<T>& whole,
     return;
   }
   // Ranks: to rank 0's whole model alone (BrickStep::share hands it to the others where they need it).
-  if constexpr (std::is_same_v<T, std::uint8_t>) {   // (as bytes: an eighth of the reals' buffers)
-    std::vector<std::uint8_t> bytes_out, bytes_in;
-    bytes_out.reserve(mine.size());
-    for (std::uint32_t q : mine) bytes_out.push_back(part[q]);
-    comm::gather_to_root(bytes_out, bytes_in);
+  // Bytes go as bytes (an eighth of the reals' buffers), the rest as reals.
+  auto gather = [&](auto& to_send, auto& received) {
+    to_send.clear();
+    for (std::uint32_t q : mine) to_send.push_back(static_cast<typename std::decay_t<decltype(to_send)>::value_type>(part[q]));
+    comm::gather_to_root(to_send, received);
     if (!comm::root()) return;
-    const std::uint8_t* p = bytes_in.data();
-    for (const auto& ranks_own : by_rank)
-      for (std::uint32_t k : ranks_own) whole[k] = *p++;
-  } else {
-    out.clear();
-    for (std::uint32_t q : mine) out.push_back(static_cast<double>(part[q]));
-    comm::gather_to_root(out, in);
-    if (!comm::root()) return;
-    const double* p = in.data();
+    auto p = received.begin();
     for (const auto& ranks_own : by_rank)
       for (std::uint32_t k : ranks_own) whole[k] = static_cast<T>(*p++);
+  };
+  if constexpr (std::is_same_v<T, std::uint8_t>) {
+    std::vector<std::uint8_t> bytes_out, bytes_in;
+    gather(bytes_out, bytes_in);
+  } else {
+    gather(out, in);
   }
 }
 

@@ -93,7 +93,7 @@ void make_results_alone(Model& model, Pipeline& pipeline) {
 }  // namespace
 
 void results_onto_parts(Model& model, Pipeline& pipeline) {
-  if (!pipeline.parts_live(model) || pipeline.results_on_parts(model) || !pipeline.results_deferred(model)) return;
+  if (!pipeline.results_to_make_on_parts(model)) return;
   const Pipeline::Deferred left = pipeline.deferred();
   pipeline.clear_deferred();
   // The parts' state to rank 0 (current already but for a failed reading's), the parts released,

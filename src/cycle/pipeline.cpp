@@ -220,7 +220,7 @@ void Pipeline::request_part_results(Model& model) {
 }
 
 void Pipeline::request_results_onto_parts(Model& model) {
-  if (!parts_live(model) || results_on_parts(model) || !results_deferred(model)) return;   // (rank 0's answer)
+  if (!results_to_make_on_parts(model)) return;   // (rank 0's answer, the same on every rank)
   std::int64_t word = kOntoParts;
   comm::broadcast(word);
   results_onto_parts(model, *this);
@@ -526,7 +526,7 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
                                                              " (a CYCLE's last step taken again, since BACKEND)");
   if (results_gathered_ > 0)
     lines.emplace_back("contact results gathered from the parts", std::to_string(results_gathered_) +
-                                                                      " (those a CYCLE's last step wrote there, since BACKEND)");
+                                                                      " (made there for a command that read them, since BACKEND)");
   const int used = step_.active();
   if (shared_by_ == kOneThread)
     lines.emplace_back("threads used", "1 (the last trial of the split in space found one thread faster: another "

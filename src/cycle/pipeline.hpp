@@ -66,8 +66,8 @@ class Pipeline {
   void sync(Model& model);
   void sync_all(Model& model);
   // At the CYCLE's end. keep_parts, in a distributed run on several ranks: sync (rank 0's model
-  // made current but for the contact results the last step wrote, which stay on the parts:
-  // results_on_parts), and each rank keeps its part, which the next CYCLE goes on from
+  // made current but for the contact results a step taken again on the parts wrote, which stay
+  // there: results_on_parts), and each rank keeps its part, which the next CYCLE goes on from
   // (parts_live); else share_whole.
   void end_cycle(Model& model, bool keep_parts = false);
   // sync_all, the parts released before rank 0 hands the whole model to the others (the next
@@ -94,15 +94,23 @@ class Pipeline {
   // part way back); refresh_whole, a collective call where parts_live, gathers it again.
   void mark_whole_stale() { whole_stale_ = true; }
   // The kept parts hold the contact results of the model's state, which rank 0's table lacks: the
-  // last step of a CYCLE wrote them there (its results deferred all the same: rank 0 keeps the copy
-  // of the step before, make_results' way, should the parts end first). The same on every rank.
+  // step a CYCLE deferred, taken again on them (results_onto_parts, cycle/run.hpp), wrote them there
+  // (its results deferred all the same: rank 0 keeps the copy of the step before, make_results'
+  // way, should the parts end first). The same on every rank.
   bool results_on_parts(const Model& model) const { return parts_live(model) && bricks().results_left(); }
+  // Where results_onto_parts has a step to take again: the parts kept, the CYCLE's results
+  // deferred and not on them yet. The same on every rank.
+  bool results_to_make_on_parts(const Model& model) const {
+    return parts_live(model) && !bricks().results_left() && results_deferred(model);
+  }
   // Those results into rank 0's table (a collective call where results_on_parts); the CYCLE's
   // results are then made, as make_results leaves them, and its copy of the step before freed.
   void gather_part_results(Model& model);
   // Rank 0 runs a command alone (OnRanks::RankZero) while the others serve its requests
   // (Session::run_on_root): serve_root, on the others, until rank 0's end_requests. What rank 0 may
-  // ask: gather_part_results, where a command reads the results (make_results_to_read).
+  // ask, each after the results are made on the parts (results_onto_parts): nothing more
+  // (request_results_onto_parts), the results gathered whole (request_part_results), or one array
+  // of them (request_result_array).
   void start_requests() { serving_ = true; }
   void end_requests();
   void serve_root(Model& model);

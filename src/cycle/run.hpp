@@ -28,8 +28,8 @@ struct CycleControl {
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the
   // result arrays are freed, and make_results takes the last step again from the rescue copy when
-  // they are read (CYCLE's way: their memory is two fifths of the model's). Under mpirun rank 0
-  // alone makes them (make_results_to_read), as it alone prints and writes. One stopped early and
+  // they are read (CYCLE's way: their memory is two fifths of the model's). Under mpirun they are
+  // made on the ranks' parts, or by rank 0 alone (make_results_to_read). One stopped early and
   // one whose last step an observer reads write them as usual.
   bool defer_results = false;
   // The step a CYCLE deferred, taken again from the rescue copy put back and released (make_results):
@@ -92,9 +92,11 @@ CycleResult run_cycles(Model& model, Pipeline& pipeline, std::int64_t n, const C
 // fails); else it is freed before the results take their memory.
 void make_results(Model& model, Pipeline& pipeline, bool keep_rescue = false);
 
-// make_results for what a command reads (the Session's model()). Under mpirun rank 0 alone takes
-// the deferred step again, through its whole model with a serial pipeline of its own, for what it
-// alone prints and writes: where the ranks keep their parts, rank 0 alone reads (Command::on_ranks);
+// make_results for what a command reads (the Session's model()). Under mpirun, where the ranks keep
+// their parts and serve rank 0's command (Pipeline::serve_root), the results are made on the parts
+// and gathered (Pipeline::request_part_results); else rank 0 alone takes the deferred step again,
+// through its whole model with a serial pipeline of its own, for what it alone prints and writes:
+// where the ranks keep their parts, rank 0 alone reads (Command::on_ranks);
 // where every rank holds the whole model, every rank calls this at the same points and the others
 // leave their results unmade (ContactTable::results_kept false: the measurements read nothing
 // there), so that their memory stays at the model's. Should rank 0 fail (out of memory), its

@@ -114,14 +114,6 @@ template <class IO> void transfer_pairs(IO& io, ContactTable& c, std::uint32_t v
   if constexpr (std::is_same_v<IO, Reader>) {
     transfer_contacts(io, c, version, [&](auto& v) { io.vec(v); });
   } else {
-    // Each result array's place in for_each_result_array's order, by its address: those a source
-    // holds are fetched in turn.
-    std::vector<const void*> result_arrays;
-    c.for_each_result_array([&](const auto& v) { result_arrays.push_back(&v); });
-    auto result_index = [&](const void* v) {
-      const auto at = std::find(result_arrays.begin(), result_arrays.end(), v);
-      return at == result_arrays.end() ? -1 : static_cast<int>(at - result_arrays.begin());
-    };
     source = c.results_kept() ? nullptr : source;
     std::vector<std::uint8_t> state;
     if (source) source->fetch(0, state);
@@ -143,7 +135,7 @@ template <class IO> void transfer_pairs(IO& io, ContactTable& c, std::uint32_t v
     };
     transfer_contacts(io, c, version, [&](const auto& v) {
       using Array = std::decay_t<decltype(v)>;
-      const int k = source ? result_index(&v) : -1;
+      const int k = source ? c.result_index(&v) : -1;   // (those a source holds, fetched in turn)
       if (k == 0) return write_kept(state);
       if constexpr (std::is_same_v<Array, std::vector<double>>) {
         if (k > 0) {

@@ -152,6 +152,16 @@ struct ContactTable {
     for_each_result_array([&](auto& v) { v.assign(i.size(), {}); });
     results_cycle = -1;
   }
+  // The place of `array` in for_each_result_array's order, where it is one of the result arrays;
+  // else -1.
+  int result_index(const void* array) const {
+    int at = 0, found = -1;
+    const_cast<ContactTable*>(this)->for_each_result_array([&](const auto& v) {
+      if (&v == array) found = at;
+      ++at;
+    });
+    return found;
+  }
   // The bytes the result arrays hold (their capacity).
   std::size_t result_bytes() const {
     std::size_t bytes = 0;
