@@ -80,6 +80,7 @@ static void run_hist(Context& ctx, Args& args) {
         for (const auto& it : items) id += it.rfind("measure ", 0) == 0;
       }
       // A sphere the cell cannot hold is refused now.
+      ctx.session.results_on_root();
       comm::on_root([&] { measure_sphere(ctx.session.model(), sphere); }, "checking the measurement sphere");
       item = measure_item(id, sphere);
     }
@@ -101,6 +102,7 @@ static void run_hist(Context& ctx, Args& args) {
   std::vector<std::int64_t> ids;
   double gap0 = 0;
   if (!range.empty()) {
+    ctx.session.results_on_root();
     comm::on_root([&] {
       const Model& model = ctx.session.model();
       auto sel = ctx.session.select(range);

@@ -112,8 +112,7 @@ void print_info(Context& ctx) {
   o << fmt::format("peak memory: {} MiB{}\n", each(&Session::RankFigures::peak_mib), comm::size() > 1 ? " (per rank)" : "");
   if (comm::size() > 1) {
     o << fmt::format("arrays held in the last step: whole model {} MiB, part {} MiB (per rank: rank 0 keeps the whole "
-                     "model for the output and the rescue copy; the others hold their part, and the whole model's ids, "
-                     "types and radii)\n",
+                     "model for the output; the others hold their part, and the whole model's ids, types and radii)\n",
                      each_array(&Session::RankFigures::whole_arrays_mib), each_array(&Session::RankFigures::part_arrays_mib));
     o << fmt::format("model held now: {} MiB (per rank: {})\n", each_array(&Session::RankFigures::model_arrays_mib),
                      s.parts_kept() ? "each its part of the model, rank 0 the whole model too"
@@ -122,6 +121,8 @@ void print_info(Context& ctx) {
                          : "the whole model on every rank");
     o << fmt::format("contact results held: {} MiB (per rank: each its part's, made there for a command that "
                      "read them, and rank 0 those a command gathered)\n", each_array(&Session::RankFigures::results_mib));
+    o << fmt::format("rescue copy held: {} MiB (per rank: each its part's, taken while the parts were live; else rank "
+                     "0 the whole model's)\n", each_array(&Session::RankFigures::rescue_mib));
   }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
   const Features f = scene_features(m);
@@ -174,6 +175,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("part_bonds_across", c.parts.bonds_across);
   line("parts_kept", s.parts_kept() ? 1 : 0);
   line("whole_hand_overs", c.hand_overs);
+  line("copies_put_back_on_parts", c.copies_on_parts);
   if (comm::size() > 1) {   // (gathered before rank 0 runs PRINT: Session::gather_rank_figures)
     const auto ranks = s.rank_figures();
     for (std::size_t r = 0; r < ranks.size(); ++r) {
@@ -181,6 +183,7 @@ void print_counters(Context& ctx, const std::string& file) {
       line(fmt::format("rank{}_whole_arrays_mib", r), ranks[r].whole_arrays_mib);
       line(fmt::format("rank{}_part_arrays_mib", r), ranks[r].part_arrays_mib);
       line(fmt::format("rank{}_model_held_mib", r), ranks[r].model_arrays_mib);
+      line(fmt::format("rank{}_rescue_copy_mib", r), ranks[r].rescue_mib);
       line(fmt::format("rank{}_peak_mib", r), ranks[r].peak_mib);
     }
     for (std::size_t r = 0; r < c.cycle_peaks_mib.size(); ++r) line(fmt::format("rank{}_cycle_peak_mib", r), c.cycle_peaks_mib[r]);

@@ -124,6 +124,9 @@ int run(int argc, char** argv) {
   // rebuilt them on their parts (to compare the two ways in one build).
   if (const char* whole = std::getenv("TRUBAL_REBUILD_WHOLE"); whole && std::strcmp(whole, "1") == 0)
     policy.local_rule = -1;
+  // Measurements: the rescue copy of the whole model on rank 0, as before each rank kept its part's.
+  if (const char* whole = std::getenv("TRUBAL_RESCUE_WHOLE"); whole && std::strcmp(whole, "1") == 0)
+    policy.whole_rescue = true;
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).
   std::int64_t stdin_deck = deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO)) ? 1 : 0;

@@ -139,7 +139,8 @@ std::vector<double> own_figures(const Model& model, const Pipeline& pipeline) {
   constexpr double kMiB = 1 << 20;
   return {static_cast<double>(model.contacts.result_bytes() + pipeline.part_result_bytes_now()) / kMiB,
           c.whole_arrays_mib, c.part_arrays_mib,
-          static_cast<double>(array_bytes(model) + pipeline.part_bytes_now()) / kMiB};
+          static_cast<double>(array_bytes(model) + pipeline.part_bytes_now()) / kMiB,
+          static_cast<double>(pipeline.rescue_bytes()) / kMiB};
 }
 }  // namespace
 
@@ -149,14 +150,15 @@ void Session::gather_rank_figures() {
   std::vector<double> all;
   comm::allgather(own_figures(model_, *pipeline_), all);
   rank_figures_.assign(peaks.size(), {});
-  for (std::size_t r = 0; r < rank_figures_.size() && 4 * r + 3 < all.size(); ++r)
-    rank_figures_[r] = {peaks[r], all[4 * r], all[4 * r + 1], all[4 * r + 2], all[4 * r + 3]};
+  constexpr std::size_t kOwn = 5;   // (own_figures' count)
+  for (std::size_t r = 0; r < rank_figures_.size() && kOwn * r + kOwn - 1 < all.size(); ++r)
+    rank_figures_[r] = {peaks[r], all[kOwn * r], all[kOwn * r + 1], all[kOwn * r + 2], all[kOwn * r + 3], all[kOwn * r + 4]};
 }
 
 std::vector<Session::RankFigures> Session::rank_figures() const {
   if (comm::size() > 1) return rank_figures_;
   const std::vector<double> f = own_figures(model_, *pipeline_);
-  return {{peak_memory_per_rank()[0], f[0], f[1], f[2], f[3]}};
+  return {{peak_memory_per_rank()[0], f[0], f[1], f[2], f[3], f[4]}};
 }
 
 void Session::require_started() const {
@@ -365,12 +367,8 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
     make_results_to_read(model_, *pipeline_);
     return dumps_->write(model_);
   }
-  const bool zero_alone = parts_kept() || pipeline_->others_hollow();
-  if (!zero_alone) make_results_to_read(model_, *pipeline_);   // (every rank holds the whole model: with every rank)
-  comm::on_root([&] {
-    if (zero_alone) make_results_to_read(model_, *pipeline_);
-    dumps_->write(model_);
-  }, "writing the dump");
+  results_on_root();   // (with every rank: made on the parts where they are kept, and gathered)
+  comm::on_root([&] { dumps_->write(model_); }, "writing the dump");
 }
 
 CycleResult Session::cycle_in_chunks(std::int64_t limit, std::int64_t chunk,

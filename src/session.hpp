@@ -85,9 +85,10 @@ class Session {
     return model_.sample;
   }
   // For settings that do not touch the balls (damping, gravity, frac); the next step is
-  // estimated afresh, and PRINT energy takes the state as it is until the next step.
+  // estimated afresh, and PRINT energy takes the state as it is until the next step. The contact
+  // results a CYCLE deferred stay so: the step taken again to make them reads the settings it was
+  // taken with (Pipeline::Deferred), and a CYCLE that follows has no use for them.
   Settings& settings() {
-    results_before_setting();   // the step taken again reads the settings
     model_.critical_dt = 0;
     model_.energy_at_step.valid = false;   // gravity's potential, say, is no longer the last step's
     unsaved_ = true;
@@ -124,6 +125,7 @@ class Session {
     double results_mib = 0;        // the contact results held (its part's included)
     double whole_arrays_mib = 0, part_arrays_mib = 0;   // the arrays held in the last distributed step
     double model_arrays_mib = 0;   // the arrays of the model this rank holds now (its part's included)
+    double rescue_mib = 0;         // the rescue copy's arrays this rank holds (Pipeline::rescue_bytes)
   };
   void gather_rank_figures();
   std::vector<RankFigures> rank_figures() const;
@@ -235,6 +237,10 @@ class Session {
   double volume = 0;                   // SET volume: volume for stress in free space (0: the box)
   // Volume used for the average stress: SET volume, else the periodic cell or START box.
   double stress_volume() const;
+  // The contact results a CYCLE deferred made in rank 0's model, every rank taking part (a
+  // collective call): before a command that every rank runs reads the model on rank 0 alone
+  // (comm::on_root), where the ranks' parts hold the copy they are made from.
+  void results_on_root() { results_before_setting(); }
 
  private:
   void start(const Space& space);   // a fresh model in this space; histories and dumps end

@@ -255,6 +255,7 @@ void BrickStep::make_next_balls(Rebuild& r) const {
 void BrickStep::commit_rebuild(Rebuild& r) {
   // The new part in the old one's place, every rank's record of the owners following the moves.
   // (Nothing here fails: the index and the laws, which a sync does not read, come after.)
+  ++edition_;
   std::swap(part_.balls, r.next_balls);
   std::swap(part_.contacts, r.next_table);
   global_ball_.swap(r.next_global);

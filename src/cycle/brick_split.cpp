@@ -114,6 +114,7 @@ void BrickStep::update_shares() {
 }
 
 void BrickStep::split(const Model& full, const VerletReference& ref) {
+  ++edition_;
   update_shares();   // (a collective call)
   const std::string doing = fmt::format("making its part of the decomposition ({} balls in the whole model)", full.balls.size());
   // A rank that cannot make its part (out of memory) must not leave the others stepping theirs and

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -77,6 +78,7 @@ void BrickStep::apply_field(Model& full, const FieldChange& change) {
 }
 
 void BrickStep::reduce_tilt(const Space& before) {
+  ++edition_;
   part_.space = before;
   reduce_cell_tilt(part_);
 }
@@ -243,6 +245,7 @@ void BrickStep::loads_changed(const Model& full) {
 }
 
 void BrickStep::release() {
+  ++edition_;
   live_ = false;
   results_left_ = false;
   auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
@@ -254,6 +257,62 @@ void BrickStep::release() {
   free(rank_bonds_); free(split_bond_rows_); free(split_bond_ball_i_);
   free(rank_balls_); free(rank_pairs_); free(rank_walls_); free(send_); free(recv_); free(send_buf_); free(recv_buf_);
   free(sums_out_); free(sums_in_);
+}
+
+void BrickStep::keep_copy() {
+  if (team_->shares_whole() || !live_)
+    throw std::logic_error("internal error: a part's rescue copy asked where no rank's part is live");
+  copy_.part.take(part_);
+  copy_.global_ball = global_ball_;
+  copy_.owned = owned_;
+  copy_.owned_pairs = owned_pairs_;
+  copy_.owned_walls = owned_walls_;
+  // Rank 0 places every rank's values in the whole model; a rank needs its own row of the bonds.
+  const auto me = static_cast<std::size_t>(team_->rank());
+  copy_.rank_balls.assign(rank_balls_.size(), {});
+  copy_.rank_bonds.assign(rank_bonds_.size(), {});
+  if (comm::root()) copy_.rank_balls = rank_balls_, copy_.rank_bonds = rank_bonds_;
+  else if (me < rank_bonds_.size()) copy_.rank_bonds[me] = rank_bonds_[me];
+  copy_.ghost = scratch_.ghost;
+  copy_.ref = ref_;
+  copy_.full_balls = full_balls_;
+  copy_.bonded = bonded_;
+  copy_.walls_any = walls_any_;
+  copy_.edition = edition_;
+  copy_.moved2 = moved2_;
+  copy_.outside_box = outside_box_;
+  copy_.held = true;
+}
+
+bool BrickStep::restore_copy_in_place(const Model& full) {
+  const bool mine = copy_.held && live_ && model_ == &full && copy_.edition == edition_ && !team_->shares_whole();
+  if (comm::any_all(!mine)) return false;   // (every rank's part, or none)
+  together([&] {
+    copy_.part.restore(part_);
+    ref_ = copy_.ref;
+  }, "putting back the rescue copy of its part");
+  // (A wrap since renumbered the pairs' images: the whole model's list is made from the parts'
+  // again at the next sync, as after that wrap.)
+  list_local_ = true;
+  moved2_ = copy_.moved2;
+  outside_box_ = copy_.outside_box;
+  current_ = false;
+  results_written_ = results_left_ = false;
+  return true;
+}
+
+void BrickStep::free_copy() { copy_ = PartCopy{}; }
+
+std::size_t BrickStep::copy_bytes() const {
+  if (!copy_.held) return 0;
+  std::size_t n = copy_.part.bytes();
+  auto add = [&](const auto& v) { n += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+  for (const auto* v : {&copy_.global_ball, &copy_.owned, &copy_.owned_pairs, &copy_.owned_walls}) add(*v);
+  for (const auto* lists : {&copy_.rank_balls, &copy_.rank_bonds})
+    for (const auto& v : *lists) add(v);
+  add(copy_.ghost);
+  for (const auto* v : {&copy_.ref.x, &copy_.ref.y, &copy_.ref.z}) add(*v);
+  return n;
 }
 
 std::size_t array_bytes(const Model& m) {

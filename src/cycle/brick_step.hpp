@@ -49,6 +49,7 @@
 #include "support/exact_sum.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
+#include "cycle/snapshot.hpp"
 #include "cycle/step_policy.hpp"
 #include "cycle/step_scratch.hpp"
 #include "cycle/team.hpp"
@@ -181,14 +182,37 @@ class BrickStep {
   void loads_changed(const Model& full);
   // The parts are dropped (the whole model was changed, or is to be stepped another way).
   void drop() {
+    ++edition_;
     live_ = false;
     results_left_ = false;
   }
   // The ranks other than 0 freed their whole model's arrays (Pipeline::hollow; said on every rank
   // alike): the next share() hands rank 0's over again, whether or not a step has followed.
   void whole_freed() { shared_ = false; }
-  // Dropped, and their memory given back (the next split makes them afresh).
+  // Dropped, and their memory given back (the next split makes them afresh). The rescue copy stays.
   void release();
+
+  // The rescue copy of this rank's part (Pipeline::take_rescue, where the ranks' parts are live):
+  // its balls, pairs, wall contacts and bonds as cycle/snapshot.hpp copies a model, and what a sync
+  // needs to gather them (each ball's and pair's place in the whole model). Ranks only.
+  void keep_copy();
+  bool copy_held() const { return copy_.held; }
+  // The bytes of the copy's arrays (0 where none is held).
+  std::size_t copy_bytes() const;
+  void free_copy();
+  // Rank 0's whole model made the state the copies hold (a collective call, every rank holding its
+  // copy): every array of the balls, resized to the copy's count, the pair list and its history,
+  // the wall contacts and the bonds' state; the contact results dropped and the unbalanced forces
+  // zero (Snapshot::restore's answer where a step since wrote them). The other ranks' models are
+  // left as they are. The parts are released after (they held the copy's state for the gathers).
+  void whole_from_copy(Model& full);
+  // The live parts put back to their copies in place, where nothing but steps and wraps changed
+  // them since (no split, rebuild or tilt reduction: the same balls, lists and ghosts),
+  // so that a step taken again from there needs no split from rank 0 (results_onto_parts).
+  // Returns false, changing nothing, where they cannot be (the same answer on every rank: a
+  // collective call). The whole model then no longer holds the parts' state (the next sync
+  // gathers it).
+  bool restore_copy_in_place(const Model& full);
 
   // A node of the split's recursive bisection: the balls before (coordinate, whole-model index)
   // (at, at_ball) along `axis` go to `left`, the others to `right`; a leaf (left < 0) is rank `owner`'s
@@ -288,8 +312,23 @@ class BrickStep {
   void index_part();
   void find_part_walls(Rebuild& r, const Model& full, ThreadPool& pool);
 
+  // (keep_copy)
+  struct PartCopy {
+    Snapshot part;
+    std::vector<std::uint32_t> global_ball, owned, owned_pairs, owned_walls;
+    std::vector<std::vector<std::uint32_t>> rank_balls, rank_bonds;   // (rank 0's; the others' own row)
+    std::vector<std::uint8_t> ghost;
+    VerletReference ref;         // (a wrap since moved the balls' reference positions with them)
+    std::size_t full_balls = 0;
+    bool bonded = false, walls_any = false, held = false;
+    std::uint64_t edition = 0;   // the part's edition_ when taken
+    double moved2 = 0;           // the last step's findings then
+    bool outside_box = false;
+  };
+
   StepPolicy* policy_;
   Team* team_ = &rank_team();
+  PartCopy copy_;
   Model part_;
   StepScratch scratch_;
   ParallelStep step_;
@@ -332,6 +371,9 @@ class BrickStep {
   std::size_t local_wraps_ = 0;              // wraps on the parts (wrap)
   std::size_t migrations_ = 0;               // balls that changed owner at a rebuild on the parts
   bool list_local_ = false;                  // the parts' list is newer than full's
+  // Counts every change of the part's balls and lists but a step's or a wrap's (a split, a
+  // rebuild on the parts, a tilt reduction, a drop): restore_copy_in_place's test.
+  std::uint64_t edition_ = 0;
   double max_radius_ = 0;                    // the whole model's largest ball (at the split)
   double shell_base_ = 0;                    // the largest shell received at the first local rebuild
   // Each member's share of the balls at the next split (the same on every member), and this

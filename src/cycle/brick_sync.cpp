@@ -236,6 +236,65 @@ void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results
   current_ = true;
 }
 
+void BrickStep::whole_from_copy(Model& full) {
+  if (team_->shares_whole() || !copy_.held)
+    throw std::logic_error("internal error: the whole model asked of the parts' rescue copies where none is held");
+  // The copy's part and what the gathers read, as a split would have left them; the list and the
+  // wall contacts made the whole model's as sync makes them after a rebuild on the parts.
+  bool results_were_kept = false;   // (rank 0's: kept, they come back zero, as Snapshot::restore leaves them)
+  together([&] {
+    results_were_kept = full.contacts.results_kept() && full.contacts.size() > 0;
+    copy_.part.restore(part_);
+    global_ball_ = copy_.global_ball;
+    owned_ = copy_.owned;
+    owned_pairs_ = copy_.owned_pairs;
+    owned_walls_ = copy_.owned_walls;
+    rank_balls_ = copy_.rank_balls;
+    rank_bonds_ = copy_.rank_bonds;
+    rank_pairs_.assign(rank_balls_.size(), {});
+    rank_walls_.assign(rank_balls_.size(), {});
+    scratch_.ghost = copy_.ghost;
+    full_balls_ = copy_.full_balls;
+    bonded_ = copy_.bonded;
+    walls_any_ = copy_.walls_any;
+    if (comm::root()) {
+      full.balls.for_each_array([&](auto& v) { v.resize(full_balls_); });
+      full.contacts.set_history_laws(part_.contacts.history_laws);
+      if (!walls_any_) full.wall_contacts = WallContacts{};
+    }
+  }, "putting back the rescue copy of its part");
+  live_ = true;
+  model_ = &full;
+  current_ = false;
+  results_written_ = results_left_ = false;
+  list_local_ = true;
+  std::vector<double> out, in;
+  // Every array of the balls (a sort or a destroyed ball since leaves none of rank 0's of use).
+  std::vector<void*> wholes;
+  full.balls.for_each_array([&](auto& v) { wholes.push_back(&v); });
+  std::size_t a = 0;
+  part_.balls.for_each_array([&](auto& v) {
+    using V = std::decay_t<decltype(v)>;
+    gather_array(*team_, v, *static_cast<V*>(wholes[a++]), owned_, rank_balls_, out, in);
+  });
+  install_local_list(full, nullptr);   // (its results dropped; install_local_walls too, where walls_any_)
+  gather_set(*team_, [](ContactTable& c, auto&& f) { each_history_array(c, f); }, part_.contacts, full.contacts, owned_pairs_,
+             rank_pairs_, out, in);
+  if (walls_any_)
+    gather_set(*team_, [](WallContacts& w, auto&& f) { each_moving_wall_array(w, f); }, part_.wall_contacts,
+               full.wall_contacts, owned_walls_, rank_walls_, out, in);
+  if (bonded_) gather_bonds(full, out, in);
+  if (comm::root()) {
+    for (auto* v : {&full.balls.fx, &full.balls.fy, &full.balls.fz, &full.balls.mx, &full.balls.my, &full.balls.mz})
+      std::fill(v->begin(), v->end(), 0.0);
+    full.balls.index_ids();
+    full.contacts.drop_results();
+    if (results_were_kept) full.contacts.keep_results();
+  }
+  current_ = true;
+  release();
+}
+
 void BrickStep::gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in) {
   // (Members sharing one whole model: member 0 makes its arrays, then every member writes its own.)
   // (Ranks: the results are the largest arrays a sync makes; a rank out of memory here alone

@@ -14,11 +14,49 @@
 #include "support/peak_memory.hpp"
 
 namespace trubal {
+namespace {
+
+// The step taken again with the settings it was first taken with (a DAMP, FRAC, TSTEP or GRAV
+// since changed them without making the results: Session::settings), and what such a setting
+// changed of the state kept after it: the step estimated afresh at the next CYCLE, the energy
+// terms no longer the last step's. Made once the model's state is that step's again (made());
+// the settings are the model's again however the step ends.
+class StepAgain {
+ public:
+  // critical_dt, at_step: the model's before anything was put back (where the caller put it back first).
+  StepAgain(Model& model, const Pipeline::Deferred& left)
+      : StepAgain(model, left, model.critical_dt, model.energy_at_step) {}
+  StepAgain(Model& model, const Pipeline::Deferred& left, double critical_dt, const EnergyAtStep& at_step)
+      : model_(model), now_(model.settings), critical_dt_(critical_dt), at_step_(at_step) {
+    model.settings = left.settings;
+  }
+  StepAgain(const StepAgain&) = delete;
+  StepAgain& operator=(const StepAgain&) = delete;
+  void made() {
+    made_ = true;
+    model_.critical_dt = critical_dt_;
+    model_.energy_at_step = at_step_;
+  }
+  ~StepAgain() {
+    model_.settings = now_;
+    if (!made_ && !(critical_dt_ > 0)) model_.critical_dt = 0;   // (put back to the copy: estimated afresh still)
+  }
+
+ private:
+  Model& model_;
+  const Settings now_;
+  const double critical_dt_;
+  const EnergyAtStep at_step_;
+  bool made_ = false;
+};
+
+}  // namespace
 
 void make_results(Model& model, Pipeline& pipeline, bool keep_rescue) {
   if (pipeline.results_deferred(model)) {
     const Pipeline::Deferred left = pipeline.deferred();
     pipeline.clear_deferred();
+    StepAgain again(model, left);
     // The list as that step had it: the same search, or none (the SAVE that follows writes it).
     pipeline.restore_rescue(model);
     pipeline.rewind_step();
@@ -30,6 +68,7 @@ void make_results(Model& model, Pipeline& pipeline, bool keep_rescue) {
     if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
       throw std::logic_error(fmt::format(
           "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));
+    again.made();
     return;
   }
   model.contacts.keep_results();
@@ -50,22 +89,39 @@ bool made_already(const Model& model) {
 // rank holds is put back after it, under its own versions (the search may keep other candidates
 // beside the same touching pairs). On failure rank 0's model is put back to the list it held and
 // marked stale (Pipeline::mark_whole_stale): the next collective call gathers it again.
-void make_results_alone(Model& model, Pipeline& pipeline) {
-  if (made_already(model)) return;
-  const Pipeline::Deferred left = pipeline.deferred();
-  const PairCandidates held = pair_list_of(model.contacts);
-  const std::uint64_t pairs_version = model.contacts.list_version, walls_version = model.wall_contacts.list_version;
-  auto put_back_list = [&] {
-    if (!holds_pairs(model.contacts, held)) install_pairs(model.contacts, held);
+// The pair list rank 0 holds, which the ranks share, and its versions (make_results_alone puts
+// them back after its step).
+struct HeldList {
+  PairCandidates pairs;
+  std::uint64_t pairs_version = 0, walls_version = 0;
+  double critical_dt = 0;   // (and these, for StepAgain)
+  EnergyAtStep at_step;
+  static HeldList of(const Model& model) {
+    return {pair_list_of(model.contacts), model.contacts.list_version, model.wall_contacts.list_version,
+            model.critical_dt, model.energy_at_step};
+  }
+  void put_back(Model& model) const {
+    if (!holds_pairs(model.contacts, pairs)) install_pairs(model.contacts, pairs);
     model.contacts.list_version = pairs_version;
     model.wall_contacts.list_version = walls_version;
-  };
+  }
+};
+
+// held: the list as it was before rescue_to_root put rank 0's model back (where the copy is the
+// parts'); else the list now.
+void make_results_alone(Model& model, Pipeline& pipeline, const HeldList* before = nullptr) {
+  if (made_already(model)) return;
+  const Pipeline::Deferred left = pipeline.deferred();
+  const HeldList held = before ? *before : HeldList::of(model);
+  auto put_back_list = [&] { held.put_back(model); };
+  StepAgain again(model, left, held.critical_dt, held.at_step);
   try {
     if (pipeline.policy().fail_remake == 0) {   // (a test's fault: TRUBAL_TEST_FAIL_AT "0 remake")
       pipeline.policy().fail_remake = -1;
       throw std::bad_alloc();
     }
-    pipeline.rescue().restore(model);
+    // (Where the copy is the parts', rescue_to_root put rank 0's model back to it already.)
+    if (!pipeline.part_rescue()) pipeline.rescue().restore(model);
     const std::unique_ptr<Pipeline> serial = make_pipeline("serial", 1, 0, &pipeline.policy());
     CycleControl control;
     control.replay = true;   // (no copy of its own: it gave these bits once already)
@@ -73,6 +129,7 @@ void make_results_alone(Model& model, Pipeline& pipeline) {
     if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
       throw std::logic_error(fmt::format(
           "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));
+    again.made();
     put_back_list();
     pipeline.count_results_made();
   } catch (const std::bad_alloc&) {
@@ -96,10 +153,15 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
   if (!pipeline.results_to_make_on_parts(model)) return;
   const Pipeline::Deferred left = pipeline.deferred();
   pipeline.clear_deferred();
-  // The parts' state to rank 0 (current already but for a failed reading's), the parts released,
-  // and the copy of the step before put back: rank 0's whole, the others' light state.
-  pipeline.release_parts(model);
-  pipeline.restore_rescue_on_root(model);
+  StepAgain again(model, left);
+  // The copy of the step before put back: on the parts where each rank keeps its own and nothing
+  // but that step changed them since; else the parts' state to rank 0 (current already but for a
+  // failed reading's), the parts released, and rank 0's whole model put back, the others' light
+  // state (the step is then split among the ranks afresh).
+  if (!pipeline.restore_rescue_on_parts(model)) {
+    pipeline.release_parts(model);
+    pipeline.restore_rescue_on_root(model);
+  }
   try {
     comm::together([&] {   // (a test's fault: TRUBAL_TEST_FAIL_AT "R remake")
       if (pipeline.policy().fail_remake != comm::rank()) return;
@@ -121,6 +183,7 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
         throw std::logic_error(fmt::format(
             "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));
     }, "making the contact results");
+    again.made();
     pipeline.count_results_made();
   } catch (...) {
     // (Every rank: the failures in the step are agreed.) The step before, as the copy holds it.
@@ -140,8 +203,16 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
     // taken again there, and gathered; else taken again here.
     if (pipeline.serving() && (pipeline.results_on_parts(model) || pipeline.results_deferred(model)))
       return pipeline.request_part_results(model);
-    if (pipeline.results_deferred(model)) make_results_alone(model, pipeline);
-    else model.contacts.keep_results();
+    if (pipeline.results_deferred(model)) {
+      // (The parts' copies are put back together: a command that rank 0 alone runs reads the
+      // results on every rank first, Session::results_on_root.)
+      if (pipeline.part_rescue())
+        throw std::logic_error("internal error: the contact results a CYCLE deferred were read on rank 0 alone, "
+                               "where the ranks' parts hold the copy they are made from");
+      make_results_alone(model, pipeline);
+    } else {
+      model.contacts.keep_results();
+    }
     return;
   }
   // Every rank holds the whole model and reads it at the same points: rank 0 makes the results,
@@ -152,7 +223,13 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
     return;
   }
   try {
-    comm::together([&] { if (comm::root()) make_results_alone(model, pipeline); }, "making the contact results");
+    // (Where the copy is the ranks' parts': put back on rank 0 first, a collective call.)
+    HeldList held;
+    if (pipeline.part_rescue() && comm::root()) held = HeldList::of(model);
+    pipeline.rescue_to_root(model);
+    comm::together([&] {
+      if (comm::root()) make_results_alone(model, pipeline, pipeline.part_rescue() ? &held : nullptr);
+    }, "making the contact results");
   } catch (...) {
     // Rank 0's model may be part way through the step taken again: every rank goes back to rank
     // 0's rescue copy, the step before (a collective call), and the failure is every rank's.

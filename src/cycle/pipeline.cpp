@@ -301,13 +301,59 @@ namespace {
 bool light_rescue(bool distributed) { return distributed && comm::size() > 1 && !comm::root(); }
 }  // namespace
 
-void Pipeline::take_rescue(const Model& model) {
+void Pipeline::take_rescue(Model& model) {
+  // The ranks' parts live: each rank keeps a copy of its own part and the light state, and rank 0's
+  // whole model, not gathered, holds none of the copy.
+  part_rescue_ = parts_live(model) && !policy_->whole_rescue;
+  if (part_rescue_) {
+    rescue_.take_light(model);
+    bricks().keep_copy();
+    rescue_wall_travel_ = wall_travel_;
+    return;
+  }
+  bricks().free_copy();
+  sync(model);
   if (light_rescue(distributed())) rescue_.take_light(model);
   else rescue_.take(model);
 }
 
+void Pipeline::whole_from_part_copies(Model& model) {
+  rescue_.restore_light(model);
+  bricks().whole_from_copy(model);
+}
+
+bool Pipeline::restore_rescue_on_parts(Model& model) {
+  if (!part_rescue_ || !parts_live(model) || !bricks().restore_copy_in_place(model)) return false;
+  rescue_.restore_light(model);
+  wall_travel_ = rescue_wall_travel_;
+  list_ = ListState::Unchecked;
+  ++copies_on_parts_;
+  return true;
+}
+
+void Pipeline::rescue_to_root(Model& model) {
+  if (!part_rescue_) return;   // (the same answer on every rank)
+  // Rank 0's model the copy's state; the others' as they are (they hold the state after the copy's
+  // step: make_results_alone takes it again on rank 0 alone). Their light state comes back after.
+  const Snapshot others_light = comm::root() ? Snapshot{} : [&] {
+    Snapshot s;
+    s.take_light(model);
+    return s;
+  }();
+  whole_from_part_copies(model);
+  if (!comm::root()) others_light.restore_light(model);
+}
+
 bool Pipeline::restore_rescue(Model& model) {
   list_from_parts_ = false;   // (the list put back is the copy's, older than the reference: searched afresh)
+  if (part_rescue_) {
+    // Every rank's part copy gathered to rank 0's whole model, which rank 0 hands to the others.
+    whole_from_part_copies(model);
+    broadcast_arrays(model);
+    others_hollow_ = false;
+    for (auto& part : bricks_) part->drop();
+    return false;
+  }
   if (!distributed() || comm::size() < 2) return rescue_.restore(model);
   // Rank 0 puts its copy back and hands the arrays to the others, which put the rest back from theirs.
   bool current = false;
@@ -322,7 +368,8 @@ bool Pipeline::restore_rescue(Model& model) {
 }
 
 void Pipeline::restore_rescue_on_root(Model& model) {
-  if (comm::root()) rescue_.restore(model);
+  if (part_rescue_) whole_from_part_copies(model);
+  else if (comm::root()) rescue_.restore(model);
   else rescue_.restore_light(model);
   for (auto& part : bricks_) part->release();
   invalidate();
@@ -501,10 +548,21 @@ bool Pipeline::Deferred::same(const Deferred& o) const {
          bits(boundary_work) == bits(o.boundary_work) && bits(kinetic) == bits(o.kinetic);
 }
 
+bool Pipeline::Deferred::same_settings(const Settings& s) const {
+  auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+  const Settings& t = settings;
+  const Damping &a = s.damping, &b = t.damping;
+  return bits(s.frac) == bits(t.frac) && bits(s.fixed_dt) == bits(t.fixed_dt) && bits(s.gravity[0]) == bits(t.gravity[0]) &&
+         bits(s.gravity[1]) == bits(t.gravity[1]) && bits(s.gravity[2]) == bits(t.gravity[2]) && a.kind == b.kind &&
+         bits(a.alpha) == bits(b.alpha) && bits(a.beta) == bits(b.beta) && bits(a.lambda) == bits(b.lambda) &&
+         bits(a.freq) == bits(b.freq) && bits(a.local) == bits(b.local);
+}
+
 PipelineCounters Pipeline::counters() const {
   return {ref_.rebuilds(),    mode_ == StepMode::Space ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
           backend_->pair_tests(), results_made_, results_gathered_, bricks().counts(), cycle_peaks_,
-          static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20), hand_overs_};
+          static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20), hand_overs_,
+          copies_on_parts_};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {

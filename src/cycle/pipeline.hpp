@@ -36,6 +36,7 @@ struct PipelineCounters {
   std::vector<double> cycle_peaks_mib;   // per rank: peak memory by the end of the last distributed CYCLE
   double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
   std::int64_t hand_overs = 0;     // the whole model handed to every rank for a command, from kept parts
+  std::int64_t copies_on_parts = 0;   // the parts put back to their rescue copies in place (restore_rescue_on_parts)
 };
 
 class Pipeline {
@@ -166,8 +167,24 @@ class Pipeline {
   // run_cycles' rescue copy of the state, kept between CYCLEs (cycle/snapshot.hpp). In a distributed
   // run only rank 0 holds its balls and pairs (the others, the rest: Snapshot::take_light); taking it
   // follows sync(), and putting it back is a collective call, rank 0 handing the state to the others.
+  // Where the ranks' parts are live (a CYCLE's copies after its split), each rank keeps its own
+  // part's copy instead (BrickStep::keep_copy) and the light state: no rank holds a copy of the
+  // whole model, and putting it back gathers the parts' copies to rank 0 first.
   const Snapshot& rescue() const { return rescue_; }
-  void take_rescue(const Model& model);
+  void take_rescue(Model& model);
+  // Whether the copy is the ranks' parts' (the same answer on every rank).
+  bool part_rescue() const { return part_rescue_; }
+  // The bytes of the copy's arrays this rank holds (PRINT info).
+  std::size_t rescue_bytes() const { return rescue_.bytes() + bricks().copy_bytes(); }
+  // Where part_rescue: rank 0's whole model put back to the copy (a collective call), the others'
+  // models left as they are; make_results_alone then takes the step again on rank 0 alone.
+  void rescue_to_root(Model& model);
+  // Where part_rescue and the parts are live and changed only by steps since the copy
+  // (BrickStep::restore_copy_in_place): every rank's part and light state put back to the copy in
+  // place, the parts staying live (a collective call; rank 0's whole model then holds the state
+  // after, the parts' state gathered again at their next sync). Returns false, changing nothing,
+  // where they cannot be (the same answer on every rank).
+  bool restore_rescue_on_parts(Model& model);
   // Returns Snapshot::restore's answer (rank 0's). The next step searches afresh.
   bool restore_rescue(Model& model);
   // The copy put back on rank 0 alone, the others taking its light state and its balls' ids, types
@@ -179,7 +196,11 @@ class Pipeline {
   }
   // The copy's arrays freed (Snapshot::release), after a one-process restore_rescue that needs
   // them no more (make_results).
-  void release_rescue() { rescue_.release(); }
+  void release_rescue() {
+    rescue_.release();
+    bricks().free_copy();
+    part_rescue_ = false;
+  }
   bool distributed() const { return mode_ == StepMode::Ranks; }
   // The critical step of the model's state (physics/timestep.hpp, `cap` the Hertz cap), before the
   // CYCLE's first step: where a distributed run's list is to be searched on the parts, they are made
@@ -194,12 +215,17 @@ class Pipeline {
     const Model* model = nullptr;
     std::int64_t cycle = -1;
     double time = 0, friction_work = 0, damping_work = 0, boundary_work = 0, kinetic = 0;
+    // The settings the step was taken with, which it is taken again with (a setting changed since,
+    // DAMP say, need not make the results first: Session::settings).
+    Settings settings;
     static Deferred of(const Model& m) {
       return {&m, m.cycle, m.time, m.energy.friction_work, m.energy.damping_work, m.energy.boundary_work,
-              m.energy_at_step.kinetic_translation + m.energy_at_step.kinetic_rotation};
+              m.energy_at_step.kinetic_translation + m.energy_at_step.kinetic_rotation, m.settings};
     }
-    // Bit for bit (a NaN compares unequal, so the test is on the bits).
+    // Bit for bit (a NaN compares unequal, so the test is on the bits); not the settings.
     bool same(const Deferred& o) const;
+    // Whether the model's settings are those the step was taken with, bit for bit.
+    bool same_settings(const Settings& s) const;
   };
   void defer_results(const Model& model) { deferred_ = Deferred::of(model); }
   // Whether the model's results wait for the step before to be taken again, from the rescue copy.
@@ -345,7 +371,12 @@ class Pipeline {
   bool list_from_parts_ = false;
   double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
   double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)
+  // The light state and the parts' copies of the rescue, put back to rank 0's whole model.
+  void whole_from_part_copies(Model& model);
   Snapshot rescue_;
+  bool part_rescue_ = false;   // (part_rescue)
+  double rescue_wall_travel_ = 0;   // wall_travel_ when the parts' copies were taken
+  std::int64_t copies_on_parts_ = 0;   // (PipelineCounters::copies_on_parts)
   Deferred deferred_;
   std::int64_t results_made_ = 0;
   std::int64_t results_gathered_ = 0;

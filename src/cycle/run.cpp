@@ -139,12 +139,9 @@ class CycleRun {
   void observe(bool observed);
   void report_progress(std::int64_t s);
   void defer_last_results();
-  // The rescue copy of the state now (a distributed run's gathered from the ranks' parts to rank 0
-  // first, which alone keeps its balls and pairs).
-  void take_copy() {
-    pipeline_.sync(model_);
-    pipeline_.take_rescue(model_);
-  }
+  // The rescue copy of the state now (a distributed run's: each rank's of its part where the parts
+  // are live, else gathered to rank 0 first, which alone keeps its balls and pairs).
+  void take_copy() { pipeline_.take_rescue(model_); }
   CycleResult& finish();
 
   Model& model_;
@@ -177,6 +174,11 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   const Space& cell = model.space;
   servo_reads_table_ =
       cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
+  // A setting changed since the last CYCLE deferred its last step's results (Session::settings):
+  // this run's steps read the new one, so that step is not one its rescue could take again; the
+  // results are of no use to it (but to a servo's first reading, which makes them as they were).
+  if (pipeline.results_deferred(model) && !pipeline.deferred().same_settings(model.settings) && !servo_reads_table_)
+    pipeline.clear_deferred();
   pipeline.refresh_whole(model);
   // The first step's sort: rank 0 alone sorts (sort_balls), the parts given back to it first.
   if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model)) pipeline.release_parts(model);

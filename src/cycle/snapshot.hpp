@@ -89,6 +89,19 @@ struct Snapshot {
   }
   static constexpr std::int64_t kNone = -2;   // (cycle + 1 is no model's cycle)
 
+  // The bytes of its arrays of balls, pairs and wall contacts (their capacity).
+  std::size_t bytes() const {
+    std::size_t n = 0;
+    auto add = [&](const auto& v) { n += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+    balls.for_each_array(add);
+    for (const auto* v : {&pairs.i, &pairs.j}) add(*v);
+    for (const auto* v : {&pairs.image_x, &pairs.image_y, &pairs.image_z}) add(*v);
+    for (const auto& v : history) add(v);
+    add(state);
+    const_cast<WallContacts&>(wall_contacts).for_each_array(add);   // (no const visitor; it only reads)
+    return n;
+  }
+
   // What take_light kept, back into the model.
   void restore_light(Model& m) const {
     m.walls = walls; m.space = space;

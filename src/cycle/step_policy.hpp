@@ -23,6 +23,9 @@ struct StepPolicy {
   // (BrickStep::rebuild_local), -1 always through the whole model (TRUBAL_REBUILD_WHOLE, to compare
   // the two ways in one build).
   int local_rule = 0;
+  // The rescue copy of a run by the decomposition: each rank's of its own live part (false), or
+  // rank 0's of the whole model (true: TRUBAL_RESCUE_WHOLE, to compare the two ways in one build).
+  bool whole_rescue = false;
   // The member (team rank) whose own work is counted kSlowFactor times slower at each split, as a
   // busy core would make it, to see the shares follow; -1: none. Eight times, so that a machine
   // busy with other work (which slows both members by up to about two) cannot hide it.

@@ -154,13 +154,10 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     }
   }
   SECTION("out of memory making the contact results a command reads: the command fails on every rank, and the shell goes on") {
-    // Three ways: rank 1 fails handing rank 0 the results the CYCLE's last step left on the parts,
+    // Two ways: rank 1 fails handing rank 0 the results the CYCLE's last step left on the parts,
     // for a PRINT (TRUBAL_TEST_FAIL_AT "1 results"; the others serve rank 0's command,
     // Pipeline::serve_root); rank 2 fails so for a SAVE, which writes them from the parts an
-    // array at a time and leaves no file, not even a part of one (ResultSource); and rank 0 fails
-    // taking that step again alone, for a DUMP, which does
-    // not ask the parts ("0 remake"; its model, part way back to the step before, is gathered from
-    // the parts again at the next command). Either way every rank stops the command with the one
+    // array at a time and leaves no file, not even a part of one (ResultSource). Either way every rank stops the command with the one
     // message, PRINT counters then finds cycle 30 with the parts kept, the next PRINT has the
     // results made on the parts (the step taken again there once) and read from them an array at
     // a time (none gathered whole), and the next CYCLE, its SAVE and the files give the serial bits.
@@ -171,8 +168,7 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     };
     for (const Way& way : {Way{"1 results", "print contacts file first.csv\n",
                                "rank 1 ran out of memory gathering the contact results from the parts"},
-                           Way{"2 results", "save s.sav\n", "rank 2 ran out of memory gathering the contact results from the parts"},
-                           Way{"0 remake", "dump vtk d/s\n", "rank 0 ran out of memory making the contact results"}}) {
+                           Way{"2 results", "save s.sav\n", "rank 2 ran out of memory gathering the contact results from the parts"}}) {
       INFO(way.fault);
       TempDir dir, serial;
       const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
@@ -198,25 +194,30 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
       for (const char* file : {"first.csv", "balls.csv", "contacts.csv", "end.sav"})
         CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
     }
-    // Rank 1 failing the step taken again on the parts ("1 remake"): the model is the copy's, the
-    // step before (cycle 29), on every rank; 31 cycles more give serial's 60.
-    TempDir dir, serial;
-    const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
-    dir.write("deck.dat", setup);
-    dir.write("more.txt", "cycle 30\nprint contacts file first.csv\n" + std::string(kCounters) +
-                              "cycle 31\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
-    CHECK(run_shell(dir, 3, "TRUBAL_TEST_FAIL_AT='1 remake'") != 124);
-    const std::string out = slurp(dir.path() / "out.txt");
-    INFO(out);
-    const std::string message = "rank 1 ran out of memory making the contact results";
-    const auto at = out.find(message);
-    REQUIRE(at != std::string::npos);
-    CHECK(out.find(message, at + 1) == std::string::npos);
-    CHECK(counter(counters_of(dir), "cycle") == 29);
-    serial.write("deck.dat", setup + "cycle 60\n" + kOutputs);
-    REQUIRE(run_deck(serial, 0) == 0);
-    for (const char* file : {"balls.csv", "contacts.csv"})
-      CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
+    // A rank failing the step taken again on the parts, rank 1 for a PRINT ("1 remake") or rank 0
+    // for a DUMP ("0 remake": rank 0 writes the dump, the step is taken on every rank's part all
+    // the same): the model is the copy's, the step before (cycle 29), on every rank; 31 cycles
+    // more give serial's 60.
+    for (const Way& way : {Way{"1 remake", "print contacts file first.csv\n", "rank 1 ran out of memory making the contact results"},
+                           Way{"0 remake", "dump vtk d/s\n", "rank 0 ran out of memory making the contact results"}}) {
+      INFO(way.fault);
+      TempDir dir, serial;
+      const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
+      dir.write("deck.dat", setup);
+      dir.write("more.txt", "cycle 30\n" + std::string(way.reader) + kCounters +
+                                "cycle 31\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+      CHECK(run_shell(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{}'", way.fault)) != 124);
+      const std::string out = slurp(dir.path() / "out.txt");
+      INFO(out);
+      const auto at = out.find(way.message);
+      REQUIRE(at != std::string::npos);
+      CHECK(out.find(way.message, at + 1) == std::string::npos);
+      CHECK(counter(counters_of(dir), "cycle") == 29);
+      serial.write("deck.dat", setup + "cycle 60\n" + kOutputs);
+      REQUIRE(run_deck(serial, 0) == 0);
+      for (const char* file : {"balls.csv", "contacts.csv"})
+        CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
+    }
   }
   SECTION("a history file rank 0 cannot open leaves the history on no rank, and the shell goes on") {
     // After an error the shell (and a deck run with -i) goes on: a table kept by the other ranks
