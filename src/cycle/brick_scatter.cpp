@@ -126,8 +126,12 @@ void BrickStep::share_decomposition() {
   cuts_.resize(cuts.size() / sizeof(Cut));
   if (!cuts.empty()) std::memcpy(cuts_.data(), cuts.data(), cuts.size());
   broadcast_lists(rank_balls_, ranks);
-  broadcast_lists(rank_pairs_, ranks);
-  broadcast_lists(rank_walls_, ranks);
+  // (Each rank's pairs' and wall contacts' places in the whole model's tables are rank 0's alone to
+  // read: it places the values the others send, sync. A whole model's list is 4 bytes a pair.)
+  if (!comm::root()) {
+    rank_pairs_.assign(static_cast<std::size_t>(ranks), {});
+    rank_walls_.assign(static_cast<std::size_t>(ranks), {});
+  }
   broadcast_lists(rank_bonds_, ranks);
   comm::broadcast(split_bond_rows_);
   comm::broadcast(split_bond_ball_i_);

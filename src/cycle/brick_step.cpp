@@ -8,6 +8,7 @@
 #include <iterator>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -291,11 +292,12 @@ bool BrickStep::restore_copy_in_place(const Model& full) {
     copy_.part.restore(part_);
     ref_ = copy_.ref;
   }, "putting back the rescue copy of its part");
-  // (A wrap since renumbered the pairs' images: the whole model's list is made from the parts'
-  // again at the next sync, as after that wrap.)
-  list_local_ = true;
+  // (A wrap since renumbered the pairs' images, which the step taken again renumbers alike, and
+  // sets list_local_ again: the whole model's list is the one the parts come back to.)
   moved2_ = copy_.moved2;
   outside_box_ = copy_.outside_box;
+  whole_list_kept_ = !list_local_;   // (the whole model's list was the parts', made at the last sync)
+  kept_edition_ = edition_;
   current_ = false;
   results_written_ = results_left_ = false;
   return true;

@@ -275,8 +275,9 @@ class BrickStep {
   void install_local_walls(Model& full);
   // sync()'s part for a bonded scene: the state and fate of every member's bonds into full's.
   void gather_bonds(Model& full, std::vector<double>& out, std::vector<double>& in);
-  // The parts' contact results into full's table (sync, gather_results).
-  void gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in);
+  // The parts' contact results into full's table (sync, gather_results). free_each: each part's
+  // array freed as it is gathered; else all once every one is.
+  void gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in, bool free_each = true);
   // A test's fault in gather_results and gather_result_array (StepPolicy::fail_results).
   void results_fault();
   // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
@@ -349,7 +350,8 @@ class BrickStep {
   std::vector<Cut> cuts_;                   // the last split's bisection (node 0 the root)
   std::vector<std::uint32_t> global_ball_;  // part ball -> whole model's ball
   std::vector<std::uint32_t> owned_, owned_pairs_, owned_walls_;   // part indices this rank reports
-  // Per rank: the whole model's balls it owns, pairs whose ball i it owns, its balls' wall contacts.
+  // Per rank: the whole model's balls it owns, pairs whose ball i it owns, its balls' wall contacts
+  // (of the ranks of a run, the pairs and wall contacts on rank 0 alone, which places what sync gathers).
   std::vector<std::vector<std::uint32_t>> rank_balls_, rank_pairs_, rank_walls_;
   // Per rank: the whole model's rows of the intact bonds (at the split) whose ball i it owns, by
   // (id_i, id_j); whether there were any (the same on every member).
@@ -374,6 +376,11 @@ class BrickStep {
   // Counts every change of the part's balls and lists but a step's or a wrap's (a split, a
   // rebuild on the parts, a tilt reduction, a drop): restore_copy_in_place's test.
   std::uint64_t edition_ = 0;
+  // Set by restore_copy_in_place: the whole model's list is the parts' list the step taken again
+  // comes back to (its wraps renumber the pairs' images as the first time), so the next sync
+  // need not make it again, unless the part's edition changed since kept_edition_.
+  bool whole_list_kept_ = false;
+  std::uint64_t kept_edition_ = 0;
   double max_radius_ = 0;                    // the whole model's largest ball (at the split)
   double shell_base_ = 0;                    // the largest shell received at the first local rebuild
   // Each member's share of the balls at the next split (the same on every member), and this

@@ -214,6 +214,10 @@ void BrickStep::install_local_walls(Model& full) {
 void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results) {
   if (!live_ || current_ || model_ != &full) return;
   std::vector<double> out, in;
+  // (After a step taken again from the copies in place, the parts' list is the one the whole
+  // model was given at the CYCLE's end, wraps and all: restore_copy_in_place.)
+  if (list_local_ && whole_list_kept_ && kept_edition_ == edition_) list_local_ = false;
+  whole_list_kept_ = false;
   if (list_local_) install_local_list(full, whole_ref);
   gather_set(*team_, [](Balls& b, auto&& f) { each_moving_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
              out, in);
@@ -295,7 +299,7 @@ void BrickStep::whole_from_copy(Model& full) {
   release();
 }
 
-void BrickStep::gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in) {
+void BrickStep::gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in, bool free_each) {
   // (Members sharing one whole model: member 0 makes its arrays, then every member writes its own.)
   // (Ranks: the results are the largest arrays a sync makes; a rank out of memory here alone
   // must not leave the others in the gathers below.)
@@ -318,11 +322,12 @@ void BrickStep::gather_result_arrays(Model& full, std::vector<double>& out, std:
     for (std::size_t a = 0; a < parts.size(); ++a) {
       comm::together([&] { if (comm::root()) wholes[a]->assign(n, {}); }, "keeping the contact results");
       gather_array(*team_, *parts[a], *wholes[a], owned_pairs_, rank_pairs_, out, in);
-      std::decay_t<decltype(*parts[a])>().swap(*parts[a]);
+      if (free_each) std::decay_t<decltype(*parts[a])>().swap(*parts[a]);
     }
   };
   each(from.bytes, to.bytes);
   each(from.reals, to.reals);
+  if (!free_each) part_.contacts.drop_results();
 }
 
 void BrickStep::results_fault() {
@@ -333,15 +338,17 @@ void BrickStep::results_fault() {
 
 void BrickStep::gather_results(Model& full) {
   if (!results_left() || model_ != &full) return;
-  results_left_ = false;   // (should a member fail below, rank 0's copy of the step before makes them)
+  // (The parts are where they are: each keeps its arrays until every array came whole, so that a
+  // member failing part way leaves them there, to be read again.)
   together([&] { results_fault(); }, "gathering the contact results from the parts");
   std::vector<double> out, in;
   try {
-    gather_result_arrays(full, out, in);
+    gather_result_arrays(full, out, in, team_->shares_whole());
   } catch (...) {
     if (team_->shares_whole() ? team_->rank() == 0 : comm::root()) full.contacts.drop_results();
     throw;
   }
+  results_left_ = false;
   // (keep_results marked the table's fresh arrays as of no step: they are of this state's.)
   if (team_->shares_whole() ? team_->rank() == 0 : comm::root()) full.contacts.results_cycle = full.cycle;
 }

@@ -155,10 +155,17 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
   pipeline.clear_deferred();
   StepAgain again(model, left);
   // The copy of the step before put back: on the parts where each rank keeps its own and nothing
-  // but that step changed them since; else the parts' state to rank 0 (current already but for a
-  // failed reading's), the parts released, and rank 0's whole model put back, the others' light
-  // state (the step is then split among the ranks afresh).
-  if (!pipeline.restore_rescue_on_parts(model)) {
+  // but that step changed them since, the copy then let go (the step writes over it, as serial's
+  // make_results lets its copy go), so that a rank never holds its part, its copy and the results
+  // at once; else the parts' state to rank 0 (current already but for a failed reading's), the
+  // parts released, and rank 0's whole model put back, the others' light state (the step is then
+  // split among the ranks afresh), the copy kept until the step is taken.
+  Snapshot state_after;   // (the light state of the CYCLE's end, which a failure in place comes back to)
+  state_after.take_light(model);
+  const bool in_place = pipeline.restore_rescue_on_parts(model);
+  if (in_place) {
+    pipeline.release_rescue();
+  } else {
     pipeline.release_parts(model);
     pipeline.restore_rescue_on_root(model);
   }
@@ -168,11 +175,11 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
       pipeline.policy().fail_remake = -1;
       throw std::bad_alloc();
     }, "making the contact results");
-    // One step from rank 0's copy, split among the ranks as a CYCLE's first is (the others hold
-    // no balls), its results left on the parts and deferred again, the copy kept.
+    // One step on the parts, its results left there (in place; else split from rank 0's model as a
+    // CYCLE's first is, the others holding no balls).
     CycleControl control;
     control.replay = true;
-    control.defer_results = control.keep_parts = control.leave_results = true;
+    control.keep_parts = control.leave_results = true;
     const BrickStep::Counts counts = pipeline.counters().parts;   // (the CYCLE's, which PRINT counters tells)
     const CycleResult r = run_cycles(model, pipeline, 1, control);
     pipeline.set_part_counts(counts);
@@ -184,10 +191,18 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
             "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));
     }, "making the contact results");
     again.made();
+    pipeline.release_rescue();
     pipeline.count_results_made();
   } catch (...) {
-    // (Every rank: the failures in the step are agreed.) The step before, as the copy holds it.
-    pipeline.restore_rescue_on_root(model);
+    // (Every rank: the failures in the step are agreed.) In place: the parts part way through the
+    // step are dropped, and rank 0's whole model, which the step did not touch, is the CYCLE's end
+    // again, without its results. Else the step before, as the copy holds it.
+    if (in_place) {
+      state_after.restore_light(model);
+      pipeline.drop_parts_unsynced(model);
+    } else {
+      pipeline.restore_rescue_on_root(model);
+    }
     throw;
   }
 }
@@ -210,6 +225,8 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
         throw std::logic_error("internal error: the contact results a CYCLE deferred were read on rank 0 alone, "
                                "where the ranks' parts hold the copy they are made from");
       make_results_alone(model, pipeline);
+    } else if (pipeline.results_on_parts(model)) {
+      throw std::logic_error("internal error: the contact results on the ranks' parts were read on rank 0 alone");
     } else {
       model.contacts.keep_results();
     }

@@ -272,6 +272,8 @@ void Pipeline::refresh_whole(Model& model) {
 }
 
 void Pipeline::share_whole(Model& model, bool for_command) {
+  // (The contact results a step taken again left on the parts are nowhere else: rank 0's first.)
+  gather_part_results(model);
   if (for_command && (others_hollow_ || parts_live(model))) ++hand_overs_;
   hand_over_to_hollow(model);
   refresh_whole(model);
@@ -365,6 +367,14 @@ bool Pipeline::restore_rescue(Model& model) {
   comm::broadcast(flag);
   for (auto& part : bricks_) part->drop();   // (they are of another state)
   return flag != 0;
+}
+
+void Pipeline::drop_parts_unsynced(Model& model) {
+  for (auto& part : bricks_) part->release();
+  return_free_memory();
+  invalidate();
+  others_hollow_ = comm_ranks_ > 1;
+  model.contacts.drop_results();
 }
 
 void Pipeline::restore_rescue_on_root(Model& model) {

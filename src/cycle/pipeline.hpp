@@ -190,6 +190,10 @@ class Pipeline {
   // The copy put back on rank 0 alone, the others taking its light state and its balls' ids, types
   // and radii (they hold no balls: others_hollow); the parts dropped (a collective call).
   void restore_rescue_on_root(Model& model);
+  // The parts released without a sync (a step taken again on them failed part way: rank 0's whole
+  // model, which it did not touch, holds the state), the others left their light state (a
+  // collective call); the contact results dropped, not made.
+  void drop_parts_unsynced(Model& model);
   // The decomposition's counts (PipelineCounters::parts) set back to `c` on every part.
   void set_part_counts(const BrickStep::Counts& c) {
     for (auto& part : bricks_) part->set_counts(c);

@@ -255,8 +255,9 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // before, is kept as this run's copy (the rescue takes that step again).
   if (!pipeline.results_deferred(model) && !control.replay) take_copy();
   pipeline.clear_deferred();
-  if (control.defer_results) {
-    // Results not of this state are of no use (the servo has read them already).
+  if (control.defer_results || control.leave_results) {
+    // Results not of this state are of no use (the servo has read them already); those left on
+    // the parts are not made in rank 0's table.
     if (model.contacts.results_cycle != model.cycle && !servo_reads_table_) model.contacts.drop_results();
   } else {
     model.contacts.keep_results();
@@ -303,7 +304,9 @@ CycleResult CycleRun::run() {
       if (step.deferred) defer_last_results();
     }
   } catch (...) {
-    pipeline_.sync_all(model_);
+    // (Not a step taken again, which leaves the parts to its caller: results_onto_parts may drop
+    // them for rank 0's model, the state before that step began.)
+    if (!control_.replay) pipeline_.sync_all(model_);
     throw;
   }
   return finish();
@@ -318,7 +321,8 @@ StepPlan CycleRun::plan(std::int64_t s) const {
     p.stopping = s % kAgreeEvery == 0 && comm::any_all(control_.interrupt->load());
   p.observed = control_.after_step && (!control_.reads_contacts || control_.reads_contacts(model_.cycle + 1));
   p.deferred = control_.defer_results && s == n_ && !p.stopping && !p.observed;
-  p.leave_results = p.deferred && control_.leave_results && control_.keep_parts && pipeline_.distributed();
+  p.leave_results = control_.leave_results && control_.keep_parts && pipeline_.distributed() && s == n_ &&
+                    !p.stopping && !p.observed;
   p.details = (s == n_ && !p.deferred) || p.stopping || (!control_.defer_results && (s + 1) % kSnapshotEvery == 0) ||
               p.observed || p.leave_results;
   p.wall_loads = p.details || s == n_ || (s + 1) % kSnapshotEvery == 0 || (control_.defer_results && s + 1 == n_);

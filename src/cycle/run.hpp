@@ -38,8 +38,9 @@ struct CycleControl {
   // A distributed run on several ranks: each rank keeps its part at the end (Pipeline::end_cycle),
   // and a run that starts with the parts live goes on from them (Session::parts_kept).
   bool keep_parts = false;
-  // With keep_parts and defer_results: the deferred last step writes its results on the parts,
-  // which keep them (results_onto_parts: the step taken again there).
+  // With keep_parts, on several ranks: the last step (unless stopped or observed) writes its
+  // results on the parts, which keep them; rank 0's table has none (results_onto_parts: the step
+  // taken again there).
   bool leave_results = false;
 };
 
@@ -106,10 +107,12 @@ void make_results(Model& model, Pipeline& pipeline, bool keep_rescue = false);
 void make_results_to_read(Model& model, Pipeline& pipeline);
 
 // Under mpirun, where the ranks keep their parts and a CYCLE deferred its last step's results
-// (a collective call; the same answer on every rank): the step taken again on the parts, from rank
-// 0's copy of the step before (Pipeline::restore_rescue_on_root), its results left there
-// (Pipeline::results_on_parts) for what reads them. Where it fails, every rank goes back to the copy,
-// the step before, and throws.
+// (a collective call; the same answer on every rank): the step taken again on the parts, from
+// their copies of the step before put back in place (Pipeline::restore_rescue_on_parts), else from
+// rank 0's whole model put back to them (restore_rescue_on_root); its results are left there
+// (Pipeline::results_on_parts) for what reads them, and the copy goes, as serial's make_results
+// lets it go (the results are made). Where it fails, the model is the CYCLE's end, without
+// the results (their copy went: in place), or the step before (the copy put back), and it throws.
 void results_onto_parts(Model& model, Pipeline& pipeline);
 
 }  // namespace trubal

@@ -233,11 +233,14 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
     return std::tuple{counter(counters, "rank0_cycle_peak_mib"), counter(counters, "rank1_cycle_peak_mib"),
                       counter(counters, "rank1_contact_results_mib")};
   };
-  parts.write("deck.dat", "backend mpi\n" + deck + kCounters);
+  // (The copies as the CYCLE left them, before the PRINTs take its last step again and let them go.)
+  const std::string copies = "print counters file copies.txt\n";
+  const std::string split_deck = deck.substr(0, deck.find("cycle 20\n") + 9) + copies + kOutputs;
+  parts.write("deck.dat", "backend mpi\n" + split_deck + kCounters);
   whole.write("deck.dat", "backend mpi\n" + deck + kCounters);
   REQUIRE(run_deck(parts, 2) == 0);
   REQUIRE(run_deck(whole, 2, "TRUBAL_REBUILD_WHOLE=1") == 0);
-  rescue.write("deck.dat", "backend mpi\n" + deck + kCounters);
+  rescue.write("deck.dat", "backend mpi\n" + split_deck + kCounters);
   REQUIRE(run_deck(rescue, 2, "TRUBAL_RESCUE_WHOLE=1") == 0);
   for (const char* file : {"balls.csv", "contacts.csv"}) {
     CHECK(slurp(parts.path() / file) == slurp(serial.path() / file));
@@ -249,7 +252,7 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
   const auto [parts0, parts1, results1] = peaks(parts);
   [[maybe_unused]] const auto [whole0, whole1, whole_results1] = peaks(whole);
   [[maybe_unused]] const auto [rescue0, rescue1, rescue_results1] = peaks(rescue);
-  const Counters part_copies = counters_of(parts), whole_copy = counters_of(rescue);
+  const Counters part_copies = read_counters(parts.path() / "copies.txt"), whole_copy = read_counters(rescue.path() / "copies.txt");
   const double copy0 = counter(part_copies, "rank0_rescue_copy_mib"), copy1 = counter(part_copies, "rank1_rescue_copy_mib");
   const double whole_copy0 = counter(whole_copy, "rank0_rescue_copy_mib");
   INFO("rescue copy MiB, ranks 0 and 1: " << copy0 << " " << copy1 << "; with the whole model's on rank 0: " << whole_copy0 << " "
@@ -260,8 +263,11 @@ TEST_CASE("distributed: the ranks other than 0 search the CYCLE's first list on 
   CHECK(copy0 < 0.7 * whole_copy0);
   CHECK(copy1 > 0.3 * whole_copy0);
   CHECK(counter(whole_copy, "rank1_rescue_copy_mib") < 0.05 * whole_copy0);
-  CHECK(counter(part_copies, "copies_put_back_on_parts") >= 1);
-  CHECK(counter(whole_copy, "copies_put_back_on_parts") == 0);
+  CHECK(counter(counters_of(parts), "copies_put_back_on_parts") >= 1);
+  CHECK(counter(counters_of(rescue), "copies_put_back_on_parts") == 0);
+  // (The PRINTs took the step again and let the copies go, as serial's results made let its go.)
+  CHECK(counter(counters_of(parts), "rank0_rescue_copy_mib") == 0);
+  CHECK(counter(counters_of(parts), "rank1_rescue_copy_mib") == 0);
   INFO("peak MiB by the CYCLE's end, ranks 0 and 1: searched on the parts " << parts0 << " " << parts1
                                                                           << ", through the whole model " << whole0 << " " << whole1
                                                                           << "; rank 1's part's results " << results1
@@ -457,6 +463,37 @@ TEST_CASE("a setting between CYCLEs leaves the results deferred: read after it, 
   CHECK(counter(counters, "results_made") == 2);
   CHECK(counter(counters, "results_gathered") == 0);
   CHECK(counter(counters, "parts_kept") == 1);
+}
+
+TEST_CASE("distributed: the results a read made on the parts, their copy gone, reach whatever reads them next", "[mpi][system]") {
+  // The first PRINT takes the CYCLE's last step again on the parts from their copies in place and
+  // lets the copies go (Pipeline::release_rescue): the results are then on the parts alone. Each
+  // command after it must find them there: a command handed the whole model (RENUMBER: rank 0
+  // gathers them first, Pipeline::share_whole), one rank 0 alone runs after a change (PROP: made
+  // where every rank agrees, Session::model_on_zero), a setting (none made), DUMP, a HIST with a
+  // range, and PRINT stress and contacts; the files are serial's, byte for byte, and each rank's
+  // copy is gone after the first PRINT.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string deck = std::string(kSqueezedCell) + "cycle 700\n" + kCounters +
+                           "print contacts file a.csv\nprint counters file after_print.txt\n"
+                           "renumber\nprint contacts file b.csv\ncycle 20\nprint contacts file c.csv\n"
+                           "prop kn 2e5\nprint contacts file d.csv\ncycle 20\ndamp local 0.3\ndump vtk d/s\n"
+                           "hist platen every 5 file h.csv range id 1 40\nprint stress\nprint contacts file e.csv\ncycle 20\n" +
+                           kOutputs;
+  TempDir serial, ranks;
+  serial.write("deck.dat", deck);
+  REQUIRE(run_deck(serial, 0) == 0);
+  ranks.write("deck.dat", "backend mpi\n" + deck);
+  REQUIRE(run_deck(ranks, 3) == 0);
+  INFO(slurp(ranks.path() / "out.txt"));
+  REQUIRE(lines_of(slurp(serial.path() / "a.csv")).size() > 20);
+  for (const char* file : {"a.csv", "b.csv", "c.csv", "d.csv", "e.csv", "h.csv", "balls.csv", "contacts.csv"})
+    CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+  const Counters before = counters_of(ranks), after = read_counters(ranks.path() / "after_print.txt");
+  CHECK(counter(before, "rank1_rescue_copy_mib") > 0);
+  CHECK(counter(after, "rank1_rescue_copy_mib") == 0);
+  CHECK(counter(after, "rank0_rescue_copy_mib") == 0);
+  CHECK(counter(after, "results_made") == 1);
 }
 
 TEST_CASE("distributed: a run that goes unstable is put back to the same rescue copy as serial's", "[mpi][system]") {

@@ -196,23 +196,35 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     }
     // A rank failing the step taken again on the parts, rank 1 for a PRINT ("1 remake") or rank 0
     // for a DUMP ("0 remake": rank 0 writes the dump, the step is taken on every rank's part all
-    // the same): the model is the copy's, the step before (cycle 29), on every rank; 31 cycles
-    // more give serial's 60.
-    for (const Way& way : {Way{"1 remake", "print contacts file first.csv\n", "rank 1 ran out of memory making the contact results"},
-                           Way{"0 remake", "dump vtk d/s\n", "rank 0 ran out of memory making the contact results"}}) {
-      INFO(way.fault);
+    // the same). Where each rank put its copy back in place and let it go (the default), the
+    // model is the CYCLE's end (cycle 30) on every rank, its results not made; where rank 0 kept
+    // the copy of the whole model (TRUBAL_RESCUE_WHOLE), it is the copy's, the step before (cycle
+    // 29). The cycles to 60 then give serial's bits.
+    struct Remake {
+      Way way;
+      const char* env;
+      std::int64_t cycle;
+    };
+    for (const Remake& remake :
+         {Remake{{"1 remake", "print contacts file first.csv\n", "rank 1 ran out of memory making the contact results"}, "", 30},
+          Remake{{"0 remake", "dump vtk d/s\n", "rank 0 ran out of memory making the contact results"}, "", 30},
+          Remake{{"1 remake", "print contacts file first.csv\n", "rank 1 ran out of memory making the contact results"},
+                 " TRUBAL_RESCUE_WHOLE=1", 29}}) {
+      const Way& way = remake.way;
+      INFO(way.fault << remake.env);
       TempDir dir, serial;
       const std::string setup = "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006 seed 5\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n";
       dir.write("deck.dat", setup);
       dir.write("more.txt", "cycle 30\n" + std::string(way.reader) + kCounters +
-                                "cycle 31\nprint balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
-      CHECK(run_shell(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{}'", way.fault)) != 124);
+                                fmt::format("cycle {}\n", 60 - remake.cycle) +
+                                "print balls file balls.csv\nprint contacts file contacts.csv\nquit\n");
+      CHECK(run_shell(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{}'{}", way.fault, remake.env)) != 124);
       const std::string out = slurp(dir.path() / "out.txt");
       INFO(out);
       const auto at = out.find(way.message);
       REQUIRE(at != std::string::npos);
       CHECK(out.find(way.message, at + 1) == std::string::npos);
-      CHECK(counter(counters_of(dir), "cycle") == 29);
+      CHECK(counter(counters_of(dir), "cycle") == remake.cycle);
       serial.write("deck.dat", setup + "cycle 60\n" + kOutputs);
       REQUIRE(run_deck(serial, 0) == 0);
       for (const char* file : {"balls.csv", "contacts.csv"})
