@@ -183,9 +183,8 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
     const BrickStep::Counts counts = pipeline.counters().parts;   // (the CYCLE's, which PRINT counters tells)
     const CycleResult r = run_cycles(model, pipeline, 1, control);
     pipeline.set_part_counts(counts);
-    // (Checked on rank 0, whose model is the one read: the others' light energies may differ from
-    // it in the last bits, which the next hand-over of rank 0's light state mends.)
-    comm::on_root([&] {
+    // (Checked on every rank: each holds the same light state.)
+    comm::together([&] {
       if (r.unstable || r.left_box || !Pipeline::Deferred::of(model).same(left))
         throw std::logic_error(fmt::format(
             "internal error: cycle {} taken again to make its contact results did not give the same state", left.cycle));

@@ -441,6 +441,14 @@ void Pipeline::prepare(Model& model, bool parts_may_search) {
   const bool hollow_here = others_hollow_ && !comm::root();
   // The rare wrap itself is serial; the test for it is shared out.
   if (!hollow_here && model.space.periodic && any_outside(model)) wrap_into_cell(model, &ref_.x, &ref_.y, &ref_.z);
+  if (others_hollow_ && comm_ranks_ > 1) {
+    // Rank 0 alone wrapped (a straining cell's wrap does work on the balls): its energy terms are
+    // every rank's, as apply_field hands them on.
+    std::vector<double> works{model.energy.boundary_work, model.space.gross_work};
+    comm::broadcast(works);
+    model.energy.boundary_work = works[0];
+    model.space.gross_work = works[1];
+  }
   bool search = hollow_here || !backend_->keeps_list() || needs_rebuild(model);
   if (distributed() && comm::size() > 1) {
     // Rank 0 decides: the others' lists take new versions whenever rank 0 hands them over
