@@ -540,6 +540,25 @@ tstep 7.05e-5
       CHECK(slurp(dir.path() / "h.csv") == slurp(serial.path() / "h.csv"));
     }
   }
+  // Cut at 605 with the results read between (the step taken again on the parts, their copies let
+  // go, as serial's make_results lets its copy go): the second CYCLE takes a copy of its own at
+  // 605 and goes back to it, with the same message as serial's, and the same contacts after.
+  const std::string deck = setup + "cycle 605\nprint contacts file c605.csv\ncycle 5000\nprint contacts file c.csv\n";
+  TempDir serial;
+  serial.write("deck.dat", deck);
+  REQUIRE(run_deck(serial, 0) == 1);
+  const std::string out = slurp(serial.path() / "out.txt");
+  const auto at = out.find("error: unstable at cycle");
+  REQUIRE(at != std::string::npos);
+  const std::string message = out.substr(at, out.find('\n', at) - at);
+  INFO(message);
+  REQUIRE(message.find("back at cycle 605,") != std::string::npos);
+  TempDir dir;
+  dir.write("deck.dat", "backend mpi\n" + deck);
+  CHECK(run_deck(dir, 3) == 1);
+  INFO(slurp(dir.path() / "out.txt"));
+  CHECK_THAT(slurp(dir.path() / "out.txt"), Catch::Contains(message));
+  for (const char* file : {"h.csv", "c605.csv"}) CHECK(slurp(dir.path() / file) == slurp(serial.path() / file));
 }
 
 TEST_CASE("distributed: Rowe's test with a following membrane runs by the spatial decomposition, with the serial bits",
