@@ -175,6 +175,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("part_bonds_across", c.parts.bonds_across);
   line("parts_kept", s.parts_kept() ? 1 : 0);
   line("whole_hand_overs", c.hand_overs);
+  line("peak_mib", s.rank_figures().front().peak_mib);   // (rank 0's under mpirun, gathered before PRINT)
   line("copies_put_back_on_parts", c.copies_on_parts);
   if (comm::size() > 1) {   // (gathered before rank 0 runs PRINT: Session::gather_rank_figures)
     const auto ranks = s.rank_figures();

@@ -1,0 +1,79 @@
+#!/bin/bash
+# Each rank's peak resident memory through a deck of the peers' dense FCC block, stage by stage,
+# against its share of the serial run's peak (doc/distributed.md, "Memory per rank"): the BALL
+# lines; CYCLE 20; SAVE and PRINT contacts file; DAMP and CYCLE 10. The deck has BACKEND mpi
+# first and PRINT counters after each stage; a stage's figure is each rank's `rank<r>_peak_mib`
+# there (the peak so far), read from the counters' files. Memory does not depend on the machine's
+# load: one run each.
+#
+#   bench/rank_memory.sh build/trubal [CELLS]     CELLS: FCC cells a side (default 63: 1,000,188
+#                                                   balls, about 2 GiB on one rank and 30 s)
+#   env: RANKS ("2 4"; more oversubscribe a small machine)
+#
+# Prints, per stage, the serial peak, then for each rank count rank 0's peak, the others' (least
+# to most) and the most of them over a share (serial peak / P). The files each run writes (the
+# save, the contacts) are compared with serial's: a run whose bytes differ is reported. Writes only
+# under a temporary folder.
+set -eu
+TRUBAL=$(realpath "$1"); CELLS=${2:-63}; RANKS=${RANKS:-2 4}
+HERE=$(cd "$(dirname "$0")" && pwd)
+PEERS=$HERE/../../shared/peers
+[ -f "$PEERS/gen_scenes.py" ] || { echo "no $PEERS/gen_scenes.py (the peers' scenes)" >&2; exit 2; }
+command -v mpirun >/dev/null || { echo "no mpirun (Debian: openmpi-bin)" >&2; exit 2; }
+W=$(mktemp -d /tmp/trubal-memory-XXXXXX)
+trap 'rm -rf "$W"' EXIT
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+cd "$W"
+SCENES_OUT=. python3 -c "import sys; sys.path.insert(0, '$PEERS'); import gen_scenes; gen_scenes.fcc($CELLS, $CELLS, $CELLS)" >/dev/null
+STAGES="balls cycle save damp"
+{
+  echo "backend mpi"
+  python3 "$HERE/fcc_deck.py" fcc_*.xyz
+  echo "print counters file balls.txt"
+  echo "cycle 20"
+  echo "print counters file cycle.txt"
+  echo "save out.sav"
+  echo "print contacts file contacts.csv"
+  echo "print counters file save.txt"
+  echo "damp local 0.1"
+  echo "cycle 10"
+  echo "print counters file damp.txt"
+} > deck.dat
+echo "$(head -1 fcc_*.xyz | cut -d' ' -f1) balls; CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores"
+
+# run P: the deck on P ranks (1: one process, without mpirun) in its own folder.
+run() {
+  mkdir -p "p$1" && cd "p$1"
+  if [ "$1" = 1 ]; then "$TRUBAL" ../deck.dat >out.txt 2>&1 || { echo "the serial run failed" >&2; tail -3 out.txt >&2; exit 1; }
+  else mpirun -np "$1" "$TRUBAL" ../deck.dat >out.txt 2>&1 || { echo "the run on $1 ranks failed" >&2; tail -3 out.txt >&2; exit 1; }
+  fi
+  cd ..
+}
+# peaks P STAGE: each rank's peak MiB at that stage, space-separated (one process: its own).
+peaks() {
+  if [ "$1" = 1 ]; then awk '$1 == "peak_mib" { printf "%.0f", $2 }' "p1/$2.txt"
+  else awk '$1 ~ /^rank[0-9]+_peak_mib$/ { sub(/^rank/, "", $1); sub(/_peak_mib$/, "", $1); p[$1] = $2; n++ }
+            END { for (r = 0; r < n; r++) printf "%s%.0f", (r ? " " : ""), p[r] }' "p$1/$2.txt"
+  fi
+}
+run 1
+for p in $RANKS; do
+  run "$p"
+  for f in out.sav contacts.csv; do cmp -s "p1/$f" "p$p/$f" || echo "$p ranks: $f differs from serial's" >&2; done
+done
+printf '%-7s %7s' stage serial
+for p in $RANKS; do printf ' | %-28s' "$p ranks: 0, others, most/share"; done
+echo
+for s in $STAGES; do
+  serial=$(peaks 1 "$s")
+  printf '%-7s %7s' "$s" "$serial"
+  for p in $RANKS; do
+    read -r -a v <<< "$(peaks "$p" "$s")"
+    others=("${v[@]:1}")
+    lo=$(printf '%s\n' "${others[@]}" | sort -n | head -1); hi=$(printf '%s\n' "${others[@]}" | sort -n | tail -1)
+    ratio=$(awk -v hi="$hi" -v s="$serial" -v p="$p" 'BEGIN { printf "%.2f", hi / (s / p) }')
+    rank0=$(awk -v r="${v[0]}" -v s="$serial" -v p="$p" 'BEGIN { printf "%s (%.1f)", r, r / (s / p) }')
+    printf ' | %-28s' "$rank0, $lo-$hi, $ratio"
+  done
+  echo
+done
