@@ -111,7 +111,7 @@ void Session::light_everywhere() {
   comm::together([&] {
     if (!comm::root()) {
       take_light_state(model_, bytes);
-      decltype(centres_)().swap(centres_);
+      centres_.clear();
     }
   }, "taking rank 0's model");
   // The balls' ids, types and radii (the split, the skin and the laws read them on every rank).
@@ -215,36 +215,18 @@ std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, dou
         throw std::runtime_error(fmt::format("ball centre {} = {} is outside the START box [{}, {}]", "xyz"[a], p[a],
                                              s.lo[a], s.hi[a]));
   // Two balls at one centre have no normal between them and would be thrown apart: refused.
-  auto key = [](double a, double b, double c) {   // -0 and 0 are the same place
-    return std::array<double, 3>{a == 0 ? 0.0 : a, b == 0 ? 0.0 : b, c == 0 ? 0.0 : c};
-  };
-  if (centres_changes_ != changes_) {
-    centres_.clear();
-    const Balls& b = model_.balls;
-    for (std::size_t k = 0; k < b.size(); ++k) centres_.emplace(key(b.x[k], b.y[k], b.z[k]), b.id[k]);
-  }
-  if (const auto it = centres_.find(key(x, y, z)); it != centres_.end())
+  if (centres_changes_ != changes_) centres_.rebuild(model_.balls);
+  if (const std::size_t k = centres_.find(model_.balls, x, y, z); k != CentreIndex::kNone)
     throw std::runtime_error(fmt::format("ball {} is already at ({}, {}, {}): two balls at one centre would fly apart; "
-                                         "give this one another centre", it->second, x, y, z));
+                                         "give this one another centre", model_.balls.id[k], x, y, z));
   try {
     const std::size_t at = trubal::add_ball(edit(), id, type, x, y, z, rad);
-    centres_.emplace(key(x, y, z), model_.balls.id[at]);
+    centres_.insert(model_.balls, at);
     centres_changes_ = changes_;
     return at;
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }
-}
-
-std::size_t Session::CentreHash::operator()(const std::array<double, 3>& c) const {
-  std::size_t h = 1469598103934665603ull;
-  for (double v : c) {
-    std::uint64_t bits;
-    std::memcpy(&bits, &v, sizeof bits);
-    h = (h ^ bits) * 1099511628211ull;
-    h ^= h >> 29;
-  }
-  return h;
 }
 
 std::size_t Session::delete_balls(const Range& range) {
@@ -310,7 +292,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   // do, the ranks other than 0 take their parts from rank 0: CycleRun.)
   if (!pipeline_->distributed()) pipeline_->share_whole(model_);
   ++changes_;   // the balls move
-  decltype(centres_)().swap(centres_);   // (a million balls' map is 50 MB; the next BALL makes it again)
+  centres_.clear();   // (the next BALL makes it again)
   unsaved_ = true;
   require_started();
   check_ready(model_);

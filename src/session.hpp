@@ -19,6 +19,7 @@
 #include "io/history.hpp"
 #include "io/vtk.hpp"
 #include "model/bond_table.hpp"
+#include "model/centre_index.hpp"
 #include "model/edit.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
@@ -263,12 +264,9 @@ class Session {
   RunTotals totals_;
   std::optional<SizeDistribution> last_sizes_;
   std::vector<std::int64_t> last_generated_;
-  // BALL's check that no two balls share a centre: exact centre -> ball id, built afresh after any
-  // other change of the balls (changes_ counts them: edit, cycle, start, restart).
-  struct CentreHash {
-    std::size_t operator()(const std::array<double, 3>& c) const;
-  };
-  std::unordered_map<std::array<double, 3>, std::int64_t, CentreHash> centres_;
+  // BALL's check that no two balls share a centre, built afresh after any other change of the
+  // balls (changes_ counts them: edit, cycle, start, restart).
+  CentreIndex centres_;
   // Cycles in chunks of `chunk` until `limit`, an interruption or instability, or `stop()` (asked
   // after each chunk; every rank takes rank 0's answer): SOLVE's and CYCLE ... until's loop.
   CycleResult cycle_in_chunks(std::int64_t limit, std::int64_t chunk,

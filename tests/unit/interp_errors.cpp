@@ -425,6 +425,17 @@ TEST_CASE("interp errors: BALL refuses a centre another ball has, and says which
   CHECK(h.session.model().balls.size() == 2);
   CHECK_FALSE(h.deck("ball 0 0 0 0.1 id 3\n"));
   CHECK_THAT(h.first_error_line(), Catch::Contains("ball 2 is already at"));
+  // -0 is the centre 0 (the index hashes them alike).
+  Harness signs;
+  CHECK_FALSE(signs.deck("start box -1 1 -1 1 -1 1\nball 0 0.5 0 0.1 id 1\nball -0 0.5 -0.0 0.1 id 2\n"));
+  CHECK_THAT(signs.first_error_line(), Catch::Contains("ball 1 is already at"));
+  // Thousands of balls (the index grows many times over): a repeat of any one is found, by its id.
+  std::string many = "start box 0 100 0 100 0 100\n";
+  for (int k = 1; k <= 3000; ++k) many += fmt::format("ball {} {} {} 0.1 id {}\n", 1 + k % 97, 1 + k / 97, 1 + (k * 7) % 89, k);
+  Harness lots;
+  REQUIRE(lots.deck(many));
+  CHECK_FALSE(lots.deck(fmt::format("ball {} {} {} 0.05\n", 1 + 1234 % 97, 1 + 1234 / 97, 1 + (1234 * 7) % 89)));
+  CHECK_THAT(lots.first_error_line(), Catch::Contains("ball 1234 is already at"));
 }
 
 // For a host program (the Python module): lines run as part of its own file from its line, the
