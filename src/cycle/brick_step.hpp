@@ -273,6 +273,10 @@ class BrickStep {
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.
   void install_local_walls(Model& full);
+  // Rank 0's part of it, of the ranks: every rank's records (`all`, `counts` each rank's count),
+  // each rank's in the list's order, merged into full's table and each rank's places in it
+  // (rank_pairs_); false, changing nothing, where some rank's are not in order.
+  bool merge_pair_runs(Model& full, std::vector<std::uint8_t>& all, const std::vector<double>& counts);
   // sync()'s part for a bonded scene: the state and fate of every member's bonds into full's.
   void gather_bonds(Model& full, std::vector<double>& out, std::vector<double>& in);
   // The parts' contact results into full's table (sync, gather_results). free_each: each part's

@@ -58,6 +58,20 @@ void install_pairs(ContactTable& table, const PairCandidates& pairs) {
   table.list_version = fresh_list_version();
 }
 
+void install_pairs_zeroed(ContactTable& table, PairCandidates&& pairs) {
+  const std::size_t n = pairs.i.size();
+  table.drop_results();
+  table.for_each_history([](auto& v, const HistoryPart&) { std::decay_t<decltype(v)>().swap(v); });
+  table.i.swap(pairs.i);
+  table.j.swap(pairs.j);
+  table.image_x.swap(pairs.image_x);
+  table.image_y.swap(pairs.image_y);
+  table.image_z.swap(pairs.image_z);
+  pairs = PairCandidates{};
+  table.for_each_history([&](auto& v, const HistoryPart&) { v.assign(n, {}); });
+  table.list_version = fresh_list_version();
+}
+
 std::uint64_t fresh_list_version() {
   static std::atomic<std::uint64_t> versions{0};   // unique across tables (a restored copy keeps its own)
   return ++versions;

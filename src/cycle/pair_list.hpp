@@ -12,6 +12,9 @@ namespace trubal {
 // one merge matches them by the pair of ids (and image). New pairs start with zeros. The table
 // gets a new list_version.
 void install_pairs(ContactTable& table, const PairCandidates& pairs);
+// `pairs` taken as the table's list, its history zero and its results dropped: for a caller that
+// then writes every pair's history (a sync gathering the ranks' parts).
+void install_pairs_zeroed(ContactTable& table, PairCandidates&& pairs);
 
 // A list version no table of this process has had (install_pairs' counter): for a list whose
 // arrays were replaced wholesale (a distributed run's copy from rank 0).
