@@ -19,12 +19,8 @@ set -eu
 TRUBAL=$(realpath "$1"); shift
 SIZES=${*:-13500}; STEPS=${STEPS:-600}; REPS=${REPS:-3}; RANKS=${RANKS:-1 2}
 HERE=$(cd "$(dirname "$0")" && pwd)
-PEERS=$HERE/../../shared/peers
-[ -f "$PEERS/gen_scenes.py" ] || { echo "no $PEERS/gen_scenes.py (the peers' scenes)" >&2; exit 2; }
-command -v mpirun >/dev/null || { echo "no mpirun (Debian: openmpi-bin)" >&2; exit 2; }
-W=$(mktemp -d /tmp/trubal-mpi-XXXXXX)
-trap 'rm -rf "$W"' EXIT
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+. "$HERE/mpi_setup.sh"
+mpi_bench_setup mpi
 SCENES_OUT=$W python3 "$PEERS/gen_scenes.py" fcc >/dev/null
 echo "CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; $STEPS steps, median of $REPS"
 "$HERE/core_speeds.sh"   # a lopsided machine shows beside its figures

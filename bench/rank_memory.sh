@@ -17,12 +17,8 @@
 set -eu
 TRUBAL=$(realpath "$1"); CELLS=${2:-63}; RANKS=${RANKS:-2 4}
 HERE=$(cd "$(dirname "$0")" && pwd)
-PEERS=$HERE/../../shared/peers
-[ -f "$PEERS/gen_scenes.py" ] || { echo "no $PEERS/gen_scenes.py (the peers' scenes)" >&2; exit 2; }
-command -v mpirun >/dev/null || { echo "no mpirun (Debian: openmpi-bin)" >&2; exit 2; }
-W=$(mktemp -d /tmp/trubal-memory-XXXXXX)
-trap 'rm -rf "$W"' EXIT
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+. "$HERE/mpi_setup.sh"
+mpi_bench_setup memory
 cd "$W"
 SCENES_OUT=. python3 -c "import sys; sys.path.insert(0, '$PEERS'); import gen_scenes; gen_scenes.fcc($CELLS, $CELLS, $CELLS)" >/dev/null
 STAGES="balls cycle save damp"

@@ -1,6 +1,6 @@
 #!/bin/sh
-# The benchmark scripts of issues 17 and 22 still run (they are run by hand, on other machines,
-# where a broken one costs a lease): bench/mpi_scaling.sh and bench/scaling.py on the smallest
+# The benchmark scripts still run (they are run by hand, on other machines, where a broken one
+# costs a lease): bench/mpi_scaling.sh, bench/scaling.py and bench/rank_memory.sh on the smallest
 # scenes for a few steps, their tables checked for a row per rank count. Nothing is timed or
 # compared. Exit 77 (skipped) without python3, mpirun or the peers' scene writer beside the checkout
 # (../shared/peers/gen_scenes.py).
@@ -33,4 +33,11 @@ done
 # Rows "P N | ...": P = 1 and 2, in each table (4 rows), with the ranks' peak memory read.
 rows=$(grep -Ec "^ +[12] +[0-9]+ \| .* [0-9]+/[0-9]+ \|" "$out") || true
 [ "$rows" = 4 ] || fail "scaling.py: $rows table rows with the ranks' memory, not 4"
-echo "bench scripts: mpi_scaling.sh and scaling.py ran"
+# bench/rank_memory.sh on a block of 500 balls on 2 ranks: a row per stage, each with rank 0's and
+# the other's peaks, and the files serial's (it says where they are not).
+RANKS=2 "$here/bench/rank_memory.sh" "$trubal" 5 >"$out" 2>&1 || fail "rank_memory.sh exited $?"
+for stage in balls cycle save damp; do
+  grep -Eq "^$stage +[0-9]+ \| [0-9]+ \([0-9.]+\), [0-9]+-[0-9]+, [0-9.]+" "$out" || fail "rank_memory.sh: no row for $stage"
+done
+if grep -q "differs" "$out"; then fail "rank_memory.sh: a file differs from serial's"; fi
+echo "bench scripts: mpi_scaling.sh, scaling.py and rank_memory.sh ran"
