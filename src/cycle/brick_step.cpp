@@ -308,7 +308,7 @@ void BrickStep::free_copy() { copy_ = PartCopy{}; }
 std::size_t BrickStep::copy_bytes() const {
   if (!copy_.held) return 0;
   std::size_t n = copy_.part.bytes();
-  auto add = [&](const auto& v) { n += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+  auto add = [&](const auto& v) { n += capacity_bytes(v); };
   for (const auto* v : {&copy_.global_ball, &copy_.owned, &copy_.owned_pairs, &copy_.owned_walls}) add(*v);
   for (const auto* lists : {&copy_.rank_balls, &copy_.rank_bonds})
     for (const auto& v : *lists) add(v);
@@ -319,7 +319,7 @@ std::size_t BrickStep::copy_bytes() const {
 
 std::size_t array_bytes(const Model& m) {
   std::size_t bytes = 0;
-  auto add = [&](const auto& v) { bytes += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+  auto add = [&](const auto& v) { bytes += capacity_bytes(v); };
   m.balls.for_each_array(add);
   m.contacts.for_each_pair_array(add);
   const_cast<WallContacts&>(m.wall_contacts).for_each_array(add);   // (it has no const visitor; it only reads)

@@ -337,11 +337,8 @@ void Pipeline::rescue_to_root(Model& model) {
   if (!part_rescue_) return;   // (the same answer on every rank)
   // Rank 0's model the copy's state; the others' as they are (they hold the state after the copy's
   // step: make_results_alone takes it again on rank 0 alone). Their light state comes back after.
-  const Snapshot others_light = comm::root() ? Snapshot{} : [&] {
-    Snapshot s;
-    s.take_light(model);
-    return s;
-  }();
+  Snapshot others_light;
+  if (!comm::root()) others_light.take_light(model);
   whole_from_part_copies(model);
   if (!comm::root()) others_light.restore_light(model);
 }

@@ -92,7 +92,7 @@ struct Snapshot {
   // The bytes of its arrays of balls, pairs and wall contacts (their capacity).
   std::size_t bytes() const {
     std::size_t n = 0;
-    auto add = [&](const auto& v) { n += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+    auto add = [&](const auto& v) { n += capacity_bytes(v); };
     balls.for_each_array(add);
     for (const auto* v : {&pairs.i, &pairs.j}) add(*v);
     for (const auto* v : {&pairs.image_x, &pairs.image_y, &pairs.image_z}) add(*v);

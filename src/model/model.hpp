@@ -45,6 +45,9 @@ struct Material {
 // function of the model's state alone: balls are added at the end, and the run puts them in space
 // order at cycles fixed by the model's own counter (Model::order, cycle/run.cpp). Ids are the
 // user's names for the balls and never change with the order; `by_id` finds a ball by id.
+// The bytes a vector holds (its capacity): the memory figures PRINT info reports.
+template <class V> std::size_t capacity_bytes(const V& v) { return v.capacity() * sizeof(typename V::value_type); }
+
 struct Balls {
   std::vector<std::int64_t> id;
   std::vector<int> type;
@@ -166,7 +169,7 @@ struct ContactTable {
   std::size_t result_bytes() const {
     std::size_t bytes = 0;
     const_cast<ContactTable*>(this)->for_each_result_array(
-        [&](const auto& v) { bytes += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); });
+        [&](const auto& v) { bytes += capacity_bytes(v); });
     return bytes;
   }
   // Frees the result arrays (their memory goes back).
