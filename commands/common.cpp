@@ -1,4 +1,5 @@
 #include "commands/common.hpp"
+#include "cycle/pipeline.hpp"
 #include "support/comm.hpp"
 
 #include <algorithm>
@@ -155,10 +156,12 @@ void ProgressReporter::finish() {
 // Overlaps past kOverlapWarning of the smaller radius at the end of a run (physics/overlap.hpp):
 // said once, and again only where the largest doubles or after they all came back below.
 static void warn_of_overlaps(Context& ctx) {
-  // (Rank 0's model alone is whole where the ranks keep their parts, and rank 0 alone warns.)
+  // (Rank 0 alone warns; where rank 0's whole model is hollow, every rank's part takes part.)
+  const bool hollow = ctx.session.pipeline().whole_hollow(ctx.session.state());
+  if (comm::size() > 1 && !comm::root() && !hollow) return;
+  const LargestOverlap big = ctx.session.largest_overlap_now();   // (the positions: no contact result is read or made)
   if (comm::size() > 1 && !comm::root()) return;
-  const Model& m = ctx.session.state();   // (the positions: no contact result is read or made)
-  const LargestOverlap big = largest_overlap(m);
+  const Model& m = ctx.session.state();
   double& warned = ctx.session.overlap_warned;
   if (big.beyond == 0) {
     warned = 0;

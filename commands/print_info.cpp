@@ -29,12 +29,17 @@ namespace trubal {
 
 // How far apart balls next to each other in memory lie, in diameters (medians of both): about 1
 // in space order (which the run puts them in: SET sort), tens where at random, which the contact
-// loop reads far more slowly. 0 for < 2 balls.
-static double memory_gap_in_diameters(const Balls& b) {
+// loop reads far more slowly. 0 for < 2 balls. (The positions an axis at a time: from the ranks'
+// kept parts, where rank 0's whole model is hollow, Session::ball_array.)
+static double memory_gap_in_diameters(const Session& s, const Balls& b) {
   if (b.size() < 2) return 0;
-  std::vector<double> gap(b.size() - 1), rad(b.rad);
-  for (std::size_t k = 1; k < b.size(); ++k)
-    gap[k - 1] = std::hypot(b.x[k] - b.x[k - 1], b.y[k] - b.y[k - 1], b.z[k] - b.z[k - 1]);
+  std::vector<double> gap(b.size() - 1, 0.0), rad(b.rad), fetched;
+  for (const std::vector<double>* axis : {&b.x, &b.y, &b.z}) {
+    const std::vector<double>& v = s.ball_array(*axis, fetched);
+    for (std::size_t k = 1; k < b.size(); ++k) gap[k - 1] += (v[k] - v[k - 1]) * (v[k] - v[k - 1]);
+  }
+  std::vector<double>().swap(fetched);
+  for (double& g : gap) g = std::sqrt(g);
   auto median = [](std::vector<double>& v) {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];
@@ -45,7 +50,9 @@ static double memory_gap_in_diameters(const Balls& b) {
 
 void print_info(Context& ctx) {
   const Session& s = ctx.session;
-  const Model& m = s.model_but_results();
+  // (The light state and the counts: under mpirun rank 0's whole model is not gathered for them.)
+  const Session::StateCounts counts = s.state_counts();
+  const Model& m = s.state();
   auto& o = ctx.out;
   if (!m.title.empty()) o << "title: " << m.title << '\n';
   if (m.started) {
@@ -66,27 +73,22 @@ void print_info(Context& ctx) {
   }
   o << fmt::format("balls: {}\n", m.balls.size());
   if (m.balls.size() >= 2) {
-    const double gap = memory_gap_in_diameters(m.balls);
+    const double gap = memory_gap_in_diameters(s, m.balls);
     o << fmt::format("ball order: neighbours in memory {:.3g} diameters apart (median); put in space order {}{}\n", gap,
                      m.order.pending && m.order.every > 0 ? "at the next step, then every " + std::to_string(m.order.every) + " cycles"
                                                           : m.order.every > 0 ? "every " + std::to_string(m.order.every) + " cycles"
                                                                               : std::string("never (SET sort 0)"),
                      gap > 3 && m.order.every == 0 ? ": the contact loop reads memory slowly; SET sort 1000 puts them in space order" : "");
   }
-  o << fmt::format("contacts: {}\n", s.touching_pairs());
-  if (!m.walls.empty()) {
-    std::size_t touching = 0;
-    for (auto st : m.wall_contacts.state) touching += st != 0;
-    o << fmt::format("walls: {} ({} ball-wall contacts)\n", m.walls.size(), touching);
-  }
+  o << fmt::format("contacts: {}\n", counts.touching);
+  if (!m.walls.empty()) o << fmt::format("walls: {} ({} ball-wall contacts)\n", m.walls.size(), counts.wall_touching);
   if (!m.bonds.empty()) {
     const BondCounts n = count_bonds(m.bonds);
     o << fmt::format("bonds: {} intact, {} broken ({} in tension, {} in shear)\n", n.intact, n.broken(), n.tension,
                      n.shear);
   }
   if (has_bridges(m))
-    o << fmt::format("bridges intact: {} between balls, {} to walls\n", count_bridges(m.contacts),
-                     count_bridges(m.wall_contacts));
+    o << fmt::format("bridges intact: {} between balls, {} to walls\n", counts.bridges, counts.wall_bridges);
   o << fmt::format("cycle: {}\n", m.cycle);
   o << fmt::format("time: {}\n", m.time);
   o << fmt::format("timestep: {}\n", m.dt);
@@ -111,11 +113,15 @@ void print_info(Context& ctx) {
   };
   o << fmt::format("peak memory: {} MiB{}\n", each(&Session::RankFigures::peak_mib), comm::size() > 1 ? " (per rank)" : "");
   if (comm::size() > 1) {
-    o << fmt::format("arrays held in the last step: whole model {} MiB, part {} MiB (per rank: rank 0 keeps the whole "
-                     "model for the output; the others hold their part, and the whole model's ids, types and radii)\n",
+    o << fmt::format("arrays held in the last step: whole model {} MiB, part {} MiB (per rank: each its part, and of the "
+                     "whole model the balls' ids, types and radii, rank 0 their fixities, masses and loads too, and the "
+                     "whole model where an output step read it)\n",
                      each_array(&Session::RankFigures::whole_arrays_mib), each_array(&Session::RankFigures::part_arrays_mib));
     o << fmt::format("model held now: {} MiB (per rank: {})\n", each_array(&Session::RankFigures::model_arrays_mib),
-                     s.parts_kept() ? "each its part of the model, rank 0 the whole model too"
+                     s.parts_kept() ? s.pipeline().whole_hollow(m) ? "each its part of the model, rank 0 the light arrays of "
+                                                                     "the whole model (gathered from the parts where a command "
+                                                                     "reads it)"
+                                                                   : "each its part of the model, rank 0 the whole model too"
                      : s.pipeline().others_hollow()
                          ? "rank 0 the whole model, the others its settings, walls and balls' ids, types and radii"
                          : "the whole model on every rank");
@@ -125,7 +131,7 @@ void print_info(Context& ctx) {
                      "0 the whole model's)\n", each_array(&Session::RankFigures::rescue_mib));
   }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
-  const Features f = scene_features(m);
+  const Features f = scene_features(m, counts.spinning);
   o << fmt::format("physics: {}\n", f.describe());
   // The loops compiled for exactly these features (the general kernel has every one on).
   const char* damping = f.mass_damping == DampKind::Rayleigh ? ", mass damping"
@@ -147,16 +153,15 @@ void print_info(Context& ctx) {
 // values were gathered before: Session::gather_rank_figures).
 void print_counters(Context& ctx, const std::string& file) {
   const Session& s = ctx.session;
-  const Model& m = s.model_but_results();
+  const Session::StateCounts counts = s.state_counts();
+  const Model& m = s.state();
   const PipelineCounters c = s.pipeline().counters();
-  std::size_t wall_touching = 0;
-  for (auto st : m.wall_contacts.state) wall_touching += st != 0;
   std::string text;
   auto line = [&](std::string_view name, auto value) { text += fmt::format("{} {}\n", name, value); };
   line("cycle", m.cycle);
   line("balls", m.balls.size());
-  line("contacts", s.touching_pairs());
-  line("wall_contacts", wall_touching);
+  line("contacts", counts.touching);
+  line("wall_contacts", counts.wall_touching);
   line("balls_destroyed", m.space.destroyed);
   line("ranks", comm::size());
   line("threads", s.pipeline().threads());

@@ -19,6 +19,7 @@
 #include "gen/region.hpp"
 #include "io/save.hpp"
 #include "model/edit.hpp"
+#include "physics/bridge.hpp"
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
 
@@ -145,7 +146,6 @@ std::vector<double> own_figures(const Model& model, const Pipeline& pipeline) {
 }  // namespace
 
 void Session::gather_rank_figures() {
-  pipeline_->refresh_whole(model_);   // (a collective call rank 0's reads follow)
   const std::vector<double> peaks = peak_memory_per_rank();
   std::vector<double> all;
   comm::allgather(own_figures(model_, *pipeline_), all);
@@ -449,7 +449,46 @@ class PartResults final : public ResultSource {
 const Model& Session::model_but_results() const {
   if (!pipeline_->serving()) return model();
   pipeline_->request_results_onto_parts(model_);   // (the balls' unbalanced forces are made with them)
-  return results_from_parts() ? model_ : model();
+  if (!results_from_parts()) return model();
+  pipeline_->request_whole(model_);   // (gathered from the parts where a CYCLE left it hollow)
+  return model_;
+}
+
+void Session::results_on_root() {
+  results_before_setting();
+  if (!pipeline_->parts_live(model_)) return;   // (the same answer on every rank)
+  pipeline_->refresh_whole(model_);
+  // (As make_results_to_read leaves them where no step is to be taken again: zero where none was kept.)
+  if (comm::root()) model_.contacts.keep_results();
+}
+
+Session::StateCounts Session::state_counts() const {
+  if (pipeline_->serving() && pipeline_->whole_hollow(model_)) {
+    const Pipeline::PartCounts c = pipeline_->request_part_counts(model_);
+    return {c.touching, c.wall_touching, c.bridges, c.wall_bridges, c.spinning > 0};
+  }
+  const Model& m = model_but_results();
+  StateCounts n;
+  n.touching = touching_pairs();
+  for (auto st : m.wall_contacts.state) n.wall_touching += st != 0;
+  n.bridges = count_bridges(m.contacts);
+  n.wall_bridges = count_bridges(m.wall_contacts);
+  return n;
+}
+
+const std::vector<double>& Session::ball_array(const std::vector<double>& of, std::vector<double>& into) const {
+  if (!(pipeline_->serving() && pipeline_->whole_hollow(model_))) return of;
+  const Balls& b = model_.balls;
+  const std::vector<double>* arrays[] = {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz};
+  const auto k = static_cast<std::size_t>(std::find(std::begin(arrays), std::end(arrays), &of) - std::begin(arrays));
+  if (k == std::size(arrays)) throw std::logic_error("internal error: not one of the balls' positions or velocities");
+  pipeline_->request_ball_array(model_, k, into);
+  return into;
+}
+
+LargestOverlap Session::largest_overlap_now() {
+  if (pipeline_->whole_hollow(model_)) return pipeline_->largest_overlap_on_parts(model_, kOverlapWarning);
+  return largest_overlap(model_);
 }
 
 std::size_t Session::touching_pairs() const {
@@ -482,7 +521,10 @@ const std::vector<std::uint8_t>& Session::results_of(const std::vector<std::uint
 void Session::save(const std::string& path) const {
   // (The results made on the parts go into the file from there, an array at a time: rank 0 never
   // holds them all, and the parts keep them for what reads them next.)
-  if (pipeline_->serving()) pipeline_->request_results_onto_parts(model_);
+  if (pipeline_->serving()) {
+    pipeline_->request_results_onto_parts(model_);
+    pipeline_->request_whole(model_);   // (gathered from the parts where a CYCLE left it hollow)
+  }
   if (results_from_parts()) {
     PartResults results(model_, *pipeline_);
     save_model(model_, path, history_.get(), 0, &results);

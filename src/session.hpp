@@ -22,6 +22,7 @@
 #include "model/edit.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
+#include "physics/overlap.hpp"
 
 namespace trubal {
 
@@ -240,7 +241,25 @@ class Session {
   // The contact results a CYCLE deferred made in rank 0's model, every rank taking part (a
   // collective call): before a command that every rank runs reads the model on rank 0 alone
   // (comm::on_root), where the ranks' parts hold the copy they are made from.
-  void results_on_root() { results_before_setting(); }
+  // Rank 0's whole model is made current too, gathered from the kept parts where a CYCLE left it
+  // hollow (Pipeline::whole_hollow).
+  void results_on_root();
+  // What PRINT info and counters tell of the state without the whole model on rank 0: the pairs
+  // and wall contacts touching, the capillary bridges between balls and to walls, and whether some
+  // ball spins (where the model's arrays do not say: `spinning` empty where they do). Under
+  // mpirun, rank 0 running a command the others serve, summed over the kept parts where rank 0's
+  // whole model is hollow; else counted on model_but_results().
+  struct StateCounts {
+    std::size_t touching = 0, wall_touching = 0, bridges = 0, wall_bridges = 0;
+    std::optional<bool> spinning;
+  };
+  StateCounts state_counts() const;
+  // Ball array `of` of the model (one of x y z, vx vy vz, wx wy wz): itself, or fetched from the
+  // kept parts into `into` where rank 0's whole model is hollow (as state_counts).
+  const std::vector<double>& ball_array(const std::vector<double>& of, std::vector<double>& into) const;
+  // The largest overlap (physics/overlap.hpp) on rank 0: from the kept parts where rank 0's whole
+  // model is hollow (a collective call, every rank taking part); else rank 0's whole model's.
+  LargestOverlap largest_overlap_now();
 
  private:
   void start(const Space& space);   // a fresh model in this space; histories and dumps end

@@ -325,6 +325,7 @@ void BrickStep::finish_part(const Model& full) {
   wall_version_ = full.wall_contacts.list_version;
   live_ = true;
   current_ = true;
+  whole_hollow_ = false;
   // (Scattered: the ranks other than 0 freed their whole model's arrays first.)
   shared_ = !scatters();
 }

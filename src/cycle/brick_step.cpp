@@ -246,6 +246,7 @@ void BrickStep::loads_changed(const Model& full) {
 }
 
 void BrickStep::release() {
+  if (live_ && whole_hollow_) throw std::logic_error("internal error: the ranks' parts released where they alone hold the model");
   ++edition_;
   live_ = false;
   results_left_ = false;

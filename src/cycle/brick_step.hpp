@@ -40,6 +40,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -180,11 +181,43 @@ class BrickStep {
   // The applied loads of `full`'s balls changed (a following membrane's, between steps, on every
   // rank alike): the part's copies take them.
   void loads_changed(const Model& full);
-  // The parts are dropped (the whole model was changed, or is to be stepped another way).
+  // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
+  // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what
+  // a CYCLE and the light commands read there (the balls' ids, types, fixities, radii, masses and
+  // applied loads, the bonds, the walls); the parts alone hold the model's state, until a sync
+  // gathers it whole again (every array of it, the lists made afresh from the parts'). Ranks of a
+  // run only, where the parts are live; a collective call. The same answer on every rank.
+  void hollow_whole(Model& full);
+  bool whole_hollow() const { return live_ && whole_hollow_; }
+  // A CYCLE's end on kept parts (a collective call): the contact results the parts' last step wrote
+  // (a step taken again there, results_onto_parts) stay there (results_left), and rank 0's whole
+  // model goes hollow (hollow_whole), nothing gathered.
+  void end_on_parts(Model& full);
+  // This member's counts over its own pairs, wall contacts and balls, which the caller sums over the
+  // members: the pairs and the wall contacts touching in the results the part holds (none where it
+  // holds none), the capillary bridges between balls and to walls, the balls that spin.
+  std::vector<double> own_counts() const;
+  // The largest overlap over the pairs and wall contacts this member owns (physics/overlap.hpp), at
+  // the part's positions now with full's space and walls: its ratio, ball, other, wall (0 or 1) and
+  // count beyond `threshold`, then its place in the whole model's tables' order (wall, the whole
+  // model's ball i or ball, ball j or wall, the image) for the caller's choice among the members.
+  std::vector<double> own_largest_overlap(const Model& full, double threshold);
+  // Moving ball array k of the part (x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz), gathered in the
+  // whole model's order into *into on rank 0 (a collective call of the ranks; the others pass null).
+  void gather_ball_array(std::size_t k, std::vector<double>* into);
+  // The parts are dropped (the whole model was changed, or is to be stepped another way). Not
+  // where they alone hold the model (whole_hollow: an internal error; sync first).
   void drop() {
+    if (live_ && whole_hollow_) throw std::logic_error("internal error: the ranks' parts dropped where they alone hold the model");
     ++edition_;
     live_ = false;
     results_left_ = false;
+  }
+  // The parts dropped where they alone hold the model, which is then lost on every rank (a step
+  // taken again on them failed part way: Pipeline::drop_parts_unsynced).
+  void drop_hollow() {
+    whole_hollow_ = false;
+    drop();
   }
   // The ranks other than 0 freed their whole model's arrays (Pipeline::hollow; said on every rank
   // alike): the next share() hands rank 0's over again, whether or not a step has followed.
@@ -341,6 +374,7 @@ class BrickStep {
   StepKernels kernels_;                     // the cycle's, with the part's pair laws
   bool live_ = false;
   bool current_ = true;                     // `full` holds the parts' state (ranks: rank 0's)
+  bool whole_hollow_ = false;               // (whole_hollow)
   bool shared_ = true;                      // and every rank's `full` does (share)
   bool walls_any_ = false;                  // the whole model had walls or wall contacts at the split
   // The parts' last step wrote the pairs' results, not yet gathered (the same on every rank, which

@@ -12,6 +12,7 @@
 #include "cycle/pair_list.hpp"
 #include "model/bond_table.hpp"
 #include "model/edit.hpp"
+#include "physics/overlap.hpp"
 #include "support/comm.hpp"
 #include "support/peak_memory.hpp"
 
@@ -271,9 +272,92 @@ void BrickStep::install_local_walls(Model& full) {
   wall_version_ = full.wall_contacts.list_version;
 }
 
+void BrickStep::hollow_whole(Model& full) {
+  if (!live_ || !scatters() || model_ != &full || whole_hollow_) return;   // (the same answer on every rank)
+  if (comm::root()) {
+    auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+    each_moving_ball_array(full.balls, free);
+    full.contacts.for_each_pair_array(free);   // (their list versions stay: live_for)
+    full.wall_contacts.for_each_array(free);
+    // (Each rank's places in the whole list and wall contacts: made again with them, install_local_list.)
+    for (auto& v : rank_pairs_) free(v);
+    for (auto& v : rank_walls_) free(v);
+  }
+  whole_hollow_ = true;
+  current_ = false;
+  whole_list_kept_ = false;
+  return_free_memory();
+}
+
+void BrickStep::end_on_parts(Model& full) {
+  if (!live_ || model_ != &full) return;
+  if (results_written_) {
+    results_written_ = false;
+    results_left_ = true;
+  }
+  hollow_whole(full);
+}
+
+std::vector<double> BrickStep::own_counts() const {
+  const ContactTable& c = part_.contacts;
+  const WallContacts& w = part_.wall_contacts;
+  const Balls& b = part_.balls;
+  double touching = 0, wall_touching = 0, bridges = 0, wall_bridges = 0, spinning = 0;
+  if (c.results_kept())
+    for (std::uint32_t q : owned_pairs_) touching += c.state[q] != 0;
+  if (c.bridge.size() == c.size())
+    for (std::uint32_t q : owned_pairs_) bridges += c.bridge[q] != 0;
+  if (w.state.size() == w.size())
+    for (std::uint32_t q : owned_walls_) wall_touching += w.state[q] != 0;
+  if (w.bridge.size() == w.size())
+    for (std::uint32_t q : owned_walls_) wall_bridges += w.bridge[q] != 0;
+  for (std::uint32_t k : owned_) spinning += b.wx[k] != 0 || b.wy[k] != 0 || b.wz[k] != 0;
+  return {touching, wall_touching, bridges, wall_bridges, spinning};
+}
+
+std::vector<double> BrickStep::own_largest_overlap(const Model& full, double threshold) {
+  part_.space = full.space;   // (a step since the part's last: the cell and the walls moved on)
+  part_.walls = full.walls;
+  const LargestOverlap big = largest_overlap(part_, threshold, &owned_pairs_, &owned_walls_);
+  double a = 0, b = 0, image = 0;
+  if (big.beyond > 0 && !big.wall) {
+    const ContactTable& c = part_.contacts;
+    a = global_ball_[c.i[big.at]];
+    b = global_ball_[c.j[big.at]];
+    image = ((c.image_x[big.at] + 128) * 256.0 + (c.image_y[big.at] + 128)) * 256.0 + (c.image_z[big.at] + 128);
+  } else if (big.beyond > 0) {
+    a = global_ball_[part_.wall_contacts.ball[big.at]];
+    b = part_.wall_contacts.wall[big.at];
+  }
+  return {big.ratio, static_cast<double>(big.ball), static_cast<double>(big.other), big.wall ? 1.0 : 0.0,
+          static_cast<double>(big.beyond), big.wall ? 1.0 : 0.0, a, b, image};
+}
+
+void BrickStep::gather_ball_array(std::size_t k, std::vector<double>* into) {
+  if (!live_ || team_->shares_whole())
+    throw std::logic_error("internal error: a ball array asked of parts that are not live");
+  ArrayList arrays;
+  each_moving_ball_array(part_.balls, arrays);
+  if (k >= arrays.reals.size()) throw std::logic_error("internal error: a ball array the balls do not have");
+  std::vector<double> whole, out, in;
+  together([&] { if (comm::root()) whole.assign(full_balls_, 0.0); }, "gathering the balls from the parts");
+  gather_array(*team_, *arrays.reals[k], whole, owned_, rank_balls_, out, in);
+  if (into) *into = std::move(whole);
+}
+
 void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results) {
   if (!live_ || current_ || model_ != &full) return;
   std::vector<double> out, in;
+  if (whole_hollow_) {
+    // Every array of the state gathered, the lists made afresh from the parts' (install_local_list).
+    together([&] {
+      if (!comm::root()) return;
+      each_moving_ball_array(full.balls, [&](std::vector<double>& v) { v.assign(full_balls_, 0.0); });
+      full.contacts.set_history_laws(part_.contacts.history_laws);
+    }, "gathering the model from the parts");
+    list_local_ = true;
+    whole_list_kept_ = false;
+  }
   // (After a step taken again from the copies in place, the parts' list is the one the whole
   // model was given at the CYCLE's end, wraps and all: restore_copy_in_place.)
   if (list_local_ && whole_list_kept_ && kept_edition_ == edition_) list_local_ = false;
@@ -298,6 +382,7 @@ void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results
              full.wall_contacts, owned_walls_, rank_walls_, out, in);
   if (bonded_) gather_bonds(full, out, in);
   current_ = true;
+  whole_hollow_ = false;
 }
 
 void BrickStep::whole_from_copy(Model& full) {
@@ -330,6 +415,7 @@ void BrickStep::whole_from_copy(Model& full) {
   live_ = true;
   model_ = &full;
   current_ = false;
+  whole_hollow_ = false;   // (every array of it gathered below)
   results_written_ = results_left_ = false;
   list_local_ = true;
   std::vector<double> out, in;

@@ -4,6 +4,7 @@
 #include <memory>
 #include <new>
 #include <stdexcept>
+#include <string>
 
 #include <fmt/format.h>
 
@@ -160,6 +161,9 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
   // at once; else the parts' state to rank 0 (current already but for a failed reading's), the
   // parts released, and rank 0's whole model put back, the others' light state (the step is then
   // split among the ranks afresh), the copy kept until the step is taken.
+  // Rank 0's whole model hollow (a CYCLE's end left the state on the parts alone): nothing holds
+  // the CYCLE's end but the parts the step is taken on.
+  const bool hollow = pipeline.whole_hollow(model);   // (the same answer on every rank)
   Snapshot state_after;   // (the light state of the CYCLE's end, which a failure in place comes back to)
   state_after.take_light(model);
   const bool in_place = pipeline.restore_rescue_on_parts(model);
@@ -169,6 +173,7 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
     pipeline.release_parts(model);
     pipeline.restore_rescue_on_root(model);
   }
+  bool stepping = false;
   try {
     comm::together([&] {   // (a test's fault: TRUBAL_TEST_FAIL_AT "R remake")
       if (pipeline.policy().fail_remake != comm::rank()) return;
@@ -181,6 +186,7 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
     control.replay = true;
     control.keep_parts = control.leave_results = true;
     const BrickStep::Counts counts = pipeline.counters().parts;   // (the CYCLE's, which PRINT counters tells)
+    stepping = true;
     const CycleResult r = run_cycles(model, pipeline, 1, control);
     pipeline.set_part_counts(counts);
     // (Checked on every rank: each holds the same light state.)
@@ -193,9 +199,27 @@ void results_onto_parts(Model& model, Pipeline& pipeline) {
     pipeline.release_rescue();
     pipeline.count_results_made();
   } catch (...) {
-    // (Every rank: the failures in the step are agreed.) In place: the parts part way through the
-    // step are dropped, and rank 0's whole model, which the step did not touch, is the CYCLE's end
-    // again, without its results. Else the step before, as the copy holds it.
+    // (Every rank: the failures in the step are agreed.) In place, rank 0's whole model hollow:
+    // before the step began, the parts hold the copy's state, the step before, and the model's
+    // light state is the copy's: kept so, its results not made; part way through the step they
+    // hold no state whole, and the model is lost with them.
+    if (in_place && hollow && !stepping) throw;
+    if (in_place && hollow) {
+      std::string what = "the step failed";
+      try {
+        throw;
+      } catch (const std::exception& e) {
+        what = e.what();
+      } catch (...) {
+      }
+      pipeline.drop_parts_unsynced(model);
+      model = Model{};
+      throw std::runtime_error(fmt::format("{}; the model, which the ranks' parts alone held, was lost with the step "
+                                           "taken again: RESTART from a save", what));
+    }
+    // In place: the parts part way through the step are dropped, and rank 0's whole model, which
+    // the step did not touch, is the CYCLE's end again, without its results. Else the step before,
+    // as the copy holds it.
     if (in_place) {
       state_after.restore_light(model);
       pipeline.drop_parts_unsynced(model);
@@ -214,9 +238,16 @@ void make_results_to_read(Model& model, Pipeline& pipeline) {
     if (!comm::root())
       throw std::logic_error("internal error: the whole model was read on a rank that holds its part alone");
     // Where the others serve rank 0's command (Pipeline::serve_root): made on the parts, the step
-    // taken again there, and gathered; else taken again here.
-    if (pipeline.serving() && (pipeline.results_on_parts(model) || pipeline.results_deferred(model)))
-      return pipeline.request_part_results(model);
+    // taken again there, and gathered, and rank 0's whole model gathered from the parts where a
+    // CYCLE left it hollow; else taken again here.
+    if (pipeline.serving()) {
+      if (pipeline.results_on_parts(model) || pipeline.results_deferred(model)) pipeline.request_part_results(model);
+      pipeline.request_whole(model);
+      model.contacts.keep_results();   // (made; else zero, as below)
+      return;
+    }
+    if (pipeline.whole_hollow(model))
+      throw std::logic_error("internal error: the whole model was read on rank 0 alone, where the ranks' parts alone hold it");
     if (pipeline.results_deferred(model)) {
       // (The parts' copies are put back together: a command that rank 0 alone runs reads the
       // results on every rank first, Session::results_on_root.)

@@ -2,6 +2,7 @@
 #include "cycle/pipeline_parts.hpp"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <bit>
 #include <chrono>
@@ -191,7 +192,17 @@ void Pipeline::end_cycle(Model& model, bool keep_parts) {
   // (PRINT info: each rank's peak so far, the CYCLE's included, the results it may make after not)
   if (distributed()) cycle_peaks_ = peak_memory_per_rank();
   if (keep_parts && parts_live(model)) {
-    each_part([&](BrickStep& part, int) { part.sync(model, &ref_, true); });
+    // Nothing gathered: rank 0's whole model goes hollow, gathered again where a command reads it
+    // (refresh_whole). Not where it holds the last step's results, which an observer's sync
+    // gathered from the parts (they let theirs go): it keeps them, made current.
+    std::int64_t results_here = comm::root() && model.contacts.size() > 0 && model.contacts.results_kept() &&
+                                model.contacts.results_cycle == model.cycle;
+    comm::broadcast(results_here);
+    if (results_here != 0) {
+      each_part([&](BrickStep& part, int) { part.sync(model, &ref_, true); });
+      return;
+    }
+    each_part([&](BrickStep& part, int) { part.end_on_parts(model); });
     return;
   }
   share_whole(model);
@@ -199,6 +210,7 @@ void Pipeline::end_cycle(Model& model, bool keep_parts) {
 
 void Pipeline::gather_part_results(Model& model) {
   if (!results_on_parts(model)) return;   // (the same answer on every rank)
+  refresh_whole(model);   // (the table they go into: rank 0's list)
   each_part([&](BrickStep& part, int) { part.gather_results(model); });
   // (As make_results leaves a CYCLE's deferred results: made, and the next CYCLE takes a copy of its own.)
   clear_deferred();
@@ -209,7 +221,9 @@ void Pipeline::gather_part_results(Model& model) {
 
 namespace {
 // What rank 0 asks of the others while it runs a command alone (Pipeline::serve_root).
-enum RootRequest : std::int64_t { kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3 };
+enum RootRequest : std::int64_t {
+  kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5, kBallArray = 6
+};
 }  // namespace
 
 void Pipeline::request_part_results(Model& model) {
@@ -228,11 +242,69 @@ void Pipeline::request_results_onto_parts(Model& model) {
 
 void Pipeline::request_result_array(Model& model, std::size_t k, std::vector<double>* reals,
                                     std::vector<std::uint8_t>* bytes) {
+  request_whole(model);   // (the table they go into: rank 0's list)
   std::int64_t word = kResultArray, array = static_cast<std::int64_t>(k);
   comm::broadcast(word);
   comm::broadcast(array);
   results_onto_parts(model, *this);
   bricks().gather_result_array(model, k, reals, bytes);
+}
+
+Pipeline::PartCounts Pipeline::part_counts(const Model& model) {
+  if (!parts_live(model)) return {};
+  std::vector<double> all;
+  comm::allgather(bricks().own_counts(), all);
+  std::array<double, 5> sum{};
+  for (std::size_t k = 0; k < all.size(); ++k) sum[k % sum.size()] += all[k];   // (integers: exact in any order)
+  auto count = [](double v) { return static_cast<std::size_t>(v); };
+  return {count(sum[0]), count(sum[1]), count(sum[2]), count(sum[3]), count(sum[4])};
+}
+
+LargestOverlap Pipeline::largest_overlap_on_parts(const Model& model, double threshold) {
+  if (!parts_live(model)) return largest_overlap(model, threshold);
+  std::vector<double> all;
+  comm::allgather(bricks().own_largest_overlap(model, threshold), all);
+  constexpr std::size_t kEach = 9;   // (BrickStep::own_largest_overlap's count)
+  LargestOverlap out;
+  const double* best = nullptr;
+  for (std::size_t r = 0; r + kEach <= all.size(); r += kEach) {
+    const double* v = all.data() + r;
+    out.beyond += static_cast<std::size_t>(v[4]);
+    if (v[4] == 0) continue;
+    // The largest ratio; of equal ones, the first in the whole model's order (pairs, then walls).
+    if (!best || v[0] > best[0] ||
+        (v[0] == best[0] && std::lexicographical_compare(v + 5, v + kEach, best + 5, best + kEach)))
+      best = v;
+  }
+  if (best) {
+    out.ratio = best[0];
+    out.ball = static_cast<std::int64_t>(best[1]);
+    out.other = static_cast<std::int64_t>(best[2]);
+    out.wall = best[3] != 0;
+  }
+  return out;
+}
+
+Pipeline::PartCounts Pipeline::request_part_counts(Model& model) {
+  std::int64_t word = kCounts;
+  comm::broadcast(word);
+  results_onto_parts(model, *this);
+  return part_counts(model);
+}
+
+void Pipeline::request_ball_array(Model& model, std::size_t k, std::vector<double>& into) {
+  if (!parts_live(model)) throw std::logic_error("internal error: a ball array asked of the parts where none is live");
+  std::int64_t word = kBallArray, array = static_cast<std::int64_t>(k);
+  comm::broadcast(word);
+  comm::broadcast(array);
+  bricks().gather_ball_array(k, &into);
+}
+
+void Pipeline::request_whole(Model& model) {
+  if (!whole_to_refresh(model)) return;   // (rank 0's answer, which the others follow)
+  std::int64_t word = kWhole;
+  comm::broadcast(word);
+  refresh_whole(model);
 }
 
 void Pipeline::end_requests() {
@@ -248,12 +320,24 @@ void Pipeline::serve_root(Model& model) {
     comm::broadcast(word);
     if (word == kCommandEnded) return;
     std::int64_t array = 0;
-    if (word == kResultArray) comm::broadcast(array);
-    else if (word != kGatherResults && word != kOntoParts)
+    if (word == kResultArray || word == kBallArray) comm::broadcast(array);
+    else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts)
       throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
     // (A failure here is every rank's, in the collective calls: rank 0's command reports it.)
     try {
+      if (word == kWhole) {
+        refresh_whole(model);
+        continue;
+      }
+      if (word == kBallArray) {
+        bricks().gather_ball_array(static_cast<std::size_t>(array), nullptr);
+        continue;
+      }
       results_onto_parts(model, *this);
+      if (word == kCounts) {
+        part_counts(model);
+        continue;
+      }
       if (word == kGatherResults) gather_part_results(model);
       else if (word == kResultArray) bricks().gather_result_array(model, static_cast<std::size_t>(array), nullptr, nullptr);
     } catch (const std::exception&) {
@@ -261,13 +345,16 @@ void Pipeline::serve_root(Model& model) {
   }
 }
 
-void Pipeline::refresh_whole(Model& model) {
+void Pipeline::refresh_whole(Model& model, bool even_hollow) {
   if (!parts_live(model)) return;   // (the same answer on every rank)
   std::int64_t stale = whole_stale_ ? 1 : 0;
   comm::broadcast(stale);
   whole_stale_ = false;
-  if (stale == 0) return;
-  for (auto& part : bricks_) part->mark_stale();
+  if (stale != 0) {
+    for (auto& part : bricks_) part->mark_stale();
+  } else if (!even_hollow || !bricks().whole_hollow()) {
+    return;
+  }
   sync(model);
 }
 
@@ -276,7 +363,7 @@ void Pipeline::share_whole(Model& model, bool for_command) {
   gather_part_results(model);
   if (for_command && (others_hollow_ || parts_live(model))) ++hand_overs_;
   hand_over_to_hollow(model);
-  refresh_whole(model);
+  refresh_whole(model);   // (rank 0's whole model, where it is hollow and no results came)
   if (!bricks().live_for(model)) return;
   list_from_parts_ = true;
   each_part([&](BrickStep& part, int) { part.share(model, &ref_, distributed()); });
@@ -367,7 +454,10 @@ bool Pipeline::restore_rescue(Model& model) {
 }
 
 void Pipeline::drop_parts_unsynced(Model& model) {
-  for (auto& part : bricks_) part->release();
+  for (auto& part : bricks_) {
+    if (part->whole_hollow()) part->drop_hollow();
+    part->release();
+  }
   return_free_memory();
   invalidate();
   others_hollow_ = comm_ranks_ > 1;
@@ -404,6 +494,7 @@ void Pipeline::apply_field(Model& model, const FieldChange& change) {
 void Pipeline::apply_field_kept(Model& model, const FieldChange& change) {
   if (!change.any || !parts_live(model)) return apply_field(model, change);
   apply_field(model, change);
+  if (bricks().whole_hollow()) return;   // (the parts alone hold the balls: gathered from them when read)
   if (comm::root())
     for (std::size_t k = 0; k < model.balls.size(); ++k) {
       double work, gross;   // (summed on the parts)

@@ -20,6 +20,7 @@
 #include "cycle/team.hpp"
 #include "cycle/timed_choice.hpp"
 #include "cycle/verlet.hpp"
+#include "physics/overlap.hpp"
 #include "support/thread_pool.hpp"
 
 namespace trubal {
@@ -124,7 +125,36 @@ class Pipeline {
   // Rank 0, serving(), where results_on_parts: array k of them (BrickStep::gather_result_array)
   // into *reals or *bytes, the parts keeping theirs (the others in serve_root).
   void request_result_array(Model& model, std::size_t k, std::vector<double>* reals, std::vector<std::uint8_t>* bytes);
-  void refresh_whole(Model& model);
+  // Rank 0's whole model made current from the kept parts where it is stale (mark_whole_stale) or,
+  // even_hollow, hollow (BrickStep::hollow_whole: a distributed CYCLE's end leaves it so); a
+  // collective call where parts_live, else nothing.
+  void refresh_whole(Model& model, bool even_hollow = true);
+  // Whether refresh_whole has work (rank 0's answer; the others' may differ).
+  bool whole_to_refresh(const Model& model) const {
+    return parts_live(model) && (whole_stale_ || bricks().whole_hollow());
+  }
+  // Rank 0, serving(): refresh_whole where it has work, every rank taking part (the others in
+  // serve_root).
+  void request_whole(Model& model);
+  // Sums over the ranks' kept parts of what each holds of its own (BrickStep::own_counts): a
+  // collective call where parts_live, every rank given the sums; zeros elsewhere.
+  struct PartCounts {
+    std::size_t touching = 0, wall_touching = 0, bridges = 0, wall_bridges = 0, spinning = 0;
+  };
+  PartCounts part_counts(const Model& model);
+  // Rank 0, serving(), where parts_live: part_counts, the results made on the parts first where a
+  // CYCLE deferred them (every rank taking part: the others in serve_root).
+  PartCounts request_part_counts(Model& model);
+  // The largest overlap of the model (physics/overlap.hpp) from the kept parts, each rank's own
+  // pairs and wall contacts, ties to the first in the whole model's tables (a collective call where
+  // parts_live, every rank given the answer; elsewhere rank 0's whole model's).
+  LargestOverlap largest_overlap_on_parts(const Model& model, double threshold);
+  // Rank 0, serving(), where parts_live: moving ball array k of the parts
+  // (BrickStep::gather_ball_array) into `into`, the parts keeping theirs.
+  void request_ball_array(Model& model, std::size_t k, std::vector<double>& into);
+  // Whether rank 0's whole model holds none of the state but its light arrays: the kept parts
+  // alone hold it (BrickStep::hollow_whole). The same answer on every rank.
+  bool whole_hollow(const Model& model) const { return parts_live(model) && bricks().whole_hollow(); }
   // The settings (Model::settings: DAMP, FRAC, TSTEP, GRAV, which leave the parts kept) to each
   // part from the model, at a CYCLE's start from kept parts.
   void parts_take_settings(const Model& model) {

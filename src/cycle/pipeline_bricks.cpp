@@ -115,16 +115,26 @@ void Pipeline::split_parts(Model& model) {
     throw;
   }
   others_hollow_ = false;   // (they hold their parts)
+  // Rank 0 too steps its part alone: its whole model's state goes (before the parts search their
+  // lists) until a sync gathers it again, for the output or a command that reads it, so that no
+  // rank holds a part and the whole model.
+  if (scatter) {
+    for (auto& part : bricks_) part->hollow_whole(model);
+    if (comm::root()) scratch_ = StepScratch{};   // (an index of the arrays that went)
+  }
   if (!search) return;
   const bool rebuilt = rebuild_parts(model, list_reach(model, skin));
   list_ = ListState::Current;
   if (rebuilt) return;
-  // They could not (the same answer on every rank; not after a split but in tests): through the
-  // whole model, which rank 0 hands back to the others.
+  // They could not (the same answer on every rank: a bond longer than the list's reach): through
+  // the whole model, gathered back from the parts, which rank 0 hands to the others.
+  sync(model);
   for (auto& part : bricks_) part->drop();
   if (distributed()) broadcast_arrays(model);
   rebuild(model);
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
+  if (scatter)
+    for (auto& part : bricks_) part->hollow_whole(model);
 }
 
 double Pipeline::list_reach(const Model& model, double skin) const {

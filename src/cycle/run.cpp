@@ -34,9 +34,12 @@ using Clock = std::chrono::steady_clock;
 
 // The scene's features (scene_features) as rank 0 finds them, on every rank: a collective call,
 // for a run going on from the ranks' parts (the others hold no ball's state but its type and radius).
-Features features_from_root(const Model& model) {
+Features features_from_root(const Model& model, Pipeline& pipeline) {
   Features f;
-  if (comm::root()) f = scene_features(model);
+  // (Rank 0's whole model hollow: whether a ball spins, from the parts.)
+  std::optional<bool> spinning;
+  if (pipeline.whole_hollow(model)) spinning = pipeline.part_counts(model).spinning > 0;
+  if (comm::root()) f = scene_features(model, spinning);
   std::vector<std::int64_t> v{f.rotation, f.friction, f.hertz, f.rolling, f.bridges, f.bonds, f.stiffness_damping,
                               static_cast<std::int64_t>(f.mass_damping), f.gravity, f.applied, f.periodic};
   comm::broadcast(v);
@@ -179,7 +182,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // results are of no use to it (but to a servo's first reading, which makes them as they were).
   if (pipeline.results_deferred(model) && !pipeline.deferred().same_settings(model.settings) && !servo_reads_table_)
     pipeline.clear_deferred();
-  pipeline.refresh_whole(model);
+  pipeline.refresh_whole(model, false);   // (stale; not where hollow: what follows reads its light arrays)
   // The first step's sort: rank 0 alone sorts (sort_balls), the parts given back to it first.
   if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model)) pipeline.release_parts(model);
   // A servo's first reading of the contact table needs the whole model's list searched on every
@@ -214,7 +217,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   }
   // The history parts the laws of this run use, zero where a law is new since the pairs were found.
   model.contacts.use_history(laws_with_history(model));
-  kernels_ = from_parts || from_root ? make_kernels(model, features_from_root(model)) : make_kernels(model);
+  kernels_ = from_parts || from_root ? make_kernels(model, features_from_root(model, pipeline)) : make_kernels(model);
   cap_ = hertz_step_cap(model);
   // The estimate between contact episodes, below which the held critical step is kept (the whole
   // model's, before a distributed run's parts take their balls; going on from them, rank 0's).

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "model/model.hpp"
 
@@ -22,10 +23,14 @@ struct LargestOverlap {
   std::int64_t other = 0;       // the other ball's id, or the wall's id
   bool wall = false;
   std::size_t beyond = 0;       // contacts whose ratio is above `threshold`
+  std::size_t at = 0;           // the largest's place: its pair, or its wall contact (wall)
 };
 
 // Over the pair list and the wall contacts, at the positions now (a read of the state: nothing is
-// written, so no result changes). Ties go to the first in the tables' order.
-LargestOverlap largest_overlap(const Model& model, double threshold = kOverlapWarning);
+// written, so no result changes). Ties go to the first in the tables' order. pairs, walls: those of
+// the tables alone (a distributed run's part: the pairs and wall contacts it owns), in order.
+LargestOverlap largest_overlap(const Model& model, double threshold = kOverlapWarning,
+                               const std::vector<std::uint32_t>* pairs = nullptr,
+                               const std::vector<std::uint32_t>* walls = nullptr);
 
 }  // namespace trubal

@@ -2,6 +2,8 @@
 // the readiness checks, the masses.
 #pragma once
 
+#include <optional>
+
 #include <string>
 
 #include "model/model.hpp"
@@ -24,7 +26,9 @@ struct Features {
   std::string describe() const;     // for PRINT info
 };
 
-Features scene_features(const Model& model);
+// spinning: whether some ball spins, where the caller knows it and the model does not hold the
+// balls' angular velocities (a distributed run's rank 0 whose kept parts alone hold them).
+Features scene_features(const Model& model, std::optional<bool> spinning = std::nullopt);
 // Whether some material has rolling resistance (PROP rr_fric): output then shows the rolling moments.
 bool has_rolling(const Model& model);
 // The laws with history of their own that the model's materials have (rolling resistance,

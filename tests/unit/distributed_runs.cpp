@@ -192,13 +192,16 @@ cycle 10000
   // the count follows the shares, which follow the ranks' speeds): checked by the bits.
   CHECK(counter(counters, "part_list_rebuilds") >= 100);
   CHECK(counter(counters, "migrations") >= 100);
-  // Rank 1 stepped its part without the whole model's arrays (Pipeline::hollow): it kept their ids
-  // and radii, 16 of a ball's 180-odd bytes, where rank 0 kept them all.
+  // Every rank stepped its part without the whole model's state (Pipeline::hollow,
+  // BrickStep::hollow_whole): rank 1 kept the balls' ids, types and radii (20 of a ball's 205
+  // bytes), rank 0 their fixities, masses and applied loads too (85 bytes), for the commands.
   {
     const double rank0 = counter(counters, "rank0_whole_arrays_mib"), rank1 = counter(counters, "rank1_whole_arrays_mib");
-    INFO("whole model's arrays held: rank 0 " << rank0 << " MiB, rank 1 " << rank1 << " MiB");
+    const double per_ball = rank0 * (1 << 20) / counter(counters, "balls");
+    INFO("whole model's arrays held: rank 0 " << rank0 << " MiB (" << per_ball << " bytes a ball), rank 1 " << rank1 << " MiB");
     CHECK(rank0 > 0);
-    CHECK(rank1 < 0.2 * rank0);
+    CHECK(per_ball < 100);
+    CHECK(rank1 < 0.3 * rank0);
   }
   // And with every list rebuilt through the whole model (TRUBAL_REBUILD_WHOLE): none on the parts,
   // the same bits.

@@ -39,7 +39,7 @@ double porosity_of(const Session& s, double volume) {
 }
 
 // The largest overlap of any pair over the smaller radius, every pair tried (periodic: nearest image).
-double largest_overlap(const Model& m) {
+double worst_overlap_every_pair(const Model& m) {
   const Balls& b = m.balls;
   const auto L = m.space.length();
   double worst = 0;
@@ -81,7 +81,7 @@ TEST_CASE("gen psd: a sieve curve to a porosity in the periodic cell", "[gen]") 
   // and independent draws (~2% at this n) or a wrong density in an interval (~10%) fail it.
   CHECK(largest_grading_difference(s) < 0.5);
   // Every stage relaxed to overlaps within 1% of the smaller radius (pack.hpp).
-  CHECK(largest_overlap(s.model()) <= 0.0101);
+  CHECK(worst_overlap_every_pair(s.model()) <= 0.0101);
   // Every centre in the cell.
   for (std::size_t k = 0; k < n; ++k) {
     CHECK(s.model().balls.x[k] >= 0);
@@ -192,7 +192,7 @@ TEST_CASE("gen psd: a porosity beyond reach stops with the porosity reached, the
   CHECK(reached > 0.30);   // well short of the target
   CHECK(reached < 0.50);   // but grown well past the start (0.75)
   CHECK_THAT(e, Catch::Contains(fmt::format("the balls are kept at {:.4f}", reached)));
-  CHECK(largest_overlap(h.session.model()) <= 0.0101);
+  CHECK(worst_overlap_every_pair(h.session.model()) <= 0.0101);
 }
 
 TEST_CASE("gen psd: balls of one size pass a sieve of their diameter, as asked", "[gen]") {
