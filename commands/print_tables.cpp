@@ -1,6 +1,7 @@
 // PRINT balls, contacts, walls and psd: the tables, to the screen or a CSV file (commands/print.cpp
 // dispatches).
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -27,7 +28,71 @@
 
 namespace trubal {
 
+namespace {
+std::int64_t id_of(double wire) { return std::bit_cast<std::int64_t>(wire); }
+
+// PRINT balls and contacts of every ball and pair, from the rows the ranks' kept parts stream where
+// rank 0's whole model is hollow (Session::rows_from_parts): the same text as from the whole model.
+void print_balls_streamed(Context& ctx, const std::string& file) {
+  std::size_t count = 0;
+  if (!file.empty()) {
+    write_file_atomically(file, [&](std::ostream& csv) {
+      csv << "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz\n";
+      ctx.session.ball_rows([&](const double* r) {
+        csv << id_of(r[0]) << ',' << static_cast<int>(r[1]);
+        for (std::size_t k = 2; k < BrickStep::kBallRow; ++k) csv << ',' << csv_real(r[k]);
+        csv << '\n';
+        ++count;
+      });
+    });
+    ctx.out << fmt::format("{} written to {}\n", count_of(count, "ball"), file);
+    return;
+  }
+  ctx.out << fmt::format("{:>8} {:>4} {:>12} {:>12} {:>12} {:>10} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}\n", "id",
+                         "type", "x", "y", "z", "rad", "vx", "vy", "vz", "fx", "fy", "fz");
+  ctx.session.ball_rows([&](const double* r) {
+    ctx.out << fmt::format("{:>8} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>10.4g} {:>11.4g} {:>11.4g} {:>11.4g} {:>11.4g} "
+                           "{:>11.4g} {:>11.4g}\n",
+                           id_of(r[0]), static_cast<int>(r[1]), r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[12], r[13], r[14]);
+  });
+}
+
+void print_contacts_streamed(Context& ctx, const std::string& file) {
+  const Model& m = ctx.session.state();   // (the materials: which columns there are)
+  const bool bridges = has_bridges(m), rolling = has_rolling(m);
+  std::size_t count = 0;
+  if (!file.empty()) {
+    write_file_atomically(file, [&](std::ostream& csv) {
+      csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding"
+          << (bridges ? ",bridge\n" : "\n");
+      ctx.session.contact_rows(bridges, [&](const double* r) {
+        csv << id_of(r[0]) << ',' << id_of(r[1]);
+        for (std::size_t k = 2; k < 10; ++k) csv << ',' << csv_real(r[k]);
+        if (rolling)
+          for (std::size_t k = 10; k < 13; ++k) csv << ',' << csv_real(r[k]);
+        csv << ',' << (r[13] == 2 ? 1 : 0);
+        if (bridges) csv << ',' << (r[14] != 0 ? 1 : 0);
+        csv << '\n';
+        ++count;
+      });
+    });
+    ctx.out << fmt::format("{} contacts written to {}\n", count, file);
+    return;
+  }
+  ctx.out << fmt::format("{:>8} {:>8} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11} {}{:>7}{}\n", "i", "j", "nx", "ny", "nz",
+                         "overlap", "fn", "|fs|", rolling ? fmt::format("{:>11} ", "|mr|") : "", "sliding",
+                         bridges ? "  bridge" : "");
+  ctx.session.contact_rows(bridges, [&](const double* r) {
+    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", id_of(r[0]),
+                           id_of(r[1]), r[2], r[3], r[4], r[5], r[6], std::sqrt(r[7] * r[7] + r[8] * r[8] + r[9] * r[9]),
+                           rolling ? fmt::format("{:>11.4g} ", std::sqrt(r[10] * r[10] + r[11] * r[11] + r[12] * r[12])) : "",
+                           r[13] == 2 ? "yes" : "no", bridges ? (r[14] != 0 ? "     yes" : "      no") : "");
+  });
+}
+}  // namespace
+
 void print_balls(Context& ctx, const Range& range, const std::string& file) {
+  if (range.empty() && ctx.session.rows_from_parts()) return print_balls_streamed(ctx, file);
   const Model& m = ctx.session.model_but_results();   // (the unbalanced forces are the balls')
   const Balls& b = m.balls;
   auto sel = ctx.session.select(range);
@@ -56,6 +121,7 @@ void print_balls(Context& ctx, const Range& range, const std::string& file) {
 }
 
 void print_contacts(Context& ctx, const Range& range, const std::string& file) {
+  if (range.empty() && ctx.session.rows_from_parts()) return print_contacts_streamed(ctx, file);
   const Model& m = ctx.session.model_but_results();
   const ContactTable& c = m.contacts;
   std::vector<bool> in(m.balls.size(), range.empty());

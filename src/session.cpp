@@ -90,6 +90,11 @@ void Session::model_on_zero() {
 
 void Session::run_on_root(const std::function<void()>& work) {
   if (comm::size() < 2) return work();
+  // Every rank holding the whole model (the parts ended in the CYCLE: a ball left the box at its
+  // last step), the contact results it deferred are made from the parts' copies, which every rank
+  // hands rank 0 (a collective call): here, before rank 0 runs alone.
+  if (!pipeline_->parts_live(model_) && pipeline_->results_deferred(model_) && pipeline_->part_rescue())
+    make_results_to_read(model_, *pipeline_);
   if (!comm::root()) return pipeline_->serve_root(model_);
   pipeline_->start_requests();
   try {
@@ -486,6 +491,18 @@ const std::vector<double>& Session::ball_array(const std::vector<double>& of, st
   return into;
 }
 
+bool Session::rows_from_parts() const {
+  if (!(pipeline_->serving() && pipeline_->whole_hollow(model_))) return false;
+  pipeline_->request_results_onto_parts(model_);   // (the balls' unbalanced forces are made with them)
+  return pipeline_->whole_hollow(model_);
+}
+
+void Session::ball_rows(const std::function<void(const double*)>& take) const { pipeline_->request_ball_rows(model_, take); }
+
+void Session::contact_rows(bool bridges, const std::function<void(const double*)>& take) const {
+  pipeline_->request_contact_rows(model_, bridges, take);
+}
+
 LargestOverlap Session::largest_overlap_now() {
   if (pipeline_->whole_hollow(model_)) return pipeline_->largest_overlap_on_parts(model_, kOverlapWarning);
   return largest_overlap(model_);
@@ -518,11 +535,44 @@ const std::vector<std::uint8_t>& Session::results_of(const std::vector<std::uint
   return fetch_results(of, into);
 }
 
+namespace {
+// The state of the ranks' kept parts where rank 0's whole model is hollow, streamed to rank 0's
+// SAVE a chunk at a time while the others serve it (Pipeline::request_stream).
+class PartState final : public StateSource {
+ public:
+  PartState(Model& model, Pipeline& pipeline) : model_(model), pipeline_(pipeline) {}
+  std::uint64_t place_pairs() override { return pipeline_.request_place_pairs(model_); }
+  std::uint64_t place_walls() override { return pipeline_.request_place_walls(model_); }
+  void stream(Table table, std::size_t k, const std::function<void(const std::vector<double>&)>& write) override {
+    pipeline_.request_stream(model_, static_cast<int>(table), k, write);
+  }
+  std::int64_t results_cycle() const override { return pipeline_.results_on_parts(model_) ? model_.cycle : -1; }
+
+ private:
+  Model& model_;
+  Pipeline& pipeline_;
+};
+}  // namespace
+
 void Session::save(const std::string& path) const {
   // (The results made on the parts go into the file from there, an array at a time: rank 0 never
   // holds them all, and the parts keep them for what reads them next.)
   if (pipeline_->serving()) {
     pipeline_->request_results_onto_parts(model_);
+    // Rank 0's whole model hollow: the parts' state streamed into the file, a chunk at a time (but
+    // a bonded model's, whose bonds' state the parts hold: gathered whole first).
+    if (pipeline_->whole_hollow(model_) && model_.bonds.empty()) {
+      PartState state(model_, *pipeline_);
+      try {
+        save_model(model_, path, history_.get(), 0, nullptr, &state);
+      } catch (...) {
+        pipeline_->request_free_saved();
+        throw;
+      }
+      pipeline_->request_free_saved();
+      unsaved_ = false;
+      return;
+    }
     pipeline_->request_whole(model_);   // (gathered from the parts where a CYCLE left it hollow)
   }
   if (results_from_parts()) {

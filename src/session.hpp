@@ -257,6 +257,13 @@ class Session {
   // Ball array `of` of the model (one of x y z, vx vy vz, wx wy wz): itself, or fetched from the
   // kept parts into `into` where rank 0's whole model is hollow (as state_counts).
   const std::vector<double>& ball_array(const std::vector<double>& of, std::vector<double>& into) const;
+  // Under mpirun, rank 0 running a command the others serve, where rank 0's whole model is hollow:
+  // the rows of PRINT balls (every ball, by id) and contacts (every pair touching, or holding a
+  // bridge where `bridges`, by ids) streamed from the kept parts (BrickStep::stream_ball_rows,
+  // stream_contact_rows); rows_from_parts says where. The results made on the parts first.
+  bool rows_from_parts() const;
+  void ball_rows(const std::function<void(const double*)>& take) const;
+  void contact_rows(bool bridges, const std::function<void(const double*)>& take) const;
   // The largest overlap (physics/overlap.hpp) on rank 0: from the kept parts where rank 0's whole
   // model is hollow (a collective call, every rank taking part); else rank 0's whole model's.
   LargestOverlap largest_overlap_now();

@@ -259,6 +259,7 @@ void BrickStep::release() {
   free(rank_bonds_); free(split_bond_rows_); free(split_bond_ball_i_);
   free(rank_balls_); free(rank_pairs_); free(rank_walls_); free(send_); free(recv_); free(send_buf_); free(recv_buf_);
   free(sums_out_); free(sums_in_);
+  free_saved();
 }
 
 void BrickStep::keep_copy() {

@@ -202,6 +202,29 @@ class BrickStep {
   // count beyond `threshold`, then its place in the whole model's tables' order (wall, the whole
   // model's ball i or ball, ball j or wall, the image) for the caller's choice among the members.
   std::vector<double> own_largest_overlap(const Model& full, double threshold);
+  // The part's state streamed to rank 0 in the whole model's order (SAVE where rank 0's whole
+  // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
+  // the pairs this member owns that SAVE keeps (touching in the results the part holds, where
+  // `results`, or with history) placed in the whole order; place_saved_walls: its wall contacts;
+  // each returns the count over every member. stream_table: array k of the moving balls (table 0:
+  // x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz), of the placed pairs (1) or wall contacts (2) in
+  // io/save.cpp's order (the list's, every declared history part's, the results'), `write(chunk)`
+  // on rank 0 for each chunk in turn (a failure there is rank 0's, thrown once the stream ends).
+  // free_saved: the places let go.
+  std::uint64_t place_saved_pairs(bool results);
+  std::uint64_t place_saved_walls();
+  void stream_table(int table, std::size_t k, const std::function<void(const std::vector<double>&)>& write);
+  void free_saved();
+  // PRINT balls and contacts where rank 0's whole model is hollow (a collective call of the ranks):
+  // the rows of this member's own balls by id, of its own pairs that touch in the results the part
+  // holds (or hold a capillary bridge, where `bridges`) by their balls' ids, merged in that order to
+  // rank 0, a batch at a time, where `take(row)` reads each in turn (on rank 0 alone; a failure there is
+  // thrown once every row came). A ball's row: id (its bits), type, x y z, rad, vx vy vz, wx wy wz,
+  // fx fy fz; a contact's: the smaller id, the larger (their bits), nx ny nz from the smaller's ball
+  // to the larger's, overlap, fn, fsx fsy fsz and mrx mry mrz on the larger's, the state, the bridge.
+  static constexpr std::size_t kBallRow = 15, kContactRow = 15;
+  void stream_ball_rows(const std::function<void(const double*)>& take);
+  void stream_contact_rows(bool bridges, const std::function<void(const double*)>& take);
   // Moving ball array k of the part (x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz), gathered in the
   // whole model's order into *into on rank 0 (a collective call of the ranks; the others pass null).
   void gather_ball_array(std::size_t k, std::vector<double>* into);
@@ -302,6 +325,22 @@ class BrickStep {
   // f(vector&) on each array of the part and its lists that cut_part makes, in the order rank 0
   // sends them and a rank receives them.
   template <class F> void each_sent_array(F&& f);
+  // (cycle/brick_stream.cpp) Each member's values (value(q) for its q-th entry, at its place at[q]
+  // in the whole order of `total` entries, ascending) to rank 0 in the whole order, a chunk at a
+  // time; and the places of entries by their balls (the whole model's, ascending), every ball's
+  // entries on its owner, in the whole order (by ball, then as each member lists them): the count.
+  template <class Value>
+  void stream_in_order(const std::vector<std::uint64_t>& at, std::uint64_t total, Value&& value,
+                       const std::function<void(const std::vector<double>&)>& write);
+  std::uint64_t place_by_ball(const std::vector<std::uint32_t>& ball, std::vector<std::uint64_t>& at);
+  // Rows of `width` values, `count` on each member (row(q, out) writes its q-th into out, in its
+  // order of `before`), merged to rank 0 in that order, take(row) there on each.
+  void merge_rows_to_root(std::size_t count, std::size_t width, const std::function<void(std::size_t, double*)>& row,
+                          const std::function<bool(const double*, const double*)>& before,
+                          const std::function<void(const double*)>& take);
+  std::vector<std::uint32_t> saved_pairs_;          // (place_saved_pairs) the part's pairs SAVE keeps
+  std::vector<std::uint64_t> saved_pair_at_, saved_wall_at_;   // their places, and the wall contacts'
+  std::uint64_t saved_pairs_total_ = 0, saved_walls_total_ = 0;
   // sync()'s first work after rebuild_local: full's list from every rank's (a collective call).
   void install_local_list(Model& full, VerletReference* whole_ref);
   // Its part for the walls' contacts.
@@ -315,7 +354,8 @@ class BrickStep {
   // The parts' contact results into full's table (sync, gather_results). free_each: each part's
   // array freed as it is gathered; else all once every one is.
   void gather_result_arrays(Model& full, std::vector<double>& out, std::vector<double>& in, bool free_each = true);
-  // A test's fault in gather_results and gather_result_array (StepPolicy::fail_results).
+  // A test's fault in gather_results, gather_result_array, place_saved_pairs and
+  // stream_contact_rows (StepPolicy::fail_results).
   void results_fault();
   // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
   template <class T> void gather_whole(const std::vector<T>& mine, std::vector<T>& all);

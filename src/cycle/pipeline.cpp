@@ -222,7 +222,8 @@ void Pipeline::gather_part_results(Model& model) {
 namespace {
 // What rank 0 asks of the others while it runs a command alone (Pipeline::serve_root).
 enum RootRequest : std::int64_t {
-  kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5, kBallArray = 6
+  kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5, kBallArray = 6,
+  kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12
 };
 }  // namespace
 
@@ -300,6 +301,50 @@ void Pipeline::request_ball_array(Model& model, std::size_t k, std::vector<doubl
   bricks().gather_ball_array(k, &into);
 }
 
+std::uint64_t Pipeline::request_place_pairs(Model& model) {
+  if (!whole_hollow(model)) throw std::logic_error("internal error: pairs streamed where rank 0's whole model holds them");
+  std::int64_t word = kPlacePairs;
+  comm::broadcast(word);
+  return bricks().place_saved_pairs(bricks().results_left());
+}
+
+std::uint64_t Pipeline::request_place_walls(Model& model) {
+  if (!whole_hollow(model)) throw std::logic_error("internal error: wall contacts streamed where rank 0's whole model holds them");
+  std::int64_t word = kPlaceWalls;
+  comm::broadcast(word);
+  return bricks().place_saved_walls();
+}
+
+void Pipeline::request_stream(Model& model, int table, std::size_t k,
+                              const std::function<void(const std::vector<double>&)>& write) {
+  if (!whole_hollow(model)) throw std::logic_error("internal error: a table streamed where rank 0's whole model holds it");
+  std::int64_t word = kStream, which = table * 1024 + static_cast<std::int64_t>(k);
+  comm::broadcast(word);
+  comm::broadcast(which);
+  bricks().stream_table(table, k, write);
+}
+
+void Pipeline::request_ball_rows(Model& model, const std::function<void(const double*)>& take) {
+  if (!whole_hollow(model)) throw std::logic_error("internal error: balls streamed where rank 0's whole model holds them");
+  std::int64_t word = kBallRows;
+  comm::broadcast(word);
+  bricks().stream_ball_rows(take);
+}
+
+void Pipeline::request_contact_rows(Model& model, bool bridges, const std::function<void(const double*)>& take) {
+  if (!whole_hollow(model)) throw std::logic_error("internal error: contacts streamed where rank 0's whole model holds them");
+  std::int64_t word = kContactRows, flag = bridges ? 1 : 0;
+  comm::broadcast(word);
+  comm::broadcast(flag);
+  bricks().stream_contact_rows(bridges, take);
+}
+
+void Pipeline::request_free_saved() {
+  std::int64_t word = kFreeSaved;
+  comm::broadcast(word);
+  bricks().free_saved();
+}
+
 void Pipeline::request_whole(Model& model) {
   if (!whole_to_refresh(model)) return;   // (rank 0's answer, which the others follow)
   std::int64_t word = kWhole;
@@ -320,11 +365,20 @@ void Pipeline::serve_root(Model& model) {
     comm::broadcast(word);
     if (word == kCommandEnded) return;
     std::int64_t array = 0;
-    if (word == kResultArray || word == kBallArray) comm::broadcast(array);
-    else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts)
+    if (word == kResultArray || word == kBallArray || word == kStream || word == kContactRows) comm::broadcast(array);
+    else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts && word != kPlacePairs &&
+             word != kPlaceWalls && word != kFreeSaved && word != kBallRows)
       throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
     // (A failure here is every rank's, in the collective calls: rank 0's command reports it.)
     try {
+      if (word == kBallRows) bricks().stream_ball_rows(nullptr);
+      if (word == kContactRows) bricks().stream_contact_rows(array != 0, nullptr);
+      if (word == kBallRows || word == kContactRows) continue;
+      if (word == kPlacePairs) bricks().place_saved_pairs(bricks().results_left());
+      if (word == kPlaceWalls) bricks().place_saved_walls();
+      if (word == kFreeSaved) bricks().free_saved();
+      if (word == kStream) bricks().stream_table(static_cast<int>(array / 1024), static_cast<std::size_t>(array % 1024), nullptr);
+      if (word == kPlacePairs || word == kPlaceWalls || word == kFreeSaved || word == kStream) continue;
       if (word == kWhole) {
         refresh_whole(model);
         continue;

@@ -4,6 +4,7 @@
 // Threads are a setting of the pipeline; the backend is only its pair search.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -152,6 +153,19 @@ class Pipeline {
   // Rank 0, serving(), where parts_live: moving ball array k of the parts
   // (BrickStep::gather_ball_array) into `into`, the parts keeping theirs.
   void request_ball_array(Model& model, std::size_t k, std::vector<double>& into);
+  // Rank 0, serving(), where whole_hollow: the parts' state streamed for SAVE, every rank taking
+  // part (the others in serve_root): the pairs SAVE keeps placed in the whole order (touching in
+  // the results the parts hold, or with history) and the wall contacts, their counts; array k of a
+  // table (BrickStep::stream_table: 0 the moving balls, 1 the placed pairs, 2 the wall contacts),
+  // `write(chunk)` here for each chunk in turn; the places let go after.
+  std::uint64_t request_place_pairs(Model& model);
+  std::uint64_t request_place_walls(Model& model);
+  void request_stream(Model& model, int table, std::size_t k, const std::function<void(const std::vector<double>&)>& write);
+  void request_free_saved();
+  // Rank 0, serving(), where whole_hollow: PRINT balls' and contacts' rows from the parts, in order
+  // (BrickStep::stream_ball_rows, stream_contact_rows), take(row) here on each.
+  void request_ball_rows(Model& model, const std::function<void(const double*)>& take);
+  void request_contact_rows(Model& model, bool bridges, const std::function<void(const double*)>& take);
   // Whether rank 0's whole model holds none of the state but its light arrays: the kept parts
   // alone hold it (BrickStep::hollow_whole). The same answer on every rank.
   bool whole_hollow(const Model& model) const { return parts_live(model) && bricks().whole_hollow(); }

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <array>
 #include <cstdio>
@@ -149,8 +150,45 @@ template <class IO> void transfer_pairs(IO& io, ContactTable& c, std::uint32_t v
   }
 }
 
+// Array k of a source's table, of n elements of type T, as vec writes it.
+template <class T> void write_streamed(Writer& w, std::uint64_t n, StateSource& source, StateSource::Table table, std::size_t k) {
+  w.pod(n);
+  std::vector<T> piece;
+  std::uint64_t written = 0;
+  source.stream(table, k, [&](const std::vector<double>& chunk) {
+    piece.resize(chunk.size());
+    for (std::size_t e = 0; e < chunk.size(); ++e) {
+      if constexpr (sizeof(T) == 8 && std::is_integral_v<T>) piece[e] = std::bit_cast<T>(chunk[e]);
+      else piece[e] = static_cast<T>(chunk[e]);
+    }
+    w.piece(piece);
+    written += piece.size();
+  });
+  if (written != n) throw std::logic_error("internal error: a table streamed to SAVE came short");
+}
+
+// A contact table's arrays from a source, in transfer_contacts' order (format 9 on: the list, each
+// declared history part by name, the results), n of each.
+template <class Table>
+void write_contacts_streamed(Writer& w, Table& t, std::uint64_t n, StateSource& source, StateSource::Table table) {
+  std::size_t k = 0;
+  auto put = [&](const auto& v) { write_streamed<typename std::decay_t<decltype(v)>::value_type>(w, n, source, table, k++); };
+  t.for_each_list_array(put);
+  std::uint64_t parts = 0;
+  t.for_each_declared_history([&](const auto&, const HistoryPart&, bool) { ++parts; });
+  w.pod(parts);
+  t.for_each_declared_history([&](auto& v, const HistoryPart& part, bool) {
+    w.str(std::string(part.name));
+    put(v);
+  });
+  t.for_each_result_array(put);
+}
+
 // One description of the layout serves both directions, so save and load cannot drift apart.
-template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, ResultSource* results = nullptr) {
+// `state` (writing the current format): where the balls' moving arrays, the pairs and the wall
+// contacts are, the model's arrays of them empty.
+template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, ResultSource* results = nullptr,
+                                  StateSource* state = nullptr) {
   io.pod(m.space.periodic);
   io.pod(m.space.lo); io.pod(m.space.hi); io.pod(m.space.boxes);
   if (version >= 3) io.pod(m.space.tilt);
@@ -208,14 +246,30 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, Resul
       }
     }
   }
-  m.balls.for_each_array([&](auto& v) { io.vec(v); });
-  transfer_pairs(io, m.contacts, version, results);
-  if (version >= 4) {
-    if constexpr (std::is_same_v<IO, Reader>) {
-      io.pod(m.contacts.results_cycle);
-    } else {
-      const std::int64_t of = results && !m.contacts.results_kept() ? results->cycle() : m.contacts.results_cycle;
-      io.pod(of);
+  if constexpr (!std::is_same_v<IO, Reader>) {
+    if (state) {
+      const Balls& b = m.balls;
+      const std::vector<double>* moving[] = {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz,
+                                             &b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz};
+      m.balls.for_each_array([&](auto& v) {
+        const auto at = std::find(std::begin(moving), std::end(moving), static_cast<const void*>(&v));
+        if (at == std::end(moving)) return io.vec(v);
+        write_streamed<double>(io, b.size(), *state, StateSource::Table::Balls, static_cast<std::size_t>(at - std::begin(moving)));
+      });
+      write_contacts_streamed(io, m.contacts, state->place_pairs(), *state, StateSource::Table::Pairs);
+      io.pod(state->results_cycle());
+    }
+  }
+  if (!state) {
+    m.balls.for_each_array([&](auto& v) { io.vec(v); });
+    transfer_pairs(io, m.contacts, version, results);
+    if (version >= 4) {
+      if constexpr (std::is_same_v<IO, Reader>) {
+        io.pod(m.contacts.results_cycle);
+      } else {
+        const std::int64_t of = results && !m.contacts.results_kept() ? results->cycle() : m.contacts.results_cycle;
+        io.pod(of);
+      }
     }
   }
   io.pod(m.settings.frac); io.pod(m.settings.fixed_dt); io.pod(m.settings.gravity);
@@ -264,7 +318,14 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, Resul
       io.pod(w.force); io.pod(w.moment); io.pod(w.normal_force); io.pod(w.stiffness); io.pod(w.contacts);
       io.pod(w.work);
     }
-    transfer_contacts(io, m.wall_contacts, version, [&](auto& v) { io.vec(v); });
+    bool streamed = false;
+    if constexpr (!std::is_same_v<IO, Reader>) {
+      if (state) {
+        write_contacts_streamed(io, m.wall_contacts, state->place_walls(), *state, StateSource::Table::Walls);
+        streamed = true;
+      }
+    }
+    if (!streamed) transfer_contacts(io, m.wall_contacts, version, [&](auto& v) { io.vec(v); });
     io.pod(m.space.periodic_axis);
   }
   if (version >= 6) io.pod(m.space.reference_volume);
@@ -368,9 +429,10 @@ template <class IO> void transfer_histories(IO& io, History& history) {
 }  // namespace
 
 void save_model(const Model& model, const std::string& path, const History* history, std::uint32_t version,
-                ResultSource* results) {
+                ResultSource* results, StateSource* state) {
   if (!comm::root()) return;   // a distributed run's files are rank 0's to write
   if (version == 0) version = kVersion;
+  if (state && version != kVersion) throw std::logic_error("internal error: a streamed SAVE of an older format");
   if (version < kOldestVersion || version > kVersion)
     throw std::invalid_argument(fmt::format("save format {} is not one this trubal writes", version));
   check_replaceable(path);
@@ -386,7 +448,7 @@ void save_model(const Model& model, const std::string& path, const History* hist
             ::lseek(fd, static_cast<off_t>(header.size()), SEEK_SET) >= 0;
   int err = ok ? 0 : errno;
   if (ok) {
-    transfer(w, const_cast<Model&>(model), version, results);
+    transfer(w, const_cast<Model&>(model), version, results, state);
     History none;
     if (version >= 6) transfer_histories(w, const_cast<History&>(history ? *history : none));
     ok = w.flush();

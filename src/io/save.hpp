@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,14 +27,36 @@ class ResultSource {
   virtual std::int64_t cycle() const = 0;
 };
 
+// Where the model's arrays do not hold its state (a distributed run's rank 0 whose whole model is
+// hollow: the ranks' kept parts alone hold it), the state SAVE writes from them, each array streamed
+// in the whole model's order a chunk at a time, so that rank 0 holds a chunk, not the model. The
+// tables: the balls' moving arrays (x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz), the pairs SAVE
+// keeps and the wall contacts, each table's arrays in SAVE's order (the list's, every declared
+// history part's, the results'). Values travel as doubles: integers of 32 bits and fewer by value,
+// 64-bit ones by their bits.
+class StateSource {
+ public:
+  enum class Table { Balls, Pairs, Walls };
+  virtual ~StateSource() = default;
+  // The pairs SAVE keeps (touching in the results, or with history) and the wall contacts, placed
+  // in the whole model's order: their counts.
+  virtual std::uint64_t place_pairs() = 0;
+  virtual std::uint64_t place_walls() = 0;
+  // Array k of the table, `write(chunk)` for each chunk in order.
+  virtual void stream(Table table, std::size_t k, const std::function<void(const std::vector<double>&)>& write) = 0;
+  // The cycle of the results the source holds; -1 where it holds none (written as zero).
+  virtual std::int64_t results_cycle() const = 0;
+};
+
 // Writes to a temporary beside PATH (TemporaryFile, io/atomic_file.hpp), syncs, renames over PATH.
 // Throws std::runtime_error on failure (the old file, if any, is untouched).
 // With `history`, its tables (settings and the rows in memory) are saved too. `version` 0 writes
 // the current format; an older one writes what that format held (for the tests that check that
 // older files still read). `results`: where the table's results are, where it does not hold them
 // (the same bytes as from a table that does).
+// `state`: where the model's state is (the current format only).
 void save_model(const Model& model, const std::string& path, const History* history = nullptr,
-                std::uint32_t version = 0, ResultSource* results = nullptr);
+                std::uint32_t version = 0, ResultSource* results = nullptr, StateSource* state = nullptr);
 // Reads a file written by save_model. Throws std::runtime_error for a missing, truncated,
 // corrupted or foreign file, or one of another version; the model is not touched then. With
 // `history`, it receives the saved tables (none from a file older than version 6), their files not

@@ -93,6 +93,12 @@ class Writer {
     pod<std::uint64_t>(s.size());
     bytes(s.data(), s.size());
   }
+  // A piece of a vector's elements: vec's bytes for a vector written its length first (pod), then
+  // its elements a piece at a time.
+  template <class T> void piece(const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (!v.empty()) bytes(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
   // Writes what the buffer holds; false (errno kept) where a write failed, now or before.
   bool flush() {
     if (!error_ && !buf_.empty()) put(buf_.data(), buf_.size());

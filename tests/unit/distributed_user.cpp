@@ -156,11 +156,12 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
   SECTION("out of memory making the contact results a command reads: the command fails on every rank, and the shell goes on") {
     // Two ways: rank 1 fails handing rank 0 the results the CYCLE's last step left on the parts,
     // for a PRINT (TRUBAL_TEST_FAIL_AT "1 results"; the others serve rank 0's command,
-    // Pipeline::serve_root); rank 2 fails so for a SAVE, which writes them from the parts an
-    // array at a time and leaves no file, not even a part of one (ResultSource). Either way every rank stops the command with the one
-    // message, PRINT counters then finds cycle 30 with the parts kept, the next PRINT has the
-    // results made on the parts (the step taken again there once) and read from them an array at
-    // a time (none gathered whole), and the next CYCLE, its SAVE and the files give the serial bits.
+    // Pipeline::serve_root; PRINT contacts streams its rows from the parts, rank 0's whole model
+    // hollow); rank 2 fails so for a SAVE, which streams the model from the parts a chunk at a time
+    // and leaves no file, not even a part of one (StateSource). Either way every rank stops the
+    // command with the one message, PRINT counters then finds cycle 30 with the parts kept, the
+    // next PRINT has the results made on the parts (the step taken again there once) and read from
+    // them (none gathered whole), and the next CYCLE, its SAVE and the files give the serial bits.
     struct Way {
       const char* fault;
       const char* reader;
