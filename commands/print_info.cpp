@@ -114,8 +114,8 @@ void print_info(Context& ctx) {
   o << fmt::format("peak memory: {} MiB{}\n", each(&Session::RankFigures::peak_mib), comm::size() > 1 ? " (per rank)" : "");
   if (comm::size() > 1) {
     o << fmt::format("arrays held in the last step: whole model {} MiB, part {} MiB (per rank: each its part, and of the "
-                     "whole model the balls' ids, types and radii, rank 0 their fixities, masses and loads too, and the "
-                     "whole model where an output step read it)\n",
+                     "whole model the balls' ids, types and radii, rank 0 their fixities too, and the whole model where an "
+                     "output step read it)\n",
                      each_array(&Session::RankFigures::whole_arrays_mib), each_array(&Session::RankFigures::part_arrays_mib));
     o << fmt::format("model held now: {} MiB (per rank: {})\n", each_array(&Session::RankFigures::model_arrays_mib),
                      s.parts_kept() ? s.pipeline().whole_hollow(m) ? "each its part of the model, rank 0 the light arrays of "
@@ -131,7 +131,7 @@ void print_info(Context& ctx) {
                      "0 the whole model's)\n", each_array(&Session::RankFigures::rescue_mib));
   }
   for (const auto& [k, v] : s.pipeline().info()) o << k << ": " << v << '\n';
-  const Features f = scene_features(m, counts.spinning);
+  const Features f = scene_features(m, counts.flags);
   o << fmt::format("physics: {}\n", f.describe());
   // The loops compiled for exactly these features (the general kernel has every one on).
   const char* damping = f.mass_damping == DampKind::Rayleigh ? ", mass damping"

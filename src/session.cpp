@@ -302,7 +302,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   require_started();
   check_ready(model_);
   // (The ranks' parts keep theirs, and rank 0 sets the others' at the split: CycleRun.)
-  if (!(parts_kept() || pipeline_->others_hollow()) || comm::root()) update_mass(model_);
+  if ((!(parts_kept() || pipeline_->others_hollow()) || comm::root()) && !pipeline_->whole_hollow(model_)) update_mass(model_);
   interrupt_requested() = false;
   CycleControl control;
   control.interrupt = &interrupt_requested();
@@ -470,7 +470,7 @@ void Session::results_on_root() {
 Session::StateCounts Session::state_counts() const {
   if (pipeline_->serving() && pipeline_->whole_hollow(model_)) {
     const Pipeline::PartCounts c = pipeline_->request_part_counts(model_);
-    return {c.touching, c.wall_touching, c.bridges, c.wall_bridges, c.spinning > 0};
+    return {c.touching, c.wall_touching, c.bridges, c.wall_bridges, c.flags()};
   }
   const Model& m = model_but_results();
   StateCounts n;

@@ -23,6 +23,7 @@
 #include "model/model.hpp"
 #include "model/range.hpp"
 #include "physics/overlap.hpp"
+#include "physics/scene.hpp"
 
 namespace trubal {
 
@@ -246,12 +247,12 @@ class Session {
   void results_on_root();
   // What PRINT info and counters tell of the state without the whole model on rank 0: the pairs
   // and wall contacts touching, the capillary bridges between balls and to walls, and whether some
-  // ball spins (where the model's arrays do not say: `spinning` empty where they do). Under
+  // ball spins or carries a load (where the model's arrays do not say: `flags` empty where they do). Under
   // mpirun, rank 0 running a command the others serve, summed over the kept parts where rank 0's
   // whole model is hollow; else counted on model_but_results().
   struct StateCounts {
     std::size_t touching = 0, wall_touching = 0, bridges = 0, wall_bridges = 0;
-    std::optional<bool> spinning;
+    std::optional<BallFlags> flags;
   };
   StateCounts state_counts() const;
   // Ball array `of` of the model (one of x y z, vx vy vz, wx wy wz): itself, or fetched from the

@@ -235,6 +235,15 @@ double BrickStep::critical_step(const Features& features) {
   return -least[0];
 }
 
+double BrickStep::free_step(const Features& features, double cap) {
+  const std::uint8_t* ghost = scratch_.ghost.size() == part_.balls.size() ? scratch_.ghost.data() : nullptr;
+  std::vector<double> any{any_ball_free(part_, features.rotation, ghost) ? 1.0 : 0.0};
+  team_->max_all(any);
+  std::vector<double> least{-contact_free_step(part_, features, cap, any[0] != 0, ghost)};
+  team_->max_all(least);   // (the smallest step: a max of the negatives, exact)
+  return -least[0];
+}
+
 void BrickStep::loads_changed(const Model& full) {
   const Balls& from = full.balls;
   Balls& to = part_.balls;

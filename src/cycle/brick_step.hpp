@@ -178,6 +178,8 @@ class BrickStep {
   // The whole model's critical step, without the Hertz cap (physics/timestep.hpp), from each rank's
   // own balls on its part: the smallest over the ranks (a collective call).
   double critical_step(const Features& features);
+  // And its contact-free step (physics/timestep.hpp contact_free_step), so.
+  double free_step(const Features& features, double cap);
   // The applied loads of `full`'s balls changed (a following membrane's, between steps, on every
   // rank alike): the part's copies take them.
   void loads_changed(const Model& full);
@@ -195,7 +197,8 @@ class BrickStep {
   void end_on_parts(Model& full);
   // This member's counts over its own pairs, wall contacts and balls, which the caller sums over the
   // members: the pairs and the wall contacts touching in the results the part holds (none where it
-  // holds none), the capillary bridges between balls and to walls, the balls that spin.
+  // holds none), the capillary bridges between balls and to walls, the balls that spin, that carry
+  // an applied force, that carry an applied moment.
   std::vector<double> own_counts() const;
   // The largest overlap over the pairs and wall contacts this member owns (physics/overlap.hpp), at
   // the part's positions now with full's space and walls: its ratio, ball, other, wall (0 or 1) and
@@ -206,8 +209,9 @@ class BrickStep {
   // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
   // the pairs this member owns that SAVE keeps (touching in the results the part holds, where
   // `results`, or with history) placed in the whole order; place_saved_walls: its wall contacts;
-  // each returns the count over every member. stream_table: array k of the moving balls (table 0:
-  // x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz), of the placed pairs (1) or wall contacts (2) in
+  // each returns the count over every member. stream_table: array k of the balls (table 0: x y z,
+  // vx vy vz, wx wy wz, fx fy fz, mx my mz, mass, inertia, ax ay az, amx amy amz), of the placed
+  // pairs (1) or wall contacts (2) in
   // io/save.cpp's order (the list's, every declared history part's, the results'), `write(chunk)`
   // on rank 0 for each chunk in turn (a failure there is rank 0's, thrown once the stream ends).
   // free_saved: the places let go.

@@ -156,10 +156,11 @@ void BrickStep::stream_table(int table, std::size_t k, const std::function<void(
     t.for_each_result_array(visit);
   };
   if (table == 0) {
-    // The moving ball arrays (x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz).
+    // The balls' arrays of reals but the radii, in io/save.hpp's order.
     Balls& b = part_.balls;
-    const std::vector<double>* arrays[] = {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz,
-                                           &b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz};
+    const std::vector<double>* arrays[] = {&b.x,  &b.y,  &b.z,  &b.vx,   &b.vy,      &b.vz, &b.wx, &b.wy,
+                                           &b.wz, &b.fx, &b.fy, &b.fz,   &b.mx,      &b.my, &b.mz, &b.mass,
+                                           &b.inertia, &b.ax, &b.ay, &b.az, &b.amx, &b.amy, &b.amz};
     if (k >= std::size(arrays)) throw std::logic_error("internal error: a ball array the balls do not have");
     std::vector<std::uint64_t> at;
     together([&] { for (std::uint32_t q : owned_) at.push_back(global_ball_[q]); }, "streaming its part to rank 0");

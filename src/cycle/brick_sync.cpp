@@ -26,6 +26,11 @@ template <class F> void each_moving_ball_array(Balls& b, F&& f) {
   for (auto* v : {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz})
     f(*v);
 }
+// What else rank 0's hollow whole model lets go (BrickStep::hollow_whole), which the parts hold:
+// the balls' masses and applied loads (a CYCLE going on from the parts reads them there).
+template <class F> void each_held_ball_array(Balls& b, F&& f) {
+  for (auto* v : {&b.mass, &b.inertia, &b.ax, &b.ay, &b.az, &b.amx, &b.amy, &b.amz}) f(*v);
+}
 template <class F> void each_history_array(ContactTable& c, F&& f) {
   c.for_each_history([&](auto& v, const HistoryPart&) { f(v); });
 }
@@ -277,6 +282,7 @@ void BrickStep::hollow_whole(Model& full) {
   if (comm::root()) {
     auto free = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
     each_moving_ball_array(full.balls, free);
+    each_held_ball_array(full.balls, free);
     full.contacts.for_each_pair_array(free);   // (their list versions stay: live_for)
     full.wall_contacts.for_each_array(free);
     // (Each rank's places in the whole list and wall contacts: made again with them, install_local_list.)
@@ -311,8 +317,13 @@ std::vector<double> BrickStep::own_counts() const {
     for (std::uint32_t q : owned_walls_) wall_touching += w.state[q] != 0;
   if (w.bridge.size() == w.size())
     for (std::uint32_t q : owned_walls_) wall_bridges += w.bridge[q] != 0;
-  for (std::uint32_t k : owned_) spinning += b.wx[k] != 0 || b.wy[k] != 0 || b.wz[k] != 0;
-  return {touching, wall_touching, bridges, wall_bridges, spinning};
+  double applied = 0, moments = 0;
+  for (std::uint32_t k : owned_) {
+    spinning += b.wx[k] != 0 || b.wy[k] != 0 || b.wz[k] != 0;
+    applied += b.ax[k] != 0 || b.ay[k] != 0 || b.az[k] != 0;
+    moments += b.amx[k] != 0 || b.amy[k] != 0 || b.amz[k] != 0;
+  }
+  return {touching, wall_touching, bridges, wall_bridges, spinning, applied, moments};
 }
 
 std::vector<double> BrickStep::own_largest_overlap(const Model& full, double threshold) {
@@ -348,15 +359,19 @@ void BrickStep::gather_ball_array(std::size_t k, std::vector<double>* into) {
 void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results) {
   if (!live_ || current_ || model_ != &full) return;
   std::vector<double> out, in;
-  if (whole_hollow_) {
+  const bool hollow = whole_hollow_;
+  if (hollow) {
     // Every array of the state gathered, the lists made afresh from the parts' (install_local_list).
     together([&] {
       if (!comm::root()) return;
       each_moving_ball_array(full.balls, [&](std::vector<double>& v) { v.assign(full_balls_, 0.0); });
+      each_held_ball_array(full.balls, [&](std::vector<double>& v) { v.assign(full_balls_, 0.0); });
       full.contacts.set_history_laws(part_.contacts.history_laws);
     }, "gathering the model from the parts");
     list_local_ = true;
     whole_list_kept_ = false;
+    gather_set(*team_, [](Balls& b, auto&& f) { each_held_ball_array(b, f); }, part_.balls, full.balls, owned_, rank_balls_,
+               out, in);
   }
   // (After a step taken again from the copies in place, the parts' list is the one the whole
   // model was given at the CYCLE's end, wraps and all: restore_copy_in_place.)

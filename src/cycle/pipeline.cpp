@@ -255,10 +255,10 @@ Pipeline::PartCounts Pipeline::part_counts(const Model& model) {
   if (!parts_live(model)) return {};
   std::vector<double> all;
   comm::allgather(bricks().own_counts(), all);
-  std::array<double, 5> sum{};
+  std::array<double, 7> sum{};
   for (std::size_t k = 0; k < all.size(); ++k) sum[k % sum.size()] += all[k];   // (integers: exact in any order)
   auto count = [](double v) { return static_cast<std::size_t>(v); };
-  return {count(sum[0]), count(sum[1]), count(sum[2]), count(sum[3]), count(sum[4])};
+  return {count(sum[0]), count(sum[1]), count(sum[2]), count(sum[3]), count(sum[4]), count(sum[5]), count(sum[6])};
 }
 
 LargestOverlap Pipeline::largest_overlap_on_parts(const Model& model, double threshold) {

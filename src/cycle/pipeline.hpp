@@ -22,6 +22,7 @@
 #include "cycle/timed_choice.hpp"
 #include "cycle/verlet.hpp"
 #include "physics/overlap.hpp"
+#include "physics/scene.hpp"
 #include "support/thread_pool.hpp"
 
 namespace trubal {
@@ -140,8 +141,13 @@ class Pipeline {
   // Sums over the ranks' kept parts of what each holds of its own (BrickStep::own_counts): a
   // collective call where parts_live, every rank given the sums; zeros elsewhere.
   struct PartCounts {
-    std::size_t touching = 0, wall_touching = 0, bridges = 0, wall_bridges = 0, spinning = 0;
+    std::size_t touching = 0, wall_touching = 0, bridges = 0, wall_bridges = 0, spinning = 0, applied = 0, moments = 0;
+    // What scene_features reads of the balls, where rank 0's whole model does not hold it.
+    BallFlags flags() const { return {spinning > 0, applied > 0, moments > 0}; }
   };
+  // The contact-free step (physics/timestep.hpp contact_free_step) of the kept parts' balls, each
+  // rank's own: the smallest over the ranks (a collective call where parts_live).
+  double part_free_step(const Features& features, double cap) { return bricks().free_step(features, cap); }
   PartCounts part_counts(const Model& model);
   // Rank 0, serving(), where parts_live: part_counts, the results made on the parts first where a
   // CYCLE deferred them (every rank taking part: the others in serve_root).

@@ -36,10 +36,10 @@ using Clock = std::chrono::steady_clock;
 // for a run going on from the ranks' parts (the others hold no ball's state but its type and radius).
 Features features_from_root(const Model& model, Pipeline& pipeline) {
   Features f;
-  // (Rank 0's whole model hollow: whether a ball spins, from the parts.)
-  std::optional<bool> spinning;
-  if (pipeline.whole_hollow(model)) spinning = pipeline.part_counts(model).spinning > 0;
-  if (comm::root()) f = scene_features(model, spinning);
+  // (Rank 0's whole model hollow: whether a ball spins or carries a load, from the parts.)
+  std::optional<BallFlags> flags;
+  if (pipeline.whole_hollow(model)) flags = pipeline.part_counts(model).flags();
+  if (comm::root()) f = scene_features(model, flags);
   std::vector<std::int64_t> v{f.rotation, f.friction, f.hertz, f.rolling, f.bridges, f.bonds, f.stiffness_damping,
                               static_cast<std::int64_t>(f.mass_damping), f.gravity, f.applied, f.periodic};
   comm::broadcast(v);
@@ -197,8 +197,10 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   const bool from_root = pipeline.others_hollow();
   if (from_parts) pipeline.parts_take_settings(model);
   const bool whole_here = !(from_parts || from_root) || comm::root();
+  // (Rank 0's whole model hollow: the parts hold the masses, which no command changed since.)
+  const bool hollow = pipeline.whole_hollow(model);
   check_ready(model);
-  if (whole_here) update_mass(model);
+  if (whole_here && !hollow) update_mass(model);
   auto check_masses = [&] {
     for (std::size_t k = 0; k < model.balls.size(); ++k)
       if (!(model.balls.mass[k] > 0 && std::isfinite(1 / model.balls.mass[k]) && model.balls.inertia[k] > 0))
@@ -221,8 +223,9 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   cap_ = hertz_step_cap(model);
   // The estimate between contact episodes, below which the held critical step is kept (the whole
   // model's, before a distributed run's parts take their balls; going on from them, rank 0's).
-  if (whole_here) free_step_ = contact_free_step(model, kernels_.features, cap_);
-  if (from_parts || from_root) {
+  if (hollow) free_step_ = pipeline.part_free_step(kernels_.features, cap_);
+  else if (whole_here) free_step_ = contact_free_step(model, kernels_.features, cap_);
+  if ((from_parts || from_root) && !hollow) {
     std::vector<double> free_step{free_step_};
     comm::broadcast(free_step);
     free_step_ = free_step[0];

@@ -249,8 +249,9 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, Resul
   if constexpr (!std::is_same_v<IO, Reader>) {
     if (state) {
       const Balls& b = m.balls;
-      const std::vector<double>* moving[] = {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz,
-                                             &b.fx, &b.fy, &b.fz, &b.mx, &b.my, &b.mz};
+      const std::vector<double>* moving[] = {&b.x,  &b.y,  &b.z,  &b.vx,   &b.vy,      &b.vz, &b.wx, &b.wy,
+                                             &b.wz, &b.fx, &b.fy, &b.fz,   &b.mx,      &b.my, &b.mz, &b.mass,
+                                             &b.inertia, &b.ax, &b.ay, &b.az, &b.amx, &b.amy, &b.amz};
       m.balls.for_each_array([&](auto& v) {
         const auto at = std::find(std::begin(moving), std::end(moving), static_cast<const void*>(&v));
         if (at == std::end(moving)) return io.vec(v);

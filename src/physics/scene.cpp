@@ -35,7 +35,7 @@ std::string Features::describe() const {
   return s;
 }
 
-Features scene_features(const Model& model, std::optional<bool> spinning_known) {
+Features scene_features(const Model& model, std::optional<BallFlags> flags) {
   Features f;
   const Balls& b = model.balls;
   const Damping& damping = model.settings.damping;
@@ -59,13 +59,18 @@ Features scene_features(const Model& model, std::optional<bool> spinning_known) 
   f.applied = false;
   for (std::size_t i = 0; i < b.size(); ++i) {
     free_spin = free_spin || (b.fixed[i] & kSpin) != kSpin;
-    if (!spinning_known) spinning = spinning || b.wx[i] != 0 || b.wy[i] != 0 || b.wz[i] != 0;
+    if (flags) continue;
+    spinning = spinning || b.wx[i] != 0 || b.wy[i] != 0 || b.wz[i] != 0;
     moments = moments || b.amx[i] != 0 || b.amy[i] != 0 || b.amz[i] != 0;
     f.applied = f.applied || moments || b.ax[i] != 0 || b.ay[i] != 0 || b.az[i] != 0;
   }
+  if (flags) {
+    spinning = flags->spinning;
+    moments = flags->moments;
+    f.applied = flags->applied || flags->moments;
+  }
   // A bond carries moments: its balls turn whatever the contacts' shear.
   f.bonds = std::any_of(model.bonds.fate.begin(), model.bonds.fate.end(), [](std::uint8_t v) { return v == 0; });
-  if (spinning_known) spinning = *spinning_known;
   f.rotation = ((f.friction || f.bonds) && free_spin) || spinning || moments;
   f.rolling = rolling && f.friction && f.rotation;
   f.periodic = model.space.periodic;

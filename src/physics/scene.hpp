@@ -26,9 +26,14 @@ struct Features {
   std::string describe() const;     // for PRINT info
 };
 
-// spinning: whether some ball spins, where the caller knows it and the model does not hold the
-// balls' angular velocities (a distributed run's rank 0 whose kept parts alone hold them).
-Features scene_features(const Model& model, std::optional<bool> spinning = std::nullopt);
+// What scene_features reads of each ball's motion and loads: whether some ball spins, carries an
+// applied force or moment, carries an applied moment.
+struct BallFlags {
+  bool spinning = false, applied = false, moments = false;
+};
+// flags: where the caller knows them and the model does not hold the balls' angular velocities and
+// applied loads (a distributed run's rank 0 whose kept parts alone hold them).
+Features scene_features(const Model& model, std::optional<BallFlags> flags = std::nullopt);
 // Whether some material has rolling resistance (PROP rr_fric): output then shows the rolling moments.
 bool has_rolling(const Model& model);
 // The laws with history of their own that the model's materials have (rolling resistance,

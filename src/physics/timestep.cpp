@@ -152,17 +152,21 @@ double balls_critical_step(const Model& model, const Features& features, bool an
 }
 
 double contact_free_step(const Model& model, const Features& features, double cap) {
+  return contact_free_step(model, features, cap, any_ball_free(model, features.rotation, nullptr), nullptr);
+}
+
+double contact_free_step(const Model& model, const Features& features, double cap, bool any_free,
+                         const std::uint8_t* skip) {
   const PairLaws laws = make_pair_laws(model);
   const Damping& damping = model.settings.damping;
   const double beta = damping.kind == DampKind::Rayleigh ? damping.beta : 0;
   const Balls& b = model.balls;
   const bool rotation = features.rotation;
-  const bool any_free = any_ball_free(model, rotation, nullptr);
   // The per-ball step of balls_critical_step for a ball without contacts, the same arithmetic: a
   // state with no ball stiffer than a lone one estimates this step to the bit.
   double step = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < b.size(); ++i) {
-    if (any_free && ball_held(b.fixed[i], rotation)) continue;
+    if ((skip && skip[i]) || (any_free && ball_held(b.fixed[i], rotation))) continue;
     double sum_kmax = 0, sum_ks = 0, sum_cn = 0;
     alone_sums(laws, i, b.mass[i], sum_kmax, sum_ks, &sum_cn);
     const double omega2 = ball_omega2(b.mass[i], sum_kmax, sum_ks, rotation);

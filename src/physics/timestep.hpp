@@ -31,6 +31,9 @@ double balls_critical_step(const Model& model, const Features& features, bool an
 // linear scene's own step before its first contact; a Hertz scene's, the cap (a lone Hertz ball
 // sets none).
 double contact_free_step(const Model& model, const Features& features, double cap);
+// Its pieces, as balls_critical_step's (a distributed run's parts: each rank's own balls).
+double contact_free_step(const Model& model, const Features& features, double cap, bool any_free,
+                         const std::uint8_t* skip);
 // The critical step the next cycle uses (its step is FRAC times this), from the one held now and
 // the estimate of the state just computed (both capped by the Rayleigh step of the Hertz balls).
 // Each change of the step while a collision is in progress leaves it an error (the two steps keep
