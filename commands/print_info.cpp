@@ -179,6 +179,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("most_part_balls", c.parts.most_balls);
   line("part_bonds_across", c.parts.bonds_across);
   line("parts_kept", s.parts_kept() ? 1 : 0);
+  line("whole_hollow", s.pipeline().whole_hollow(m) ? 1 : 0);
   line("whole_hand_overs", c.hand_overs);
   line("peak_mib", s.rank_figures().front().peak_mib);   // (rank 0's under mpirun, gathered before PRINT)
   line("copies_put_back_on_parts", c.copies_on_parts);

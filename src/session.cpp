@@ -90,11 +90,10 @@ void Session::model_on_zero() {
 
 void Session::run_on_root(const std::function<void()>& work) {
   if (comm::size() < 2) return work();
-  // Every rank holding the whole model (the parts ended in the CYCLE: a ball left the box at its
-  // last step), the contact results it deferred are made from the parts' copies, which every rank
-  // hands rank 0 (a collective call): here, before rank 0 runs alone.
-  if (!pipeline_->parts_live(model_) && pipeline_->results_deferred(model_) && pipeline_->part_rescue())
-    make_results_to_read(model_, *pipeline_);
+  // No part kept (the parts ended in the CYCLE: a ball left the box at one of its last steps), the
+  // contact results it deferred are made with every rank (a collective call: make_results_to_read
+  // agrees on a failure, and the parts' copies come to rank 0): here, before rank 0 runs alone.
+  if (!pipeline_->parts_live(model_) && pipeline_->results_deferred(model_)) make_results_to_read(model_, *pipeline_);
   if (!comm::root()) return pipeline_->serve_root(model_);
   pipeline_->start_requests();
   try {

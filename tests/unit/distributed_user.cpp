@@ -357,3 +357,63 @@ damp local 0.7
     CHECK_FALSE(std::filesystem::exists(dir.path() / "after.sav"));   // the deck stopped there
   }
 }
+
+TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads the parts: serial's bytes", "[mpi][system]") {
+  // A CYCLE's end leaves rank 0's whole model hollow (BrickStep::hollow_whole): PRINT info and
+  // counters then sum their counts over the parts, PRINT balls and contacts merge the parts' rows by
+  // id, SAVE streams the parts' arrays a chunk at a time, and CYCLE's overlap warning and its next
+  // start (a load, a spin: the kernel's features; the contact-free step) read the parts. Two scenes
+  // on 3 ranks against serial: balls falling in a box onto a wall, one pressed into it by an applied
+  // force (the warning, of a wall contact); a compressed periodic cell with rolling resistance and
+  // capillary bridges.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string reads =
+      "print counters file counters.txt\nprint info\nprint contacts\nsave a.sav\nprint balls file b.csv\n"
+      "print contacts file c.csv\ncycle 40\nprint contacts file c2.csv\nsave c.sav\nprint balls file b2.csv\n";
+  const std::string box =
+      "start box 0 0.01 0 0.01 0 0.01 destroy\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\nwall id 7 plane 0 0 0.0001 0 0 1\n"
+      "ball 0.005 0.005 0.00115 0.001 id 1001\ngen 600 0.0004 0.0006 seed 5\napply zforce -20 range id 1001\n"
+      "grav 0 0 -9.81\ncycle 150\n";
+  const std::string wet =
+      "start 0.01 0.01 0.01\ngen 900 0.0004 0.0006 seed 7\n"
+      "prop kn 1e5 ks 1e5 mu 0.5 dens 2650 rr_fric 0.1 bridge 2e-10 tension 0.072\nstrain 200 200 200\ncycle 300\n";
+  // And balls thrown out of a box through its faces (a wall placed over some of them), one at the
+  // CYCLE's last steps: the parts end there, every rank holding the whole model, and rank 0's
+  // commands have the results made with every rank first (they hung, rank 0 alone waiting for
+  // the others).
+  const std::string thrown =
+      "start box 0 0.01 0 0.01 0 0.01 destroy\ngen 600 0.0004 0.0006 seed 5\n"
+      "prop kn 1e5 ks 1e5 mu 0.5 dens 2650 rr_fric 0.1\nwall id 7 plane 0 0 0.0001 0 0 1\ngrav 0 0 -9.81\ncycle 300\n";
+  for (const std::string& scene : {box, wet, thrown}) {
+    INFO(scene);
+    TempDir serial, ranks;
+    serial.write("deck.dat", scene + reads);
+    ranks.write("deck.dat", scene + reads);
+    REQUIRE(run_deck(serial, 0) == 0);
+    REQUIRE(run_deck(ranks, 3) == 0);
+    const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
+    INFO(out);
+    const Counters counters = counters_of(ranks);
+    CHECK(counter(counters, "parts_kept") == (scene == thrown ? 0 : 1));
+    CHECK(counter(counters, "whole_hollow") == (scene == thrown ? 0 : 1));   // (the counts read the parts)
+    for (const char* file : {"a.sav", "b.csv", "c.csv", "c2.csv", "c.sav", "b2.csv"}) {
+      INFO(file);
+      CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+    }
+    if (scene == wet) CHECK(lines_of(slurp(serial.path() / "c.csv")).size() > 10);   // (contacts to print)
+    if (scene == box) CHECK(out.find("overlap of ball 1001 on wall 7") != std::string::npos);
+    // The lines PRINT info, PRINT contacts and the CYCLEs print of the model, as serial's.
+    auto model_lines = [](const std::string& text) {
+      std::string kept;
+      for (const std::string& line : lines_of(text))
+        for (const char* start : {"contacts:", "walls:", "bridges intact:", "physics:", "kernel:", "ball order:", "balls:",
+                                  "deck.dat:8: warning: at cycle"})
+          if (line.rfind(start, 0) == 0) kept += line + '\n';
+      const auto rows = text.find("overlap          fn");
+      kept += rows == std::string::npos ? "" : text.substr(rows, text.find("trubal>", rows) - rows);
+      return kept;
+    };
+    CHECK(model_lines(out) == model_lines(serial_out));
+    if (scene == wet) CHECK(model_lines(serial_out).find("bridges intact") != std::string::npos);
+  }
+}
