@@ -8,7 +8,9 @@
 //   stages that search the part and carry its history over;
 // - brick_halo.cpp: the bins by which a rebuild finds the balls each member needs from the others;
 // - brick_migrate.cpp: what a ball takes with it (the records below) and the messages of a rebuild;
-// - brick_sync.cpp: the whole model made current from the parts (sync, share).
+// - brick_sync.cpp: the whole model made current from the parts (sync, share), rank 0's let go
+//   (hollow_whole), what the parts count and hold between CYCLEs;
+// - brick_stream.cpp: the parts' state streamed to rank 0 in the whole model's order (SAVE, PRINT).
 #pragma once
 
 #include <algorithm>
