@@ -129,9 +129,11 @@ void Session::light_everywhere() {
 
 void Session::results_before_setting() {
   if (!parts_kept()) return make_results_to_read(model_, *pipeline_);
-  // (Made on the parts, where the CYCLE deferred them, and gathered to rank 0.)
+  // (Made on the parts, where the CYCLE deferred them, and gathered to rank 0, and rank 0's whole
+  // model with them where it is hollow: rank 0 reads it next.)
   results_onto_parts(model_, *pipeline_);
   pipeline_->gather_part_results(model_);
+  pipeline_->refresh_whole(model_);
   comm::on_root([&] { make_results_to_read(model_, *pipeline_); }, "making the contact results");
   // (The next CYCLE takes a copy of its own on every rank, of the new settings, as serial does.)
   pipeline_->clear_deferred();
@@ -458,13 +460,7 @@ const Model& Session::model_but_results() const {
   return model_;
 }
 
-void Session::results_on_root() {
-  results_before_setting();
-  if (!pipeline_->parts_live(model_)) return;   // (the same answer on every rank)
-  pipeline_->refresh_whole(model_);
-  // (As make_results_to_read leaves them where no step is to be taken again: zero where none was kept.)
-  if (comm::root()) model_.contacts.keep_results();
-}
+void Session::results_on_root() { results_before_setting(); }
 
 Session::StateCounts Session::state_counts() const {
   if (pipeline_->serving() && pipeline_->whole_hollow(model_)) {

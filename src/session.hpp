@@ -243,7 +243,7 @@ class Session {
   // collective call): before a command that every rank runs reads the model on rank 0 alone
   // (comm::on_root), where the ranks' parts hold the copy they are made from.
   // Rank 0's whole model is made current too, gathered from the kept parts where a CYCLE left it
-  // hollow (Pipeline::whole_hollow).
+  // hollow (Pipeline::whole_hollow: results_before_setting).
   void results_on_root();
   // What PRINT info and counters tell of the state without the whole model on rank 0: the pairs
   // and wall contacts touching, the capillary bridges between balls and to walls, and whether some
