@@ -68,8 +68,11 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   // The new part in the old one's place, then what is made from it.
   commit_rebuild(r);
   together([&] { index_part(); }, "indexing its new pair list");
+  // (The wall contacts are still the old part's, numbered by its balls: found afresh, then indexed.)
   if (!full.walls.empty() || part_.wall_contacts.size() > 0)
     together([&] { find_part_walls(r, full, pool); }, "finding the wall contacts of its part");
+  else
+    scratch_.index_walls(part_.wall_contacts, part_.balls.size());
   return true;
 }
 
@@ -304,7 +307,6 @@ void BrickStep::index_part() {
     recv_buf_[r].resize(kHalo * recv_[r].size());
   }
   scratch_.index(part_.contacts, m);
-  scratch_.index_walls(part_.wall_contacts, m);
   kernels_.laws = make_pair_laws(part_);
 }
 
