@@ -118,9 +118,9 @@ void print_info(Context& ctx) {
                      "output step read it)\n",
                      each_array(&Session::RankFigures::whole_arrays_mib), each_array(&Session::RankFigures::part_arrays_mib));
     o << fmt::format("model held now: {} MiB (per rank: {})\n", each_array(&Session::RankFigures::model_arrays_mib),
-                     s.parts_kept() ? s.pipeline().whole_hollow(m) ? "each its part of the model, rank 0 the light arrays of "
-                                                                     "the whole model (gathered from the parts where a command "
-                                                                     "reads it)"
+                     s.parts_kept() ? s.pipeline().whole_hollow(m) ? "each its part of the model, and rank 0 the whole model's "
+                                                                     "light arrays, the rest gathered from the parts where a "
+                                                                     "command reads it"
                                                                    : "each its part of the model, rank 0 the whole model too"
                      : s.pipeline().others_hollow()
                          ? "rank 0 the whole model, the others its settings, walls and balls' ids, types and radii"

@@ -733,7 +733,7 @@ std::vector<std::pair<std::string, std::string>> Pipeline::info() const {
   if (!cycle_peaks_.empty()) {
     lines.emplace_back("peak memory by the last CYCLE's end",
                        mib_list(cycle_peaks_) + " MiB (per rank; the whole model's list is searched on the parts, so that in a CYCLE "
-                               "no rank but 0 holds it)");
+                               "no rank holds it, but rank 0 where an output step reads the whole model)");
   }
   if (backend_->keeps_list()) {
     lines.emplace_back("pair list skin", format_number(ref_.skin()));
