@@ -1,7 +1,6 @@
 // PRINT balls, contacts, walls and psd: the tables, to the screen or a CSV file (commands/print.cpp
 // dispatches).
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -29,7 +28,7 @@
 namespace trubal {
 
 namespace {
-std::int64_t id_of(double wire) { return std::bit_cast<std::int64_t>(wire); }
+constexpr auto row_id = &BrickStep::row_id;
 
 // PRINT balls and contacts of every ball and pair, from the rows the ranks' kept parts stream where
 // rank 0's whole model is hollow (Session::rows_from_parts): the same text as from the whole model.
@@ -39,7 +38,7 @@ void print_balls_streamed(Context& ctx, const std::string& file) {
     write_file_atomically(file, [&](std::ostream& csv) {
       csv << "id,type,x,y,z,rad,vx,vy,vz,wx,wy,wz,fx,fy,fz\n";
       ctx.session.ball_rows([&](const double* r) {
-        csv << id_of(r[0]) << ',' << static_cast<int>(r[1]);
+        csv << row_id(r[0]) << ',' << static_cast<int>(r[1]);
         for (std::size_t k = 2; k < BrickStep::kBallRow; ++k) csv << ',' << csv_real(r[k]);
         csv << '\n';
         ++count;
@@ -53,7 +52,7 @@ void print_balls_streamed(Context& ctx, const std::string& file) {
   ctx.session.ball_rows([&](const double* r) {
     ctx.out << fmt::format("{:>8} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>10.4g} {:>11.4g} {:>11.4g} {:>11.4g} {:>11.4g} "
                            "{:>11.4g} {:>11.4g}\n",
-                           id_of(r[0]), static_cast<int>(r[1]), r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[12], r[13], r[14]);
+                           row_id(r[0]), static_cast<int>(r[1]), r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[12], r[13], r[14]);
   });
 }
 
@@ -66,7 +65,7 @@ void print_contacts_streamed(Context& ctx, const std::string& file) {
       csv << "i,j,nx,ny,nz,overlap,fn,fsx,fsy,fsz," << (rolling ? "mrx,mry,mrz," : "") << "sliding"
           << (bridges ? ",bridge\n" : "\n");
       ctx.session.contact_rows(bridges, [&](const double* r) {
-        csv << id_of(r[0]) << ',' << id_of(r[1]);
+        csv << row_id(r[0]) << ',' << row_id(r[1]);
         for (std::size_t k = 2; k < 10; ++k) csv << ',' << csv_real(r[k]);
         if (rolling)
           for (std::size_t k = 10; k < 13; ++k) csv << ',' << csv_real(r[k]);
@@ -83,8 +82,8 @@ void print_contacts_streamed(Context& ctx, const std::string& file) {
                          "overlap", "fn", "|fs|", rolling ? fmt::format("{:>11} ", "|mr|") : "", "sliding",
                          bridges ? "  bridge" : "");
   ctx.session.contact_rows(bridges, [&](const double* r) {
-    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", id_of(r[0]),
-                           id_of(r[1]), r[2], r[3], r[4], r[5], r[6], std::sqrt(r[7] * r[7] + r[8] * r[8] + r[9] * r[9]),
+    ctx.out << fmt::format("{:>8} {:>8} {:>9.5f} {:>9.5f} {:>9.5f} {:>11.4g} {:>11.4g} {:>11.4g} {}{:>7}{}\n", row_id(r[0]),
+                           row_id(r[1]), r[2], r[3], r[4], r[5], r[6], std::sqrt(r[7] * r[7] + r[8] * r[8] + r[9] * r[9]),
                            rolling ? fmt::format("{:>11.4g} ", std::sqrt(r[10] * r[10] + r[11] * r[11] + r[12] * r[12])) : "",
                            r[13] == 2 ? "yes" : "no", bridges ? (r[14] != 0 ? "     yes" : "      no") : "");
   });

@@ -460,8 +460,6 @@ const Model& Session::model_but_results() const {
   return model_;
 }
 
-void Session::results_on_root() { results_before_setting(); }
-
 Session::StateCounts Session::state_counts() const {
   if (pipeline_->serving() && pipeline_->whole_hollow(model_)) {
     const Pipeline::PartCounts c = pipeline_->request_part_counts(model_);
@@ -478,11 +476,14 @@ Session::StateCounts Session::state_counts() const {
 
 const std::vector<double>& Session::ball_array(const std::vector<double>& of, std::vector<double>& into) const {
   if (!(pipeline_->serving() && pipeline_->whole_hollow(model_))) return of;
-  const Balls& b = model_.balls;
-  const std::vector<double>* arrays[] = {&b.x, &b.y, &b.z, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz};
-  const auto k = static_cast<std::size_t>(std::find(std::begin(arrays), std::end(arrays), &of) - std::begin(arrays));
-  if (k == std::size(arrays)) throw std::logic_error("internal error: not one of the balls' positions or velocities");
-  pipeline_->request_ball_array(model_, k, into);
+  std::size_t k = 0, at = ~std::size_t{0};
+  model_.balls.for_each_array([&](const auto& v) {
+    if (static_cast<const void*>(&v) == &of) at = k;
+    ++k;
+  });
+  if (at == ~std::size_t{0}) throw std::logic_error("internal error: not one of the balls' arrays");
+  into.clear();
+  pipeline_->request_stream(model_, 0, at, [&](const std::vector<double>& chunk) { into.insert(into.end(), chunk.begin(), chunk.end()); });
   return into;
 }
 

@@ -244,7 +244,7 @@ class Session {
   // (comm::on_root), where the ranks' parts hold the copy they are made from.
   // Rank 0's whole model is made current too, gathered from the kept parts where a CYCLE left it
   // hollow (Pipeline::whole_hollow: results_before_setting).
-  void results_on_root();
+  void results_on_root() { results_before_setting(); }
   // What PRINT info and counters tell of the state without the whole model on rank 0: the pairs
   // and wall contacts touching, the capillary bridges between balls and to walls, and whether some
   // ball spins or carries a load (where the model's arrays do not say: `flags` empty where they do). Under
@@ -255,8 +255,8 @@ class Session {
     std::optional<BallFlags> flags;
   };
   StateCounts state_counts() const;
-  // Ball array `of` of the model (one of x y z, vx vy vz, wx wy wz): itself, or fetched from the
-  // kept parts into `into` where rank 0's whole model is hollow (as state_counts).
+  // Ball array `of` of the model (one of its arrays of reals): itself, or streamed from the kept
+  // parts into `into` where rank 0's whole model is hollow (as state_counts).
   const std::vector<double>& ball_array(const std::vector<double>& of, std::vector<double>& into) const;
   // Under mpirun, rank 0 running a command the others serve, where rank 0's whole model is hollow:
   // the rows of PRINT balls (every ball, by id) and contacts (every pair touching, or holding a

@@ -38,6 +38,7 @@
 //   other ranks step without the whole model's arrays meanwhile (Pipeline::hollow).
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <functional>
 #include <stdexcept>
@@ -209,9 +210,8 @@ class BrickStep {
   // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
   // the pairs this member owns that SAVE keeps (touching in the results the part holds, where
   // `results`, or with history) placed in the whole order; place_saved_walls: its wall contacts;
-  // each returns the count over every member. stream_table: array k of the balls (table 0: x y z,
-  // vx vy vz, wx wy wz, fx fy fz, mx my mz, mass, inertia, ax ay az, amx amy amz), of the placed
-  // pairs (1) or wall contacts (2) in
+  // each returns the count over every member. stream_table: array k of the balls (table 0, in
+  // Balls::for_each_array's order), of the placed pairs (1) or wall contacts (2) in
   // io/save.cpp's order (the list's, every declared history part's, the results'), `write(chunk)`
   // on rank 0 for each chunk in turn (a failure there is rank 0's, thrown once the stream ends).
   // free_saved: the places let go.
@@ -227,11 +227,10 @@ class BrickStep {
   // fx fy fz; a contact's: the smaller id, the larger (their bits), nx ny nz from the smaller's ball
   // to the larger's, overlap, fn, fsx fsy fsz and mrx mry mrz on the larger's, the state, the bridge.
   static constexpr std::size_t kBallRow = 15, kContactRow = 15;
+  // An id as a row holds it (its bits).
+  static std::int64_t row_id(double v) { return std::bit_cast<std::int64_t>(v); }
   void stream_ball_rows(const std::function<void(const double*)>& take);
   void stream_contact_rows(bool bridges, const std::function<void(const double*)>& take);
-  // Moving ball array k of the part (x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz), gathered in the
-  // whole model's order into *into on rank 0 (a collective call of the ranks; the others pass null).
-  void gather_ball_array(std::size_t k, std::vector<double>* into);
   // The parts are dropped (the whole model was changed, or is to be stepped another way). Not
   // where they alone hold the model (whole_hollow: an internal error; sync first).
   void drop() {

@@ -137,7 +137,7 @@ void BrickStep::stream_table(int table, std::size_t k, const std::function<void(
   std::size_t seen = 0;
   bool done = false;
   // Array k of `t`'s list, declared history and results (io/save.cpp's order), over `rows` at `at`;
-  // `ball_array`: the arrays of part balls' indices, sent as the whole model's.
+  // ball_a, ball_b: the arrays of the part's balls' indices, sent as the whole model's.
   auto each = [&](auto& t, const std::vector<std::uint32_t>& rows, const std::vector<std::uint64_t>& at, std::uint64_t total,
                   const void* ball_a, const void* ball_b) {
     auto visit = [&](const auto& v) {
@@ -156,29 +156,21 @@ void BrickStep::stream_table(int table, std::size_t k, const std::function<void(
     t.for_each_result_array(visit);
   };
   if (table == 0) {
-    // The balls' arrays of reals but the radii, in io/save.hpp's order.
-    Balls& b = part_.balls;
-    const std::vector<double>* arrays[] = {&b.x,  &b.y,  &b.z,  &b.vx,   &b.vy,      &b.vz, &b.wx, &b.wy,
-                                           &b.wz, &b.fx, &b.fy, &b.fz,   &b.mx,      &b.my, &b.mz, &b.mass,
-                                           &b.inertia, &b.ax, &b.ay, &b.az, &b.amx, &b.amy, &b.amz};
-    if (k >= std::size(arrays)) throw std::logic_error("internal error: a ball array the balls do not have");
+    // The balls' array k of Balls::for_each_array.
     std::vector<std::uint64_t> at;
     together([&] { for (std::uint32_t q : owned_) at.push_back(global_ball_[q]); }, "streaming its part to rank 0");
-    const std::vector<double>& v = *arrays[k];
-    stream_in_order(at, full_balls_, [&](std::size_t q) { return v[owned_[q]]; }, write);
-    return;
-  }
-  if (table == 1) {
+    part_.balls.for_each_array([&](const auto& v) {
+      if (seen++ != k) return;
+      done = true;
+      stream_in_order(at, full_balls_, [&](std::size_t q) { return to_wire(v[owned_[q]]); }, write);
+    });
+  } else if (table == 1) {
     each(part_.contacts, saved_pairs_, saved_pair_at_, saved_pairs_total_, &part_.contacts.i, &part_.contacts.j);
   } else {
     each(part_.wall_contacts, owned_walls_, saved_wall_at_, saved_walls_total_, &part_.wall_contacts.ball, nullptr);
   }
-  if (!done) throw std::logic_error("internal error: an array the contact table does not have");
+  if (!done) throw std::logic_error("internal error: an array the table does not have");
 }
-
-}  // namespace trubal
-
-namespace trubal {
 
 void BrickStep::merge_rows_to_root(std::size_t count, std::size_t width, const std::function<void(std::size_t, double*)>& row,
                                    const std::function<bool(const double*, const double*)>& before,
@@ -246,10 +238,6 @@ void BrickStep::merge_rows_to_root(std::size_t count, std::size_t width, const s
   if (failed) std::rethrow_exception(failed);
 }
 
-namespace {
-std::int64_t id_of(double wire) { return std::bit_cast<std::int64_t>(wire); }
-}  // namespace
-
 void BrickStep::stream_ball_rows(const std::function<void(const double*)>& take) {
   if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: balls streamed where no rank's part is live");
   const Balls& b = part_.balls;
@@ -264,7 +252,7 @@ void BrickStep::stream_ball_rows(const std::function<void(const double*)>& take)
     out[1] = b.type[k];
     std::size_t at = 2;
     for (const auto* v : {&b.x, &b.y, &b.z, &b.rad, &b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz, &b.fx, &b.fy, &b.fz}) out[at++] = (*v)[k];
-  }, [](const double* p, const double* q) { return id_of(p[0]) < id_of(q[0]); }, take);
+  }, [](const double* p, const double* q) { return row_id(p[0]) < row_id(q[0]); }, take);
 }
 
 void BrickStep::stream_contact_rows(bool bridges, const std::function<void(const double*)>& take) {
@@ -299,7 +287,7 @@ void BrickStep::stream_contact_rows(bool bridges, const std::function<void(const
     out[13] = results ? c.state[p] : 0;
     out[14] = bridged ? c.bridge[p] : 0.0;
   }, [](const double* p, const double* q) {
-    return id_of(p[0]) != id_of(q[0]) ? id_of(p[0]) < id_of(q[0]) : id_of(p[1]) < id_of(q[1]);
+    return row_id(p[0]) != row_id(q[0]) ? row_id(p[0]) < row_id(q[0]) : row_id(p[1]) < row_id(q[1]);
   }, take);
 }
 

@@ -344,18 +344,6 @@ std::vector<double> BrickStep::own_largest_overlap(const Model& full, double thr
           static_cast<double>(big.beyond), big.wall ? 1.0 : 0.0, a, b, image};
 }
 
-void BrickStep::gather_ball_array(std::size_t k, std::vector<double>* into) {
-  if (!live_ || team_->shares_whole())
-    throw std::logic_error("internal error: a ball array asked of parts that are not live");
-  ArrayList arrays;
-  each_moving_ball_array(part_.balls, arrays);
-  if (k >= arrays.reals.size()) throw std::logic_error("internal error: a ball array the balls do not have");
-  std::vector<double> whole, out, in;
-  together([&] { if (comm::root()) whole.assign(full_balls_, 0.0); }, "gathering the balls from the parts");
-  gather_array(*team_, *arrays.reals[k], whole, owned_, rank_balls_, out, in);
-  if (into) *into = std::move(whole);
-}
-
 void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results) {
   if (!live_ || current_ || model_ != &full) return;
   std::vector<double> out, in;

@@ -222,7 +222,7 @@ void Pipeline::gather_part_results(Model& model) {
 namespace {
 // What rank 0 asks of the others while it runs a command alone (Pipeline::serve_root).
 enum RootRequest : std::int64_t {
-  kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5, kBallArray = 6,
+  kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5,
   kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12
 };
 }  // namespace
@@ -293,14 +293,6 @@ Pipeline::PartCounts Pipeline::request_part_counts(Model& model) {
   return part_counts(model);
 }
 
-void Pipeline::request_ball_array(Model& model, std::size_t k, std::vector<double>& into) {
-  if (!parts_live(model)) throw std::logic_error("internal error: a ball array asked of the parts where none is live");
-  std::int64_t word = kBallArray, array = static_cast<std::int64_t>(k);
-  comm::broadcast(word);
-  comm::broadcast(array);
-  bricks().gather_ball_array(k, &into);
-}
-
 std::uint64_t Pipeline::request_place_pairs(Model& model) {
   if (!whole_hollow(model)) throw std::logic_error("internal error: pairs streamed where rank 0's whole model holds them");
   std::int64_t word = kPlacePairs;
@@ -365,7 +357,7 @@ void Pipeline::serve_root(Model& model) {
     comm::broadcast(word);
     if (word == kCommandEnded) return;
     std::int64_t array = 0;
-    if (word == kResultArray || word == kBallArray || word == kStream || word == kContactRows) comm::broadcast(array);
+    if (word == kResultArray || word == kStream || word == kContactRows) comm::broadcast(array);
     else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts && word != kPlacePairs &&
              word != kPlaceWalls && word != kFreeSaved && word != kBallRows)
       throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
@@ -381,10 +373,6 @@ void Pipeline::serve_root(Model& model) {
       if (word == kPlacePairs || word == kPlaceWalls || word == kFreeSaved || word == kStream) continue;
       if (word == kWhole) {
         refresh_whole(model);
-        continue;
-      }
-      if (word == kBallArray) {
-        bricks().gather_ball_array(static_cast<std::size_t>(array), nullptr);
         continue;
       }
       results_onto_parts(model, *this);

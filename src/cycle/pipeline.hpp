@@ -156,13 +156,10 @@ class Pipeline {
   // pairs and wall contacts, ties to the first in the whole model's tables (a collective call where
   // parts_live, every rank given the answer; elsewhere rank 0's whole model's).
   LargestOverlap largest_overlap_on_parts(const Model& model, double threshold);
-  // Rank 0, serving(), where parts_live: moving ball array k of the parts
-  // (BrickStep::gather_ball_array) into `into`, the parts keeping theirs.
-  void request_ball_array(Model& model, std::size_t k, std::vector<double>& into);
   // Rank 0, serving(), where whole_hollow: the parts' state streamed for SAVE, every rank taking
   // part (the others in serve_root): the pairs SAVE keeps placed in the whole order (touching in
   // the results the parts hold, or with history) and the wall contacts, their counts; array k of a
-  // table (BrickStep::stream_table: 0 the moving balls, 1 the placed pairs, 2 the wall contacts),
+  // table (BrickStep::stream_table: 0 the balls, 1 the placed pairs, 2 the wall contacts),
   // `write(chunk)` here for each chunk in turn; the places let go after.
   std::uint64_t request_place_pairs(Model& model);
   std::uint64_t request_place_walls(Model& model);

@@ -248,14 +248,13 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, Resul
   }
   if constexpr (!std::is_same_v<IO, Reader>) {
     if (state) {
-      const Balls& b = m.balls;
-      const std::vector<double>* moving[] = {&b.x,  &b.y,  &b.z,  &b.vx,   &b.vy,      &b.vz, &b.wx, &b.wy,
-                                             &b.wz, &b.fx, &b.fy, &b.fz,   &b.mx,      &b.my, &b.mz, &b.mass,
-                                             &b.inertia, &b.ax, &b.ay, &b.az, &b.amx, &b.amy, &b.amz};
+      // (The arrays the model holds are current: those it lets go, the source's.)
+      const std::size_t n = m.balls.size();
+      std::size_t k = 0;
       m.balls.for_each_array([&](auto& v) {
-        const auto at = std::find(std::begin(moving), std::end(moving), static_cast<const void*>(&v));
-        if (at == std::end(moving)) return io.vec(v);
-        write_streamed<double>(io, b.size(), *state, StateSource::Table::Balls, static_cast<std::size_t>(at - std::begin(moving)));
+        const std::size_t at = k++;
+        if (v.size() == n) return io.vec(v);
+        write_streamed<typename std::decay_t<decltype(v)>::value_type>(io, n, *state, StateSource::Table::Balls, at);
       });
       write_contacts_streamed(io, m.contacts, state->place_pairs(), *state, StateSource::Table::Pairs);
       io.pod(state->results_cycle());

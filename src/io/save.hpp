@@ -30,8 +30,8 @@ class ResultSource {
 // Where the model's arrays do not hold its state (a distributed run's rank 0 whose whole model is
 // hollow: the ranks' kept parts alone hold it), the state SAVE writes from them, each array streamed
 // in the whole model's order a chunk at a time, so that rank 0 holds a chunk, not the model. The
-// tables: the balls' arrays of reals but the radii (x y z, vx vy vz, wx wy wz, fx fy fz, mx my mz,
-// mass, inertia, ax ay az, amx amy amz), the pairs SAVE keeps and the wall contacts, each table's arrays in SAVE's order (the list's, every declared
+// tables: the balls (array k of Balls::for_each_array, where the model's is empty), the pairs SAVE
+// keeps and the wall contacts, each table's arrays in SAVE's order (the list's, every declared
 // history part's, the results'). Values travel as doubles: integers of 32 bits and fewer by value,
 // 64-bit ones by their bits.
 class StateSource {
