@@ -37,13 +37,14 @@ static void run_ball(Context& ctx, Args& args) {
     if (k == 0) id = args.count("id", 1);
     else type = static_cast<int>(args.count("type", 1, 1000000));
   }
-  auto index = ctx.session.add_ball(id, type, p[0], p[1], p[2], rad);
-  const Model& m = ctx.session.state();
+  // (Under mpirun, where the ranks hold a batch deck's BALL lines, every rank runs this: rank 0's
+  // output alone is shown.)
+  const std::int64_t made = ctx.session.add_ball_line(id, type, p[0], p[1], p[2], rad);
   // Placed as asked (the user may mean it), but a ball across a wall is thrown off at the first step.
-  for (const Wall& w : m.walls)
+  for (const Wall& w : ctx.session.state().walls)
     if (const std::string how = against_wall(w, {p[0], p[1], p[2]}, rad); !how.empty())
-      ctx.warn(fmt::format("BALL: ball {} {}; placed as asked", m.balls.id[index], how));
-  if (ctx.interp.interactive) ctx.out << fmt::format("ball {} created\n", ctx.session.model().balls.id[index]);
+      ctx.warn(fmt::format("BALL: ball {} {}; placed as asked", made, how));
+  if (ctx.interp.interactive) ctx.out << fmt::format("ball {} created\n", made);
 }
 
 const Command ball_command = {
@@ -57,6 +58,6 @@ const Command ball_command = {
     "`outside` cylinder) is placed as asked, with a warning naming the ball, the wall and the gap from the "
     "ball's surface to the wall (the first CYCLE would push it off hard; GEN places no ball there).",
     "ball 0.05 0.05 0.1 0.003 id 1001",
-    {"id", "type"}, run_ball, true, false, OnRanks::ModelOnZero};
+    {"id", "type"}, run_ball, true, false, OnRanks::ModelOnZero, HeldUse::Add};
 
 }  // namespace trubal

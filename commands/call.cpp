@@ -16,6 +16,6 @@ const Command call_command = {
     "or not) is an error. A relative name is looked up in the working directory, then beside the calling "
     "file. An error inside names that file and line.",
     "call materials.dat",
-    {}, run_call, false, false, OnRanks::Parts};
+    {}, run_call, false, false, OnRanks::Parts, HeldUse::Keep};
 
 }  // namespace trubal

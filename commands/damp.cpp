@@ -43,6 +43,6 @@ const Command damp_command = {
     "The stiffness part is a dashpot at each contact and shortens the automatic time step. `DAMP local a` "
     "selects Cundall's local non-viscous damping. There is no damping until a deck asks for it.",
     "damp local 0.7",
-    {"mass", "stiff", "local", "off"}, run_damp, false, false, OnRanks::Parts};
+    {"mass", "stiff", "local", "off"}, run_damp, false, false, OnRanks::Parts, HeldUse::Keep};
 
 }  // namespace trubal

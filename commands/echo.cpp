@@ -6,7 +6,7 @@ static void run_echo(Context& ctx, Args& args) { ctx.out << args.rest() << '\n';
 
 const Command echo_command = {
     "ECHO", {}, "ECHO text", "print a line of text", "Prints its words (after $variables are replaced).",
-    "echo stage 2: shearing", {}, run_echo, true, false, OnRanks::Parts};
+    "echo stage 2: shearing", {}, run_echo, true, false, OnRanks::Parts, HeldUse::Keep};
 
 static void run_title(Context& ctx, Args& args) {
   std::string title = args.rest();
@@ -22,7 +22,7 @@ const Command title_command = {
     "$variables are still replaced; a title written as one double-quoted string loses its quotes, which is how "
     "a title holds a comment character (`TITLE \"run 2; dense\"`).",
     "title drained triaxial, 500 balls",
-    {}, run_title, false, true, OnRanks::Parts};
+    {}, run_title, false, true, OnRanks::Parts, HeldUse::Keep};
 
 static void run_stop(Context& ctx, Args& args) {
   args.done();
@@ -33,6 +33,6 @@ const Command stop_command = {
     "STOP", {"QUIT", "END", "EXIT"}, "STOP", "end the session",
     "Ends the session (a batch deck also ends at the end of its file). Typed at the shell's prompt with the "
     "model changed since the last SAVE, it asks first, as Ctrl-D does.",
-    "stop", {}, run_stop, false, false, OnRanks::Parts};
+    "stop", {}, run_stop, false, false, OnRanks::Parts, HeldUse::Keep};
 
 }  // namespace trubal

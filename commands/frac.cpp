@@ -25,7 +25,7 @@ const Command frac_command = {
     "resolving collisions: an impact's rebound is off by a few percent at 0.8 (CYCLE warns where the energy "
     "balance shows it; man page, CONVENTIONS, says why the default stays). Cancels a fixed TSTEP.",
     "frac 0.5",
-    {}, run_frac, false, false, OnRanks::Parts};
+    {}, run_frac, false, false, OnRanks::Parts, HeldUse::Keep};
 
 static void run_tstep(Context& ctx, Args& args) {
   if (args.accept("auto")) {
@@ -44,7 +44,7 @@ const Command tstep_command = {
     "Fixes the time step to dt (the instability guard still watches the run). `TSTEP auto` goes back to "
     "FRAC times the critical step.",
     "tstep 1e-6",
-    {"auto"}, run_tstep, false, false, OnRanks::Parts};
+    {"auto"}, run_tstep, false, false, OnRanks::Parts, HeldUse::Keep};
 
 static void run_grav(Context& ctx, Args& args) {
   auto g = read_xyz(args, "gravity");
@@ -57,6 +57,6 @@ const Command grav_command = {
     "Sets the gravitational acceleration (a body force m g on every ball). GRAV 0 0 0 turns it off.",
     "grav 0 0 -9.81",
     {},
-    run_grav, false, false, OnRanks::Parts};
+    run_grav, false, false, OnRanks::Parts, HeldUse::Keep};
 
 }  // namespace trubal

@@ -52,6 +52,6 @@ const Command help_command = {
     "Without a word, lists every command with a one-line summary; `HELP cycle` shows the usage and details "
     "of one command.",
     "help cycle",
-    {}, run_help, false, false, OnRanks::Parts};
+    {}, run_help, false, false, OnRanks::Parts, HeldUse::Keep};
 
 }  // namespace trubal

@@ -277,6 +277,6 @@ const Command print_command = {
     "print stress",
     {"sample", "info", "counters", "balls", "contacts", "bonds", "stress", "strain", "energy", "fabric", "coordination", "prop", "damp",
      "history", "walls", "psd", "porosity", "measure", "file", "volume", "range"},
-    run_print, false, false, OnRanks::RankZero};
+    run_print, false, false, OnRanks::RankZero, HeldUse::Place, {"info", "counters"}};
 
 }  // namespace trubal

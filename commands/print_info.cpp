@@ -71,8 +71,11 @@ void print_info(Context& ctx) {
   } else {
     o << "space: none (START first)\n";
   }
-  o << fmt::format("balls: {}\n", m.balls.size());
-  if (m.balls.size() >= 2) {
+  o << fmt::format("balls: {}\n", m.balls.size() + s.held_balls());
+  if (s.held_balls() > 0)
+    o << fmt::format("balls held: {} (a batch deck's BALL lines, on the ranks that keep them, placed in the model "
+                     "when a command reads the balls)\n", s.held_balls());
+  else if (m.balls.size() >= 2) {
     const double gap = memory_gap_in_diameters(s, m.balls);
     o << fmt::format("ball order: neighbours in memory {:.3g} diameters apart (median); put in space order {}{}\n", gap,
                      m.order.pending && m.order.every > 0 ? "at the next step, then every " + std::to_string(m.order.every) + " cycles"
@@ -122,6 +125,8 @@ void print_info(Context& ctx) {
                                                                      "light arrays, the rest gathered from the parts where a "
                                                                      "command reads it"
                                                                    : "each its part of the model, rank 0 the whole model too"
+                     : s.held_balls() > 0 ? "rank 0 the whole model, the others its settings, walls and balls' ids, types "
+                                            "and radii, and each the held balls it keeps"
                      : s.pipeline().others_hollow()
                          ? "rank 0 the whole model, the others its settings, walls and balls' ids, types and radii"
                          : "the whole model on every rank");
@@ -159,7 +164,8 @@ void print_counters(Context& ctx, const std::string& file) {
   std::string text;
   auto line = [&](std::string_view name, auto value) { text += fmt::format("{} {}\n", name, value); };
   line("cycle", m.cycle);
-  line("balls", m.balls.size());
+  line("balls", m.balls.size() + s.held_balls());
+  line("balls_held", s.held_balls());
   line("contacts", counts.touching);
   line("wall_contacts", counts.wall_touching);
   line("balls_destroyed", m.space.destroyed);

@@ -99,6 +99,6 @@ const Command prop_command = {
     "and theta.",
     "prop kn 1e6 ks 1e6 fric 30 dens 2650",
     {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest", "rr_fric", "bridge", "tension", "angle"},
-    run_prop, true, false, OnRanks::ModelOnZero};
+    run_prop, true, false, OnRanks::ModelOnZero, HeldUse::Keep};
 
 }  // namespace trubal

@@ -5,7 +5,10 @@
 #include "support/peak_memory.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
+#include <exception>
+#include <limits>
 #include <filesystem>
 #include <cmath>
 #include <random>
@@ -27,7 +30,10 @@ namespace trubal {
 
 // Under mpirun the ranks share the step (BACKEND mpi); otherwise one thread, as TRUBAL.
 Session::Session()
-    : pipeline_(make_pipeline(comm::size() > 1 ? "mpi" : "serial", 1, 0, &policy_)), history_(std::make_unique<History>()) {}
+    : pipeline_(make_pipeline(comm::size() > 1 ? "mpi" : "serial", 1, 0, &policy_)), history_(std::make_unique<History>()),
+      comm_size_(comm::size()) {}
+
+bool Session::distributed() const { return pipeline_->distributed(); }
 Session::~Session() = default;
 
 Model& Session::edit() {
@@ -141,12 +147,12 @@ void Session::results_before_setting() {
 
 namespace {
 // This process's memory figures but its peak, in RankFigures' order after peak_mib.
-std::vector<double> own_figures(const Model& model, const Pipeline& pipeline) {
+std::vector<double> own_figures(const Model& model, const Pipeline& pipeline, std::size_t held_bytes) {
   const PipelineCounters c = pipeline.counters();
   constexpr double kMiB = 1 << 20;
   return {static_cast<double>(model.contacts.result_bytes() + pipeline.part_result_bytes_now()) / kMiB,
           c.whole_arrays_mib, c.part_arrays_mib,
-          static_cast<double>(array_bytes(model) + pipeline.part_bytes_now()) / kMiB,
+          static_cast<double>(array_bytes(model) + pipeline.part_bytes_now() + held_bytes) / kMiB,
           static_cast<double>(pipeline.rescue_bytes()) / kMiB};
 }
 }  // namespace
@@ -154,7 +160,7 @@ std::vector<double> own_figures(const Model& model, const Pipeline& pipeline) {
 void Session::gather_rank_figures() {
   const std::vector<double> peaks = peak_memory_per_rank();
   std::vector<double> all;
-  comm::allgather(own_figures(model_, *pipeline_), all);
+  comm::allgather(own_figures(model_, *pipeline_, held_.bytes()), all);
   rank_figures_.assign(peaks.size(), {});
   constexpr std::size_t kOwn = 5;   // (own_figures' count)
   for (std::size_t r = 0; r < rank_figures_.size() && kOwn * r + kOwn - 1 < all.size(); ++r)
@@ -163,7 +169,7 @@ void Session::gather_rank_figures() {
 
 std::vector<Session::RankFigures> Session::rank_figures() const {
   if (comm::size() > 1) return rank_figures_;
-  const std::vector<double> f = own_figures(model_, *pipeline_);
+  const std::vector<double> f = own_figures(model_, *pipeline_, held_.bytes());
   return {{peak_memory_per_rank()[0], f[0], f[1], f[2], f[3], f[4]}};
 }
 
@@ -211,7 +217,7 @@ void Session::start_periodic(const std::array<double, 3>& length, const std::arr
   start(space);
 }
 
-std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, double z, double rad) {
+void Session::check_in_box(double x, double y, double z) const {
   require_started();
   const Space& s = model_.space;
   double p[3] = {x, y, z};
@@ -220,11 +226,19 @@ std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, dou
       if (p[a] < s.lo[a] || p[a] > s.hi[a])
         throw std::runtime_error(fmt::format("ball centre {} = {} is outside the START box [{}, {}]", "xyz"[a], p[a],
                                              s.lo[a], s.hi[a]));
-  // Two balls at one centre have no normal between them and would be thrown apart: refused.
+}
+
+// Two balls at one centre have no normal between them and would be thrown apart: refused.
+static std::string centre_taken(std::int64_t id, double x, double y, double z) {
+  return fmt::format("ball {} is already at ({}, {}, {}): two balls at one centre would fly apart; give this one "
+                     "another centre", id, x, y, z);
+}
+
+std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, double z, double rad) {
+  check_in_box(x, y, z);
   if (centres_changes_ != changes_) centres_.rebuild(model_.balls);
   if (const std::size_t k = centres_.find(model_.balls, x, y, z); k != CentreIndex::kNone)
-    throw std::runtime_error(fmt::format("ball {} is already at ({}, {}, {}): two balls at one centre would fly apart; "
-                                         "give this one another centre", model_.balls.id[k], x, y, z));
+    throw std::runtime_error(centre_taken(model_.balls.id[k], x, y, z));
   try {
     const std::size_t at = trubal::add_ball(edit(), id, type, x, y, z, rad);
     centres_.insert(model_.balls, at);
@@ -233,6 +247,115 @@ std::size_t Session::add_ball(std::int64_t id, int type, double x, double y, dou
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }
+}
+
+bool Session::hold_needs_start() const {
+  return light_pending_ || parts_kept() || pipeline_->results_deferred(model_);
+}
+
+void Session::hold_start() {
+  // As model_on_zero, then light_everywhere: every rank holds the model's light state and its
+  // balls' ids (the next free id is every rank's to know).
+  model_on_zero();
+  light_everywhere();
+}
+
+std::int64_t Session::add_ball_line(std::int64_t id, int type, double x, double y, double z, double rad) {
+  if (!hold_balls()) {
+    const std::size_t k = add_ball(id, type, x, y, z, rad);
+    return model_.balls.id[k];
+  }
+  // Every rank runs this for every line, each checking what it holds the facts for, in the order
+  // add_ball checks them: the box; a centre taken (rank 0 the model's balls, the keeper the held
+  // ones); the ids (every rank knows the largest; rank 0 the model's, the id's checker the held).
+  check_in_box(x, y, z);
+  const int ranks = comm_size_, me = comm::rank();
+  if (me == 0) {
+    if (centres_changes_ != changes_) centres_.rebuild(model_.balls);
+    if (const std::size_t k = centres_.find(model_.balls, x, y, z); k != CentreIndex::kNone)
+      throw std::runtime_error(centre_taken(model_.balls.id[k], x, y, z));
+  }
+  const int keeper = HeldBalls::keeper(x, y, z, ranks);
+  if (keeper == me)
+    if (const std::size_t k = held_.centres.find(held_, x, y, z); k != CentreIndex::kNone)
+      throw std::runtime_error(centre_taken(held_.id[k], x, y, z));
+  const Balls& b = model_.balls;
+  const std::int64_t largest = std::max(b.by_id.empty() ? 0 : b.id[b.by_id.back()], held_.max_id);
+  if (id <= 0) {
+    if (largest == std::numeric_limits<std::int64_t>::max())
+      throw std::runtime_error("no ball id is left after " + std::to_string(largest) +
+                               ": give the new ball its id (BALL ... id n)");
+    id = largest + 1;
+  }
+  const bool checks_id = HeldBalls::id_checker(id, ranks) == me;
+  if ((me == 0 && find_ball(model_, id) >= 0) || (checks_id && held_.ids.contains(id)))
+    throw std::runtime_error("ball id " + std::to_string(id) + " is taken");
+  if (b.size() + held_.total >= std::numeric_limits<std::uint32_t>::max())
+    throw std::runtime_error("a model holds at most " + std::to_string(std::numeric_limits<std::uint32_t>::max()) +
+                             " balls");
+  if (checks_id) held_.ids.insert(id);
+  if (keeper == me) held_.add(held_.total, id, type, x, y, z, rad);
+  ++held_.total;
+  held_.max_id = std::max(held_.max_id, id);
+  // What an edit marks (edit(): no results are deferred, hold_start made them), and what add_ball
+  // sets; rank 0's index of the model's centres stays current.
+  const bool centres_current = centres_changes_ == changes_;
+  ++changes_;
+  if (centres_current) centres_changes_ = changes_;
+  unsaved_ = true;
+  model_.energy_at_step.valid = false;
+  pipeline_->invalidate();
+  model_.critical_dt = 0;
+  model_.order.pending = true;
+  return id;
+}
+
+void Session::place_held() {
+  if (held_.total == 0) return;
+  // The lines a chunk at a time: each rank sends its balls of the chunk (seven numbers each, the
+  // integers by their bits), rank 0 puts them in the lines' order and adds them. A failure on rank
+  // 0 (out of memory) lets the others' sends go on, then stops every rank with its message.
+  constexpr std::uint64_t kChunk = std::uint64_t{1} << 18;
+  constexpr std::size_t kRecord = 7;
+  auto bits = [](std::int64_t v) { return std::bit_cast<double>(v); };
+  auto integer = [](double v) { return std::bit_cast<std::int64_t>(v); };
+  std::exception_ptr failure;
+  std::size_t next = 0;
+  std::vector<double> mine, all;
+  std::vector<std::uint32_t> at;
+  for (std::uint64_t lo = 0; lo < held_.total; lo += kChunk) {
+    const std::uint64_t hi = std::min(held_.total, lo + kChunk);
+    mine.clear();
+    for (; next < held_.size() && held_.line[next] < hi; ++next)
+      for (double v : {bits(static_cast<std::int64_t>(held_.line[next])), bits(held_.id[next]),
+                       static_cast<double>(held_.type[next]), held_.x[next], held_.y[next], held_.z[next],
+                       held_.rad[next]})
+        mine.push_back(v);
+    comm::gather_to_root(mine, all);
+    if (!comm::root() || failure) continue;
+    try {
+      at.assign(hi - lo, ~std::uint32_t{0});
+      for (std::size_t r = 0; r + kRecord <= all.size(); r += kRecord)
+        at[static_cast<std::uint64_t>(integer(all[r])) - lo] = static_cast<std::uint32_t>(r / kRecord);
+      for (std::uint32_t q : at) {
+        if (q == ~std::uint32_t{0}) throw std::logic_error("internal error: a held ball's line is missing");
+        const double* v = &all[kRecord * q];
+        trubal::add_ball(model_, integer(v[1]), static_cast<int>(v[2]), v[3], v[4], v[5], v[6]);
+      }
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  }
+  std::vector<double>().swap(all);
+  held_.clear();
+  // (The others take the new balls' ids, types and radii before the next command that is not rank 0's.)
+  light_pending_ = true;
+  ++changes_;
+  pipeline_->invalidate();
+  comm::together([&] {
+    if (failure) std::rethrow_exception(failure);
+  }, "adding the BALL lines' balls to the model");
+  return_free_memory();
 }
 
 std::size_t Session::delete_balls(const Range& range) {

@@ -20,6 +20,7 @@
 #include "model/bond_table.hpp"
 #include "model/centre_index.hpp"
 #include "model/edit.hpp"
+#include "model/held_balls.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
 #include "physics/overlap.hpp"
@@ -150,6 +151,26 @@ class Session {
   void require_started() const;
 
   std::size_t add_ball(std::int64_t id, int type, double x, double y, double z, double rad);
+  // BALL: the ball added (add_ball), or where the ranks hold BALL lines (hold_balls), held: every
+  // rank runs it, checks its part of BALL's rules and keeps the ball where its centre's hash says
+  // (model/held_balls.hpp). Returns the ball's id.
+  std::int64_t add_ball_line(std::int64_t id, int type, double x, double y, double z, double rad);
+  // Under mpirun in a batch deck (the interpreter's word before each command: Interpreter::execute),
+  // with BACKEND mpi: BALL lines are held on the ranks rather than built into rank 0's model. The
+  // same on every rank.
+  void set_hold_balls(bool hold) { hold_balls_ = hold && comm_size_ > 1; }
+  bool hold_balls() const { return hold_balls_ && distributed(); }
+  // Whether BALL, to be held, first needs a collective call (hold_start: the parts released, the
+  // others given rank 0's light state); the same on every rank.
+  bool hold_needs_start() const;
+  // That call: before the first held BALL line (each rank then takes the model as it is).
+  void hold_start();
+  // The balls held, on all ranks (every rank's count); placed in the model by place_held, a
+  // collective call: every rank sends its balls to rank 0, which adds them in the lines' order, a
+  // chunk of lines at a time. Every command that reads the balls has them placed first
+  // (Interpreter::run_agreed, Command::held).
+  std::uint64_t held_balls() const { return held_.total; }
+  void place_held();
   // GEN: returns how many were placed (fewer than n when there is no room).
   std::size_t generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range);
   // GEN with a size distribution: n balls (count > 0) or a target porosity; the balls' types
@@ -298,6 +319,13 @@ class Session {
   CycleResult cycle_in_chunks(std::int64_t limit, std::int64_t chunk,
                               const std::function<void(std::int64_t, std::int64_t)>& progress,
                               const std::function<bool()>& stop);
+  // BALL lines held on the ranks (hold_balls): this rank's, and the counts every rank keeps.
+  HeldBalls held_;
+  bool hold_balls_ = false;
+  int comm_size_ = 1;
+  bool distributed() const;
+  // BALL's check that a centre lies in the START box, where it is bounded.
+  void check_in_box(double x, double y, double z) const;
   std::uint64_t changes_ = 0, centres_changes_ = ~std::uint64_t{0};
   mutable bool unsaved_ = false;   // (SAVE is const: it changes nothing in the model)
   // model_on_zero ran since the last light_everywhere (every rank alike).

@@ -143,4 +143,14 @@ const Command& find_command(std::string_view keyword) {
   throw InputError(fmt::format("unknown command '{}' (HELP lists the commands)", printable(keyword)));
 }
 
+HeldUse held_use(const Command& command, const Args& args) {
+  if (command.keeps_held_after.empty()) return command.held;
+  Args look = args;   // (a copy: the command reads its words itself)
+  try {
+    return !look.empty() && look.keyword(command.keeps_held_after) ? HeldUse::Keep : HeldUse::Place;
+  } catch (const InputError&) {
+    return HeldUse::Place;   // (the command reports the word)
+  }
+}
+
 }  // namespace trubal

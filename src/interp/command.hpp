@@ -73,6 +73,14 @@ enum class OnRanks : std::uint8_t {
                  // MEMBRANE, SAMPLE)
 };
 
+// What a command does with BALL lines a batch deck's ranks hold (Session::hold_balls,
+// model/held_balls.hpp).
+enum class HeldUse : std::uint8_t {
+  Place,   // reads the balls: they are placed in the model first (Session::place_held)
+  Keep,    // reads no ball (a setting, a material, text, PRINT info and counters' counts): kept
+  Add,     // BALL: holds one more
+};
+
 struct Command {
   std::string_view name;                     // canonical keyword, capitals
   std::vector<std::string_view> aliases;     // other full keywords (CREATE for BALL)
@@ -91,7 +99,14 @@ struct Command {
   // not taken as separators (the lexer's text_after_keyword).
   bool raw_text = false;
   OnRanks on_ranks = OnRanks::Whole;
+  HeldUse held = HeldUse::Place;
+  // Where held is Keep for some forms alone: the first words of those (PRINT info and counters);
+  // the others place the balls.
+  std::vector<std::string_view> keeps_held_after = {};
 };
+
+// What this line of the command does with held balls (Command::held, keeps_held_after).
+HeldUse held_use(const Command& command, const Args& args);
 
 // The command table (commands/table.cpp): the dispatcher, HELP, completion and the man-page test
 // all read this one list.

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -225,6 +226,7 @@ void Interpreter::report_out_of_memory() {
 
 void Interpreter::warn(const std::string& raw_message) {
   const std::string message = safe(raw_message);
+  show_held_echo(std::numeric_limits<std::int64_t>::max());   // (the lines before it, as they ran here)
   output_.out().flush();
   if (frames_.empty()) output_.err() << "warning: " << message << '\n';
   else output_.err() << fmt::format("{}:{}: warning: {}\n", frames_.back().name, frames_.back().line, message);
@@ -249,14 +251,30 @@ void Interpreter::execute(const std::string& line) {
   // Flushed before it runs: a long or hung command shows its own line (a quick one's waits for the
   // next command that is not, or for an error: Command::quick).
   const bool flush = interactive || !command.quick;
+  // A batch deck's BALL lines are held on the ranks, not built into rank 0's model (Session::hold_balls).
+  session_.set_hold_balls(comm::size() > 1 && agree_lazily && !interactive);
+  std::vector<std::string> rest(words.begin() + 1, words.end());
+  const HeldUse held = held_use(command, Args(command.usage, rest));
+  // Before the command, a collective call: the held balls placed in the model, or the first held
+  // BALL's start (Session::hold_start).
+  const bool held_call = (held == HeldUse::Place && session_.held_balls() > 0) ||
+                         (held == HeldUse::Add && session_.hold_balls() && session_.hold_needs_start());
   // (Not where the ranks' parts are kept: the whole model is handed over first, a collective call.)
-  const bool lazily = comm::size() > 1 && agree_lazily && command.quick && !interactive && !session_.parts_kept();
+  // (Nor where the echo held for the agreement has grown to 64 KiB: each agreement shows it.)
+  const bool lazily = comm::size() > 1 && agree_lazily && command.quick && !interactive && !session_.parts_kept() &&
+                      !held_call && held_echo_.size() < (std::size_t{1} << 16);
   // The quick commands before it agreed on first (it may make collective calls), before its echo:
   // a deck that failed earlier on another rank does not show this command as run.
   if (comm::size() > 1 && !lazily) settle_agreement();
   if (echo && !interactive) {
-    output_.out() << "trubal> " << printable(expanded, 400) << '\n';
-    if (flush) output_.out() << std::flush;
+    if (lazily) {
+      // (Held until the ranks agree: a line after one that failed on another rank is not shown.)
+      held_echo_ += fmt::format("trubal> {}\n", printable(expanded, 400));
+      held_echo_ends_.emplace_back(commands_run_, held_echo_.size());
+    } else {
+      output_.out() << "trubal> " << printable(expanded, 400) << '\n';
+      if (flush) output_.out() << std::flush;
+    }
   }
   words.erase(words.begin());
   if (command.raw_text) {   // (split_words has checked the quotes; the text is the line's, as typed)
@@ -267,7 +285,7 @@ void Interpreter::execute(const std::string& line) {
   Args args(command.usage, std::move(words));
   Context ctx{session_, *this, output_.out()};
   if (comm::size() == 1) command.run(ctx, args);
-  else run_agreed(command, ctx, args, lazily);
+  else run_agreed(command, ctx, args, lazily, held);
   // Ctrl-C during a command that does not look for it (RESTART, SAVE): a batch deck stops after it,
   // as at a CYCLE (exit 1), rather than the next CYCLE clearing the request. Under mpirun the ranks
   // agree (a collective call: after the commands every rank runs in step, the ones that are not quick).
@@ -286,7 +304,7 @@ static std::string with_location(const std::string& file, int line, const std::s
   return fmt::format("{} {} {}{}", line, file.size(), file, message);
 }
 
-void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, bool lazily) {
+void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, bool lazily, HeldUse held) {
   // Every rank runs the command; they agree whether it failed, so that they stay in step (a file
   // only rank 0 writes may fail there alone). The first failing rank's message is everyone's.
   bool failed = false, reported = false;
@@ -294,6 +312,11 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
   try {
     if (fail_line_for_test > 0 && !frames_.empty() && frames_.back().line == fail_line_for_test)
       throw std::runtime_error(fmt::format("rank {} fails here for a test (TRUBAL_TEST_FAIL_AT)", comm::rank()));
+    // The balls of BALL lines held on the ranks, placed in the model where the command reads them
+    // (Command::held); or the start of holding them.
+    const bool hold = held == HeldUse::Add && session_.hold_balls();
+    if (held == HeldUse::Place) session_.place_held();
+    else if (hold && session_.hold_needs_start()) session_.hold_start();
     // What the command needs of the model (Command::on_ranks): the same on every rank.
     if (command.on_ranks != OnRanks::ModelOnZero) session_.light_everywhere();
     switch (command.on_ranks) {
@@ -312,6 +335,11 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
         command.run(ctx, args);
         break;
       case OnRanks::ModelOnZero:
+        if (hold) {   // (every rank: each checks its part of the rules, one keeps the ball)
+          RankAlone alone;
+          command.run(ctx, args);
+          break;
+        }
         // (Quick, agreed lazily: rank 0 alone may fail, and waits in the agreement for the others,
         // which go on to the next command that is not quick, or the deck's end, and agree there.)
         session_.model_on_zero();
@@ -334,13 +362,30 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
   agreement_pending_ = false;
   if (failed && !reported)
     message = with_location(here_file(), here_line(), message);
-  if (comm::first_failure(failed, message, commands_run_) >= 0) throw_agreed(std::move(message));
+  agree(failed, message);
+}
+
+void Interpreter::agree(bool failed, std::string& message) {
+  std::int64_t failed_at = -1;
+  const bool any = comm::first_failure(failed, message, commands_run_, &failed_at) >= 0;
+  show_held_echo(any ? failed_at : std::numeric_limits<std::int64_t>::max());
+  if (any) throw_agreed(std::move(message));
+}
+
+void Interpreter::show_held_echo(std::int64_t through) {
+  if (held_echo_ends_.empty()) return;
+  std::size_t end = 0;
+  for (const auto& [order, at] : held_echo_ends_)
+    if (order <= through) end = at;
+  output_.out().write(held_echo_.data(), static_cast<std::streamsize>(end));
+  held_echo_.clear();
+  held_echo_ends_.clear();
 }
 
 void Interpreter::settle_agreement() {
   if (!std::exchange(agreement_pending_, false)) return;
   std::string message;
-  if (comm::first_failure(false, message, commands_run_) >= 0) throw_agreed(std::move(message));
+  agree(false, message);
 }
 
 void Interpreter::throw_agreed(std::string message) {

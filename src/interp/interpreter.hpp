@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "interp/command.hpp"
 #include "interp/output.hpp"
 
 namespace trubal {
@@ -108,10 +109,19 @@ class Interpreter {
   void report_out_of_memory();
   // Runs a command on every rank and agrees whether it failed (comm::first_failure); `lazily`: a
   // success leaves the agreement pending (agree_lazily).
-  void run_agreed(const Command& command, Context& ctx, Args& args, bool lazily);
+  // held: what the line does with BALL lines held on the ranks (held_use).
+  void run_agreed(const Command& command, Context& ctx, Args& args, bool lazily, HeldUse held);
   // The ranks' pending agreement on the quick commands run since the last one, if any: throws the
   // first failing rank's error.
   void settle_agreement();
+  // The ranks agree whether a command failed (comm::first_failure), rank 0's echo of the lines run
+  // lazily shown up to the first failing one (all where none failed); throws the failure.
+  void agree(bool failed, std::string& message);
+  void show_held_echo(std::int64_t through);
+  // The echo of lines run lazily (agree_lazily), not yet agreed on: the text and where each
+  // line's ends, by its order (commands_run_).
+  std::string held_echo_;
+  std::vector<std::pair<std::int64_t, std::size_t>> held_echo_ends_;
   // After the ranks agreed that a rank failed with `message` (encoded with its FILE:LINE): the error.
   [[noreturn]] void throw_agreed(std::string message);
   bool agreement_pending_ = false;

@@ -18,7 +18,8 @@ class CentreIndex {
   static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
   // The index of a ball of `b` whose centre is (x, y, z) exactly (-0 and 0 the same), or kNone.
-  std::size_t find(const Balls& b, double x, double y, double z) const {
+  // (`b`: the balls, or anything that holds centres in arrays x, y and z: HeldBalls.)
+  template <class Centres> std::size_t find(const Centres& b, double x, double y, double z) const {
     if (slots_.empty()) return kNone;
     for (std::size_t s = hash(x, y, z) & mask(); slots_[s] != kEmpty; s = (s + 1) & mask()) {
       const std::uint32_t k = slots_[s];
@@ -27,15 +28,15 @@ class CentreIndex {
     return kNone;
   }
   // Ball k of `b` added (its centre not there yet: find first).
-  void insert(const Balls& b, std::size_t k) {
+  template <class Centres> void insert(const Centres& b, std::size_t k) {
     if (2 * (count_ + 1) > slots_.size()) grow(b);
     put(b, static_cast<std::uint32_t>(k));
     ++count_;
   }
   // Every ball of `b`, afresh.
-  void rebuild(const Balls& b) {
+  template <class Centres> void rebuild(const Centres& b) {
     clear();
-    for (std::size_t k = 0; k < b.size(); ++k) insert(b, k);
+    for (std::size_t k = 0; k < b.x.size(); ++k) insert(b, k);
   }
   // Empty, its memory given back.
   void clear() {
@@ -43,9 +44,7 @@ class CentreIndex {
     count_ = 0;
   }
 
- private:
-  static constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
-  std::size_t mask() const { return slots_.size() - 1; }
+  // (HeldBalls picks the rank that keeps a centre by it.)
   static std::uint64_t hash(double x, double y, double z) {
     std::uint64_t h = 1469598103934665603ull;
     for (double v : {x, y, z}) {
@@ -57,12 +56,18 @@ class CentreIndex {
     }
     return h;
   }
-  void put(const Balls& b, std::uint32_t k) {
+  // The bytes it holds.
+  std::size_t bytes() const { return slots_.capacity() * sizeof(std::uint32_t); }
+
+ private:
+  static constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
+  std::size_t mask() const { return slots_.size() - 1; }
+  template <class Centres> void put(const Centres& b, std::uint32_t k) {
     std::size_t s = hash(b.x[k], b.y[k], b.z[k]) & mask();
     while (slots_[s] != kEmpty) s = (s + 1) & mask();
     slots_[s] = k;
   }
-  void grow(const Balls& b) {
+  template <class Centres> void grow(const Centres& b) {
     std::vector<std::uint32_t> old;
     old.swap(slots_);
     slots_.assign(old.empty() ? 1024 : 2 * old.size(), kEmpty);

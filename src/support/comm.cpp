@@ -137,7 +137,8 @@ void broadcast(std::int64_t& value) {
 #endif
 }
 
-int first_failure(bool failed, [[maybe_unused]] std::string& message, [[maybe_unused]] std::int64_t order) {
+int first_failure(bool failed, [[maybe_unused]] std::string& message, [[maybe_unused]] std::int64_t order,
+                  std::int64_t* failed_order) {
 #ifdef TRUBAL_HAVE_MPI
   if (g_started && g_size > 1) {
     // (order, rank) in one integer: the rank in the low 23 bits (MPI_Comm_size is an int, and no
@@ -149,6 +150,7 @@ int first_failure(bool failed, [[maybe_unused]] std::string& message, [[maybe_un
     MPI_Allreduce(&mine, &least, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
     if (least == kNone) return -1;
     const int first = static_cast<int>(least & ((std::int64_t{1} << kRankBits) - 1));
+    if (failed_order) *failed_order = least >> kRankBits;
     std::int64_t n = static_cast<std::int64_t>(message.size());
     MPI_Bcast(&n, 1, MPI_INT64_T, first, MPI_COMM_WORLD);
     message.resize(static_cast<std::size_t>(n));
@@ -156,6 +158,7 @@ int first_failure(bool failed, [[maybe_unused]] std::string& message, [[maybe_un
     return first;
   }
 #endif
+  if (failed && failed_order) *failed_order = order;
   return failed ? 0 : -1;
 }
 

@@ -35,7 +35,8 @@ void broadcast(std::int64_t& value);
 // The rank on which `failed` is true with the lowest `order` (then the lowest rank), or -1 where it
 // is true on none; that rank's `message` is handed to every rank. `order`: where in the deck the
 // rank failed (its count of commands run; 0 to 2^40), for ranks that may meet at different commands.
-int first_failure(bool failed, std::string& message, std::int64_t order = 0);
+// failed_order, where given: that rank's order (unchanged where none failed).
+int first_failure(bool failed, std::string& message, std::int64_t order = 0, std::int64_t* failed_order = nullptr);
 
 // Rank 0's vector (its size and values) to every rank. Instantiated for the element types of the
 // model's arrays: double, float, std::int64_t, int, std::uint32_t, std::uint8_t, std::int8_t.

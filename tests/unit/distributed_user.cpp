@@ -8,9 +8,11 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "counters.hpp"
 #include "interp_support.hpp"
+#include "model/held_balls.hpp"
 #include "mpi_launch.hpp"
 #include "skip.hpp"
 
@@ -415,5 +417,96 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
     };
     CHECK(model_lines(out) == model_lines(serial_out));
     if (scene == wet) CHECK(model_lines(serial_out).find("bridges intact") != std::string::npos);
+  }
+}
+
+TEST_CASE("distributed: a batch deck's BALL lines held on the ranks: serial's model, a bad line found on any rank",
+          "[mpi][system]") {
+  // Every rank reads each BALL line and one keeps the ball (model/held_balls.hpp), until a command
+  // reads the balls: PROP, GRAV and PRINT counters keep them held, CYCLE has them placed in rank 0's
+  // model in the lines' order. The model is serial's; each rank holds about a third of the balls,
+  // and checks the centres it keeps and the ids its hash picks, so that a repeat is found on the
+  // rank that keeps the first ball, with serial's message and FILE:LINE, and no line after it shown.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  constexpr int kRanks = 3, kBalls = 30000;
+  auto x_of = [](int k) { return 0.01 + 0.0098 * (k % 100); };
+  auto y_of = [](int k) { return 0.01 + 0.0098 * (k / 100 % 100); };
+  auto z_of = [](int k) { return 0.01 + 0.0098 * (k / 10000); };
+  std::string balls;
+  for (int k = 0; k < kBalls; ++k)   // (every third with its id, the others the next free one)
+    balls += fmt::format("ball {} {} {} 0.004{}\n", x_of(k), y_of(k), z_of(k), k % 3 == 0 ? fmt::format(" id {}", 100000 + k) : "");
+  const std::string head = "start box 0 1 0 1 0 1\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\nwall id 3 plane 0 0 0.008 0 0 1\n";
+  SECTION("placed at the CYCLE: serial's model; held, a third on each rank") {
+    const std::string deck = head + balls + "grav 0 0 -9.81\n" + kCounters + "print info\ncycle 30\nsave a.sav\n" + kOutputs;
+    TempDir serial, ranks;
+    serial.write("deck.dat", deck);
+    ranks.write("deck.dat", deck);
+    REQUIRE(run_deck(serial, 0) == 0);
+    REQUIRE(run_deck(ranks, kRanks) == 0);
+    const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
+    INFO(out.substr(out.size() > 3000 ? out.size() - 3000 : 0));
+    for (const char* file : {"a.sav", "balls.csv", "contacts.csv"}) {
+      INFO(file);
+      CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+    }
+    // The wall's warnings (the balls of the first layer cross it), one each, as serial's: the
+    // standard error of a run apart (under mpirun it reaches the file apart from the output, and
+    // may fall inside an echoed line there).
+    TempDir serial_err, ranks_err;
+    serial_err.write("deck.dat", head + balls + "cycle 1\n");
+    ranks_err.write("deck.dat", head + balls + "cycle 1\n");
+    REQUIRE(run_trubal(serial_err, 0, " deck.dat >out.txt 2>err.txt") == 0);
+    REQUIRE(run_trubal(ranks_err, kRanks, " deck.dat >out.txt 2>err.txt") == 0);
+    const std::string warnings = slurp(ranks_err.path() / "err.txt");
+    CHECK(lines_of(warnings).size() >= 10000);   // (the first layer's balls, and the CYCLE's overlap warning)
+    CHECK(warnings == slurp(serial_err.path() / "err.txt"));
+    const Counters counters = counters_of(ranks);
+    CHECK(counter(counters, "balls") == kBalls);
+    CHECK(counter(counters, "balls_held") == kBalls);
+    // A held ball is 52 bytes of arrays and its share of two hash tables (at most 48 bytes at their
+    // emptiest after growing), the arrays up to twice their length: under 160 bytes. The model's
+    // arrays are 205 bytes a ball, so a rank holding them all would hold 3 times this bound.
+    for (int r = 0; r < kRanks; ++r) {
+      INFO("rank " << r);
+      const double held = counter(counters, fmt::format("rank{}_model_held_mib", r));
+      CHECK(held > 0);
+      CHECK(held * (1 << 20) < 160.0 * kBalls / kRanks);
+    }
+    CHECK(out.find("balls held: 30000") != std::string::npos);
+  }
+  SECTION("a centre or an id taken twice, found by the rank that keeps the first") {
+    // A repeat of ball k's centre, where rank 2 keeps it; and of an id rank 1 checks: each line's
+    // error is serial's, once, and the run shows no line after it.
+    int k_centre = 0, k_id = 0;
+    while (HeldBalls::keeper(x_of(k_centre), y_of(k_centre), z_of(k_centre), kRanks) != 2) ++k_centre;
+    while (k_id % 3 != 0 || HeldBalls::id_checker(100000 + k_id, kRanks) != 1) ++k_id;
+    const std::vector<std::string> repeats = {
+        fmt::format("ball {} {} {} 0.003\n", x_of(k_centre), y_of(k_centre), z_of(k_centre)),
+        fmt::format("ball 0.5 0.5 0.995 0.003 id {}\n", 100000 + k_id)};
+    for (const std::string& repeat : repeats) {
+      INFO(repeat);
+      const std::size_t cut = balls.find('\n', balls.size() / 2) + 1;   // (the repeat halfway)
+      const std::string deck = "start box 0 1 0 1 0 1\n" + balls.substr(0, cut) + repeat + balls.substr(cut) + "cycle 10\n";
+      TempDir serial, ranks;
+      serial.write("deck.dat", deck);
+      ranks.write("deck.dat", deck);
+      CHECK(run_trubal(serial, 0, " deck.dat >out.txt 2>err.txt") == 1);
+      CHECK(run_trubal(ranks, kRanks, " deck.dat >out.txt 2>err.txt") == 1);
+      const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
+      const std::string message = lines_of(slurp(serial.path() / "err.txt")).at(0);
+      INFO(message);
+      CHECK(message.find("error:") != std::string::npos);
+      const std::string err = slurp(ranks.path() / "err.txt");
+      const auto at = err.find(message);
+      REQUIRE(at != std::string::npos);
+      CHECK(err.find("deck.dat:", at + 1) == std::string::npos);
+      // The echo: serial's lines, the repeated one last.
+      auto echoed = [](const std::string& text) {
+        std::size_t n = 0;
+        for (const std::string& line : lines_of(text)) n += line.rfind("trubal> ", 0) == 0;
+        return n;
+      };
+      CHECK(echoed(out) == echoed(serial_out));
+    }
   }
 }
