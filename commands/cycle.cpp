@@ -133,7 +133,7 @@ const Command cycle_command = {
     "otherwise (SET progress). At the end one line gives the cycle, time, step and speed, and in batch "
     "where the time went (contact detection, forces, motion, output).",
     "cycle 1000",
-    {"until", "axial", "volumetric", "q", "p", "sig1", "sig3", "time", "every"}, run_cycle, false, false, OnRanks::Parts};
+    {"until", "axial", "volumetric", "q", "p", "sig1", "sig3", "time", "every"}, run_cycle, false, false, OnRanks::Parts, HeldUse::Split};
 
 static void run_solve(Context& ctx, Args& args) {
   double ratio = 1e-3;

@@ -22,6 +22,7 @@
 #include "gen/region.hpp"
 #include "io/save.hpp"
 #include "model/edit.hpp"
+#include "model/periodic_cell.hpp"
 #include "physics/bridge.hpp"
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
@@ -310,11 +311,10 @@ std::int64_t Session::add_ball_line(std::int64_t id, int type, double x, double 
   return id;
 }
 
-void Session::place_held() {
-  if (held_.total == 0) return;
+std::exception_ptr Session::gather_held(
+    const std::function<void(std::int64_t, int, double, double, double, double)>& take) {
   // The lines a chunk at a time: each rank sends its balls of the chunk (seven numbers each, the
-  // integers by their bits), rank 0 puts them in the lines' order and adds them. A failure on rank
-  // 0 (out of memory) lets the others' sends go on, then stops every rank with its message.
+  // integers by their bits), rank 0 puts them in the lines' order and takes them.
   constexpr std::uint64_t kChunk = std::uint64_t{1} << 18;
   constexpr std::size_t kRecord = 7;
   auto bits = [](std::int64_t v) { return std::bit_cast<double>(v); };
@@ -340,13 +340,22 @@ void Session::place_held() {
       for (std::uint32_t q : at) {
         if (q == ~std::uint32_t{0}) throw std::logic_error("internal error: a held ball's line is missing");
         const double* v = &all[kRecord * q];
-        trubal::add_ball(model_, integer(v[1]), static_cast<int>(v[2]), v[3], v[4], v[5], v[6]);
+        take(integer(v[1]), static_cast<int>(v[2]), v[3], v[4], v[5], v[6]);
       }
     } catch (...) {
       failure = std::current_exception();
     }
   }
-  std::vector<double>().swap(all);
+  return failure;
+}
+
+void Session::place_held() {
+  if (held_.total == 0) return;
+  // Rank 0 adds them to its model in the lines' order. A failure there (out of memory) stops every
+  // rank with its message.
+  const std::exception_ptr failure = gather_held([&](std::int64_t id, int type, double x, double y, double z, double rad) {
+    trubal::add_ball(model_, id, type, x, y, z, rad);
+  });
   held_.clear();
   // (The others take the new balls' ids, types and radii before the next command that is not rank 0's.)
   light_pending_ = true;
@@ -356,6 +365,99 @@ void Session::place_held() {
     if (failure) std::rethrow_exception(failure);
   }, "adding the BALL lines' balls to the model");
   return_free_memory();
+}
+
+void Session::place_held_as_parts() {
+  if (held_.total == 0) return;
+  light_everywhere();   // (the others' materials give their parts' masses)
+  // Where the space wraps an axis, a ball outside the cell would be wrapped before the first search
+  // (Pipeline::prepare): rank 0 places them in its model then. (A collective call on every rank.)
+  bool wraps = false;
+  for (int a = 0; a < 3; ++a) wraps = wraps || model_.space.wraps(a);
+  bool outside_here = false;
+  if (wraps) {
+    Model probe;   // (the held centres, as outside_cell reads a model's)
+    probe.space = model_.space;
+    probe.balls.id = held_.id;
+    probe.balls.x = held_.x;
+    probe.balls.y = held_.y;
+    probe.balls.z = held_.z;
+    outside_here = outside_cell(probe, 0, probe.balls.size());
+  }
+  const bool outside = comm::any_all(outside_here);
+  // (The same answer on every rank: each holds the model's light state and its balls' ids.)
+  if (!(pipeline_->distributed() && comm_size_ > 1 && model_.balls.size() == 0 && model_.bonds.empty() && !outside &&
+        !parts_kept()))
+    return place_held();
+  // Rank 0 takes the balls' ids, types, radii and centres in the lines' order (their fixities
+  // none), checks them as a CYCLE does, where it can, and puts them in space order where the CYCLE's first step would;
+  // for each rank it notes the whole model's index of each ball the rank keeps, in its order.
+  const bool sorts = sort_due(model_);
+  Balls& b = model_.balls;
+  std::exception_ptr failure = gather_held([&](std::int64_t id, int type, double x, double y, double z, double rad) {
+    b.id.push_back(id);
+    b.type.push_back(type);
+    b.fixed.push_back(0);
+    b.rad.push_back(rad);
+    b.x.push_back(x);
+    b.y.push_back(y);
+    b.z.push_back(z);
+  });
+  const int ranks = comm_size_;
+  std::vector<std::vector<std::uint32_t>> kept(static_cast<std::size_t>(ranks));
+  std::int64_t checked = 1;
+  comm::together([&] {
+    if (failure) std::rethrow_exception(failure);
+    if (!comm::root()) return;
+    b.index_ids();
+    // A ball or type the CYCLE will refuse: the balls are placed on rank 0 instead, and the CYCLE
+    // says why, as serially (after reading its own words).
+    try {
+      check_ready(model_);
+      for (std::size_t k = 0; k < b.size(); ++k) {
+        const BallMass m = ball_mass(model_, b.type[k], b.rad[k]);
+        if (!ball_mass_problem(b.id[k], m.mass, m.inertia, b.rad[k]).empty()) throw std::runtime_error("");
+      }
+    } catch (const std::runtime_error&) {
+      checked = 0;
+      return;
+    }
+    const std::vector<std::size_t> order = sorts ? sort_in_space_order(model_) : std::vector<std::size_t>{};
+    std::vector<std::uint32_t> at(b.size());   // each line's index
+    for (std::size_t k = 0; k < at.size(); ++k) at[order.empty() ? k : order[k]] = static_cast<std::uint32_t>(k);
+    for (std::uint32_t k : at) kept[HeldBalls::keeper(b.x[k], b.y[k], b.z[k], ranks)].push_back(k);
+  }, "placing the BALL lines' balls in the ranks' parts");
+  comm::broadcast(checked);
+  if (checked == 0) {
+    if (comm::root()) {
+      b.for_each_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+      b.by_id.clear();
+    }
+    return place_held();
+  }
+  if (sorts) model_.order.pending = false;
+  // Each rank learns the whole model's index of each of its balls, and takes their ids, types and
+  // radii in the whole model's order.
+  std::vector<std::uint32_t> mine;
+  if (comm::root()) {
+    for (int r = 1; r < ranks; ++r) comm::send_bytes(r, kept[r].data(), kept[r].size() * sizeof(std::uint32_t));
+    mine = std::move(kept[0]);
+  } else {
+    mine.resize(held_.size());
+    comm::receive_bytes(0, mine.data(), mine.size() * sizeof(std::uint32_t));
+  }
+  std::vector<std::vector<std::uint32_t>>().swap(kept);
+  broadcast_ball_names(b);
+  std::vector<double> records;
+  records.reserve(BrickStep::kRecord * held_.size());
+  for (std::size_t q = 0; q < held_.size(); ++q)
+    for (double v : {static_cast<double>(mine[q]), std::bit_cast<double>(held_.id[q]), static_cast<double>(held_.type[q]),
+                     held_.x[q], held_.y[q], held_.z[q], held_.rad[q]})
+      records.push_back(v);
+  held_.clear();
+  std::vector<std::uint32_t>().swap(mine);
+  ++changes_;
+  pipeline_->parts_from_records(model_, records);
 }
 
 std::size_t Session::delete_balls(const Range& range) {

@@ -171,6 +171,15 @@ class Session {
   // (Interpreter::run_agreed, Command::held).
   std::uint64_t held_balls() const { return held_.total; }
   void place_held();
+  // For a CYCLE: the held balls made the ranks' parts straight away where the model holds no other
+  // ball (nor a bond) and none lies outside a periodic cell (Pipeline::parts_from_records: rank 0 gathers their ids,
+  // types, radii and centres alone, checks them, sorts them into space order and decomposes them,
+  // and each rank sends its balls to their owners); else place_held. A collective call.
+  void place_held_as_parts();
+  // Rank 0 takes each held ball in the lines' order (`take`: id, type, x, y, z, radius) while every
+  // rank sends its own, 256 Ki lines a gather (a collective call). A failure of take is returned,
+  // not thrown: the others' sends went on, and the caller has the ranks agree on it.
+  std::exception_ptr gather_held(const std::function<void(std::int64_t, int, double, double, double, double)>& take);
   // GEN: returns how many were placed (fewer than n when there is no room).
   std::size_t generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range);
   // GEN with a size distribution: n balls (count > 0) or a target porosity; the balls' types

@@ -8,11 +8,13 @@
 #include <cstring>
 #include <exception>
 #include <new>
+#include <numeric>
 #include <stdexcept>
 #include <type_traits>
 
 #include <fmt/format.h>
 
+#include "physics/scene.hpp"
 #include "support/comm.hpp"
 #include "support/peak_memory.hpp"
 
@@ -113,6 +115,81 @@ void BrickStep::scatter_parts(const Model& full, const VerletReference& ref, con
   together([&] {
     if (failure) std::rethrow_exception(failure);
   }, fmt::format("making the ranks' parts of the decomposition ({} balls in the whole model)", full.balls.size()));
+  return_free_memory();
+}
+
+void BrickStep::split_from_records(const Model& full, std::vector<double>& records) {
+  ++edition_;
+  update_shares();   // (a collective call)
+  const int ranks = team_->size(), me = team_->rank();
+  const std::string doing = fmt::format("making its part of the decomposition ({} balls in the whole model)", full.balls.size());
+  together([&] {
+    if (comm::root()) decompose(full);
+  }, doing);
+  share_decomposition();
+  // Each ball to its owner: the counts first (each rank's to each, gathered), then the records.
+  std::vector<std::vector<double>> send(static_cast<std::size_t>(ranks)), recv(static_cast<std::size_t>(ranks));
+  together([&] {
+    for (std::size_t r = 0; r + kRecord <= records.size(); r += kRecord) {
+      auto& to = send[owner_[static_cast<std::size_t>(records[r])]];
+      to.insert(to.end(), records.begin() + static_cast<std::ptrdiff_t>(r),
+                records.begin() + static_cast<std::ptrdiff_t>(r + kRecord));
+    }
+    std::vector<double>().swap(records);
+  }, doing);
+  std::vector<double> counts, all;
+  for (const auto& v : send) counts.push_back(static_cast<double>(v.size()));
+  comm::allgather(counts, all);
+  for (int r = 0; r < ranks; ++r) recv[r].resize(static_cast<std::size_t>(all[static_cast<std::size_t>(r * ranks + me)]));
+  comm::exchange(send, recv);
+  std::vector<std::vector<double>>().swap(send);
+  together([&] {
+    // The part: this rank's balls in the whole model's order (rank_balls_ ascends), at rest, their
+    // masses from their types' densities as a CYCLE sets the whole model's.
+    const std::vector<std::uint32_t>& mine = rank_balls_[me];
+    const std::size_t m = mine.size();
+    Balls& b = part_.balls;
+    b.for_each_array([&](auto& v) {
+      std::decay_t<decltype(v)>().swap(v);
+      v.resize(m);
+    });
+    std::size_t placed = 0;
+    for (const auto& from : recv)
+      for (std::size_t r = 0; r + kRecord <= from.size(); r += kRecord) {
+        const auto k = static_cast<std::uint32_t>(from[r]);
+        const auto at = std::lower_bound(mine.begin(), mine.end(), k);
+        if (at == mine.end() || *at != k) throw std::logic_error("internal error: a ball came to a rank that does not own it");
+        const auto q = static_cast<std::size_t>(at - mine.begin());
+        b.id[q] = row_id(from[r + 1]);
+        b.type[q] = static_cast<int>(from[r + 2]);
+        b.x[q] = from[r + 3];
+        b.y[q] = from[r + 4];
+        b.z[q] = from[r + 5];
+        b.rad[q] = from[r + 6];
+        ++placed;
+      }
+    if (placed != m) throw std::logic_error("internal error: a rank's balls did not all come");
+    std::vector<std::vector<double>>().swap(recv);
+    part_.materials = full.materials;
+    update_mass(part_);
+    part_.contacts.for_each_pair_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+    part_.contacts.set_history_laws(split_laws_);
+    part_.bonds.for_each_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+    part_.wall_contacts.for_each_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+    global_ball_ = mine;
+    owned_.resize(m);
+    std::iota(owned_.begin(), owned_.end(), 0u);
+    owned_pairs_.clear();
+    owned_walls_.clear();
+    send_.assign(static_cast<std::size_t>(ranks), {});
+    recv_.assign(static_cast<std::size_t>(ranks), {});
+    scratch_.ghost.assign(m, 0);
+    ghosts_ = 0;
+    ref_.x.clear();
+    ref_.y.clear();
+    ref_.z.clear();
+  }, doing);
+  finish_part(full);
   return_free_memory();
 }
 

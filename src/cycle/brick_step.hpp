@@ -107,6 +107,16 @@ class BrickStep {
   // Ranks: rank 0 makes every rank's part and sends it (scatters); the others need no more of
   // `full` than its light state and the balls' count.
   void split(const Model& full, const VerletReference& ref);
+  // The ranks' split made from balls each rank keeps apart from `full` (a batch deck's held BALL
+  // lines: Session::place_held_as_parts). `full` holds, on rank 0, the balls' ids, types, radii,
+  // fixities and centres in the whole model's order and no pair, wall contact or bond; `records`,
+  // this rank's balls, 7 numbers each (the whole model's index, the id's bits, type, x, y, z,
+  // radius), go to their owners, each of which makes its part of its own: no ghost, as no pair is
+  // found yet. A collective call; `records` is let go once sent.
+  void split_from_records(const Model& full, std::vector<double>& records);
+  static constexpr std::size_t kRecord = 7;
+  // Counts the splits, rebuilds, tilt reductions and drops (a part changed other than by steps).
+  std::uint64_t edition() const { return edition_; }
   // One step on this rank's part: forces, motion of the owned balls, the ghosts' new state from
   // their owners, the global sums (merged over the ranks into `sums`) and the walls' loads (into
   // full.walls). The space and walls are read from `full`.

@@ -710,7 +710,7 @@ PipelineCounters Pipeline::counters() const {
   return {ref_.rebuilds(),    mode_ == StepMode::Space ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
           backend_->pair_tests(), results_made_, results_gathered_, bricks().counts(), cycle_peaks_,
           static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20), hand_overs_,
-          copies_on_parts_};
+          copies_on_parts_, parts_from_records_};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {

@@ -40,6 +40,7 @@ struct PipelineCounters {
   double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
   std::int64_t hand_overs = 0;     // the whole model handed to every rank for a command, from kept parts
   std::int64_t copies_on_parts = 0;   // the parts put back to their rescue copies in place (restore_rescue_on_parts)
+  std::int64_t parts_from_records = 0;   // the parts made from balls the ranks kept (parts_from_records)
 };
 
 class Pipeline {
@@ -258,6 +259,16 @@ class Pipeline {
   // and searched now and each rank's own balls give their steps (a collective call), so that no rank
   // but 0 holds the whole list; the ranks other than 0 then hold their part alone.
   double critical_timestep(Model& model, const Features& features, double cap);
+  // The ranks' parts made from the balls each rank keeps of a batch deck's BALL lines
+  // (Session::place_held_as_parts; BrickStep::split_from_records says what `model` and `records`
+  // hold) and their lists searched, rank 0's whole model hollow: as a CYCLE's first split leaves
+  // them, the balls never gathered whole. A collective call.
+  void parts_from_records(Model& model, std::vector<double>& records);
+  // Whether the kept parts were put in space order at this cycle and have not changed since
+  // (parts_from_records sorted them): a CYCLE's first sort has nothing to do.
+  bool parts_in_space_order(const Model& model) const {
+    return parts_live(model) && sorted_cycle_ == model.cycle && sorted_edition_ == bricks().edition();
+  }
 
   // A CYCLE that left its last step's results to be made when read (CycleControl::defer_results):
   // the rescue copy is then of the step before, and taking that step again makes them
@@ -432,6 +443,9 @@ class Pipeline {
   std::int64_t results_made_ = 0;
   std::int64_t results_gathered_ = 0;
   bool serving_ = false;   // (start_requests)
+  std::int64_t sorted_cycle_ = -1;      // (parts_in_space_order)
+  std::int64_t parts_from_records_ = 0;   // (PipelineCounters::parts_from_records)
+  std::uint64_t sorted_edition_ = 0;
 };
 
 // A pipeline with the backend of that name (BACKEND's words; throws std::invalid_argument), both

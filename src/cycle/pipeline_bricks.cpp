@@ -137,6 +137,26 @@ void Pipeline::split_parts(Model& model) {
     for (auto& part : bricks_) part->hollow_whole(model);
 }
 
+void Pipeline::parts_from_records(Model& model, std::vector<double>& records) {
+  // As split_parts with a list to search, the parts made from the records rather than cut from
+  // rank 0's whole model.
+  const double skin = list_skin(model);
+  ref_.record(model, skin);
+  wall_travel_ = 0;
+  list_ = ListState::PartsToSearch;
+  for (auto& part : bricks_) part->whole_freed();
+  bricks().split_from_records(model, records);
+  others_hollow_ = false;
+  for (auto& part : bricks_) part->hollow_whole(model);
+  if (comm::root()) scratch_ = StepScratch{};
+  if (!rebuild_parts(model, list_reach(model, skin)))
+    throw std::logic_error("internal error: the parts of new balls could not search their lists");
+  list_ = ListState::Current;
+  sorted_cycle_ = model.cycle;
+  sorted_edition_ = bricks().edition();
+  ++parts_from_records_;
+}
+
 double Pipeline::list_reach(const Model& model, double skin) const {
   const double bridge = bridge_reach(model);
   if (bridge == 0) return skin;

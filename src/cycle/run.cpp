@@ -184,7 +184,10 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
     pipeline.clear_deferred();
   pipeline.refresh_whole(model, false);   // (stale; not where hollow: what follows reads its light arrays)
   // The first step's sort: rank 0 alone sorts (sort_balls), the parts given back to it first.
-  if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model)) pipeline.release_parts(model);
+  // (Not where the parts were put in space order at this cycle: Pipeline::parts_from_records.)
+  const bool presorted = pipeline.parts_in_space_order(model);
+  if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model) && !presorted)
+    pipeline.release_parts(model);
   // A servo's first reading of the contact table needs the whole model's list searched on every
   // rank: handed over first, from the parts or from rank 0.
   if (servo_reads_table_) pipeline.share_whole(model);
@@ -202,11 +205,10 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   check_ready(model);
   if (whole_here && !hollow) update_mass(model);
   auto check_masses = [&] {
-    for (std::size_t k = 0; k < model.balls.size(); ++k)
-      if (!(model.balls.mass[k] > 0 && std::isfinite(1 / model.balls.mass[k]) && model.balls.inertia[k] > 0))
-        throw std::runtime_error(fmt::format(
-            "ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger radius or "
-            "density", model.balls.id[k], model.balls.mass[k], model.balls.rad[k]));
+    const Balls& b = model.balls;
+    for (std::size_t k = 0; k < b.size(); ++k)
+      if (std::string why = ball_mass_problem(b.id[k], b.mass[k], b.inertia[k], b.rad[k]); !why.empty())
+        throw std::runtime_error(why);
   };
   if (from_root) comm::on_root(check_masses, "checking the balls' masses");
   else if (!from_parts) check_masses();
@@ -214,7 +216,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // deferred is to be taken again first (make_results: it is of the order before), which the first
   // step then sorts after.
   if (sort_due(model) && !pipeline.results_deferred(model)) {
-    sort_balls();
+    if (!presorted) sort_balls();
     sorted_at_start_ = true;
   }
   // The history parts the laws of this run use, zero where a law is new since the pairs were found.

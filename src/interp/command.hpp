@@ -79,6 +79,8 @@ enum class HeldUse : std::uint8_t {
   Place,   // reads the balls: they are placed in the model first (Session::place_held)
   Keep,    // reads no ball (a setting, a material, text, PRINT info and counters' counts): kept
   Add,     // BALL: holds one more
+  Split,   // CYCLE, SOLVE: placed in the ranks' parts where they can be, without rank 0 holding
+           // them all (Session::place_held_as_parts); else as Place
 };
 
 struct Command {

@@ -257,7 +257,7 @@ void Interpreter::execute(const std::string& line) {
   const HeldUse held = held_use(command, Args(command.usage, rest));
   // Before the command, a collective call: the held balls placed in the model, or the first held
   // BALL's start (Session::hold_start).
-  const bool held_call = (held == HeldUse::Place && session_.held_balls() > 0) ||
+  const bool held_call = ((held == HeldUse::Place || held == HeldUse::Split) && session_.held_balls() > 0) ||
                          (held == HeldUse::Add && session_.hold_balls() && session_.hold_needs_start());
   // (Not where the ranks' parts are kept: the whole model is handed over first, a collective call.)
   // (Nor where the echo held for the agreement has grown to 64 KiB: each agreement shows it.)
@@ -316,6 +316,7 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
     // (Command::held); or the start of holding them.
     const bool hold = held == HeldUse::Add && session_.hold_balls();
     if (held == HeldUse::Place) session_.place_held();
+    else if (held == HeldUse::Split) session_.place_held_as_parts();
     else if (hold && session_.hold_needs_start()) session_.hold_start();
     // What the command needs of the model (Command::on_ranks): the same on every rank.
     if (command.on_ranks != OnRanks::ModelOnZero) session_.light_everywhere();

@@ -263,14 +263,17 @@ double order_cell(const Balls& b) {
   return std::isfinite(diameter) && diameter > 0 ? diameter : 1.0;
 }
 
-bool sort_in_space(Model& model) {
+std::vector<std::size_t> sort_in_space_order(Model& model) {
   model.order.pending = false;
-  const std::vector<std::size_t> order = space_order(model.balls, order_cell(model.balls));
+  std::vector<std::size_t> order = space_order(model.balls, order_cell(model.balls));
   bool moved = false;
   for (std::size_t k = 0; k < order.size() && !moved; ++k) moved = order[k] != k;
-  if (moved) reorder_balls(model, order);
-  return moved;
+  if (!moved) return {};
+  reorder_balls(model, order);
+  return order;
 }
+
+bool sort_in_space(Model& model) { return !sort_in_space_order(model).empty(); }
 
 Renumbering renumber_balls(Model& model, RenumberOrder how) {
   Balls& b = model.balls;

@@ -44,6 +44,9 @@ void reorder_balls(Model& model, const std::vector<std::size_t>& order);
 // balls' centres and ids alone, so every backend, thread and rank count and cut of a run puts
 // them in the same order, and so does a model that reached the same state another way. Returns whether any ball moved.
 bool sort_in_space(Model& model);
+// The same, returning the order the balls were put in (new index k holds the ball at old index
+// order[k]), or nothing where none moved.
+std::vector<std::size_t> sort_in_space_order(Model& model);
 
 // Whether the step about to be taken puts the balls in space order first (Model::order).
 inline bool sort_due(const Model& model) {

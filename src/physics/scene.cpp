@@ -114,15 +114,28 @@ void check_ready(const Model& model) {
     throw std::runtime_error("the balls mix Hertz-Mindlin and linear types; give every type the same law");
 }
 
+BallMass ball_mass(const Model& model, int type, double r) {
+  const auto it = model.materials.find(type);
+  const double density = it == model.materials.end() ? 0 : it->second.density;
+  BallMass m;
+  m.mass = density * 4.0 / 3.0 * M_PI * r * r * r;
+  m.inertia = 0.4 * m.mass * r * r;
+  return m;
+}
+
 void update_mass(Model& model) {
   Balls& b = model.balls;
   for (std::size_t i = 0; i < b.size(); ++i) {
-    const auto it = model.materials.find(b.type[i]);
-    const double density = it == model.materials.end() ? 0 : it->second.density;
-    const double r = b.rad[i];
-    b.mass[i] = density * 4.0 / 3.0 * M_PI * r * r * r;
-    b.inertia[i] = 0.4 * b.mass[i] * r * r;
+    const BallMass m = ball_mass(model, b.type[i], b.rad[i]);
+    b.mass[i] = m.mass;
+    b.inertia[i] = m.inertia;
   }
+}
+
+std::string ball_mass_problem(std::int64_t id, double mass, double inertia, double rad) {
+  if (mass > 0 && std::isfinite(1 / mass) && inertia > 0) return "";
+  return fmt::format("ball {} has mass {:.3g} (radius {:.3g}): too small for a step to move it; give it a larger "
+                     "radius or density", id, mass, rad);
 }
 
 }  // namespace trubal

@@ -44,4 +44,11 @@ HistoryLaws laws_with_history(const Model& model);
 void check_ready(const Model& model);
 // Derives mass and moment of inertia from the type densities.
 void update_mass(Model& model);
+// A ball's mass and moment of inertia from its type's density (update_mass's, for one ball).
+struct BallMass {
+  double mass = 0, inertia = 0;
+};
+BallMass ball_mass(const Model& model, int type, double rad);
+// What is wrong with a ball's mass for a step ("" where nothing is): CYCLE's check.
+std::string ball_mass_problem(std::int64_t id, double mass, double inertia, double rad);
 }  // namespace trubal

@@ -437,7 +437,8 @@ TEST_CASE("distributed: a batch deck's BALL lines held on the ranks: serial's mo
     balls += fmt::format("ball {} {} {} 0.004{}\n", x_of(k), y_of(k), z_of(k), k % 3 == 0 ? fmt::format(" id {}", 100000 + k) : "");
   const std::string head = "start box 0 1 0 1 0 1\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\nwall id 3 plane 0 0 0.008 0 0 1\n";
   SECTION("placed at the CYCLE: serial's model; held, a third on each rank") {
-    const std::string deck = head + balls + "grav 0 0 -9.81\n" + kCounters + "print info\ncycle 30\nsave a.sav\n" + kOutputs;
+    const std::string deck = head + balls + "grav 0 0 -9.81\n" + kCounters + "print info\ncycle 30\nsave a.sav\n" + kOutputs +
+                             "print counters file after.txt\n";
     TempDir serial, ranks;
     serial.write("deck.dat", deck);
     ranks.write("deck.dat", deck);
@@ -473,6 +474,8 @@ TEST_CASE("distributed: a batch deck's BALL lines held on the ranks: serial's mo
       CHECK(held * (1 << 20) < 160.0 * kBalls / kRanks);
     }
     CHECK(out.find("balls held: 30000") != std::string::npos);
+    // The CYCLE made the parts from the held balls (Session::place_held_as_parts).
+    CHECK(counter(read_counters(ranks.path() / "after.txt"), "parts_from_held_balls") == 1);
   }
   SECTION("a centre or an id taken twice, found by the rank that keeps the first") {
     // A repeat of ball k's centre, where rank 2 keeps it; and of an id rank 1 checks: each line's
@@ -509,4 +512,56 @@ TEST_CASE("distributed: a batch deck's BALL lines held on the ranks: serial's mo
       CHECK(echoed(out) == echoed(serial_out));
     }
   }
+}
+
+TEST_CASE("distributed: a CYCLE after held BALL lines makes the ranks' parts of them, or places them on rank 0",
+          "[mpi][system]") {
+  // The CYCLE right after the BALL lines makes the parts from the balls the ranks hold, rank 0
+  // sorting their ids and centres alone (Session::place_held_as_parts): serial's bits, with the
+  // first step's sort or without it (SET sort 0), in a box or a periodic cell. Where the model holds
+  // other balls, a ball lies outside the periodic cell (the first step wraps it first), or the CYCLE
+  // refuses a type, rank 0 places them in its model (place_held) and the CYCLE goes on, or fails, as
+  // serially.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  std::string balls;
+  for (int k = 0; k < 3000; ++k)
+    balls += fmt::format("ball {} {} {} 0.005\n", 0.01 + 0.0098 * (k % 30), 0.01 + 0.0098 * (k / 30 % 30), 0.01 + 0.0098 * (k / 900));
+  const std::string prop = "prop kn 1e5 ks 1e5 mu 0.5 dens 2650\n", after = "grav 0 -3 -9.81\ncycle 40\nsave a.sav\n";
+  struct Scene {
+    std::string name, deck;
+    int from_held;   // parts_from_held_balls
+  };
+  const std::vector<Scene> scenes = {
+      {"sorted", "start box 0 1 0 1 0 1\n" + prop + balls + after, 1},
+      {"not sorted", "start box 0 1 0 1 0 1\nset sort 0\n" + prop + balls + after, 1},
+      {"another ball first", "start box 0 1 0 1 0 1\n" + prop + "ball 0.9 0.9 0.9 0.004\nfix xvel range id 1\n" + balls + after, 0},
+      {"periodic", "start 0.4 0.4 0.4\n" + prop + balls + after, 1},
+      {"periodic, a ball outside the cell", "start 0.4 0.4 0.4\n" + prop + balls + "ball 0.45 0.2 0.2 0.005\n" + after, 0},
+  };
+  for (const Scene& scene : scenes) {
+    INFO(scene.name);
+    TempDir serial, ranks;
+    serial.write("deck.dat", scene.deck + kOutputs + kCounters);
+    ranks.write("deck.dat", scene.deck + kOutputs + kCounters);
+    REQUIRE(run_deck(serial, 0) == 0);
+    REQUIRE(run_deck(ranks, 3) == 0);
+    INFO(slurp(ranks.path() / "out.txt").substr(0, 3000));
+    for (const char* file : {"a.sav", "balls.csv", "contacts.csv"}) {
+      INFO(file);
+      CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+    }
+    CHECK(lines_of(slurp(serial.path() / "contacts.csv")).size() > 100);   // (balls in contact)
+    CHECK(counter(counters_of(ranks), "parts_from_held_balls") == scene.from_held);
+  }
+  // A type without a density: the CYCLE's message, as serial's.
+  TempDir serial, ranks;
+  const std::string deck = "start box 0 1 0 1 0 1\nprop kn 1e5 ks 1e5 mu 0.5\n" + balls + "cycle 10\n";
+  serial.write("deck.dat", deck);
+  ranks.write("deck.dat", deck);
+  CHECK(run_trubal(serial, 0, " deck.dat >out.txt 2>err.txt") == 1);
+  CHECK(run_trubal(ranks, 3, " deck.dat >out.txt 2>err.txt") == 1);
+  const std::string message = lines_of(slurp(serial.path() / "err.txt")).at(0);
+  INFO(message);
+  CHECK(message.find("has no density") != std::string::npos);
+  CHECK(slurp(ranks.path() / "err.txt").find(message) != std::string::npos);
 }
