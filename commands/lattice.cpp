@@ -42,6 +42,6 @@ const Command lattice_command = {
     "`lattice fcc 40 10 10 25 layers odd range octagon 180 180 180 156` (|dx| + |dy| <= b sqrt(2) "
     "keeps 6 d in the large layers and 5 d in the small ones).",
     "lattice fcc 0.01 5 5 5 origin 0.02 0.02 0.02",
-    {"fcc", "origin", "type", "layers", "all", "even", "odd", "range"}, run_lattice, false, false, OnRanks::ModelOnZero};
+    {"fcc", "origin", "type", "layers", "all", "even", "odd", "range"}, run_lattice, false, false, OnRanks::ModelOnZero, HeldUse::Add};
 
 }  // namespace trubal

@@ -280,22 +280,27 @@ std::int64_t Session::add_ball_line(std::int64_t id, int type, double x, double 
   if (keeper == me)
     if (const std::size_t k = held_.centres.find(held_, x, y, z); k != CentreIndex::kNone)
       throw std::runtime_error(centre_taken(held_.id[k], x, y, z));
+  if (id > 0 && ((me == 0 && find_ball(model_, id) >= 0) ||
+                  (HeldBalls::id_checker(id, ranks) == me && held_.ids.contains(id))))
+    throw std::runtime_error("ball id " + std::to_string(id) + " is taken");
+  return hold_ball(id, type, x, y, z, rad);
+}
+
+std::int64_t Session::hold_ball(std::int64_t id, int type, double x, double y, double z, double rad) {
+  const int ranks = comm_size_, me = comm::rank();
   const Balls& b = model_.balls;
-  const std::int64_t largest = std::max(b.by_id.empty() ? 0 : b.id[b.by_id.back()], held_.max_id);
   if (id <= 0) {
+    const std::int64_t largest = std::max(b.by_id.empty() ? 0 : b.id[b.by_id.back()], held_.max_id);
     if (largest == std::numeric_limits<std::int64_t>::max())
       throw std::runtime_error("no ball id is left after " + std::to_string(largest) +
                                ": give the new ball its id (BALL ... id n)");
     id = largest + 1;
   }
-  const bool checks_id = HeldBalls::id_checker(id, ranks) == me;
-  if ((me == 0 && find_ball(model_, id) >= 0) || (checks_id && held_.ids.contains(id)))
-    throw std::runtime_error("ball id " + std::to_string(id) + " is taken");
   if (b.size() + held_.total >= std::numeric_limits<std::uint32_t>::max())
     throw std::runtime_error("a model holds at most " + std::to_string(std::numeric_limits<std::uint32_t>::max()) +
                              " balls");
-  if (checks_id) held_.ids.insert(id);
-  if (keeper == me) held_.add(held_.total, id, type, x, y, z, rad);
+  if (HeldBalls::id_checker(id, ranks) == me) held_.ids.insert(id);
+  if (HeldBalls::keeper(x, y, z, ranks) == me) held_.add(held_.total, id, type, x, y, z, rad);
   ++held_.total;
   held_.max_id = std::max(held_.max_id, id);
   // What an edit marks (edit(): no results are deferred, hold_start made them), and what add_ball

@@ -155,6 +155,9 @@ class Session {
   // rank runs it, checks its part of BALL's rules and keeps the ball where its centre's hash says
   // (model/held_balls.hpp). Returns the ball's id.
   std::int64_t add_ball_line(std::int64_t id, int type, double x, double y, double z, double rad);
+  // One ball held (hold_balls), its rules checked before (add_ball_line; LATTICE checks its own):
+  // the next free id where id <= 0; returns the id.
+  std::int64_t hold_ball(std::int64_t id, int type, double x, double y, double z, double rad);
   // Under mpirun in a batch deck (the interpreter's word before each command: Interpreter::execute),
   // with BACKEND mpi: BALL lines are held on the ranks rather than built into rank 0's model. The
   // same on every rank.

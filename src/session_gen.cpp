@@ -192,27 +192,38 @@ std::size_t Session::lattice_fcc(double d, int nx, int ny, int nz, const std::ar
   if (static_cast<double>(nx) * ny * nz > kMostPoints)
     throw std::runtime_error(fmt::format("LATTICE: {} x {} x {} = {:.3g} points is more than {:.0e}", nx, ny, nz,
                                          static_cast<double>(nx) * ny * nz, kMostPoints));
-  std::vector<std::array<double, 3>> points;
-  for (int k = 0; k < nz; ++k) {
-    bool odd = k % 2 == 1;
-    if ((layers == Layers::Even && odd) || (layers == Layers::Odd && !odd)) continue;
-    int mx = odd && !periodic_x ? nx - 1 : nx, my = odd && !periodic_y ? ny - 1 : ny;
-    double shift = odd ? 0.5 * d : 0.0;
-    for (int j = 0; j < my; ++j)
-      for (int i = 0; i < mx; ++i) {
-        std::array<double, 3> p = {origin[0] + i * d + shift, origin[1] + j * d + shift, origin[2] + k * layer};
-        if (holds(model_, range, {0, type, p[0], p[1], p[2]})) points.push_back(p);
-      }
-  }
+  // The lattice's points the range holds, in order, to `f` (twice: checked, then added).
+  auto each_point = [&](auto&& f) {
+    for (int k = 0; k < nz; ++k) {
+      bool odd = k % 2 == 1;
+      if ((layers == Layers::Even && odd) || (layers == Layers::Odd && !odd)) continue;
+      int mx = odd && !periodic_x ? nx - 1 : nx, my = odd && !periodic_y ? ny - 1 : ny;
+      double shift = odd ? 0.5 * d : 0.0;
+      for (int j = 0; j < my; ++j)
+        for (int i = 0; i < mx; ++i) {
+          const double p[3] = {origin[0] + i * d + shift, origin[1] + j * d + shift, origin[2] + k * layer};
+          if (holds(model_, range, {0, type, p[0], p[1], p[2]})) f(p);
+        }
+    }
+  };
   const Space& s = model_.space;
-  for (const auto& p : points)
+  std::size_t count = 0;
+  each_point([&](const double* p) {
     for (int a = 0; a < 3; ++a)
       if (!s.wraps(a) && (p[a] < s.lo[a] || p[a] > s.hi[a]))
         throw std::runtime_error(fmt::format("LATTICE: a ball centre ({}, {}, {}) falls outside the START box", p[0],
                                              p[1], p[2]));
+    ++count;
+  });
+  // (Under mpirun in a batch deck every rank runs it, and each keeps the balls its hash picks, as
+  // BALL lines: hold_ball.)
+  if (hold_balls()) {
+    each_point([&](const double* p) { hold_ball(0, type, p[0], p[1], p[2], 0.5 * d); });
+    return count;
+  }
   Model& m = edit();
-  for (const auto& p : points) trubal::add_ball(m, 0, type, p[0], p[1], p[2], 0.5 * d);
-  return points.size();
+  each_point([&](const double* p) { trubal::add_ball(m, 0, type, p[0], p[1], p[2], 0.5 * d); });
+  return count;
 }
 
 }  // namespace trubal

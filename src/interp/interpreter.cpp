@@ -253,8 +253,9 @@ void Interpreter::execute(const std::string& line) {
   const bool flush = interactive || !command.quick;
   // A batch deck's BALL lines are held on the ranks, not built into rank 0's model (Session::hold_balls).
   session_.set_hold_balls(comm::size() > 1 && agree_lazily && !interactive);
-  std::vector<std::string> rest(words.begin() + 1, words.end());
-  const HeldUse held = held_use(command, Args(command.usage, rest));
+  const HeldUse held = command.keeps_held_after.empty()
+                           ? command.held
+                           : held_use(command, Args(command.usage, std::vector<std::string>(words.begin() + 1, words.end())));
   // Before the command, a collective call: the held balls placed in the model, or the first held
   // BALL's start (Session::hold_start).
   const bool held_call = ((held == HeldUse::Place || held == HeldUse::Split) && session_.held_balls() > 0) ||
