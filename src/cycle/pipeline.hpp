@@ -377,6 +377,9 @@ class Pipeline {
   // next rebuild; the rebuild rule stays the skin's (a ball moved half the skin).
   double list_reach(const Model& model, double skin) const;
   bool rebuild_parts(const Model& model, double skin);
+  // The lists of parts just made searched on them, or where they cannot be, through the whole
+  // model, gathered from them, and the parts made afresh (split_parts, parts_from_records).
+  void search_new_parts(Model& model, double skin);
   void hand_over_to_hollow(Model& model);
   std::size_t held_whole_ = 0, held_part_ = 0;   // bytes of arrays in the last distributed step (PRINT info)
   std::vector<double> cycle_peaks_;              // per rank: peak MiB by the end of the last distributed CYCLE

@@ -122,18 +122,22 @@ void Pipeline::split_parts(Model& model) {
     for (auto& part : bricks_) part->hollow_whole(model);
     if (comm::root()) scratch_ = StepScratch{};   // (an index of the arrays that went)
   }
-  if (!search) return;
+  if (search) search_new_parts(model, skin);
+}
+
+void Pipeline::search_new_parts(Model& model, double skin) {
   const bool rebuilt = rebuild_parts(model, list_reach(model, skin));
   list_ = ListState::Current;
   if (rebuilt) return;
-  // They could not (the same answer on every rank: a bond longer than the list's reach): through
-  // the whole model, gathered back from the parts, which rank 0 hands to the others.
+  // They could not (the same answer on every rank: a bond longer than the list's reach, or
+  // TRUBAL_REBUILD_WHOLE): through the whole model, gathered back from the parts, which rank 0
+  // hands to the others.
   sync(model);
   for (auto& part : bricks_) part->drop();
   if (distributed()) broadcast_arrays(model);
   rebuild(model);
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
-  if (scatter)
+  if (distributed() && comm::size() > 1)
     for (auto& part : bricks_) part->hollow_whole(model);
 }
 
@@ -149,9 +153,7 @@ void Pipeline::parts_from_records(Model& model, std::vector<double>& records) {
   others_hollow_ = false;
   for (auto& part : bricks_) part->hollow_whole(model);
   if (comm::root()) scratch_ = StepScratch{};
-  if (!rebuild_parts(model, list_reach(model, skin)))
-    throw std::logic_error("internal error: the parts of new balls could not search their lists");
-  list_ = ListState::Current;
+  search_new_parts(model, skin);
   sorted_cycle_ = model.cycle;
   sorted_edition_ = bricks().edition();
   ++parts_from_records_;

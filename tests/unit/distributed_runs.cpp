@@ -292,7 +292,8 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   // A CYCLE's last step leaves its contact results on the parts: rank 0 alone runs PRINT and SAVE
   // (Command::on_ranks), the others serving it the results where it reads them, while they keep
   // their part and no more of the whole model than its balls' ids, types and radii; the next CYCLE
-  // goes on from the parts. A command that changes the balls (LATTICE, INIT) runs on rank 0 alone,
+  // goes on from the parts. A command that changes the balls (INIT; LATTICE's balls are held on
+  // the ranks until INIT reads them, and placed in rank 0's model then) runs on rank 0 alone,
   // the parts' state given to it first, and the others take rank 0's model but the balls' arrays
   // (their ids, types and radii alone): the next CYCLE's split sends each rank its part, so the
   // whole model is never handed over (it went to every rank, 28 MiB of this block's pairs). The
@@ -346,13 +347,18 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   CHECK(counter(kept, "rank1_contact_results_mib") == 0);
   CHECK(counter(kept, "rank0_model_held_mib") >= 40);
   CHECK(counter(kept, "rank1_model_held_mib") < 0.3 * counter(kept, "rank0_model_held_mib"));
-  // After LATTICE, and after INIT: rank 1 holds the balls' ids, types and radii alone (20 of rank
-  // 0's 216 bytes a ball), and no part.
-  for (const char* file : {"built.txt", "init.txt"}) {
-    INFO(file);
-    const Counters light = read_counters(two.path() / file);
-    CHECK(counter(light, "parts_kept") == 0);
-    CHECK(counter(light, "rank1_model_held_mib") < 0.15 * counter(light, "rank0_model_held_mib"));
+  // After INIT: rank 1 holds the balls' ids, types and radii alone (20 of rank 0's 216 bytes a
+  // ball), and no part. After LATTICE, before it, each rank holds about half the lattice's balls
+  // (model/held_balls.hpp: about 80 bytes a ball), which INIT had rank 0 place in its model.
+  const Counters light = read_counters(two.path() / "init.txt"), held = read_counters(two.path() / "built.txt");
+  CHECK(counter(light, "parts_kept") == 0);
+  CHECK(counter(light, "rank1_model_held_mib") < 0.15 * counter(light, "rank0_model_held_mib"));
+  CHECK(counter(held, "parts_kept") == 0);
+  CHECK(counter(held, "balls_held") == 37800);
+  for (const char* rank : {"rank0_model_held_mib", "rank1_model_held_mib"}) {
+    INFO(rank);
+    CHECK(counter(held, rank) > 0.05 * counter(light, "rank0_model_held_mib"));
+    CHECK(counter(held, rank) < 0.3 * counter(light, "rank0_model_held_mib"));
   }
   // After INIT and one more CYCLE: the parts kept again; rank 1 got no results, and no command or
   // CYCLE handed the whole model over.
