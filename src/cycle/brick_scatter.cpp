@@ -185,11 +185,11 @@ void BrickStep::split_from_records(const Model& full, std::vector<double>& recor
     recv_.assign(static_cast<std::size_t>(ranks), {});
     scratch_.ghost.assign(m, 0);
     ghosts_ = 0;
-    // (The list's reference positions, as cut_part takes them from the whole model's: the balls'
-    // own, at the search about to be made.)
-    ref_.x = b.x;
-    ref_.y = b.y;
-    ref_.z = b.z;
+    // (No reference positions: the search about to be made sets them, or where it goes through
+    // the whole model, reference_at_balls.)
+    ref_.x.clear();
+    ref_.y.clear();
+    ref_.z.clear();
   }, doing);
   finish_part(full);
   return_free_memory();

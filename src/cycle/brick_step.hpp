@@ -115,6 +115,14 @@ class BrickStep {
   // found yet. A collective call; `records` is let go once sent.
   void split_from_records(const Model& full, std::vector<double>& records);
   static constexpr std::size_t kRecord = 7;
+  // The part's list reference positions its balls' own where it holds none (a part made by
+  // split_from_records, whose search goes through the whole model: a sync gathers them).
+  void reference_at_balls() {
+    if (ref_.x.size() == part_.balls.size()) return;
+    ref_.x = part_.balls.x;
+    ref_.y = part_.balls.y;
+    ref_.z = part_.balls.z;
+  }
   // Counts the splits, rebuilds, tilt reductions and drops (a part changed other than by steps).
   std::uint64_t edition() const { return edition_; }
   // One step on this rank's part: forces, motion of the owned balls, the ghosts' new state from

@@ -132,6 +132,7 @@ void Pipeline::search_new_parts(Model& model, double skin) {
   // They could not (the same answer on every rank: a bond longer than the list's reach, or
   // TRUBAL_REBUILD_WHOLE): through the whole model, gathered back from the parts, which rank 0
   // hands to the others.
+  for (auto& part : bricks_) part->reference_at_balls();
   sync(model);
   for (auto& part : bricks_) part->drop();
   if (distributed()) broadcast_arrays(model);
