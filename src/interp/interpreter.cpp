@@ -284,7 +284,8 @@ void Interpreter::execute(const std::string& line) {
     if (!text.empty()) words.push_back(std::move(text));
   }
   Args args(command.usage, std::move(words));
-  Context ctx{session_, *this, output_.out()};
+  // (A command run lazily prints after its held echo: keep_lazy_output.)
+  Context ctx{session_, *this, lazily ? static_cast<std::ostream&>(lazy_out_) : output_.out()};
   if (comm::size() == 1) command.run(ctx, args);
   else run_agreed(command, ctx, args, lazily, held);
   // Ctrl-C during a command that does not look for it (RESTART, SAVE): a batch deck stops after it,
@@ -357,6 +358,7 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
     failed = true;
     message = e.what();
   }
+  if (lazily) keep_lazy_output();
   if (!failed && lazily) {
     agreement_pending_ = true;
     return;
@@ -372,6 +374,14 @@ void Interpreter::agree(bool failed, std::string& message) {
   const bool any = comm::first_failure(failed, message, commands_run_, &failed_at) >= 0;
   show_held_echo(any ? failed_at : std::numeric_limits<std::int64_t>::max());
   if (any) throw_agreed(std::move(message));
+}
+
+void Interpreter::keep_lazy_output() {
+  std::string text = lazy_out_.str();
+  if (text.empty()) return;
+  lazy_out_.str("");
+  held_echo_ += text;
+  held_echo_ends_.emplace_back(commands_run_, held_echo_.size());
 }
 
 void Interpreter::show_held_echo(std::int64_t through) {

@@ -5,6 +5,7 @@
 #include <istream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -121,6 +122,9 @@ class Interpreter {
   // The echo of lines run lazily (agree_lazily), not yet agreed on: the text and where each
   // line's ends, by its order (commands_run_).
   std::string held_echo_;
+  // What a command run lazily prints (ECHO's text), kept after its echo (keep_lazy_output).
+  std::ostringstream lazy_out_;
+  void keep_lazy_output();
   std::vector<std::pair<std::int64_t, std::size_t>> held_echo_ends_;
   // After the ranks agreed that a rank failed with `message` (encoded with its FILE:LINE): the error.
   [[noreturn]] void throw_agreed(std::string message);

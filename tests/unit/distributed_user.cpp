@@ -533,7 +533,8 @@ TEST_CASE("distributed: a CYCLE after held BALL lines makes the ranks' parts of 
   std::string balls;
   for (int k = 0; k < 3000; ++k)
     balls += fmt::format("ball {} {} {} 0.005\n", 0.01 + 0.0098 * (k % 30), 0.01 + 0.0098 * (k / 30 % 30), 0.01 + 0.0098 * (k / 900));
-  const std::string prop = "prop kn 1e5 ks 1e5 mu 0.5 dens 2650\n", after = "grav 0 -3 -9.81\ncycle 40\nsave a.sav\n";
+  const std::string prop = "prop kn 1e5 ks 1e5 mu 0.5 dens 2650\n",
+                    after = "echo the balls are read\ngrav 0 -3 -9.81\ncycle 40\nsave a.sav\n";
   struct Scene {
     std::string name, deck;
     int from_held;   // parts_from_held_balls
@@ -561,6 +562,13 @@ TEST_CASE("distributed: a CYCLE after held BALL lines makes the ranks' parts of 
     if (scene.name != "a lattice")   // (its balls touch, falling together)
       CHECK(lines_of(slurp(serial.path() / "contacts.csv")).size() > 100);   // (balls in contact)
     CHECK(counter(counters_of(ranks), "parts_from_held_balls") == scene.from_held);
+    // ECHO, run lazily, prints after its line's echo and the lines before, as serially (its text
+    // is held with the echo until the ranks agree).
+    const std::string out = slurp(ranks.path() / "out.txt");
+    const auto echo_at = out.find("trubal> echo the balls are read\nthe balls are read\n");
+    CHECK(echo_at != std::string::npos);
+    const auto last_ball = out.rfind("trubal> ball ");
+    CHECK((last_ball == std::string::npos || echo_at > last_ball));
   }
   // A type without a density: the CYCLE's message; a BALL at a centre LATTICE took (each rank
   // keeps the lattice's balls its hash picks, as BALL lines): BALL's. As serial's.
