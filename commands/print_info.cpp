@@ -179,6 +179,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("decompositions", c.parts.decompositions);
   line("part_list_rebuilds", c.parts.list_rebuilds);
   line("part_wraps", c.parts.wraps);
+  line("part_sorts", c.parts.sorts);
   line("migrations", c.parts.migrations);
   line("ghosts", c.parts.ghosts);
   line("least_part_balls", c.parts.least_balls);

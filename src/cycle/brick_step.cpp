@@ -355,6 +355,8 @@ std::vector<std::pair<std::string, std::string>> BrickStep::info() const {
   {
     lines.emplace_back("pair lists rebuilt on the parts",
                        std::to_string(local_rebuilds_) + " (each rank searching its own balls and those within reach of them)");
+    lines.emplace_back("sorts on the parts", std::to_string(sorts_) + " (the balls put in space order by their ranks, "
+                                                                  "no rank holding the whole model)");
     lines.emplace_back("wraps on the parts", std::to_string(local_wraps_) + " (balls moved across the periodic faces by their ranks)");
     lines.emplace_back("balls that changed rank", std::to_string(migrations_) +
                                                       " (at the rebuilds on the parts: a ball goes to the " + member +

@@ -159,6 +159,15 @@ class BrickStep {
   // found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
+  // The balls put in space order on the parts (a collective call of the ranks, their parts live),
+  // as sort_in_space (model/edit.hpp) puts the whole model's: each rank's keys of its own balls
+  // go to every rank, which orders them (by key, then id: about 20 bytes a ball for the moment);
+  // the whole model's light arrays (rank 0's hollow model: hollow_whole first), each ball's owner,
+  // the split's cuts and bonds follow the new order, and each part is renumbered and put in it,
+  // its pairs and wall contacts with it (reorder_balls), its list kept. Returns the order (new
+  // index k holds old index order[k]), or nothing where no ball moves (the same on every rank).
+  // The rescue copy stays of the order it was taken in (whole_from_copy puts every ball array back).
+  std::vector<std::uint32_t> sort_in_space(Model& full);
   // Wraps the parts' balls into the periodic cell as the whole model's wrap would (a collective
   // call, where outside_cell said some ball is out): every copy of a ball moves alike, so each part
   // renumbers its pairs' images as the whole list would be; the energy the wrap adds (a straining
@@ -312,15 +321,17 @@ class BrickStep {
     std::size_t decompositions = 0, list_rebuilds = 0, wraps = 0, migrations = 0;
     std::size_t ghosts = 0, least_balls = 0, most_balls = 0;
     std::size_t bonds_across = 0;   // intact bonds whose balls two members owned at the last split
+    std::size_t sorts = 0;          // the sorts into space order on the parts (sort_in_space), moving balls or not
   };
   // The counts as they were (a step taken again on the parts is no decomposition of the run's:
   // results_onto_parts keeps the CYCLE's).
   void set_counts(const Counts& c) {
     splits_ = c.decompositions; local_rebuilds_ = c.list_rebuilds; local_wraps_ = c.wraps; migrations_ = c.migrations;
     ghosts_ = c.ghosts; least_balls_ = c.least_balls; most_balls_ = c.most_balls; bonds_across_ = c.bonds_across;
+    sorts_ = c.sorts;
   }
   Counts counts() const {
-    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_, bonds_across_};
+    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_, bonds_across_, sorts_};
   }
   // The bytes of the part's arrays of balls, pairs and wall contacts.
   std::size_t part_bytes() const;
@@ -471,6 +482,7 @@ class BrickStep {
   std::size_t local_rebuilds_ = 0;           // lists rebuilt on the parts (rebuild_local)
   std::size_t local_wraps_ = 0;              // wraps on the parts (wrap)
   std::size_t migrations_ = 0;               // balls that changed owner at a rebuild on the parts
+  std::size_t sorts_ = 0;                    // (Counts::sorts)
   bool list_local_ = false;                  // the parts' list is newer than full's
   // Counts every change of the part's balls and lists but a step's or a wrap's (a split, a
   // rebuild on the parts, a tilt reduction, a drop): restore_copy_in_place's test.

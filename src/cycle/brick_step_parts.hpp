@@ -11,6 +11,7 @@
 // - brick_sync.cpp: the whole model made current from the parts (sync, share), rank 0's let go
 //   (hollow_whole), what the parts count and hold between CYCLEs;
 // - brick_stream.cpp: the parts' state streamed to rank 0 in the whole model's order (SAVE, PRINT).
+// - brick_sort.cpp: the balls put in space order on the parts (sort_in_space).
 #pragma once
 
 #include <algorithm>

@@ -264,6 +264,17 @@ class Pipeline {
   // hold) and their lists searched, rank 0's whole model hollow: as a CYCLE's first split leaves
   // them, the balls never gathered whole. A collective call.
   void parts_from_records(Model& model, std::vector<double>& records);
+  // Whether the balls are put in space order on the ranks' parts (sort_on_parts): a distributed
+  // run's ranks, their parts live. The same answer on every rank.
+  bool sorts_on_parts(const Model& model) const { return distributed() && comm_ranks_ > 1 && parts_live(model); }
+  // The balls put in space order on the parts (BrickStep::sort_in_space; a collective call, where
+  // sorts_on_parts), the whole model's light arrays and the list's reference with them, every
+  // rank's whole model hollow: no rank gathers the whole model, and the parts and their lists
+  // stay. Returns whether any ball moved (the same on every rank).
+  bool sort_on_parts(Model& model);
+  // Whether a rescue copy taken in a CYCLE is taken on the ranks' parts (take_rescue: no rank
+  // holds the whole model's copy, nor needs the contact results of the step before it).
+  bool rescue_on_parts() const { return distributed() && comm_ranks_ > 1 && !policy_->whole_rescue; }
   // Whether the kept parts were put in space order at this cycle and have not changed since
   // (parts_from_records sorted them): a CYCLE's first sort has nothing to do.
   bool parts_in_space_order(const Model& model) const {

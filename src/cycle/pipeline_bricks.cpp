@@ -160,6 +160,20 @@ void Pipeline::parts_from_records(Model& model, std::vector<double>& records) {
   ++parts_from_records_;
 }
 
+bool Pipeline::sort_on_parts(Model& model) {
+  if (!sorts_on_parts(model)) throw std::logic_error("internal error: the balls sorted on parts that are not live");
+  // (The others' whole models hollow, as each step leaves them: a command or START's escapes may
+  // have handed the whole model over since.)
+  if (!comm::root()) hollow(model);
+  for (auto& part : bricks_) part->whole_freed();
+  const std::vector<std::uint32_t> order = bricks().sort_in_space(model);
+  model.order.pending = false;
+  if (comm::root()) scratch_ = StepScratch{};   // (an index of the arrays hollow_whole let go)
+  if (order.empty()) return false;
+  ref_.reorder(order);
+  return true;
+}
+
 double Pipeline::list_reach(const Model& model, double skin) const {
   const double bridge = bridge_reach(model);
   if (bridge == 0) return skin;

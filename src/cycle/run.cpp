@@ -92,7 +92,8 @@ Escapes find_escapes(const Model& model) {
 // What one step of the CYCLE writes and keeps. The per-pair results measurements read are written
 // only where someone will read them: the last step (PRINT, SOLVE; CYCLE's defers it:
 // make_results), a step Ctrl-C ends, snapshot steps (Snapshot::restore finds them current where
-// the next step fails; not where results are deferred, as the rescue takes the step again) and the
+// the next step fails; not where results are deferred, as the rescue takes the step again, nor
+// where the copy is taken on the ranks' parts, which keeps none) and the
 // cycles history and dumps record.
 struct StepPlan {
   bool stopping = false;   // Ctrl-C was seen before this step: it is the last
@@ -183,10 +184,12 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   if (pipeline.results_deferred(model) && !pipeline.deferred().same_settings(model.settings) && !servo_reads_table_)
     pipeline.clear_deferred();
   pipeline.refresh_whole(model, false);   // (stale; not where hollow: what follows reads its light arrays)
-  // The first step's sort: rank 0 alone sorts (sort_balls), the parts given back to it first.
+  // The first step's sort: on the parts (sort_balls), where rank 0's whole model is hollow; else
+  // rank 0 alone sorts, the parts given back to it first (it holds the whole model already).
   // (Not where the parts were put in space order at this cycle: Pipeline::parts_from_records.)
   const bool presorted = pipeline.parts_in_space_order(model);
-  if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model) && !presorted)
+  if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model) && !presorted &&
+      !pipeline.whole_hollow(model))
     pipeline.release_parts(model);
   // A servo's first reading of the contact table needs the whole model's list searched on every
   // rank: handed over first, from the parts or from rank 0.
@@ -331,7 +334,10 @@ StepPlan CycleRun::plan(std::int64_t s) const {
   p.deferred = control_.defer_results && s == n_ && !p.stopping && !p.observed;
   p.leave_results = control_.leave_results && control_.keep_parts && pipeline_.distributed() && s == n_ &&
                     !p.stopping && !p.observed;
-  p.details = (s == n_ && !p.deferred) || p.stopping || (!control_.defer_results && (s + 1) % kSnapshotEvery == 0) ||
+  // (A snapshot step's results serve a whole model's copy alone: a copy on the ranks' parts holds
+  // none, and rank 0 gathers no whole model for it.)
+  p.details = (s == n_ && !p.deferred) || p.stopping ||
+              (!control_.defer_results && (s + 1) % kSnapshotEvery == 0 && !pipeline_.rescue_on_parts()) ||
               p.observed || p.leave_results;
   p.wall_loads = p.details || s == n_ || (s + 1) % kSnapshotEvery == 0 || (control_.defer_results && s + 1 == n_);
   const std::int64_t reaches = model_.cycle + 1;   // the cycle this step reaches
@@ -428,7 +434,12 @@ StepTotals CycleRun::advance(const StepPlan& step) {
 // The balls in space order (Model::order). Where none moves (the first step's order, put before
 // the run's first search: CycleRun's start), the pipeline keeps what it holds.
 void CycleRun::sort_balls() {
-  // (A distributed run's parts: their state to rank 0, which alone sorts; the ranks split afresh.)
+  // A distributed run's live parts: the ranks sort them where they are, and their lists stay.
+  if (pipeline_.sorts_on_parts(model_)) {
+    if (pipeline_.sort_on_parts(model_)) kernels_.laws = make_pair_laws(model_);   // (per-ball type indices)
+    return;
+  }
+  // (Parts not live: their state to rank 0, which alone sorts; the ranks split afresh.)
   if (pipeline_.distributed()) pipeline_.release_parts(model_);
   if (pipeline_.others_hollow()) {
     // Rank 0 alone holds the balls: it sorts them, and the others take their ids, types and radii

@@ -54,6 +54,15 @@ void VerletReference::record(const Model& model, double skin) {
   ++rebuilds_;
 }
 
+void VerletReference::reorder(const std::vector<std::uint32_t>& order) {
+  for (auto* v : {&x, &y, &z, &rad_}) {
+    if (v->size() != order.size()) continue;
+    std::vector<double> out(order.size());
+    for (std::size_t k = 0; k < order.size(); ++k) out[k] = (*v)[order[k]];
+    v->swap(out);
+  }
+}
+
 void VerletReference::record_cell(const Model& model, double skin) {
   cell_ = model.space.length();
   tilt_ = model.space.tilt;

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -34,6 +35,10 @@ class VerletReference {
   // there until a sync gathers them into x, y, z: the cell and the skin of the new list.
   void record_cell(const Model& model, double skin);
   void invalidate() { valid_ = false; }
+  // The balls were put in the order `order` (new index k holds old index order[k]) without a new
+  // list (a distributed run's sort on its parts: Pipeline::sort_on_parts): the positions and radii
+  // held follow them.
+  void reorder(const std::vector<std::uint32_t>& order);
   // The balls the reference was recorded for (x, y, z hold their positions, but on a distributed
   // run's rank that held the balls' ids, types and radii alone: then they are empty).
   std::size_t balls() const { return count_; }

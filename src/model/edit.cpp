@@ -163,30 +163,43 @@ std::uint64_t spread3(std::uint64_t v) {
   return v;
 }
 
+}  // namespace
+
+std::array<double, 3> space_corner(const Balls& b, const std::vector<std::uint32_t>* pick) {
+  std::array<double, 3> lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::infinity()};
+  const std::vector<double>* axes[3] = {&b.x, &b.y, &b.z};
+  const std::size_t n = pick ? pick->size() : b.size();
+  for (int a = 0; a < 3; ++a)
+    for (std::size_t q = 0; q < n; ++q) {
+      const double v = (*axes[a])[pick ? (*pick)[q] : q];
+      if (std::isfinite(v)) lo[a] = std::min(lo[a], v);
+    }
+  return lo;
+}
+
+std::uint64_t space_key(double x, double y, double z, const std::array<double, 3>& lo, double cell) {
+  constexpr double kTop = 0x1fffff;   // 21 bits an axis
+  const double at[3] = {x, y, z};
+  std::uint64_t code = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(at[a])) return ~std::uint64_t{0};
+    const double c = std::min(std::floor((at[a] - lo[a]) / cell), kTop);
+    code |= spread3(static_cast<std::uint64_t>(c)) << a;
+  }
+  return code;
+}
+
+namespace {
+
 // The order of the balls in space: Morton order of cells `cell` wide from the lowest centre, ties
 // (one cell) by id, so that the order is a function of the centres and ids alone; a ball with a
 // centre not finite goes last.
 std::vector<std::size_t> space_order(const Balls& b, double cell) {
   const std::size_t n = b.size();
-  std::array<double, 3> lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                           std::numeric_limits<double>::infinity()};
-  const std::vector<double>* axes[3] = {&b.x, &b.y, &b.z};
-  for (int a = 0; a < 3; ++a)
-    for (double v : *axes[a])
-      if (std::isfinite(v)) lo[a] = std::min(lo[a], v);
-  constexpr double kTop = 0x1fffff;   // 21 bits an axis
+  const std::array<double, 3> lo = space_corner(b);
   std::vector<std::uint64_t> key(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    std::uint64_t code = 0;
-    bool finite = true;
-    for (int a = 0; a < 3; ++a) {
-      const double v = (*axes[a])[k];
-      if (!std::isfinite(v)) { finite = false; break; }
-      const double c = std::min(std::floor((v - lo[a]) / cell), kTop);
-      code |= spread3(static_cast<std::uint64_t>(c)) << a;
-    }
-    key[k] = finite ? code : ~std::uint64_t{0};
-  }
+  for (std::size_t k = 0; k < n; ++k) key[k] = space_key(b.x[k], b.y[k], b.z[k], lo, cell);
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::sort(order.begin(), order.end(),

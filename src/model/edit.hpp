@@ -1,6 +1,7 @@
 // Adding, removing and reordering balls, with everything the model keeps by ball index.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -38,6 +39,16 @@ std::int64_t find_ball(const Model& model, std::int64_t id);
 // turned round: its shear history, normal, force and image change sign, so the physics is the
 // same) and the wall contacts. Ids, groups and the membrane's balls are by id and stay.
 void reorder_balls(Model& model, const std::vector<std::size_t>& order);
+
+// The space order's parts (sort_in_space), for a run whose balls are kept apart (a distributed
+// run's parts: BrickStep::sort_in_space): the corner the cells are counted from, the least finite
+// coordinate along each axis (infinite where none) of the balls `pick` names (all where null); a
+// ball's key, its cell of the grid `cell` wide from `lo` as a Morton code (21 bits an axis), the
+// last key where its centre is not finite. The order is by key, then by id; the cell is
+// order_cell's, one largest diameter.
+std::array<double, 3> space_corner(const Balls& b, const std::vector<std::uint32_t>* pick = nullptr);
+std::uint64_t space_key(double x, double y, double z, const std::array<double, 3>& lo, double cell);
+double order_cell(const Balls& b);
 
 // The balls in space order (the Morton order of cells one largest diameter wide from the lowest
 // centres, ties by id), as the run puts them at the cycles Model::order names. A function of the

@@ -1,7 +1,7 @@
 // Distributed runs beyond the cut matrix of cycle_cuts.cpp: four ranks, the spatial
 // decomposition of a strained and of a shearing cell on 2 to 4 ranks, a save on three ranks
 // restarted on two, a fast gas crossing the periodic faces for 10,000 steps, the rescue copy, Rowe's
-// test; each gives the serial bits. (What a user meets at the ranks, bad input and signals:
+// test, the sorts into space order on the parts; each gives the serial bits. (What a user meets at the ranks, bad input and signals:
 // distributed_user.cpp.) Skipped where this build or machine has no MPI.
 #include "paths.hpp"
 #include "cycle/pipeline.hpp"
@@ -598,3 +598,75 @@ cycle 400
   }
 }
 
+
+TEST_CASE("distributed: the balls put in space order on the ranks' parts inside a CYCLE, however it is cut: serial's bits",
+          "[mpi][system]") {
+  // SET sort 25: the run puts the balls in space order every 25 cycles. Where the ranks' parts are
+  // live, the ranks sort them where they are (Pipeline::sort_on_parts, BrickStep::sort_in_space):
+  // every rank's keys to every rank, the light arrays, owners, cuts and bonds renumbered, each part
+  // renumbered with its pairs turned round as serial's table is, and no part given back to rank 0.
+  // Before, each sort gathered the whole model to rank 0 and split it again (24 decompositions in
+  // 600 cycles); now the one split of the CYCLE's start stays (the ranks' speeds may ask for
+  // another: under 10 are allowed). Four scenes on 3 ranks against serial: balls falling onto a
+  // wall in a box; a compressed periodic cell with rolling resistance and capillary bridges (balls
+  // crossing the faces and changing rank), in one CYCLE and cut into three (the second starting at
+  // a cycle of the sort, on the kept parts); a bonded block crushed (SET sort 10); and that cell
+  // stepped above its critical step, which goes unstable 196 cycles after the copy of its CYCLE's
+  // start, eight sorts later: every ball array is put back from the copies, in their order.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string outputs =
+      "print balls file b.csv\nprint contacts file c.csv\nsave a.sav\nprint counters file counters.txt\n";
+  const std::string box =
+      "start box 0 0.01 0 0.01 0 0.01 destroy\nset sort 25\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\n"
+      "wall id 7 plane 0 0 0.0001 0 0 1\ngen 600 0.0004 0.0006 seed 5\ngrav 0 0 -9.81\ncycle 600\n";
+  const std::string cell =
+      "start 0.01 0.01 0.01\nset sort 25\ngen 900 0.0004 0.0006 seed 7\n"
+      "prop kn 1e5 ks 1e5 mu 0.5 dens 2650 rr_fric 0.1 bridge 2e-10 tension 0.072\nstrain 200 200 200\n";
+  const std::string bonded =
+      "start box -3 8 -3 8 -3 8 destroy\nset sort 10\nprop kn 1e8 ks 5e7 mu 0.5 dens 2000\nlattice fcc 1 5 5 7\n"
+      "bond gap 1e-6 kn 2e8 ks 1e8 ten 2e5 coh 4e5 fa 30\ngroup top range z 3.5 10\nfix vel spin range group top\n"
+      "fix vel spin range z -1 0.1\ninit zvel -0.3 range group top\ncycle 400\nprint bonds file bonds.csv\n";
+  struct Scene {
+    std::string name, deck;
+    std::size_t sorts;   // the sorts on the parts at least: the CYCLEs' cycles of the sort after their first step
+  };
+  const std::vector<Scene> scenes = {
+      {"a box", box, 23},
+      {"a cell", cell + "cycle 600\n", 23},
+      {"a cell, cut", cell + "cycle 300\ncycle 137\ncycle 163\n", 23},
+      {"a bonded block", bonded, 39},
+  };
+  for (const Scene& scene : scenes) {
+    INFO(scene.name);
+    TempDir serial, ranks;
+    serial.write("deck.dat", scene.deck + outputs);
+    ranks.write("deck.dat", "backend mpi\n" + scene.deck + outputs);
+    REQUIRE(run_deck(serial, 0) == 0);
+    REQUIRE(run_deck(ranks, 3) == 0);
+    INFO(slurp(ranks.path() / "out.txt").substr(0, 3000));
+    for (const char* file : {"b.csv", "c.csv", "a.sav", "bonds.csv"}) {
+      if (!std::filesystem::exists(serial.path() / file)) continue;
+      INFO(file);
+      CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+    }
+    const Counters counters = counters_of(ranks);
+    CHECK(counter(counters, "part_sorts") >= scene.sorts);
+    CHECK(counter(counters, "decompositions") < 10);
+  }
+  // Unstable: serial's message, which tells the state put back (its energies, its fastest ball).
+  TempDir serial, ranks;
+  const std::string deck = cell + "cycle 300\ntstep 2.3e-6\ncycle 1500\n";
+  serial.write("deck.dat", deck);
+  ranks.write("deck.dat", "backend mpi\n" + deck);
+  REQUIRE(run_deck(serial, 0) == 1);
+  REQUIRE(run_deck(ranks, 3) == 1);
+  auto message = [](const TempDir& dir) {
+    const std::string out = slurp(dir.path() / "out.txt");
+    const auto at = out.find("error: unstable at cycle");
+    return at == std::string::npos ? std::string() : out.substr(at, out.find('\n', at) - at);
+  };
+  const std::string expected = message(serial);
+  REQUIRE(expected.find("unstable at cycle 496") != std::string::npos);
+  REQUIRE(expected.find("back at cycle 300") != std::string::npos);
+  CHECK(message(ranks) == expected);
+}
