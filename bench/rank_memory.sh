@@ -1,14 +1,16 @@
 #!/bin/bash
 # Each rank's peak resident memory through a deck of the peers' dense FCC block, stage by stage,
 # against its share of the serial run's peak (doc/distributed.md, "Memory per rank"): the BALL
-# lines; CYCLE 20; SAVE and PRINT contacts file; DAMP and CYCLE 10. The deck has BACKEND mpi
-# first and PRINT counters after each stage; a stage's figure is each rank's `rank<r>_peak_mib`
+# lines; CYCLE 20; SAVE and PRINT contacts file; DAMP and CYCLE 10; with LONG, a long CYCLE
+# (LONG cycles: the sorts into space order every 1000 cycles and the rescue copies every 500 in
+# it). The deck has BACKEND mpi first and PRINT counters after each stage; a stage's figure is each rank's `rank<r>_peak_mib`
 # there (the peak so far), read from the counters' files. Memory does not depend on the machine's
 # load: one run each.
 #
 #   bench/rank_memory.sh build/trubal [CELLS]     CELLS: FCC cells a side (default 63: 1,000,188
 #                                                   balls, about 2 GiB on one rank and 30 s)
-#   env: RANKS ("2 4"; more oversubscribe a small machine)
+#   env: RANKS ("2 4"; more oversubscribe a small machine), LONG (cycles of the long CYCLE; none
+#        by default: at 1,000,188 balls a thousand cycles take some minutes a run)
 #
 # Prints, per stage, the serial peak, then for each rank count rank 0's peak, the others' (least
 # to most) and the most of them over a share (serial peak / P). The files each run writes (the
@@ -22,6 +24,8 @@ mpi_bench_setup memory
 cd "$W"
 SCENES_OUT=. python3 -c "import sys; sys.path.insert(0, '$PEERS'); import gen_scenes; gen_scenes.fcc($CELLS, $CELLS, $CELLS)" >/dev/null
 STAGES="balls cycle save damp"
+LONG=${LONG:-}
+[ -n "$LONG" ] && STAGES="$STAGES long"
 {
   echo "backend mpi"
   python3 "$HERE/fcc_deck.py" fcc_*.xyz
@@ -34,6 +38,7 @@ STAGES="balls cycle save damp"
   echo "damp local 0.1"
   echo "cycle 10"
   echo "print counters file damp.txt"
+  if [ -n "$LONG" ]; then echo "cycle $LONG"; echo "print counters file long.txt"; fi
 } > deck.dat
 echo "$(head -1 fcc_*.xyz | cut -d' ' -f1) balls; CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores"
 

@@ -39,12 +39,16 @@ Session::~Session() = default;
 
 Model& Session::edit() {
   make_results_to_read(model_, *pipeline_);   // of the state before the change
+  mark_edited();
+  return model_;
+}
+
+void Session::mark_edited() {
   ++changes_;
   unsaved_ = true;
   model_.energy_at_step.valid = false;   // the balls may no longer be as the last step left them
   pipeline_->invalidate();
   model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
-  return model_;
 }
 
 Model& Session::edit_cell() {
@@ -303,15 +307,11 @@ std::int64_t Session::hold_ball(std::int64_t id, int type, double x, double y, d
   if (HeldBalls::keeper(x, y, z, ranks) == me) held_.add(held_.total, id, type, x, y, z, rad);
   ++held_.total;
   held_.max_id = std::max(held_.max_id, id);
-  // What an edit marks (edit(): no results are deferred, hold_start made them), and what add_ball
-  // sets; rank 0's index of the model's centres stays current.
+  // What an edit marks (no results are deferred: hold_start made them), and what add_ball sets;
+  // rank 0's index of the model's centres stays current.
   const bool centres_current = centres_changes_ == changes_;
-  ++changes_;
+  mark_edited();
   if (centres_current) centres_changes_ = changes_;
-  unsaved_ = true;
-  model_.energy_at_step.valid = false;
-  pipeline_->invalidate();
-  model_.critical_dt = 0;
   model_.order.pending = true;
   return id;
 }
