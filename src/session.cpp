@@ -380,15 +380,7 @@ void Session::place_held_as_parts() {
   bool wraps = false;
   for (int a = 0; a < 3; ++a) wraps = wraps || model_.space.wraps(a);
   bool outside_here = false;
-  if (wraps) {
-    Model probe;   // (the held centres, as outside_cell reads a model's)
-    probe.space = model_.space;
-    probe.balls.id = held_.id;
-    probe.balls.x = held_.x;
-    probe.balls.y = held_.y;
-    probe.balls.z = held_.z;
-    outside_here = outside_cell(probe, 0, probe.balls.size());
-  }
+  if (wraps) outside_here = outside_cell(model_.space, held_.x, held_.y, held_.z, 0, held_.x.size());
   const bool outside = comm::any_all(outside_here);
   // (The same answer on every rank: each holds the model's light state and its balls' ids.)
   if (!(pipeline_->distributed() && comm_size_ > 1 && model_.balls.size() == 0 && model_.bonds.empty() && !outside &&

@@ -166,6 +166,9 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
   list_version_ = full.contacts.list_version;   // (ranks other than 0: unchanged, until share)
   if (walls_any_) install_local_walls(full);
   if (whole_ref && whole_ref->balls() == full.balls.size()) {
+    // (Rank 0's positions let go while its whole model was hollow: Pipeline::hollow_whole.)
+    if (comm::root() && !team_->shares_whole())
+      for (auto* v : {&whole_ref->x, &whole_ref->y, &whole_ref->z}) v->resize(full.balls.size());
     std::vector<double> out, in;
     gather_array(*team_, ref_.x, whole_ref->x, owned_, rank_balls_, out, in);
     gather_array(*team_, ref_.y, whole_ref->y, owned_, rank_balls_, out, in);

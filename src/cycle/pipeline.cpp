@@ -203,6 +203,7 @@ void Pipeline::end_cycle(Model& model, bool keep_parts) {
       return;
     }
     each_part([&](BrickStep& part, int) { part.end_on_parts(model); });
+    hollow_whole(model);   // (what the pipeline keeps of it)
     return;
   }
   share_whole(model);

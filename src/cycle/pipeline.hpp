@@ -376,6 +376,9 @@ class Pipeline {
   // A rank other than 0 of a distributed run, its part live: frees the whole model's arrays but the
   // balls' ids and radii (BrickStep::share and restore_rescue hand them over again).
   void hollow(Model& model);
+  // Rank 0's whole model let go where the ranks' parts are live (BrickStep::hollow_whole), and with
+  // it the pipeline's index of its arrays and the list's reference positions.
+  void hollow_whole(Model& model);
   // The parts made from the whole model (split), and where prepare() left the list stale, searched
   // on them (rebuild_local), the ranks other than 0 hollow first.
   void split_parts(Model& model);

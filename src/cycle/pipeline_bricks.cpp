@@ -101,8 +101,9 @@ void Pipeline::split_parts(Model& model) {
   }
   // The ranks other than 0 free their whole model's arrays before their part comes: rank 0 makes
   // every part and sends it (BrickStep::scatter_parts). Should that fail, rank 0 hands the whole
-  // model back to them.
+  // model back to them. No rank keeps the whole model's radii for the list's test.
   const bool scatter = distributed() && comm::size() > 1;
+  if (scatter) ref_.forget_radii();
   if (scatter) {
     if (!comm::root()) hollow(model);
     for (auto& part : bricks_) part->whole_freed();
@@ -118,10 +119,7 @@ void Pipeline::split_parts(Model& model) {
   // Rank 0 too steps its part alone: its whole model's state goes (before the parts search their
   // lists) until a sync gathers it again, for the output or a command that reads it, so that no
   // rank holds a part and the whole model.
-  if (scatter) {
-    for (auto& part : bricks_) part->hollow_whole(model);
-    if (comm::root()) scratch_ = StepScratch{};   // (an index of the arrays that went)
-  }
+  if (scatter) hollow_whole(model);
   if (search) search_new_parts(model, skin);
 }
 
@@ -138,8 +136,7 @@ void Pipeline::search_new_parts(Model& model, double skin) {
   if (distributed()) broadcast_arrays(model);
   rebuild(model);
   each_part([&](BrickStep& part, int) { part.split(model, ref_); });
-  if (distributed() && comm::size() > 1)
-    for (auto& part : bricks_) part->hollow_whole(model);
+  if (distributed() && comm::size() > 1) hollow_whole(model);
 }
 
 void Pipeline::parts_from_records(Model& model, std::vector<double>& records) {
@@ -147,13 +144,13 @@ void Pipeline::parts_from_records(Model& model, std::vector<double>& records) {
   // rank 0's whole model.
   const double skin = list_skin(model);
   ref_.record(model, skin);
+  ref_.forget_radii();   // (as split_parts)
   wall_travel_ = 0;
   list_ = ListState::PartsToSearch;
   for (auto& part : bricks_) part->whole_freed();
   bricks().split_from_records(model, records);
   others_hollow_ = false;
-  for (auto& part : bricks_) part->hollow_whole(model);
-  if (comm::root()) scratch_ = StepScratch{};
+  hollow_whole(model);
   search_new_parts(model, skin);
   sorted_cycle_ = model.cycle;
   sorted_edition_ = bricks().edition();
@@ -168,10 +165,20 @@ bool Pipeline::sort_on_parts(Model& model) {
   for (auto& part : bricks_) part->whole_freed();
   const std::vector<std::uint32_t> order = bricks().sort_in_space(model);
   model.order.pending = false;
-  if (comm::root()) scratch_ = StepScratch{};   // (an index of the arrays hollow_whole let go)
+  hollow_whole(model);   // (sort_in_space let rank 0's whole model go: what the pipeline keeps of it too)
   if (order.empty()) return false;
   ref_.reorder(order);
   return true;
+}
+
+void Pipeline::hollow_whole(Model& model) {
+  for (auto& part : bricks_) part->hollow_whole(model);
+  if (!comm::root() || !bricks().whole_hollow()) return;
+  // What rank 0's pipeline keeps of the whole model goes with it: the index of its arrays and the
+  // list's reference positions (24 bytes a ball; the parts hold their own, and a sync after a
+  // rebuild on the parts gathers them again).
+  scratch_ = StepScratch{};
+  for (auto* v : {&ref_.x, &ref_.y, &ref_.z}) std::vector<double>().swap(*v);
 }
 
 double Pipeline::list_reach(const Model& model, double skin) const {

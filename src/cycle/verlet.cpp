@@ -12,7 +12,7 @@ double VerletReference::displacement_limit2(const Model& model) const {
   const Balls& b = model.balls;
   const std::size_t n = b.size();
   if (!valid_ || count_ != n) return -1;
-  if (n && std::memcmp(rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return -1;
+  if (radii_kept_ && n && std::memcmp(rad_.data(), b.rad.data(), n * sizeof(double)) != 0) return -1;
   // Periodic space: an image pair also closes by the change of the cell's edge vectors (per axis,
   // the change of the edge length plus those of the tilts that shift that axis).
   double cell_change = 0;
@@ -46,6 +46,7 @@ double VerletReference::skin_for(const Balls& b) {
 void VerletReference::record(const Model& model, double skin) {
   const Balls& b = model.balls;
   x = b.x; y = b.y; z = b.z; rad_ = b.rad;
+  radii_kept_ = true;
   count_ = b.size();
   cell_ = model.space.length();
   tilt_ = model.space.tilt;

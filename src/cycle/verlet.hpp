@@ -35,6 +35,14 @@ class VerletReference {
   // there until a sync gathers them into x, y, z: the cell and the skin of the new list.
   void record_cell(const Model& model, double skin);
   void invalidate() { valid_ = false; }
+  // The radii are not kept for the test (a distributed run's ranks whose parts are about to be
+  // made from the whole model: any change of a radius is an edit, which drops the parts and
+  // invalidates this), saving 8 bytes a ball of the whole model on every rank. The next record
+  // keeps them again.
+  void forget_radii() {
+    std::vector<double>().swap(rad_);
+    radii_kept_ = false;
+  }
   // The balls were put in the order `order` (new index k holds old index order[k]) without a new
   // list (a distributed run's sort on its parts: Pipeline::sort_on_parts): the positions and radii
   // held follow them.
@@ -52,6 +60,7 @@ class VerletReference {
   double skin_ = 0;
   std::size_t count_ = 0;
   bool valid_ = false;
+  bool radii_kept_ = true;                // (forget_radii)
   std::size_t rebuilds_ = 0;
 };
 

@@ -59,22 +59,26 @@ namespace {
 
 // The part of ball k's coordinate a that the tilts contribute (0 in an unsheared cell): the
 // coordinate less it is lo[a] + edge length * the fractional coordinate along edge a.
-double tilt_terms(const Space& s, const CellFrame& f, const Balls& b, std::size_t k, int a) {
+double tilt_terms(const Space& s, const CellFrame& f, double y, double z, int a) {
   if (a == 2 || (f.xy == 0 && f.xz == 0 && f.yz == 0)) return 0;
-  const double sz = (b.z[k] - s.lo[2]) / f.lz;
+  const double sz = (z - s.lo[2]) / f.lz;
   if (a == 1) return f.yz * sz;
-  const double sy = (b.y[k] - s.lo[1] - f.yz * sz) / f.ly;
+  const double sy = (y - s.lo[1] - f.yz * sz) / f.ly;
   return f.xy * sy + f.xz * sz;
 }
 
 }  // namespace
 
 bool outside_cell(const Model& model, std::size_t begin, std::size_t end) {
-  const Space& s = model.space;
-  if (!s.periodic) return false;
   const Balls& b = model.balls;
+  return outside_cell(model.space, b.x, b.y, b.z, begin, end);
+}
+
+bool outside_cell(const Space& s, const std::vector<double>& x_, const std::vector<double>& y_,
+                  const std::vector<double>& z_, std::size_t begin, std::size_t end) {
+  if (!s.periodic) return false;
   const CellFrame f = cell_frame(s);
-  const std::vector<double>* pos[3] = {&b.x, &b.y, &b.z};
+  const std::vector<double>* pos[3] = {&x_, &y_, &z_};
   if (f.xy == 0 && f.xz == 0 && f.yz == 0) {
     // An unsheared cell (the common case, every step): the same test axis by axis, without the
     // early exit, as a loop the compiler vectorises (an infinite coordinate is not outside; a NaN
@@ -95,7 +99,7 @@ bool outside_cell(const Model& model, std::size_t begin, std::size_t end) {
       if (!s.periodic_axis[a]) continue;
       const double x = (*pos[a])[k];
       if (!std::isfinite(x)) continue;
-      const double t = x - tilt_terms(s, f, b, k, a);
+      const double t = x - tilt_terms(s, f, y_[k], z_[k], a);
       if (!(t >= s.lo[a] && t < s.hi[a])) return true;
     }
   return false;
@@ -146,7 +150,7 @@ bool wrap_into_cell(Model& model, std::vector<double>* ref_x, std::vector<double
       if (!s.periodic_axis[a]) continue;
       double& x = (*pos[a])[k];
       if (!std::isfinite(x)) continue;   // the guard reports it
-      const double tilt = tilt_terms(s, f, b, k, a);
+      const double tilt = tilt_terms(s, f, b.y[k], b.z[k], a);
       const double t = x - tilt;
       if (t >= s.lo[a] && t < s.hi[a]) continue;
       // The ball moves to its own image inside the cell: minus shift edge vectors.

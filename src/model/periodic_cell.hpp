@@ -123,6 +123,9 @@ void check_periodic_cell(const Model& model);
 // Whether some ball of [begin, end) lies outside the cell, so that wrap_into_cell would move it
 // (a read-only test that threads can share out; a true answer may be conservative).
 bool outside_cell(const Model& model, std::size_t begin, std::size_t end);
+// The same for centres kept apart from a model (a batch deck's held BALL lines).
+bool outside_cell(const Space& space, const std::vector<double>& x, const std::vector<double>& y,
+                  const std::vector<double>& z, std::size_t begin, std::size_t end);
 
 // Wraps every ball centre into the periodic cell (the parallelepiped lo + H s, s in [0, 1), taken
 // z first, then y, then x). A ball moved by an edge vector has its velocity changed by that edge's
