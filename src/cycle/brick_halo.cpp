@@ -104,7 +104,8 @@ void BrickStep::mark_bins(Rebuild& r) const {
   for (std::size_t q = 0; q < owned_.size(); ++q)
     if (r.dest[q] == r.me && r.bin_of[q] != ShellBins::kNone) mark(r.bin_of[q]);
   for (std::size_t t = 0; t < r.moved; ++t)
-    if (static_cast<int>(r.all_moves[3 * t + 1]) == r.me) mark(static_cast<std::uint32_t>(r.all_moves[3 * t + 2]));
+    if (static_cast<int>(r.all_moves[Rebuild::kMove * t + 1]) == r.me)
+      mark(static_cast<std::uint32_t>(r.all_moves[Rebuild::kMove * t + 2]));
 }
 
 void BrickStep::find_shells(Rebuild& r) const {

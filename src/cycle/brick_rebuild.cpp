@@ -34,7 +34,7 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   fit_shell_bins(r, full.space);   // (collective)
   together([&] { find_moves(r); }, "finding the balls that change owner");
   team_->allgather(r.moves, r.all_moves);
-  r.moved = r.all_moves.size() / 3;
+  r.moved = r.all_moves.size() / Rebuild::kMove;
   if (!balanced_after_moves(r)) return false;
   // The halo, which of this member's balls each other needs (brick_halo.cpp), and what leaves with
   // a moving ball (brick_migrate.cpp).
@@ -276,14 +276,20 @@ void BrickStep::commit_rebuild(Rebuild& r) {
     part_.bonds.changed();
     part_.balls.index_ids();
   }
-  if (r.moved > 0) {   // every rank's record of the owners (sync gathers each rank's balls by it)
-    for (std::size_t t = 0; t < r.moved; ++t)
-      owner_[static_cast<std::size_t>(r.all_moves[3 * t])] = static_cast<int>(r.all_moves[3 * t + 1]);
-    for (auto& v : rank_balls_) v.clear();
-    for (std::size_t k = 0; k < owner_.size(); ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
-    for (auto& v : rank_bonds_) v.clear();   // (by their balls i's owners, in the split's order)
-    for (std::size_t t = 0; t < split_bond_rows_.size(); ++t)
-      rank_bonds_[owner_[split_bond_ball_i_[t]]].push_back(split_bond_rows_[t]);
+  if (r.moved > 0) {   // the records of the owners (sync gathers each rank's balls by them)
+    if (!owner_.empty()) {   // (every member's rows: rank 0's of a run, every thread's)
+      for (std::size_t t = 0; t < r.moved; ++t)
+        owner_[static_cast<std::size_t>(r.all_moves[Rebuild::kMove * t])] =
+            static_cast<int>(r.all_moves[Rebuild::kMove * t + 1]);
+      for (auto& v : rank_balls_) v.clear();
+      for (std::size_t k = 0; k < owner_.size(); ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
+      for (auto& v : rank_bonds_) v.clear();   // (by their balls i's owners, in the split's order)
+      for (std::size_t t = 0; t < split_bond_rows_.size(); ++t)
+        rank_bonds_[owner_[split_bond_ball_i_[t]]].push_back(split_bond_rows_[t]);
+    } else {
+      own_rows_from_part();   // (the others' rows: a rank of a run other than 0 keeps its own alone)
+    }
+    rank_counts_ = r.count;
     most_balls_ = *std::max_element(r.count.begin(), r.count.end());
     least_balls_ = *std::min_element(r.count.begin(), r.count.end());
     migrations_ += r.moved;

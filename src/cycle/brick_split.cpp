@@ -308,12 +308,13 @@ void BrickStep::finish_part(const Model& full) {
   kernels_.laws = make_pair_laws(part_);
   step_.set_part_only(true);
 
-  most_balls_ = 0;
-  least_balls_ = full_balls_;
-  for (int r = 0; r < ranks; ++r) {
-    most_balls_ = std::max(most_balls_, rank_balls_[r].size());
-    least_balls_ = std::min(least_balls_, rank_balls_[r].size());
-  }
+  rank_counts_.assign(ranks, 0);
+  for (int r = 0; r < ranks; ++r) rank_counts_[r] = rank_balls_[r].size();
+  most_balls_ = *std::max_element(rank_counts_.begin(), rank_counts_.end());
+  least_balls_ = *std::min_element(rank_counts_.begin(), rank_counts_.end());
+  // A rank of a run other than 0 keeps its own row of the split's lists alone (rank 0 places what
+  // the others send at a sync): each ball's owner and the other ranks' balls go, 8 bytes a ball.
+  if (scatters() && team_->rank() != 0) let_go_of_others_lists();
   ++splits_;
   shell_base_ = 0;
   list_local_ = false;
@@ -328,6 +329,28 @@ void BrickStep::finish_part(const Model& full) {
   whole_hollow_ = false;
   // (Scattered: the ranks other than 0 freed their whole model's arrays first.)
   shared_ = !scatters();
+}
+
+void BrickStep::let_go_of_others_lists() {
+  const auto me = static_cast<std::size_t>(team_->rank());
+  std::vector<int>().swap(owner_);
+  for (std::size_t r = 0; r < rank_balls_.size(); ++r)
+    if (r != me) std::vector<std::uint32_t>().swap(rank_balls_[r]);
+}
+
+void BrickStep::own_rows_from_part() {
+  // This rank's balls in the whole model's order (a part is numbered in it), and the split's
+  // intact bonds whose ball i is one of them, in the split's order.
+  const auto me = static_cast<std::size_t>(team_->rank());
+  std::vector<std::uint32_t>& mine = rank_balls_[me];
+  mine.clear();
+  for (std::uint32_t q : owned_) mine.push_back(global_ball_[q]);
+  std::sort(mine.begin(), mine.end());
+  if (rank_bonds_.size() <= me) return;
+  rank_bonds_[me].clear();
+  for (std::size_t t = 0; t < split_bond_rows_.size(); ++t)
+    if (std::binary_search(mine.begin(), mine.end(), split_bond_ball_i_[t]))
+      rank_bonds_[me].push_back(split_bond_rows_[t]);
 }
 
 int BrickStep::owner_at(double x, double y, double z, std::uint32_t k) const {
@@ -358,17 +381,17 @@ void BrickStep::find_moves(Rebuild& r) const {
     r.moves.push_back(global_ball_[k]);
     r.moves.push_back(r.dest[q]);
     r.moves.push_back(r.bin_of[q]);
+    r.moves.push_back(r.me);
   }
 }
 
 bool BrickStep::balanced_after_moves(Rebuild& r) const {
   // The counts after the moves, against the shares: a tenth off (and two balls), and the parts are
   // made afresh from the whole model, balanced again.
-  r.count.resize(r.ranks);
-  for (int q = 0; q < r.ranks; ++q) r.count[q] = rank_balls_[q].size();
+  r.count = rank_counts_;
   for (std::size_t t = 0; t < r.moved; ++t) {
-    --r.count[owner_[static_cast<std::size_t>(r.all_moves[3 * t])]];
-    ++r.count[static_cast<std::size_t>(r.all_moves[3 * t + 1])];
+    --r.count[static_cast<std::size_t>(r.all_moves[Rebuild::kMove * t + 3])];
+    ++r.count[static_cast<std::size_t>(r.all_moves[Rebuild::kMove * t + 1])];
   }
   const double total = std::accumulate(shares_.begin(), shares_.end(), 0.0);
   for (int q = 0; q < r.ranks; ++q) {

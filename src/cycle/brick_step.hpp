@@ -343,6 +343,11 @@ class BrickStep {
   // the whole model; cut_part: member `me`'s part and its lists (owned_, send_ and the like), into
   // this one's; finish_part: what every member then sets alike.
   void decompose(const Model& full);
+  // A rank of a run other than 0, its part made: each ball's owner and the other ranks' rows of
+  // rank_balls_ let go; its own rows (its balls, its bonds) made again from its part after a
+  // rebuild or a sort on the parts (own_rows_from_part).
+  void let_go_of_others_lists();
+  void own_rows_from_part();
   void cut_part(const Model& full, const VerletReference& ref, int me);
   void finish_part(const Model& full);
   // The ranks of a run scatter (cycle/brick_scatter.cpp): rank 0 alone reads the whole model,
@@ -456,7 +461,8 @@ class BrickStep {
   const Model* model_ = nullptr;
   std::uint64_t list_version_ = 0, wall_version_ = 0;
   std::size_t full_balls_ = 0;
-  std::vector<int> owner_;                  // per ball of the whole model
+  std::vector<int> owner_;                  // per ball of the whole model (rank 0's alone of a run: let_go_of_others_lists)
+  std::vector<std::size_t> rank_counts_;    // per member: the balls it owns (every member's)
   std::vector<Cut> cuts_;                   // the last split's bisection (node 0 the root)
   std::vector<std::uint32_t> global_ball_;  // part ball -> whole model's ball
   std::vector<std::uint32_t> owned_, owned_pairs_, owned_walls_;   // part indices this rank reports

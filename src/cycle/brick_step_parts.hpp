@@ -258,7 +258,9 @@ struct BrickStep::Rebuild {
   // fit_shell_bins:
   ShellBins bins;
   // find_moves: per owned ball (in owned_'s order), the rank that owns it from now on and its bin;
-  // the balls that change owner, this rank's and every rank's (whole-model index, new owner, bin).
+  // the balls that change owner, this rank's and every rank's (kMove numbers each: whole-model
+  // index, new owner, bin, old owner).
+  static constexpr std::size_t kMove = 4;
   std::vector<int> dest;
   std::vector<std::uint32_t> bin_of;
   std::vector<double> moves, all_moves;
