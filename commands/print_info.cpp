@@ -33,18 +33,24 @@ namespace trubal {
 // kept parts, where rank 0's whole model is hollow, Session::ball_array.)
 static double memory_gap_in_diameters(const Session& s, const Balls& b) {
   if (b.size() < 2) return 0;
-  std::vector<double> gap(b.size() - 1, 0.0), rad(b.rad), fetched;
+  auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  // (One array of the balls' at a time beside the gaps: the radii's median first, then each axis,
+  // fetched from the ranks' parts where rank 0's whole model is hollow.)
+  double diameter = 0;
+  {
+    std::vector<double> rad(b.rad);
+    diameter = 2 * median(rad);
+  }
+  std::vector<double> gap(b.size() - 1, 0.0), fetched;
   for (const std::vector<double>* axis : {&b.x, &b.y, &b.z}) {
     const std::vector<double>& v = s.ball_array(*axis, fetched);
     for (std::size_t k = 1; k < b.size(); ++k) gap[k - 1] += (v[k] - v[k - 1]) * (v[k] - v[k - 1]);
   }
   std::vector<double>().swap(fetched);
   for (double& g : gap) g = std::sqrt(g);
-  auto median = [](std::vector<double>& v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  const double diameter = 2 * median(rad);
   return diameter > 0 ? median(gap) / diameter : 0;
 }
 

@@ -137,7 +137,7 @@ class CycleRun {
   StepTotals advance(const StepPlan& step);
   StepTotals retake_to(std::int64_t cycle);
   bool escapes(bool replay);
-  void sort_balls();
+  bool sort_balls();   // whether any ball moved
   bool rescue(std::int64_t bad_cycle);
   CycleResult& unstable(const StepTotals& sums, std::int64_t s);
   void observe(bool observed);
@@ -163,6 +163,9 @@ class CycleRun {
   Clock::time_point loop_start_, last_progress_;
   std::int64_t start_cycle_ = 0;
   bool sorted_at_start_ = false;   // the first step's sort was done before the first search
+  // The sort of the step about to be taken, made before its rescue copy (run(): a CYCLE's last
+  // step whose results are deferred), at this cycle; advance() then makes none (-1: none made).
+  std::int64_t sorted_ahead_ = -1;
 };
 
 CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control)
@@ -285,7 +288,17 @@ CycleResult CycleRun::run() {
   try {
     for (std::int64_t s = 1; s <= n_; ++s) {
       const StepPlan step = plan(s);
-      if (step.deferred && pipeline_.rescue().cycle != model_.cycle) take_copy();
+      if (step.deferred) {
+        // The copy the results are made from later is of the order the step is taken in: the
+        // step's sort first (on the ranks' parts it changes their edition, and a copy of the
+        // order before could not be put back on them in place).
+        bool sorted = false;
+        if (sort_due(model_) && !(sorted_at_start_ && model_.cycle == start_cycle_)) {
+          sorted = sort_balls();
+          sorted_ahead_ = model_.cycle;
+        }
+        if (sorted || pipeline_.rescue().cycle != model_.cycle) take_copy();
+      }
       const StepTotals sums = advance(step);
       if (step.energies) {
         if (guard_->failed(model_, sums, s, result_)) return unstable(sums, s);
@@ -377,7 +390,8 @@ StepTotals CycleRun::advance(const StepPlan& step) {
   const auto step_start = Clock::now();
   // The balls in space order (Model::order) on cycles of the absolute count and at the first step
   // after balls were added: the same steps however the run is cut, on every backend and rank.
-  if (sort_due(model) && !(sorted_at_start_ && model.cycle == start_cycle_)) sort_balls();
+  if (sort_due(model) && !(sorted_at_start_ && model.cycle == start_cycle_) && sorted_ahead_ != model.cycle) sort_balls();
+  sorted_ahead_ = -1;
   // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
   // (the same steps however the run is cut).
   if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) {
@@ -433,11 +447,12 @@ StepTotals CycleRun::advance(const StepPlan& step) {
 
 // The balls in space order (Model::order). Where none moves (the first step's order, put before
 // the run's first search: CycleRun's start), the pipeline keeps what it holds.
-void CycleRun::sort_balls() {
+bool CycleRun::sort_balls() {
   // A distributed run's live parts: the ranks sort them where they are, and their lists stay.
   if (pipeline_.sorts_on_parts(model_)) {
-    if (pipeline_.sort_on_parts(model_)) kernels_.laws = make_pair_laws(model_);   // (per-ball type indices)
-    return;
+    if (!pipeline_.sort_on_parts(model_)) return false;
+    kernels_.laws = make_pair_laws(model_);   // (per-ball type indices)
+    return true;
   }
   // (Parts not live: their state to rank 0, which alone sorts; the ranks split afresh.)
   if (pipeline_.distributed()) pipeline_.release_parts(model_);
@@ -448,14 +463,15 @@ void CycleRun::sort_balls() {
     comm::on_root([&] { moved = sort_in_space(model_) ? 1 : 0; }, "putting the balls in space order");
     comm::broadcast(moved);
     model_.order.pending = false;
-    if (moved == 0) return;
+    if (moved == 0) return false;
     broadcast_ball_names(model_.balls);
   } else {
     pipeline_.sync_all(model_);
-    if (!sort_in_space(model_)) return;
+    if (!sort_in_space(model_)) return false;
   }
   pipeline_.invalidate();
   kernels_.laws = make_pair_laws(model_);   // per-ball type indices
+  return true;
 }
 
 // START box: balls outside a bounded axis's faces after a step are destroyed (`destroy`) or stop

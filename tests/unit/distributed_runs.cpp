@@ -612,7 +612,8 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
   // crossing the faces and changing rank), in one CYCLE and cut into three (the second starting at
   // a cycle of the sort, on the kept parts); a bonded block crushed (SET sort 10); and that cell
   // stepped above its critical step, which goes unstable 196 cycles after the copy of its CYCLE's
-  // start, eight sorts later: every ball array is put back from the copies, in their order.
+  // start, eight sorts later: every ball array is put back from the copies, in their order. And
+  // a CYCLE whose last step sorts, its results read after.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string outputs =
       "print balls file b.csv\nprint contacts file c.csv\nsave a.sav\nprint counters file counters.txt\n";
@@ -652,6 +653,26 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
     const Counters counters = counters_of(ranks);
     CHECK(counter(counters, "part_sorts") >= scene.sorts);
     CHECK(counter(counters, "decompositions") < 10);
+  }
+  {
+    // A CYCLE whose last step starts at a cycle of the sort (26 from 0), its results read after:
+    // the copy they are made from is taken after that step's sort (CycleRun::run), so that it is
+    // put back on the parts in place. (Taken before, it was of the order before the sort, which
+    // changed the parts' edition: the parts gave their state to rank 0, which made the results
+    // and split the model again.)
+    TempDir serial, ranks;
+    const std::string deck = cell + "cycle 26\nprint contacts file c.csv\nprint counters file counters.txt\ncycle 50\nsave a.sav\n";
+    serial.write("deck.dat", deck);
+    ranks.write("deck.dat", "backend mpi\n" + deck);
+    REQUIRE(run_deck(serial, 0) == 0);
+    REQUIRE(run_deck(ranks, 3) == 0);
+    for (const char* file : {"c.csv", "a.sav"}) {
+      INFO(file);
+      CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+    }
+    const Counters counters = counters_of(ranks);
+    CHECK(counter(counters, "results_made") == 1);
+    CHECK(counter(counters, "copies_put_back_on_parts") == 1);
   }
   // Unstable: serial's message, which tells the state put back (its energies, its fastest ball).
   TempDir serial, ranks;
