@@ -179,20 +179,9 @@ void BrickStep::install_local_list(Model& full, VerletReference* whole_ref) {
 
 bool BrickStep::merge_pair_runs(Model& full, std::vector<std::uint8_t>& all, const std::vector<double>& counts) {
   const int ranks = team_->size();
-  struct Key {
-    std::uint32_t i, j;
-    std::int8_t x, y, z;
-    bool operator<(const Key& o) const {
-      if (i != o.i) return i < o.i;
-      if (j != o.j) return j < o.j;
-      if (x != o.x) return x < o.x;
-      if (y != o.y) return y < o.y;
-      return z < o.z;
-    }
-  };
-  auto key = [&](std::size_t q) {
+  auto key = [&](std::size_t q) {   // (a record's place in the list's order: pair_before's)
     const std::uint8_t* r = all.data() + q * kPairRecord;
-    Key k;
+    PairKey k;
     std::memcpy(&k.i, r, 4);
     std::memcpy(&k.j, r + 4, 4);
     std::memcpy(&k.x, r + 8, 1);
@@ -216,10 +205,10 @@ bool BrickStep::merge_pair_runs(Model& full, std::vector<std::uint8_t>& all, con
   for (int r = 0; r < ranks; ++r) rank_pairs_[r].resize(static_cast<std::size_t>(counts[r]));
   for (std::size_t out = 0; out < total; ++out) {
     int least = -1;
-    Key best{};
+    PairKey best{};
     for (int r = 0; r < ranks; ++r) {
       if (head[r] == at[r + 1]) continue;
-      const Key k = key(head[r]);
+      const PairKey k = key(head[r]);
       if (least < 0 || k < best) least = r, best = k;
     }
     sorted.i[out] = best.i; sorted.j[out] = best.j;

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <vector>
 
@@ -284,14 +285,22 @@ struct ContactTable {
 };
 
 // The order of a pair list (a ContactTable's or PairCandidates'): by i, then j, then image (the
-// same two balls may touch across several periodic faces in a small cell). Pair p of `a` before
-// pair q of `b`.
+// same two balls may touch across several periodic faces in a small cell). PairKey is a pair's
+// place in it, for lists kept in other forms (the records the ranks send: BrickStep::merge_pair_runs).
+struct PairKey {
+  std::uint32_t i = 0, j = 0;
+  std::int8_t x = 0, y = 0, z = 0;
+  friend bool operator<(const PairKey& a, const PairKey& b) {
+    return std::tie(a.i, a.j, a.x, a.y, a.z) < std::tie(b.i, b.j, b.x, b.y, b.z);
+  }
+};
+template <class A> PairKey pair_key(const A& a, std::size_t p) {
+  return {static_cast<std::uint32_t>(a.i[p]), static_cast<std::uint32_t>(a.j[p]), static_cast<std::int8_t>(a.image_x[p]),
+          static_cast<std::int8_t>(a.image_y[p]), static_cast<std::int8_t>(a.image_z[p])};
+}
+// Pair p of `a` before pair q of `b`.
 template <class A, class B> bool pair_before(const A& a, std::size_t p, const B& b, std::size_t q) {
-  if (a.i[p] != b.i[q]) return a.i[p] < b.i[q];
-  if (a.j[p] != b.j[q]) return a.j[p] < b.j[q];
-  if (a.image_x[p] != b.image_x[q]) return a.image_x[p] < b.image_x[q];
-  if (a.image_y[p] != b.image_y[q]) return a.image_y[p] < b.image_y[q];
-  return a.image_z[p] < b.image_z[q];
+  return pair_key(a, p) < pair_key(b, q);
 }
 
 // What the servo reads of a force pass, summed by the contact loops: sum of F (x) l (symmetric part,
