@@ -13,18 +13,6 @@
 namespace trubal {
 namespace {
 
-// Every array of `visit`'s of length order.size() put in the order `order` (new index k holds old
-// index order[k]); the others (let go on a hollow model) are left alone.
-template <class Visit>
-void permute_whole(Visit&& visit, const std::vector<std::uint32_t>& order) {
-  visit([&](auto& v) {
-    if (v.size() != order.size()) return;
-    std::decay_t<decltype(v)> out(v.size());
-    for (std::size_t k = 0; k < order.size(); ++k) out[k] = v[order[k]];
-    v.swap(out);
-  });
-}
-
 // A list of part indices renumbered by `local` (old index -> new), ascending again.
 void renumber(std::vector<std::uint32_t>& list, const std::vector<std::uint32_t>& local) {
   for (auto& q : list) q = local[q];
@@ -92,14 +80,14 @@ std::vector<std::uint32_t> BrickStep::sort_in_space(Model& full) {
     // What every rank holds by whole-model index: the light arrays, each ball's owner and each
     // rank's balls, the split's cuts (their ties broken by index: a ball on a cut may fall on its
     // other side now, and moves at the next rebuild on the parts), the split's bonds.
-    permute_whole([&](auto&& f) { full.balls.for_each_array(f); }, order);
+    permute_arrays([&](auto&& f) { full.balls.for_each_array(f); }, order);
     full.balls.index_ids();
     for (Cut& c : cuts_)
       if (c.left >= 0) c.at_ball = c.at_ball < n ? new_index[c.at_ball] : c.at_ball;
     for (auto& k : split_bond_ball_i_) k = new_index[k];
     const bool all_rows = !owner_.empty();   // (rank 0's; the others keep their own rows alone)
     if (all_rows) {
-      permute_whole([&](auto&& f) { f(owner_); }, order);
+      permute_arrays([&](auto&& f) { f(owner_); }, order);
       for (auto& v : rank_balls_) v.clear();
       for (std::size_t k = 0; k < n; ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
       for (auto& v : rank_bonds_) v.clear();
@@ -127,7 +115,7 @@ std::vector<std::uint32_t> BrickStep::sort_in_space(Model& full) {
     std::vector<std::uint32_t> part_order(local_order.begin(), local_order.end());
     std::vector<std::size_t>().swap(local_order);
     ref_.reorder(part_order);
-    permute_whole([&](auto&& f) { f(scratch_.ghost); }, part_order);
+    permute_arrays([&](auto&& f) { f(scratch_.ghost); }, part_order);
     renumber(owned_, local);
     if (!all_rows) own_rows_from_part();
     for (auto& v : send_) renumber(v, local);   // (both sides of an exchange in the whole order)

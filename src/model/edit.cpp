@@ -207,18 +207,6 @@ std::vector<std::size_t> space_order(const Balls& b, double cell) {
   return order;
 }
 
-// Puts every array of `f`'s visitor in the order `order` (new position k holds old element
-// order[k]); arrays of another length (results not kept) are left alone.
-template <class Visit>
-void permute_arrays(Visit&& visit, const std::vector<std::size_t>& order) {
-  visit([&](auto& v) {
-    if (v.size() != order.size()) return;
-    std::decay_t<decltype(v)> out(v.size());
-    for (std::size_t k = 0; k < order.size(); ++k) out[k] = v[order[k]];
-    v.swap(out);
-  });
-}
-
 }  // namespace
 
 std::int64_t Renumbering::map(std::int64_t old) const {

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "model/model.hpp"
@@ -39,6 +40,18 @@ std::int64_t find_ball(const Model& model, std::int64_t id);
 // turned round: its shear history, normal, force and image change sign, so the physics is the
 // same) and the wall contacts. Ids, groups and the membrane's balls are by id and stay.
 void reorder_balls(Model& model, const std::vector<std::size_t>& order);
+
+// Puts every array `visit` lists (visit(f) calls f on each) in the order `order` (new position k
+// holds old element order[k]); arrays of another length (results not kept, a hollow model's
+// arrays let go) are left alone.
+template <class Visit, class Index> void permute_arrays(Visit&& visit, const std::vector<Index>& order) {
+  visit([&](auto& v) {
+    if (v.size() != order.size()) return;
+    std::decay_t<decltype(v)> out(v.size());
+    for (std::size_t k = 0; k < order.size(); ++k) out[k] = v[order[k]];
+    v.swap(out);
+  });
+}
 
 // The space order's parts (sort_in_space), for a run whose balls are kept apart (a distributed
 // run's parts: BrickStep::sort_in_space): the corner the cells are counted from, the least finite

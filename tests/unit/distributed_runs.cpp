@@ -615,6 +615,14 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
   // start, eight sorts later: every ball array is put back from the copies, in their order. And
   // a CYCLE whose last step sorts, its results read after.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  // The deck serially and on 3 ranks (BACKEND mpi first), each in its own folder, each ending with
+  // the exit status `status`.
+  auto run_both = [](const std::string& deck, TempDir& serial, TempDir& ranks, int status) {
+    serial.write("deck.dat", deck);
+    ranks.write("deck.dat", "backend mpi\n" + deck);
+    REQUIRE(run_deck(serial, 0) == status);
+    REQUIRE(run_deck(ranks, 3) == status);
+  };
   const std::string outputs =
       "print balls file b.csv\nprint contacts file c.csv\nsave a.sav\nprint counters file counters.txt\n";
   const std::string box =
@@ -640,10 +648,7 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
   for (const Scene& scene : scenes) {
     INFO(scene.name);
     TempDir serial, ranks;
-    serial.write("deck.dat", scene.deck + outputs);
-    ranks.write("deck.dat", "backend mpi\n" + scene.deck + outputs);
-    REQUIRE(run_deck(serial, 0) == 0);
-    REQUIRE(run_deck(ranks, 3) == 0);
+    run_both(scene.deck + outputs, serial, ranks, 0);
     INFO(slurp(ranks.path() / "out.txt").substr(0, 3000));
     for (const char* file : {"b.csv", "c.csv", "a.sav", "bonds.csv"}) {
       if (!std::filesystem::exists(serial.path() / file)) continue;
@@ -661,11 +666,8 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
     // changed the parts' edition: the parts gave their state to rank 0, which made the results
     // and split the model again.)
     TempDir serial, ranks;
-    const std::string deck = cell + "cycle 26\nprint contacts file c.csv\nprint counters file counters.txt\ncycle 50\nsave a.sav\n";
-    serial.write("deck.dat", deck);
-    ranks.write("deck.dat", "backend mpi\n" + deck);
-    REQUIRE(run_deck(serial, 0) == 0);
-    REQUIRE(run_deck(ranks, 3) == 0);
+    run_both(cell + "cycle 26\nprint contacts file c.csv\nprint counters file counters.txt\ncycle 50\nsave a.sav\n", serial,
+             ranks, 0);
     for (const char* file : {"c.csv", "a.sav"}) {
       INFO(file);
       CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
@@ -676,11 +678,7 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
   }
   // Unstable: serial's message, which tells the state put back (its energies, its fastest ball).
   TempDir serial, ranks;
-  const std::string deck = cell + "cycle 300\ntstep 2.3e-6\ncycle 1500\n";
-  serial.write("deck.dat", deck);
-  ranks.write("deck.dat", "backend mpi\n" + deck);
-  REQUIRE(run_deck(serial, 0) == 1);
-  REQUIRE(run_deck(ranks, 3) == 1);
+  run_both(cell + "cycle 300\ntstep 2.3e-6\ncycle 1500\n", serial, ranks, 1);
   auto message = [](const TempDir& dir) {
     const std::string out = slurp(dir.path() / "out.txt");
     const auto at = out.find("error: unstable at cycle");
