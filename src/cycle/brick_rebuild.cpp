@@ -277,18 +277,10 @@ void BrickStep::commit_rebuild(Rebuild& r) {
     part_.balls.index_ids();
   }
   if (r.moved > 0) {   // the records of the owners (sync gathers each rank's balls by them)
-    if (!owner_.empty()) {   // (every member's rows: rank 0's of a run, every thread's)
-      for (std::size_t t = 0; t < r.moved; ++t)
-        owner_[static_cast<std::size_t>(r.all_moves[Rebuild::kMove * t])] =
-            static_cast<int>(r.all_moves[Rebuild::kMove * t + 1]);
-      for (auto& v : rank_balls_) v.clear();
-      for (std::size_t k = 0; k < owner_.size(); ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
-      for (auto& v : rank_bonds_) v.clear();   // (by their balls i's owners, in the split's order)
-      for (std::size_t t = 0; t < split_bond_rows_.size(); ++t)
-        rank_bonds_[owner_[split_bond_ball_i_[t]]].push_back(split_bond_rows_[t]);
-    } else {
-      own_rows_from_part();   // (the others' rows: a rank of a run other than 0 keeps its own alone)
-    }
+    for (std::size_t t = 0; !owner_.empty() && t < r.moved; ++t)
+      owner_[static_cast<std::size_t>(r.all_moves[Rebuild::kMove * t])] =
+          static_cast<int>(r.all_moves[Rebuild::kMove * t + 1]);
+    remake_rows();
     rank_counts_ = r.count;
     most_balls_ = *std::max_element(r.count.begin(), r.count.end());
     least_balls_ = *std::min_element(r.count.begin(), r.count.end());

@@ -85,15 +85,7 @@ std::vector<std::uint32_t> BrickStep::sort_in_space(Model& full) {
     for (Cut& c : cuts_)
       if (c.left >= 0) c.at_ball = c.at_ball < n ? new_index[c.at_ball] : c.at_ball;
     for (auto& k : split_bond_ball_i_) k = new_index[k];
-    const bool all_rows = !owner_.empty();   // (rank 0's; the others keep their own rows alone)
-    if (all_rows) {
-      permute_arrays([&](auto&& f) { f(owner_); }, order);
-      for (auto& v : rank_balls_) v.clear();
-      for (std::size_t k = 0; k < n; ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
-      for (auto& v : rank_bonds_) v.clear();
-      for (std::size_t t = 0; t < split_bond_rows_.size(); ++t)
-        rank_bonds_[owner_[split_bond_ball_i_[t]]].push_back(split_bond_rows_[t]);
-    }
+    permute_arrays([&](auto&& f) { f(owner_); }, order);   // (rank 0's; the others keep none)
     for (auto& v : rank_pairs_) std::vector<std::uint32_t>().swap(v);   // (the whole list's: made at the next sync)
     for (auto& v : rank_walls_) std::vector<std::uint32_t>().swap(v);
 
@@ -117,7 +109,7 @@ std::vector<std::uint32_t> BrickStep::sort_in_space(Model& full) {
     ref_.reorder(part_order);
     permute_arrays([&](auto&& f) { f(scratch_.ghost); }, part_order);
     renumber(owned_, local);
-    if (!all_rows) own_rows_from_part();
+    remake_rows();
     for (auto& v : send_) renumber(v, local);   // (both sides of an exchange in the whole order)
     for (auto& v : recv_) renumber(v, local);
     // The pairs each rank reports are those whose ball i it owns, which may be the other ball now.

@@ -338,6 +338,16 @@ void BrickStep::let_go_of_others_lists() {
     if (r != me) std::vector<std::uint32_t>().swap(rank_balls_[r]);
 }
 
+void BrickStep::remake_rows() {
+  if (owner_.empty()) return own_rows_from_part();
+  // Every rank's balls and bonds (by their balls i's owners, in the split's order) from the owners.
+  for (auto& v : rank_balls_) v.clear();
+  for (std::size_t k = 0; k < owner_.size(); ++k) rank_balls_[owner_[k]].push_back(static_cast<std::uint32_t>(k));
+  for (auto& v : rank_bonds_) v.clear();
+  for (std::size_t t = 0; t < split_bond_rows_.size(); ++t)
+    rank_bonds_[owner_[split_bond_ball_i_[t]]].push_back(split_bond_rows_[t]);
+}
+
 void BrickStep::own_rows_from_part() {
   // This rank's balls in the whole model's order (a part is numbered in it), and the split's
   // intact bonds whose ball i is one of them, in the split's order.

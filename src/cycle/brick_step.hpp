@@ -348,6 +348,9 @@ class BrickStep {
   // rebuild or a sort on the parts (own_rows_from_part).
   void let_go_of_others_lists();
   void own_rows_from_part();
+  // The rows of rank_balls_ and rank_bonds_ after a rebuild or a sort on the parts: every rank's
+  // from owner_ where this member keeps it, else its own from its part.
+  void remake_rows();
   void cut_part(const Model& full, const VerletReference& ref, int me);
   void finish_part(const Model& full);
   // The ranks of a run scatter (cycle/brick_scatter.cpp): rank 0 alone reads the whole model,

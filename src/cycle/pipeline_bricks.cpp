@@ -103,8 +103,8 @@ void Pipeline::split_parts(Model& model) {
   // every part and sends it (BrickStep::scatter_parts). Should that fail, rank 0 hands the whole
   // model back to them. No rank keeps the whole model's radii for the list's test.
   const bool scatter = distributed() && comm::size() > 1;
-  if (scatter) ref_.forget_radii();
   if (scatter) {
+    ref_.forget_radii();
     if (!comm::root()) hollow(model);
     for (auto& part : bricks_) part->whole_freed();
   }
