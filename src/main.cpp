@@ -127,6 +127,9 @@ int run(int argc, char** argv) {
   // Measurements: the rescue copy of the whole model on rank 0, as before each rank kept its part's.
   if (const char* whole = std::getenv("TRUBAL_RESCUE_WHOLE"); whole && std::strcmp(whole, "1") == 0)
     policy.whole_rescue = true;
+  // Tests: the decomposition's shares kept equal, whatever the ranks' speeds.
+  if (const char* equal = std::getenv("TRUBAL_EQUAL_SHARES"); equal && std::strcmp(equal, "1") == 0)
+    policy.follow_speeds = false;
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).
   std::int64_t stdin_deck = deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO)) ? 1 : 0;

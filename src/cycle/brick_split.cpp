@@ -87,6 +87,7 @@ std::vector<double> BrickStep::proposed_shares() {
   // balls.
   const int ranks = team_->size();
   if (shares_.size() != static_cast<std::size_t>(ranks)) shares_.assign(ranks, 1.0 / ranks);
+  if (!policy_->follow_speeds) return {};   // (the shares stay equal)
   const double seconds = work_seconds_ * (team_->rank() == policy_->slow_member ? StepPolicy::kSlowFactor : 1);
   std::vector<double> mine{seconds, work_ball_steps_}, all;
   team_->allgather(mine, all);   // (a collective call: every member asks at once)

@@ -26,6 +26,11 @@ struct StepPolicy {
   // The rescue copy of a run by the decomposition: each rank's of its own live part (false), or
   // rank 0's of the whole model (true: TRUBAL_RESCUE_WHOLE, to compare the two ways in one build).
   bool whole_rescue = false;
+  // Whether the decomposition's shares follow the members' measured speeds at each split and stale
+  // list (BrickStep::proposed_shares; true) or stay equal (false: TRUBAL_EQUAL_SHARES, so that a
+  // test may count the lists rebuilt on the parts on a loaded machine, where the speeds would
+  // move the shares and have the parts made afresh instead).
+  bool follow_speeds = true;
   // The member (team rank) whose own work is counted kSlowFactor times slower at each split, as a
   // busy core would make it, to see the shares follow; -1: none. Eight times, so that a machine
   // busy with other work (which slows both members by up to about two) cannot hide it.

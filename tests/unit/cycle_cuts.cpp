@@ -185,6 +185,7 @@ Result run(const Scene& scene, const std::string& backend, const std::string& cy
   WorkingDir cd(dir.path());
   Harness h;
   h.session.policy().split_rule = split_rule;
+  h.session.policy().follow_speeds = false;   // (the lists rebuilt on the parts are counted: speeds would move the shares)
   const std::string deck = "backend " + backend + "\n" + scene.setup + scene.during + cycling + kEndOutputs;
   const bool ok = h.deck(deck);
   INFO(deck);

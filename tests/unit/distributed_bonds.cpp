@@ -40,7 +40,7 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
 
   TempDir two;
   two.write("deck.dat", "backend mpi\n" + std::string(kBlock) + "cycle 400\n" + kBondOutputs);
-  REQUIRE(run_deck(two, 2) == 0);
+  REQUIRE(run_deck(two, 2, kEqualShares) == 0);
   INFO(slurp(two.path() / "out.txt"));
   const Counters counters = read_counters(two.path() / "counters.txt");
   CHECK(counter(counters, "ranks") == 2);

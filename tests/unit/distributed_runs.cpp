@@ -183,7 +183,7 @@ cycle 10000
   serial.write("deck.dat", deck);
   REQUIRE(run_deck(serial, 0) == 0);
   two.write("deck.dat", "backend mpi\n" + deck + kCounters);
-  REQUIRE(run_deck(two, 2) == 0);
+  REQUIRE(run_deck(two, 2, kEqualShares) == 0);
   INFO(slurp(two.path() / "out.txt"));
   const Counters counters = counters_of(two);
   CHECK(counter(counters, "decompositions") >= 1);
@@ -621,7 +621,7 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
     serial.write("deck.dat", deck);
     ranks.write("deck.dat", "backend mpi\n" + deck);
     REQUIRE(run_deck(serial, 0) == status);
-    REQUIRE(run_deck(ranks, 3) == status);
+    REQUIRE(run_deck(ranks, 3, kEqualShares) == status);
   };
   const std::string outputs =
       "print balls file b.csv\nprint contacts file c.csv\nsave a.sav\nprint counters file counters.txt\n";

@@ -17,6 +17,11 @@ inline const std::string kMpiEnv =
     "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
     "ASAN_OPTIONS=detect_leaks=0";
 
+// The decomposition's shares kept equal (TRUBAL_EQUAL_SHARES), where a test counts the lists
+// rebuilt on the parts: on a loaded machine the ranks' speeds would move the shares, and a change
+// of shares makes the parts afresh instead.
+inline const std::string kEqualShares = "TRUBAL_EQUAL_SHARES=1";
+
 // The time limit of a run of the cut matrix on ranks: a loaded machine takes a minute or two, a
 // hang forever.
 inline constexpr int kLongRunLimit = 600;

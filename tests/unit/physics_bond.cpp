@@ -260,6 +260,7 @@ TEST_CASE("bond: a breaking bonded block gives the same bits on every backend an
     StepPolicy policy;
     policy.share_rule = 1;     // shared even where one thread would be faster: the split is what is tested
     policy.split_rule = 1;     // in space where the backend keeps a list (a part of the decomposition a thread)
+    policy.follow_speeds = false;   // (a loaded machine's speeds would move the shares: parts made afresh, no rebuild on them)
     Model model = start;
     auto pipeline = make_pipeline(backend, threads, 0, &policy);
     REQUIRE(run_cycles(model, *pipeline, 300, {}).done == 300);
