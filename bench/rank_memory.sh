@@ -3,7 +3,8 @@
 # against its share of the serial run's peak (doc/distributed.md, "Memory per rank"): the BALL
 # lines; CYCLE 20; SAVE and PRINT contacts file; DAMP and CYCLE 10; with LONG, a long CYCLE
 # (LONG cycles: the sorts into space order every 1000 cycles and the rescue copies every 500 in
-# it). The deck has BACKEND mpi first and PRINT counters after each stage; a stage's figure is each rank's `rank<r>_peak_mib`
+# it); then, in a second run, RESTART of the serial run's save and CYCLE 10 after it. The decks
+# have BACKEND mpi first and PRINT counters after each stage; a stage's figure is each rank's `rank<r>_peak_mib`
 # there (the peak so far), read from the counters' files. Memory does not depend on the machine's
 # load: one run each.
 #
@@ -40,28 +41,36 @@ LONG=${LONG:-}
   echo "print counters file damp.txt"
   if [ -n "$LONG" ]; then echo "cycle $LONG"; echo "print counters file long.txt"; fi
 } > deck.dat
+printf 'backend mpi\nrestart ../p1/out.sav\nprint counters file restart.txt\ncycle 10\nprint counters file rcycle.txt\nsave again.sav\n' > restart.dat
 echo "$(head -1 fcc_*.xyz | cut -d' ' -f1) balls; CPU: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores"
 
-# run P: the deck on P ranks (1: one process, without mpirun) in its own folder.
+# run P DECK DIR: the deck on P ranks (1: one process, without mpirun) in the folder DIR<P>.
 run() {
-  mkdir -p "p$1" && cd "p$1"
-  if [ "$1" = 1 ]; then "$TRUBAL" ../deck.dat >out.txt 2>&1 || { echo "the serial run failed" >&2; tail -3 out.txt >&2; exit 1; }
-  else mpirun -np "$1" "$TRUBAL" ../deck.dat >out.txt 2>&1 || { echo "the run on $1 ranks failed" >&2; tail -3 out.txt >&2; exit 1; }
+  mkdir -p "$3$1" && cd "$3$1"
+  if [ "$1" = 1 ]; then "$TRUBAL" "../$2" >out.txt 2>&1 || { echo "the serial run of $2 failed" >&2; tail -3 out.txt >&2; exit 1; }
+  else mpirun -np "$1" "$TRUBAL" "../$2" >out.txt 2>&1 || { echo "the run of $2 on $1 ranks failed" >&2; tail -3 out.txt >&2; exit 1; }
   fi
   cd ..
 }
-# peaks P STAGE: each rank's peak MiB at that stage, space-separated (one process: its own).
+# peaks P STAGE: each rank's peak MiB at that stage, space-separated (one process: its own); the
+# stages after RESTART are the second run's (folder r<P>).
 peaks() {
-  if [ "$1" = 1 ]; then awk '$1 == "peak_mib" { printf "%.0f", $2 }' "p1/$2.txt"
+  local f="p$1/$2.txt"
+  case "$2" in restart|rcycle) f="r$1/$2.txt" ;; esac
+  if [ "$1" = 1 ]; then awk '$1 == "peak_mib" { printf "%.0f", $2 }' "$f"
   else awk '$1 ~ /^rank[0-9]+_peak_mib$/ { sub(/^rank/, "", $1); sub(/_peak_mib$/, "", $1); p[$1] = $2; n++ }
-            END { for (r = 0; r < n; r++) printf "%s%.0f", (r ? " " : ""), p[r] }' "p$1/$2.txt"
+            END { for (r = 0; r < n; r++) printf "%s%.0f", (r ? " " : ""), p[r] }' "$f"
   fi
 }
-run 1
+run 1 deck.dat p
+run 1 restart.dat r
 for p in $RANKS; do
-  run "$p"
+  run "$p" deck.dat p
+  run "$p" restart.dat r
   for f in out.sav contacts.csv; do cmp -s "p1/$f" "p$p/$f" || echo "$p ranks: $f differs from serial's" >&2; done
+  cmp -s r1/again.sav "r$p/again.sav" || echo "$p ranks: the save after RESTART differs from serial's" >&2
 done
+STAGES="$STAGES restart rcycle"
 printf '%-7s %7s' stage serial
 for p in $RANKS; do printf ' | %-28s' "$p ranks: 0, others, most/share"; done
 echo

@@ -45,8 +45,10 @@ const Command restart_command = {
     "the writing inside it); rows the save holds that the file lacks are written again. A file that is missing "
     "or holds other columns is started afresh with the rows the save kept. RESTART says what it did to each. A HIST given again with the same quantities, period and file "
     "(a deck that repeats its HIST after RESTART) goes on with the resumed history. A save of format 5 or older "
-    "restarts with no histories.",
+    "restarts with no histories. The file is read a buffer at a time (its checksum first, then the state), never "
+    "held whole in memory beside the model.",
     "restart dense.sav",
-    {}, run_restart};
+    // (Every rank runs it: rank 0 alone reads the file, the others take its light state: Session::restart.)
+    {}, run_restart, false, false, OnRanks::Parts};
 
 }  // namespace trubal

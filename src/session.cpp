@@ -804,7 +804,25 @@ void Session::save(const std::string& path) const {
 
 std::vector<std::string> Session::restart(const std::string& path) {
   auto histories = std::make_unique<History>();
-  Model loaded = load_model(path, histories.get());
+  Model loaded;
+  if (comm_size_ < 2) {
+    loaded = load_model(path, histories.get());
+  } else {
+    // Rank 0 alone reads the file, a buffer at a time, and holds the model; the others take its
+    // light state and the balls' ids, types and radii (light_everywhere), as after a command rank
+    // 0 ran alone, and the histories. A CYCLE then sends each rank its part. On a failure (every
+    // rank's) the model is kept.
+    comm::on_root([&] { loaded = load_model(path, histories.get()); }, "reading the save file");
+    std::string bytes;
+    comm::on_root([&] { bytes = history_bytes(*histories); }, "writing its histories for the other ranks");
+    comm::broadcast(bytes);
+    comm::together([&] {
+      if (!comm::root()) take_history_bytes(*histories, bytes);
+    }, "taking rank 0's histories");
+    // The model it replaces goes, its parts unsynced (nothing of it is read again).
+    pipeline_->drop_parts_unsynced(model_);
+    light_pending_ = true;
+  }
   model_ = std::move(loaded);
   pipeline_->clear_deferred();
   last_sizes_.reset();
@@ -815,6 +833,7 @@ std::vector<std::string> Session::restart(const std::string& path) {
   history_ = std::move(histories);
   dumps_.reset();
   pipeline_->invalidate();
+  light_everywhere();   // (under mpirun: the others' light state; a collective call)
   return history_->resume_files(model_.cycle);
 }
 

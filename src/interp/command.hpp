@@ -61,11 +61,12 @@ struct Context {
 // of the model (cycle/brick_step.hpp).
 enum class OnRanks : std::uint8_t {
   Whole,      // every rank gets the whole model first (Session::whole_everywhere), then runs it
-              // (RESTART, START, BACKEND, RENUMBER, TABLE)
+              // (START, BACKEND, RENUMBER, TABLE)
   RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
               // (PRINT, SAVE, PLOT)
   Parts,      // every rank runs it on the model as it is (CYCLE; the settings: DAMP, FRAC, TSTEP, GRAV;
-              // the cell's: STRAIN, SERVO; the commands that do not read the balls)
+              // the cell's: STRAIN, SERVO; the commands that do not read the balls; RESTART, which
+              // rank 0 alone reads and the others take the light state of: Session::restart)
   ModelOnZero,   // changes the model alone: rank 0 alone runs it, on its whole model, the parts' state
                  // given to it first (Session::model_on_zero); the others take rank 0's model but the
                  // balls' arrays before the next command of another kind (Session::light_everywhere)

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <type_traits>
@@ -499,6 +500,22 @@ std::string light_state(const Model& model) {
   return bytes;
 }
 
+std::string history_bytes(const History& history) {
+  std::string bytes;
+  Writer w(&bytes);
+  transfer_histories(w, const_cast<History&>(history));
+  w.flush();
+  return bytes;
+}
+
+void take_history_bytes(History& history, const std::string& bytes) {
+  History taken;
+  Reader r(bytes, "rank 0's histories");
+  transfer_histories(r, taken);
+  if (!r.at_end()) r.corrupt();
+  history = std::move(taken);
+}
+
 void take_light_state(Model& model, const std::string& bytes) {
   Model light;
   Reader r(bytes, "rank 0's model");
@@ -509,50 +526,58 @@ void take_light_state(Model& model, const std::string& bytes) {
 }
 
 Model load_model(const std::string& path, History* history) {
-  // Rank 0 reads the file, every rank restarts from its bytes (an error travels as "E" + message).
-  std::string data;
-  if (comm::root()) {
-    // Looked at before it is opened (through a link: a link to a save is a save): opening a FIFO
-    // waits for a writer for ever, and a device such as /dev/zero never ends.
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    const fs::file_type kind = fs::status(path, ec).type();
-    if (kind == fs::file_type::directory) {
-      data = fmt::format("E'{}' is a directory, not a save file", path);
-    } else if (kind == fs::file_type::fifo || kind == fs::file_type::character || kind == fs::file_type::block ||
-               kind == fs::file_type::socket) {
-      data = fmt::format("E'{}' is {}, not a save file", path,
-                         kind == fs::file_type::fifo ? "a FIFO (a named pipe: reading it waits for a writer)"
-                                                     : "a device or a socket");
-    } else {
-      std::ifstream in(path, std::ios::binary);
-      if (!in) data = fmt::format("Ecannot open the save file '{}'", path);
-      else data = "D" + std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    }
-  }
-  comm::broadcast(data);
-  if (data.empty() || data[0] == 'E') throw std::runtime_error(data.empty() ? "cannot read the save file" : data.substr(1));
-  data.erase(0, 1);
-  const std::size_t header_size = sizeof kMagic + sizeof kVersion + 2 * sizeof(std::uint64_t);
-  if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0)
+  // Looked at before it is opened (through a link: a link to a save is a save): opening a FIFO
+  // waits for a writer for ever, and a device such as /dev/zero never ends.
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_type kind = fs::status(path, ec).type();
+  if (kind == fs::file_type::directory) throw std::runtime_error(fmt::format("'{}' is a directory, not a save file", path));
+  if (kind == fs::file_type::fifo || kind == fs::file_type::character || kind == fs::file_type::block ||
+      kind == fs::file_type::socket)
+    throw std::runtime_error(fmt::format("'{}' is {}, not a save file", path,
+                                         kind == fs::file_type::fifo ? "a FIFO (a named pipe: reading it waits for a writer)"
+                                                                     : "a device or a socket"));
+  // The file is read twice, a buffer at a time: its checksum, then the model (never the file's
+  // bytes whole beside the model made of them).
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw std::runtime_error(fmt::format("cannot open the save file '{}'", path));
+  std::FILE* f = file.get();
+  const auto read_error = [&] {
+    return std::runtime_error(fmt::format("cannot read '{}': {} (not restarted)", path, std::strerror(errno)));
+  };
+  char header[sizeof kMagic + sizeof kVersion + 2 * sizeof(std::uint64_t)];
+  const std::size_t header_size = sizeof header;
+  const std::size_t got = std::fread(header, 1, header_size, f);
+  if (got < header_size && std::ferror(f)) throw read_error();
+  if (got < sizeof kMagic || std::memcmp(header, kMagic, sizeof kMagic) != 0)
     throw std::runtime_error(fmt::format("'{}' is not a trubal save file", path));
-  if (data.size() < header_size) throw std::runtime_error(fmt::format("'{}' is truncated (not restarted)", path));
+  if (got < header_size) throw std::runtime_error(fmt::format("'{}' is truncated (not restarted)", path));
   std::uint32_t version = 0;
   std::uint64_t size = 0, sum = 0;
-  std::memcpy(&version, data.data() + sizeof kMagic, sizeof version);
-  std::memcpy(&size, data.data() + sizeof kMagic + sizeof version, sizeof size);
-  std::memcpy(&sum, data.data() + sizeof kMagic + sizeof version + sizeof size, sizeof sum);
+  std::memcpy(&version, header + sizeof kMagic, sizeof version);
+  std::memcpy(&size, header + sizeof kMagic + sizeof version, sizeof size);
+  std::memcpy(&sum, header + sizeof kMagic + sizeof version + sizeof size, sizeof sum);
   if (version < kOldestVersion || version > kVersion)
     throw std::runtime_error(fmt::format("'{}' was saved by save format version {}; this trubal reads versions {} to {}",
                                          path, version, kOldestVersion, kVersion));
-  std::string body = data.substr(header_size);
-  if (body.size() < size)
-    throw std::runtime_error(
-        fmt::format("'{}' is truncated: {} of {} bytes (not restarted)", path, body.size(), size));
-  if (body.size() > size || fnv1a(body) != sum)
+  std::uint64_t body = 0, body_sum = kFnvStart;
+  {
+    std::vector<char> buf(std::size_t{1} << 20);
+    for (;;) {
+      const std::size_t n = std::fread(buf.data(), 1, buf.size(), f);
+      if (n == 0) break;
+      body += n;
+      if (body <= size) body_sum = fnv1a_more(body_sum, buf.data(), n);
+    }
+    if (std::ferror(f)) throw read_error();
+  }
+  if (body < size)
+    throw std::runtime_error(fmt::format("'{}' is truncated: {} of {} bytes (not restarted)", path, body, size));
+  if (body > size || body_sum != sum)
     throw std::runtime_error(fmt::format("'{}' is corrupted: its checksum does not match (not restarted)", path));
+  if (std::fseek(f, static_cast<long>(header_size), SEEK_SET) != 0) throw read_error();
   Model m;
-  Reader r(body, path);
+  Reader r(f, size, path);
   transfer(r, m, version);
   History histories;
   if (version >= 6) transfer_histories(r, histories);

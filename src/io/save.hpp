@@ -70,5 +70,9 @@ Model load_model(const std::string& path, History* history = nullptr);
 // SAVE keeps is left behind. light_state changes nothing (the bulk is set aside while it writes).
 std::string light_state(const Model& model);
 void take_light_state(Model& model, const std::string& bytes);
+// The histories' tables (settings and rows) as bytes in SAVE's layout, and the tables made of them:
+// what the ranks other than 0 take of the histories rank 0 alone read (Session::restart).
+std::string history_bytes(const History& history);
+void take_history_bytes(History& history, const std::string& bytes);
 
 }  // namespace trubal

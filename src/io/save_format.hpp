@@ -4,9 +4,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -45,12 +47,14 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'B', 'A', 'L', 'S', 'V'};
 constexpr std::uint32_t kVersion = 13;
 constexpr std::uint32_t kOldestVersion = 2;
 
-// FNV-1a, 64 bit: enough to tell a damaged file from a good one.
-inline std::uint64_t fnv1a(const std::string& data) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
+// FNV-1a, 64 bit: enough to tell a damaged file from a good one. fnv1a_more goes on from `h`
+// (the sum of the bytes before) over n more.
+constexpr std::uint64_t kFnvStart = 1469598103934665603ull;
+inline std::uint64_t fnv1a_more(std::uint64_t h, const char* p, std::size_t n) {
+  for (std::size_t k = 0; k < n; ++k) h = (h ^ static_cast<unsigned char>(p[k])) * 1099511628211ull;
   return h;
 }
+inline std::uint64_t fnv1a(const std::string& data) { return fnv1a_more(kFnvStart, data.data(), data.size()); }
 
 static_assert(sizeof(Damping) == sizeof(DampKind) + sizeof(std::uint32_t) + 5 * sizeof(double), "Damping has hidden padding");
 static_assert(sizeof(Material) == 12 * sizeof(double) + 8, "Material has hidden padding");
@@ -112,7 +116,7 @@ class Writer {
  private:
   static constexpr std::size_t kBuffer = std::size_t{1} << 20;
   void bytes(const char* p, std::size_t n) {
-    for (std::size_t k = 0; k < n; ++k) sum_ = (sum_ ^ static_cast<unsigned char>(p[k])) * 1099511628211ull;
+    sum_ = fnv1a_more(sum_, p, n);
     size_ += n;
     if (buf_.size() + n <= kBuffer) {
       buf_.append(p, n);
@@ -141,18 +145,18 @@ class Writer {
   int fd_;
   std::string* sink_ = nullptr;
   std::string buf_;
-  std::uint64_t size_ = 0, sum_ = 1469598103934665603ull;
+  std::uint64_t size_ = 0, sum_ = kFnvStart;
   int error_ = 0;
 };
 
+// Reads a save's body from memory (light_state's bytes), or from a file a buffer at a time (a
+// million balls' body is over a GB: never held whole beside the model made of it).
 class Reader {
  public:
-  Reader(const std::string& data, const std::string& path) : data_(data), path_(path) {}
-  template <class T> void pod(T& v) {
-    need(sizeof v);
-    std::memcpy(&v, data_.data() + pos_, sizeof v);
-    pos_ += sizeof v;
-  }
+  Reader(const std::string& data, const std::string& path) : mem_(data.data()), size_(data.size()), path_(path) {}
+  // `size` bytes of body from the file's offset now (which the caller has checked are there).
+  Reader(std::FILE* file, std::uint64_t size, const std::string& path) : file_(file), size_(size), path_(path) {}
+  template <class T> void pod(T& v) { take(&v, sizeof v); }
   // A bool is one byte, 0 or 1: any other byte would be a bool with no value (undefined behaviour).
   void pod(bool& v) {
     std::uint8_t byte = 0;
@@ -166,31 +170,64 @@ class Reader {
   template <class T> void vec(std::vector<T>& v) {
     std::uint64_t n = 0;
     pod(n);
-    if (n > (data_.size() - pos_) / sizeof(T)) corrupt();
+    if (n > (size_ - pos_) / sizeof(T)) corrupt();
     v.resize(n);
-    if (n) std::memcpy(v.data(), data_.data() + pos_, n * sizeof(T));
-    pos_ += n * sizeof(T);
+    if (n) take(v.data(), n * sizeof(T));
   }
   void str(std::string& s) {
     std::uint64_t n = 0;
     pod(n);
     need(n);
-    s.assign(data_.data() + pos_, n);
-    pos_ += n;
+    s.resize(n);
+    take(s.data(), n);
   }
-  bool at_end() const { return pos_ == data_.size(); }
+  bool at_end() const { return pos_ == size_; }
   const std::string& path() const { return path_; }
   [[noreturn]] void corrupt() const {
     throw std::runtime_error(fmt::format("'{}' is damaged: its contents do not add up (not restarted)", path_));
   }
 
  private:
-  void need(std::size_t n) const {
-    if (n > data_.size() - pos_) corrupt();
+  void need(std::uint64_t n) const {
+    if (n > size_ - pos_) corrupt();
   }
-  const std::string& data_;
+  void take(void* to, std::size_t n) {
+    need(n);
+    char* out = static_cast<char*>(to);
+    if (mem_) {
+      std::memcpy(out, mem_ + pos_, n);
+      pos_ += n;
+      return;
+    }
+    while (n > 0) {
+      if (at_ == buf_.size()) refill();
+      const std::size_t k = std::min(n, buf_.size() - at_);
+      std::memcpy(out, buf_.data() + at_, k);
+      at_ += k;
+      out += k;
+      n -= k;
+      pos_ += k;
+    }
+  }
+  void refill() {
+    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(kBuffer, size_ - read_));
+    buf_.resize(want);
+    const std::size_t got = want > 0 ? std::fread(buf_.data(), 1, want, file_) : 0;
+    if (got != want)   // (the file was checked whole: it changed, or the disk failed, since)
+      throw std::runtime_error(fmt::format("cannot read '{}': {} (not restarted)", path_,
+                                           std::ferror(file_) ? std::strerror(errno) : "it was cut short while read"));
+    read_ += got;
+    at_ = 0;
+  }
+  static constexpr std::size_t kBuffer = std::size_t{1} << 20;
+  const char* mem_ = nullptr;   // the body in memory, or
+  std::FILE* file_ = nullptr;   // the file it is read from
+  std::uint64_t size_ = 0;      // the body's length
   std::string path_;
-  std::size_t pos_ = 0;
+  std::uint64_t pos_ = 0;       // the bytes taken
+  std::vector<char> buf_;       // the file's bytes read, at_ of them taken
+  std::size_t at_ = 0;
+  std::uint64_t read_ = 0;      // the body's bytes read from the file
 };
 
 }  // namespace trubal::save_bytes

@@ -370,6 +370,55 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   CHECK(counter(counters, "rank1_model_held_mib") < 0.3 * counter(counters, "rank0_model_held_mib"));
 }
 
+TEST_CASE("distributed: RESTART read by rank 0 alone, the others holding its light state, gives the serial bits", "[mpi][system]") {
+  // A resting FCC block of 37,800 balls (a periodic cell), its 226,800 contacts and a history
+  // saved at cycle 20, restarted on 3 ranks: rank 0 alone reads the file, a buffer at a time; the
+  // others take the model's light state, the balls' ids, types and radii (20 bytes a ball) and
+  // the histories, and the CYCLE after sends each its part. Before, rank 0 sent the others the
+  // file's bytes and each made the whole model of them: every rank's peak was rank 0's.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  TempDir first;
+  first.write("deck.dat", "start 30 30 29.698484809834994\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\n"
+                          "lattice fcc 1 30 30 42\nhist energy every 5 file h.csv\ncycle 20\nsave s.sav\n");
+  REQUIRE(run_deck(first, 0) == 0);
+  const std::string save = slurp(first.path() / "s.sav"), history = slurp(first.path() / "h.csv");
+  const std::string rest = "print counters file r.txt\ncycle 30\nsave t.sav\n" + std::string(kOutputs) + kCounters;
+  TempDir serial, ranks;
+  for (TempDir* dir : {&serial, &ranks}) {
+    dir->write("s.sav", save);
+    dir->write("h.csv", history);
+  }
+  serial.write("deck.dat", "restart s.sav\n" + rest);
+  ranks.write("deck.dat", "backend mpi\nrestart s.sav\n" + rest);
+  REQUIRE(run_deck(serial, 0) == 0);
+  REQUIRE(run_deck(ranks, 3) == 0);
+  const std::string out = slurp(ranks.path() / "out.txt");
+  INFO(out);
+  auto restarted = [](const std::string& text) {
+    const auto at = text.find("restarted from");
+    return at == std::string::npos ? std::string() : text.substr(at, text.find('\n', at) - at);
+  };
+  CHECK(!restarted(out).empty());
+  CHECK(restarted(out) == restarted(slurp(serial.path() / "out.txt")));
+  for (const char* file : {"balls.csv", "contacts.csv", "h.csv", "t.sav"}) {
+    INFO(file);
+    CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+  }
+  CHECK(lines_of(slurp(ranks.path() / "h.csv")).size() > 10);   // (the saved rows and the CYCLE's after)
+  // After RESTART: rank 0 holds the model (216 bytes a ball and its pairs), the others the light
+  // state alone, and their peaks are below rank 0's by most of its model.
+  const Counters after = read_counters(ranks.path() / "r.txt");
+  const double balls = 37800, mib = 1 << 20;
+  const double whole = counter(after, "rank0_model_held_mib");
+  CHECK(whole * mib / balls > 150);
+  for (const char* rank : {"rank1", "rank2"}) {
+    INFO(rank);
+    CHECK(counter(after, std::string(rank) + "_model_held_mib") * mib / balls < 25);
+    CHECK(counter(after, std::string(rank) + "_peak_mib") < counter(after, "rank0_peak_mib") - 0.5 * whole);
+  }
+  CHECK(counter(counters_of(ranks), "decompositions") >= 1);
+}
+
 TEST_CASE("distributed: DAMP, FRAC, TSTEP, GRAV, STRAIN and SERVO between CYCLEs leave the ranks their parts, with the serial bits",
           "[mpi][system]") {
   // A squeezed periodic cell whose settings change between nine CYCLEs: each setting's command runs
