@@ -88,11 +88,6 @@ static void run_print(Context& ctx, Args& args) {
     case 15: args.done(); print_counters(ctx, file); return;
     case 1: print_balls(ctx, read_range(args, ctx.session), file); return;
     case 2: print_contacts(ctx, read_range(args, ctx.session), file); return;
-  }
-  const Model& m = ctx.session.model();
-  switch (item) {
-    case 16: args.done(); print_sample(ctx); return;
-    case 17: print_bonds(ctx, read_range(args, ctx.session), file); return;
     case 3: {
       double volume = 0;
       if (args.accept("volume")) volume = args.real("volume");
@@ -100,14 +95,20 @@ static void run_print(Context& ctx, Args& args) {
       ctx.session.require_started();
       if (sphere) {
         if (volume > 0) args.fail("`volume` goes with the whole space's stress, not a measurement sphere's");
-        const SphereMeasurement sm = measure_sphere(m, *sphere);
+        const SphereMeasurement sm = measure_sphere(ctx.session.model(), *sphere);
         print_sphere_header(ctx, *sphere, sm);
         print_sym(ctx, "stress", sm.stress);
         return;
       }
-      print_sym(ctx, "stress", average_stress(m, volume > 0 ? volume : ctx.session.stress_volume()));
+      // (Under mpirun from the ranks' parts where they hold the model: Session::average_stress_in.)
+      print_sym(ctx, "stress", ctx.session.average_stress_in(volume > 0 ? volume : ctx.session.stress_volume()));
       return;
     }
+  }
+  const Model& m = ctx.session.model();
+  switch (item) {
+    case 16: args.done(); print_sample(ctx); return;
+    case 17: print_bonds(ctx, read_range(args, ctx.session), file); return;
     case 4: {
       args.done();
       const auto& e = m.space.strain;

@@ -682,6 +682,11 @@ const Model& Session::model_but_results() const {
   return model_;
 }
 
+Sym6 Session::average_stress_in(double volume) const {
+  if (pipeline_->serving() && pipeline_->whole_hollow(model_)) return pipeline_->request_stress(model_).over(volume);
+  return average_stress(model(), volume);
+}
+
 Session::StateCounts Session::state_counts() const {
   if (pipeline_->serving() && pipeline_->whole_hollow(model_)) {
     const Pipeline::PartCounts c = pipeline_->request_part_counts(model_);

@@ -23,6 +23,7 @@
 #include "model/held_balls.hpp"
 #include "model/model.hpp"
 #include "model/range.hpp"
+#include "physics/measure.hpp"
 #include "physics/overlap.hpp"
 #include "physics/scene.hpp"
 
@@ -288,6 +289,10 @@ class Session {
     std::optional<BallFlags> flags;
   };
   StateCounts state_counts() const;
+  // The average stress in `volume` (physics/measure.hpp average_stress): under mpirun, rank 0
+  // running a command the others serve, from the kept parts' exact sums where rank 0's whole model
+  // is hollow (as state_counts: the whole model is not gathered); else from model().
+  Sym6 average_stress_in(double volume) const;
   // Ball array `of` of the model (one of its arrays of reals): itself, or streamed from the kept
   // parts into `into` where rank 0's whole model is hollow (as state_counts).
   const std::vector<double>& ball_array(const std::vector<double>& of, std::vector<double>& into) const;

@@ -48,6 +48,7 @@
 
 #include "cycle/kernels.hpp"
 #include "physics/cell.hpp"
+#include "physics/measure.hpp"
 #include "support/exact_sum.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
@@ -233,6 +234,10 @@ class BrickStep {
   // count beyond `threshold`, then its place in the whole model's tables' order (wall, the whole
   // model's ball i or ball, ball j or wall, the image) for the caller's choice among the members.
   std::vector<double> own_largest_overlap(const Model& full, double threshold);
+  // Love's formula's sums (physics/measure.hpp stress_sums) over the pairs and wall contacts this
+  // member owns, from the results the part holds, with full's space and walls: exact, so that
+  // their total over the members is the whole model's.
+  StressSums own_stress(const Model& full);
   // The part's state streamed to rank 0 in the whole model's order (SAVE where rank 0's whole
   // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
   // the pairs this member owns that SAVE keeps (touching in the results the part holds, where

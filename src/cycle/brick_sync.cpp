@@ -318,6 +318,12 @@ std::vector<double> BrickStep::own_counts() const {
   return {touching, wall_touching, bridges, wall_bridges, spinning, applied, moments};
 }
 
+StressSums BrickStep::own_stress(const Model& full) {
+  part_.space = full.space;   // (as own_largest_overlap: the cell and the walls as they are now)
+  part_.walls = full.walls;
+  return stress_sums(part_, &owned_pairs_, &owned_walls_);
+}
+
 std::vector<double> BrickStep::own_largest_overlap(const Model& full, double threshold) {
   part_.space = full.space;   // (a step since the part's last: the cell and the walls moved on)
   part_.walls = full.walls;

@@ -15,6 +15,7 @@
 
 #include "cycle/pair_list.hpp"
 #include "cycle/run.hpp"
+#include "cycle/sum_exchange.hpp"
 #include "cycle/wall_list.hpp"
 #include "support/comm.hpp"
 #include "model/wall_shape.hpp"
@@ -224,7 +225,7 @@ namespace {
 // What rank 0 asks of the others while it runs a command alone (Pipeline::serve_root).
 enum RootRequest : std::int64_t {
   kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5,
-  kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12
+  kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12, kStress = 13
 };
 }  // namespace
 
@@ -285,6 +286,30 @@ LargestOverlap Pipeline::largest_overlap_on_parts(const Model& model, double thr
     out.wall = best[3] != 0;
   }
   return out;
+}
+
+StressSums Pipeline::stress_on_parts(const Model& model) {
+  if (!parts_live(model)) return stress_sums(model);
+  StressSums own = bricks().own_stress(model);
+  std::vector<double> mine, all;
+  for (ExactSum& e : own.s) pack(e, mine);
+  comm::allgather(mine, all);
+  StressSums total;
+  const double* in = all.data();
+  for (std::size_t r = 0; r < all.size() / mine.size(); ++r)
+    for (ExactSum& e : total.s) {
+      ExactSum rank_sum;
+      unpack(rank_sum, in);
+      e.add(rank_sum);
+    }
+  return total;
+}
+
+StressSums Pipeline::request_stress(Model& model) {
+  std::int64_t word = kStress;
+  comm::broadcast(word);
+  results_onto_parts(model, *this);
+  return stress_on_parts(model);
 }
 
 Pipeline::PartCounts Pipeline::request_part_counts(Model& model) {
@@ -360,7 +385,7 @@ void Pipeline::serve_root(Model& model) {
     std::int64_t array = 0;
     if (word == kResultArray || word == kStream || word == kContactRows) comm::broadcast(array);
     else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts && word != kPlacePairs &&
-             word != kPlaceWalls && word != kFreeSaved && word != kBallRows)
+             word != kPlaceWalls && word != kFreeSaved && word != kBallRows && word != kStress)
       throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
     // (A failure here is every rank's, in the collective calls: rank 0's command reports it.)
     try {
@@ -379,6 +404,10 @@ void Pipeline::serve_root(Model& model) {
       results_onto_parts(model, *this);
       if (word == kCounts) {
         part_counts(model);
+        continue;
+      }
+      if (word == kStress) {
+        stress_on_parts(model);
         continue;
       }
       if (word == kGatherResults) gather_part_results(model);

@@ -157,6 +157,12 @@ class Pipeline {
   // pairs and wall contacts, ties to the first in the whole model's tables (a collective call where
   // parts_live, every rank given the answer; elsewhere rank 0's whole model's).
   LargestOverlap largest_overlap_on_parts(const Model& model, double threshold);
+  // Love's formula's sums (physics/measure.hpp stress_sums) over the kept parts, each rank's own
+  // pairs and wall contacts, merged exactly: the whole model's bits (a collective call where
+  // parts_live, every rank given the sums). request_stress: rank 0, serving(), the results made on
+  // the parts first where a CYCLE deferred them (the others in serve_root).
+  StressSums stress_on_parts(const Model& model);
+  StressSums request_stress(Model& model);
   // Rank 0, serving(), where whole_hollow: the parts' state streamed for SAVE, every rank taking
   // part (the others in serve_root): the pairs SAVE keeps placed in the whole order (touching in
   // the results the parts hold, or with history) and the wall contacts, their counts; array k of a

@@ -33,38 +33,6 @@ void add_contact_strain(double& sum, bool hertz, double kn, double u, double fsx
 
 }  // namespace
 
-// The capillary bridges' part of the stress: each bridge the last force pass left (the state it
-// pulled with), its force on j, -F n, times the branch vector i -> j; at a wall, the force on the
-// wall times the branch from the ball's centre to the wall. The pass's gaps are not kept (a pair
-// apart has no results), so the gaps are the positions' now, one step on from that pass.
-static void add_bridge_stress(const Model& model, Sym6& s) {
-  const ContactTable& c = model.contacts;
-  const Balls& b = model.balls;
-  if (!has_bridges(model)) return;
-  const CellFrame cell = cell_frame(model.space);
-  for (std::size_t p = 0; p < c.size() && c.bridge.size() == c.size(); ++p) {
-    if (c.bridge[p] == 0) continue;
-    const std::size_t i = c.i[p], j = c.j[p];
-    const auto [dx, dy, dz] = pair_separation(cell, model.space.periodic, b, c, p);
-    const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (!(d > 0)) continue;
-    const double f = -bridge_force(pair_bridge(model, i, j), b.rad[i], b.rad[j], d - b.rad[i] - b.rad[j]) / d;
-    add_dyad(s, f * dx, f * dy, f * dz, dx, dy, dz);
-  }
-  const WallContacts& w = model.wall_contacts;
-  for (std::size_t p = 0; p < w.size() && w.bridge.size() == w.size(); ++p) {
-    if (w.bridge[p] == 0 || w.ball[p] >= b.size() || w.wall[p] >= model.walls.size()) continue;
-    const std::size_t i = w.ball[p];
-    const Vec3 centre{b.x[i], b.y[i], b.z[i]};
-    const WallLane lane = wall_lane(model.walls[w.wall[p]], centre, b.rad[i]);
-    const double d = std::sqrt(lane.dx * lane.dx + lane.dy * lane.dy + lane.dz * lane.dz);
-    if (!(d > 0)) continue;
-    const double f = -bridge_force(wall_bridge(model, i, w.wall[p]), lane.r, lane.r, d - 2 * lane.r) / d;
-    add_dyad(s, f * lane.dx, f * lane.dy, f * lane.dz, lane.point[0] - centre[0], lane.point[1] - centre[1],
-             lane.point[2] - centre[2]);
-  }
-}
-
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz) {
   s[0] += ax * bx; s[1] += ay * by; s[2] += az * bz;
   s[3] += 0.5 * (ax * by + ay * bx);
@@ -72,29 +40,95 @@ void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, do
   s[5] += 0.5 * (ay * bz + az * by);
 }
 
-Sym6 average_stress(const Model& model, double volume) {
-  Sym6 s{};
+namespace {
+
+// The symmetric part of a (x) b, in Sym6 order, into six exact sums (each term as add_dyad's).
+struct DyadSums {
+  explicit DyadSums(std::array<ExactSum, 6>& s) : xx(s[0]), yy(s[1]), zz(s[2]), xy(s[3]), xz(s[4]), yz(s[5]) {}
+  void add(double ax, double ay, double az, double bx, double by, double bz) {
+    xx.add(ax * bx); yy.add(ay * by); zz.add(az * bz);
+    xy.add(0.5 * (ax * by + ay * bx));
+    xz.add(0.5 * (ax * bz + az * bx));
+    yz.add(0.5 * (ay * bz + az * by));
+  }
+  ExactSum::Stream xx, yy, zz, xy, xz, yz;
+};
+
+// f(p) for the rows given (every row of n where null).
+template <class F> void each_row(const std::vector<std::uint32_t>* rows, std::size_t n, F&& f) {
+  if (!rows) {
+    for (std::size_t p = 0; p < n; ++p) f(p);
+    return;
+  }
+  for (std::uint32_t p : *rows)
+    if (p < n) f(p);
+}
+
+}  // namespace
+
+Sym6 StressSums::over(double volume) const {
+  Sym6 out;
+  for (int k = 0; k < 6; ++k) out[k] = s[k].value() / volume;
+  return out;
+}
+
+void StressSums::add(const StressSums& o) {
+  for (int k = 0; k < 6; ++k) s[k].add(o.s[k]);
+}
+
+StressSums stress_sums(const Model& model, const std::vector<std::uint32_t>* pairs, const std::vector<std::uint32_t>* walls) {
+  StressSums out;
+  DyadSums d(out.s);
   const ContactTable& c = model.contacts;
   const Balls& b = model.balls;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!c.touching(p)) continue;
-    // Force on j times the branch vector i -> j: positive when the pair is pushed apart, so
-    // compression comes out positive (soil-mechanics sign).
-    const double d = b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p];
-    add_dyad(s, c.fx[p], c.fy[p], c.fz[p], d * c.nx[p], d * c.ny[p], d * c.nz[p]);
-  }
-  add_bridge_stress(model, s);
-  // Ball-wall contacts: the force on the wall and the branch from the ball's centre to the contact point.
+  // Force on j times the branch vector i -> j: positive when the pair is pushed apart, so
+  // compression comes out positive (soil-mechanics sign).
+  each_row(pairs, c.size(), [&](std::size_t p) {
+    if (!c.touching(p)) return;
+    const double l = b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p];
+    d.add(c.fx[p], c.fy[p], c.fz[p], l * c.nx[p], l * c.ny[p], l * c.nz[p]);
+  });
+  // The capillary bridges' part: each bridge the last force pass left (the state it pulled with),
+  // its force on j, -F n, times the branch vector i -> j; at a wall, the force on the wall times
+  // the branch from the ball's centre to the wall. The pass's gaps are not kept (a pair apart has
+  // no results), so the gaps are the positions' now, one step on from that pass.
   const WallContacts& w = model.wall_contacts;
+  if (has_bridges(model)) {
+    const CellFrame cell = cell_frame(model.space);
+    if (c.bridge.size() == c.size())
+      each_row(pairs, c.size(), [&](std::size_t p) {
+        if (c.bridge[p] == 0) return;
+        const std::size_t i = c.i[p], j = c.j[p];
+        const auto [dx, dy, dz] = pair_separation(cell, model.space.periodic, b, c, p);
+        const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (!(dist > 0)) return;
+        const double f = -bridge_force(pair_bridge(model, i, j), b.rad[i], b.rad[j], dist - b.rad[i] - b.rad[j]) / dist;
+        d.add(f * dx, f * dy, f * dz, dx, dy, dz);
+      });
+    if (w.bridge.size() == w.size())
+      each_row(walls, w.size(), [&](std::size_t p) {
+        if (w.bridge[p] == 0 || w.ball[p] >= b.size() || w.wall[p] >= model.walls.size()) return;
+        const std::size_t i = w.ball[p];
+        const Vec3 centre{b.x[i], b.y[i], b.z[i]};
+        const WallLane lane = wall_lane(model.walls[w.wall[p]], centre, b.rad[i]);
+        const double dist = std::sqrt(lane.dx * lane.dx + lane.dy * lane.dy + lane.dz * lane.dz);
+        if (!(dist > 0)) return;
+        const double f = -bridge_force(wall_bridge(model, i, w.wall[p]), lane.r, lane.r, dist - 2 * lane.r) / dist;
+        d.add(f * lane.dx, f * lane.dy, f * lane.dz, lane.point[0] - centre[0], lane.point[1] - centre[1],
+              lane.point[2] - centre[2]);
+      });
+  }
+  // Ball-wall contacts: the force on the wall and the branch from the ball's centre to the contact point.
   if (w.fx.size() == w.size() && w.overlap.size() == w.size())
-    for (std::size_t p = 0; p < w.size(); ++p) {
-      if (w.state[p] == 0 || w.ball[p] >= b.size()) continue;
-      const double d = b.rad[w.ball[p]] - w.overlap[p];
-      add_dyad(s, w.fx[p], w.fy[p], w.fz[p], d * w.nx[p], d * w.ny[p], d * w.nz[p]);
-    }
-  for (double& v : s) v /= volume;
-  return s;
+    each_row(walls, w.size(), [&](std::size_t p) {
+      if (w.state[p] == 0 || w.ball[p] >= b.size()) return;
+      const double l = b.rad[w.ball[p]] - w.overlap[p];
+      d.add(w.fx[p], w.fy[p], w.fz[p], l * w.nx[p], l * w.ny[p], l * w.nz[p]);
+    });
+  return out;
 }
+
+Sym6 average_stress(const Model& model, double volume) { return stress_sums(model).over(volume); }
 
 double EnergyReport::total() const {
   return kinetic_translation + kinetic_rotation + strain + potential + friction_work + rolling_work + damping_work +

@@ -3,17 +3,31 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "model/model.hpp"
+#include "support/exact_sum.hpp"
 
 namespace trubal {
 
 using Sym6 = std::array<double, 6>;   // xx yy zz xy xz yz
 
-// Average stress (1/V) sum_c f_a l_b over the contacts (compression positive).
 // Adds the symmetric part of a (x) b to s, in Sym6 order.
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz);
+// Love's formula's sums over the contacts, sum_c f_a l_b (the force on j by the branch vector i ->
+// j; a wall contact's force on the wall by the branch from the ball's centre to the contact point;
+// the capillary bridges' forces likewise), each component an exact sum (support/exact_sum.hpp), so
+// that the total depends neither on the contacts' order nor on how they are shared among ranks.
+// `pairs`, `walls`: the rows summed (every one where null): a rank's own on its part.
+struct StressSums {
+  std::array<ExactSum, 6> s;
+  Sym6 over(double volume) const;   // the average stress in that volume (compression positive)
+  void add(const StressSums& o);
+};
+StressSums stress_sums(const Model& model, const std::vector<std::uint32_t>* pairs = nullptr,
+                       const std::vector<std::uint32_t>* walls = nullptr);
+// Average stress (1/V) sum_c f_a l_b over the contacts (compression positive).
 Sym6 average_stress(const Model& model, double volume);
 
 // A triaxial test's stresses, compression positive: the deviator q = sigma1 - sigma3 and the mean

@@ -362,7 +362,8 @@ damp local 0.7
 
 TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads the parts: serial's bytes", "[mpi][system]") {
   // A CYCLE's end leaves rank 0's whole model hollow (BrickStep::hollow_whole): PRINT info and
-  // counters then sum their counts over the parts, PRINT balls and contacts merge the parts' rows by
+  // counters then sum their counts over the parts, PRINT stress its exact sums over the parts (the
+  // contacts', the wall contacts' and the bridges'), PRINT balls and contacts merge the parts' rows by
   // id, SAVE streams the parts' arrays a chunk at a time, and CYCLE's overlap warning and its next
   // start (a load, a spin: the kernel's features; the contact-free step) read the parts. Two scenes
   // on 3 ranks against serial: balls falling in a box onto a wall, one pressed into it by an applied
@@ -370,7 +371,7 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
   // capillary bridges.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string reads =
-      "print counters file counters.txt\nprint info\nprint contacts\nsave a.sav\nprint balls file b.csv\n"
+      "print stress\nprint stress volume 2e-6\nprint counters file counters.txt\nprint info\nprint contacts\nsave a.sav\nprint balls file b.csv\n"
       "print contacts file c.csv\ncycle 40\nprint contacts file c2.csv\nsave c.sav\nprint balls file b2.csv\n";
   const std::string box =
       "start box 0 0.01 0 0.01 0 0.01 destroy\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\nwall id 7 plane 0 0 0.0001 0 0 1\n"
@@ -409,7 +410,7 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
       std::string kept;
       for (const std::string& line : lines_of(text))
         for (const char* start : {"contacts:", "walls:", "bridges intact:", "physics:", "kernel:", "ball order:", "balls:",
-                                  "deck.dat:8: warning: at cycle"})
+                                  "deck.dat:8: warning: at cycle", "stress:"})
           if (line.rfind(start, 0) == 0) kept += line + '\n';
       const auto rows = text.find("overlap          fn");
       kept += rows == std::string::npos ? "" : text.substr(rows, text.find("trubal>", rows) - rows);
@@ -417,6 +418,7 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
     };
     CHECK(model_lines(out) == model_lines(serial_out));
     if (scene == wet) CHECK(model_lines(serial_out).find("bridges intact") != std::string::npos);
+    CHECK(model_lines(serial_out).find("stress: xx") != std::string::npos);
   }
 }
 
