@@ -104,6 +104,34 @@ static void run_print(Context& ctx, Args& args) {
       print_sym(ctx, "stress", ctx.session.average_stress_in(volume > 0 ? volume : ctx.session.stress_volume()));
       return;
     }
+    // (Of the whole space, under mpirun from the ranks' parts where they hold the model:
+    // Session::whole_contact_sums.)
+    case 6: {
+      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
+        const SphereMeasurement sm = measure_sphere(ctx.session.model(), *sphere);
+        print_sphere_header(ctx, *sphere, sm);
+        print_sym(ctx, "fabric", sm.fabric);
+        return;
+      }
+      print_sym(ctx, "fabric", ctx.session.whole_contact_sums().fabric_tensor());
+      return;
+    }
+    case 7: {
+      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
+        const SphereMeasurement sm = measure_sphere(ctx.session.model(), *sphere);
+        print_sphere_header(ctx, *sphere, sm);
+        ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n", sm.coordination,
+                               sm.sliding, sm.contacts);
+        return;
+      }
+      const ContactSums c = ctx.session.whole_contact_sums();
+      ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n",
+                             c.coordination(ctx.session.state().balls.size()), c.sliding_fraction(),
+                             static_cast<std::size_t>(c.touching));
+      const Unbalanced u = c.unbalanced_ratio();
+      ctx.out << fmt::format("unbalanced-force ratio: mean {:.4g}  max {:.4g}\n", u.mean_ratio, u.max_ratio);
+      return;
+    }
   }
   const Model& m = ctx.session.model();
   switch (item) {
@@ -135,30 +163,6 @@ static void run_print(Context& ctx, Args& args) {
           has_bridges(m) || e.capillary_work != 0 ? fmt::format("capillary work: {:.8g}\n", e.capillary_work) : "",
           !m.bonds.empty() || e.bond_break_work != 0 ? fmt::format("bond breakage: {:.8g}\n", e.bond_break_work) : "",
           e.total());
-      return;
-    }
-    case 6: {
-      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
-        const SphereMeasurement sm = measure_sphere(m, *sphere);
-        print_sphere_header(ctx, *sphere, sm);
-        print_sym(ctx, "fabric", sm.fabric);
-        return;
-      }
-      print_sym(ctx, "fabric", fabric_tensor(m));
-      return;
-    }
-    case 7: {
-      if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
-        const SphereMeasurement sm = measure_sphere(m, *sphere);
-        print_sphere_header(ctx, *sphere, sm);
-        ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n", sm.coordination,
-                               sm.sliding, sm.contacts);
-        return;
-      }
-      ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n",
-                             coordination_number(m), sliding_fraction(m), contact_count(m));
-      auto u = unbalanced_force(m);
-      ctx.out << fmt::format("unbalanced-force ratio: mean {:.4g}  max {:.4g}\n", u.mean_ratio, u.max_ratio);
       return;
     }
     case 8: {

@@ -687,6 +687,11 @@ Sym6 Session::average_stress_in(double volume) const {
   return average_stress(model(), volume);
 }
 
+ContactSums Session::whole_contact_sums() const {
+  if (pipeline_->serving() && pipeline_->whole_hollow(model_)) return pipeline_->request_contact_sums(model_);
+  return contact_sums(model());
+}
+
 Session::StateCounts Session::state_counts() const {
   if (pipeline_->serving() && pipeline_->whole_hollow(model_)) {
     const Pipeline::PartCounts c = pipeline_->request_part_counts(model_);

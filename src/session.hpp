@@ -293,6 +293,10 @@ class Session {
   // running a command the others serve, from the kept parts' exact sums where rank 0's whole model
   // is hollow (as state_counts: the whole model is not gathered); else from model().
   Sym6 average_stress_in(double volume) const;
+  // The contact measures' sums (physics/measure.hpp contact_sums: fabric, coordination, sliding,
+  // unbalanced force) of the whole space, as average_stress_in: from the parts where rank 0's
+  // whole model is hollow.
+  ContactSums whole_contact_sums() const;
   // Ball array `of` of the model (one of its arrays of reals): itself, or streamed from the kept
   // parts into `into` where rank 0's whole model is hollow (as state_counts).
   const std::vector<double>& ball_array(const std::vector<double>& of, std::vector<double>& into) const;

@@ -238,6 +238,9 @@ class BrickStep {
   // member owns, from the results the part holds, with full's space and walls: exact, so that
   // their total over the members is the whole model's.
   StressSums own_stress(const Model& full);
+  // The contact measures' sums (physics/measure.hpp contact_sums) over the pairs, wall contacts
+  // and balls this member owns, from the results the part holds.
+  ContactSums own_contact_sums() const { return contact_sums(part_, &owned_pairs_, &owned_walls_, &owned_); }
   // The part's state streamed to rank 0 in the whole model's order (SAVE where rank 0's whole
   // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
   // the pairs this member owns that SAVE keeps (touching in the results the part holds, where

@@ -225,7 +225,8 @@ namespace {
 // What rank 0 asks of the others while it runs a command alone (Pipeline::serve_root).
 enum RootRequest : std::int64_t {
   kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5,
-  kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12, kStress = 13
+  kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12, kStress = 13,
+  kContactSums = 14
 };
 }  // namespace
 
@@ -303,6 +304,33 @@ StressSums Pipeline::stress_on_parts(const Model& model) {
       e.add(rank_sum);
     }
   return total;
+}
+
+ContactSums Pipeline::contact_sums_on_parts(const Model& model) {
+  if (!parts_live(model)) return contact_sums(model);
+  ContactSums own = bricks().own_contact_sums();
+  std::vector<double> mine, all;
+  own.each_sum([&](ExactSum& e) { pack(e, mine); });
+  for (double v : {own.unbalanced_max, own.touching, own.sliding, own.contacts, own.free_balls}) mine.push_back(v);
+  comm::allgather(mine, all);
+  ContactSums total;
+  const double* in = all.data();
+  for (std::size_t r = 0; r < all.size() / mine.size(); ++r) {
+    ContactSums rank_sums;
+    rank_sums.each_sum([&](ExactSum& e) { unpack(e, in); });
+    for (double* v : {&rank_sums.unbalanced_max, &rank_sums.touching, &rank_sums.sliding, &rank_sums.contacts,
+                      &rank_sums.free_balls})
+      *v = *in++;
+    total.add(rank_sums);
+  }
+  return total;
+}
+
+ContactSums Pipeline::request_contact_sums(Model& model) {
+  std::int64_t word = kContactSums;
+  comm::broadcast(word);
+  results_onto_parts(model, *this);
+  return contact_sums_on_parts(model);
 }
 
 StressSums Pipeline::request_stress(Model& model) {
@@ -385,7 +413,8 @@ void Pipeline::serve_root(Model& model) {
     std::int64_t array = 0;
     if (word == kResultArray || word == kStream || word == kContactRows) comm::broadcast(array);
     else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts && word != kPlacePairs &&
-             word != kPlaceWalls && word != kFreeSaved && word != kBallRows && word != kStress)
+             word != kPlaceWalls && word != kFreeSaved && word != kBallRows && word != kStress &&
+             word != kContactSums)
       throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
     // (A failure here is every rank's, in the collective calls: rank 0's command reports it.)
     try {
@@ -408,6 +437,10 @@ void Pipeline::serve_root(Model& model) {
       }
       if (word == kStress) {
         stress_on_parts(model);
+        continue;
+      }
+      if (word == kContactSums) {
+        contact_sums_on_parts(model);
         continue;
       }
       if (word == kGatherResults) gather_part_results(model);

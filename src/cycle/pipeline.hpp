@@ -163,6 +163,9 @@ class Pipeline {
   // the parts first where a CYCLE deferred them (the others in serve_root).
   StressSums stress_on_parts(const Model& model);
   StressSums request_stress(Model& model);
+  // The same of the contact measures' sums (physics/measure.hpp contact_sums).
+  ContactSums contact_sums_on_parts(const Model& model);
+  ContactSums request_contact_sums(Model& model);
   // Rank 0, serving(), where whole_hollow: the parts' state streamed for SAVE, every rank taking
   // part (the others in serve_root): the pairs SAVE keeps placed in the whole order (touching in
   // the results the parts hold, or with history) and the wall contacts, their counts; array k of a

@@ -219,6 +219,11 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
     if (!have_stress) stress = volume > 0 ? average_stress(model, volume) : Sym6{}, have_stress = true;
     return stress;
   };
+  std::optional<ContactSums> sums;   // (unbal and contacts: one pass)
+  auto get_sums = [&]() -> const ContactSums& {
+    if (!sums) sums = contact_sums(model);
+    return *sums;
+  };
   for (const auto& item : t.items) {
     if (item == "stress") {
       for (double s : get_stress()) row.push_back(s);
@@ -301,11 +306,11 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
         row.push_back(wall_position(*it));
       }
     } else if (item == "unbal") {
-      row.push_back(unbalanced_force(model).mean_ratio);
+      row.push_back(get_sums().unbalanced_ratio().mean_ratio);
     } else if (item == "contacts") {
-      row.push_back(static_cast<double>(contact_count(model)));
-      row.push_back(sliding_fraction(model));
-      row.push_back(coordination_number(model));
+      row.push_back(get_sums().touching);
+      row.push_back(get_sums().sliding_fraction());
+      row.push_back(get_sums().coordination(model.balls.size()));
     }
   }
   if (t.out) {

@@ -193,68 +193,81 @@ std::size_t contact_count(const Model& model) {
   return n;
 }
 
-double coordination_number(const Model& model) {
-  return model.balls.size() ? 2.0 * static_cast<double>(contact_count(model)) / static_cast<double>(model.balls.size())
-                            : 0.0;
+double coordination_number(const Model& model) { return contact_sums(model).coordination(model.balls.size()); }
+
+double sliding_fraction(const Model& model) { return contact_sums(model).sliding_fraction(); }
+
+Sym6 fabric_tensor(const Model& model) { return contact_sums(model).fabric_tensor(); }
+
+Unbalanced unbalanced_force(const Model& model) { return contact_sums(model).unbalanced_ratio(); }
+
+void ContactSums::add(const ContactSums& o) {
+  for (int k = 0; k < 6; ++k) fabric[k].add(o.fabric[k]);
+  contact_force.add(o.contact_force);
+  unbalanced.add(o.unbalanced);
+  unbalanced_max = std::max(unbalanced_max, o.unbalanced_max);
+  touching += o.touching;
+  sliding += o.sliding;
+  contacts += o.contacts;
+  free_balls += o.free_balls;
 }
 
-double sliding_fraction(const Model& model) {
-  std::size_t sliding = 0;
-  for (auto s : model.contacts.state) sliding += s == 2;
-  const std::size_t n = contact_count(model);
-  return n ? static_cast<double>(sliding) / static_cast<double>(n) : 0.0;
-}
-
-Sym6 fabric_tensor(const Model& model) {
-  Sym6 f{};
-  const ContactTable& c = model.contacts;
-  for (std::size_t p = 0; p < c.size(); ++p)
-    if (c.touching(p)) add_dyad(f, c.nx[p], c.ny[p], c.nz[p], c.nx[p], c.ny[p], c.nz[p]);
-  const std::size_t n = contact_count(model);
-  if (n)
-    for (double& v : f) v /= static_cast<double>(n);
+Sym6 ContactSums::fabric_tensor() const {
+  Sym6 f;
+  for (int k = 0; k < 6; ++k) f[k] = touching > 0 ? fabric[k].value() / touching : 0.0;
   return f;
 }
 
-Unbalanced unbalanced_force(const Model& model) {
+double ContactSums::sliding_fraction() const { return touching > 0 ? sliding / touching : 0.0; }
+
+Unbalanced ContactSums::unbalanced_ratio() const {
+  Unbalanced u;
+  const double sum = unbalanced.value(), contact_sum = contact_force.value();
+  if (free_balls == 0 || sum == 0) return u;   // nothing free, or all in balance
+  if (contacts == 0 || contact_sum == 0) {      // forces that no contact balances: SOLVE goes on
+    u.mean_ratio = u.max_ratio = std::numeric_limits<double>::infinity();
+    return u;
+  }
+  const double mean_contact = contact_sum / contacts;
+  u.mean_ratio = sum / free_balls / mean_contact;
+  u.max_ratio = unbalanced_max / mean_contact;
+  return u;
+}
+
+ContactSums contact_sums(const Model& model, const std::vector<std::uint32_t>* pairs, const std::vector<std::uint32_t>* walls,
+                         const std::vector<std::uint32_t>* balls) {
+  ContactSums out;
+  DyadSums fabric(out.fabric);
+  ExactSum::Stream contact_force(out.contact_force), unbalanced(out.unbalanced);
   const ContactTable& c = model.contacts;
   const Balls& b = model.balls;
-  double contact_sum = 0;
-  std::size_t contacts = 0;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!c.touching(p)) continue;
-    contact_sum += std::sqrt(c.fx[p] * c.fx[p] + c.fy[p] * c.fy[p] + c.fz[p] * c.fz[p]);
-    ++contacts;
-  }
+  each_row(pairs, c.size(), [&](std::size_t p) {
+    if (p < c.state.size() && c.state[p] == 2) ++out.sliding;
+    if (!c.touching(p)) return;
+    fabric.add(c.nx[p], c.ny[p], c.nz[p], c.nx[p], c.ny[p], c.nz[p]);
+    contact_force.add(std::sqrt(c.fx[p] * c.fx[p] + c.fy[p] * c.fy[p] + c.fz[p] * c.fz[p]));
+    ++out.touching;
+  });
+  out.contacts = out.touching;
   const WallContacts& w = model.wall_contacts;   // a ball resting on a wall is balanced by it
-  for (std::size_t p = 0; p < w.size() && w.fx.size() == w.size(); ++p) {
-    if (w.state[p] == 0) continue;
-    contact_sum += std::sqrt(w.fx[p] * w.fx[p] + w.fy[p] * w.fy[p] + w.fz[p] * w.fz[p]);
-    ++contacts;
-  }
+  if (w.fx.size() == w.size())
+    each_row(walls, w.size(), [&](std::size_t p) {
+      if (w.state[p] == 0) return;
+      contact_force.add(std::sqrt(w.fx[p] * w.fx[p] + w.fy[p] * w.fy[p] + w.fz[p] * w.fz[p]));
+      ++out.contacts;
+    });
   // Only free velocity components count: a fixed one's force is a reaction, not an imbalance.
-  double unbalanced_sum = 0, unbalanced_max = 0;
-  std::size_t balls = 0;
-  for (std::size_t i = 0; i < b.size(); ++i) {
-    if ((b.fixed[i] & kVel) == kVel) continue;
+  each_row(balls, b.size(), [&](std::size_t i) {
+    if ((b.fixed[i] & kVel) == kVel) return;
     const double fx = (b.fixed[i] & kXVel) ? 0 : b.fx[i];
     const double fy = (b.fixed[i] & kYVel) ? 0 : b.fy[i];
     const double fz = (b.fixed[i] & kZVel) ? 0 : b.fz[i];
     const double f = std::sqrt(fx * fx + fy * fy + fz * fz);
-    unbalanced_sum += f;
-    unbalanced_max = std::max(unbalanced_max, f);
-    ++balls;
-  }
-  Unbalanced u;
-  if (balls == 0 || unbalanced_sum == 0) return u;   // nothing free, or all in balance
-  if (contacts == 0 || contact_sum == 0) {             // forces that no contact balances: SOLVE goes on
-    u.mean_ratio = u.max_ratio = std::numeric_limits<double>::infinity();
-    return u;
-  }
-  const double mean_contact = contact_sum / static_cast<double>(contacts);
-  u.mean_ratio = unbalanced_sum / static_cast<double>(balls) / mean_contact;
-  u.max_ratio = unbalanced_max / mean_contact;
-  return u;
+    unbalanced.add(f);
+    out.unbalanced_max = std::max(out.unbalanced_max, f);
+    ++out.free_balls;
+  });
+  return out;
 }
 
 std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls) {

@@ -65,6 +65,30 @@ std::size_t contact_count(const Model& model);
 struct Unbalanced { double mean_ratio = 0, max_ratio = 0; };
 Unbalanced unbalanced_force(const Model& model);
 
+// What the whole space's contact measures are made of (the fabric, the coordination, the sliding
+// fraction, the unbalanced-force ratio), over any share of the pairs, wall contacts and balls: exact
+// sums, counts and a largest, so that merged over the shares (the ranks' parts) they are the whole
+// model's, bit for bit. `pairs`, `walls`, `balls`: the rows taken (every one where null).
+struct ContactSums {
+  std::array<ExactSum, 6> fabric;   // n (x) n over the touching pairs
+  ExactSum contact_force;           // |f| over the touching pairs and wall contacts
+  ExactSum unbalanced;              // |F| over the balls not fixed in every velocity (their free components)
+  double unbalanced_max = 0;        // the largest of those
+  double touching = 0, sliding = 0, contacts = 0, free_balls = 0;   // counts (touching pairs; and wall contacts)
+  void add(const ContactSums& o);
+  template <class F> void each_sum(F&& f) {
+    for (ExactSum& e : fabric) f(e);
+    f(contact_force);
+    f(unbalanced);
+  }
+  Sym6 fabric_tensor() const;
+  double sliding_fraction() const;
+  double coordination(std::size_t balls) const { return balls ? 2.0 * touching / static_cast<double>(balls) : 0.0; }
+  Unbalanced unbalanced_ratio() const;
+};
+ContactSums contact_sums(const Model& model, const std::vector<std::uint32_t>* pairs = nullptr,
+                         const std::vector<std::uint32_t>* walls = nullptr, const std::vector<std::uint32_t>* balls = nullptr);
+
 // Sum of the unbalanced force on the given balls (for fixed balls: the reaction force they carry).
 std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls);
 

@@ -362,8 +362,9 @@ damp local 0.7
 
 TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads the parts: serial's bytes", "[mpi][system]") {
   // A CYCLE's end leaves rank 0's whole model hollow (BrickStep::hollow_whole): PRINT info and
-  // counters then sum their counts over the parts, PRINT stress its exact sums over the parts (the
-  // contacts', the wall contacts' and the bridges'), PRINT balls and contacts merge the parts' rows by
+  // counters then sum their counts over the parts, PRINT stress, fabric and coordination their
+  // exact sums and counts over the parts (the contacts', the wall contacts', the bridges', the
+  // balls' unbalanced forces), PRINT balls and contacts merge the parts' rows by
   // id, SAVE streams the parts' arrays a chunk at a time, and CYCLE's overlap warning and its next
   // start (a load, a spin: the kernel's features; the contact-free step) read the parts. Two scenes
   // on 3 ranks against serial: balls falling in a box onto a wall, one pressed into it by an applied
@@ -371,7 +372,8 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
   // capillary bridges.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string reads =
-      "print stress\nprint stress volume 2e-6\nprint counters file counters.txt\nprint info\nprint contacts\nsave a.sav\nprint balls file b.csv\n"
+      "print stress\nprint stress volume 2e-6\nprint fabric\nprint coordination\nprint counters file counters.txt\n"
+      "print info\nprint contacts\nsave a.sav\nprint balls file b.csv\n"
       "print contacts file c.csv\ncycle 40\nprint contacts file c2.csv\nsave c.sav\nprint balls file b2.csv\n";
   const std::string box =
       "start box 0 0.01 0 0.01 0 0.01 destroy\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\nwall id 7 plane 0 0 0.0001 0 0 1\n"
@@ -410,7 +412,8 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
       std::string kept;
       for (const std::string& line : lines_of(text))
         for (const char* start : {"contacts:", "walls:", "bridges intact:", "physics:", "kernel:", "ball order:", "balls:",
-                                  "deck.dat:8: warning: at cycle", "stress:"})
+                                  "deck.dat:8: warning: at cycle", "stress:", "fabric:", "coordination number:",
+                                  "sliding fraction:", "unbalanced-force ratio:"})
           if (line.rfind(start, 0) == 0) kept += line + '\n';
       const auto rows = text.find("overlap          fn");
       kept += rows == std::string::npos ? "" : text.substr(rows, text.find("trubal>", rows) - rows);
@@ -418,7 +421,8 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
     };
     CHECK(model_lines(out) == model_lines(serial_out));
     if (scene == wet) CHECK(model_lines(serial_out).find("bridges intact") != std::string::npos);
-    CHECK(model_lines(serial_out).find("stress: xx") != std::string::npos);
+    for (const char* reading : {"stress: xx", "fabric: xx", "coordination number:", "unbalanced-force ratio: mean"})
+      CHECK(model_lines(serial_out).find(reading) != std::string::npos);
   }
 }
 
