@@ -160,6 +160,7 @@ const Command solve_command = {
     "Cycles until the mean unbalanced-force ratio (mean unbalanced force over mean contact force) is below "
     "r (default 1e-3), checking every 100 cycles, or until n cycles (default 100000).",
     "solve ratio 1e-4 limit 50000",
-    {"ratio", "limit"}, run_solve};
+    // (Under mpirun on the ranks' parts, as CYCLE: Session::solve.)
+    {"ratio", "limit"}, run_solve, false, false, OnRanks::Parts, HeldUse::Split};
 
 }  // namespace trubal

@@ -583,14 +583,15 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
 
 CycleResult Session::cycle_in_chunks(std::int64_t limit, std::int64_t chunk,
                                      const std::function<void(std::int64_t, std::int64_t)>& progress,
-                                     const std::function<bool()>& stop) {
+                                     const std::function<bool()>& stop, bool on_parts) {
   CycleResult out;
   std::int64_t done = 0;
   CycleResult worst;   // the chunk whose energy balance was off the most (its warning is the run's, once)
   while (done < limit) {
     std::int64_t n = std::min(chunk, limit - done);
     CycleResult r = cycle(n, progress ? [&](std::int64_t d, std::int64_t) { progress(done + d, limit); }
-                                      : std::function<void(std::int64_t, std::int64_t)>{});
+                                      : std::function<void(std::int64_t, std::int64_t)>{},
+                          on_parts, on_parts);
     done += r.done;
     const double seconds = out.seconds + r.seconds;
     PhaseTimes times = out.times;
@@ -618,10 +619,20 @@ CycleResult Session::cycle_in_chunks(std::int64_t limit, std::int64_t chunk,
 Session::SolveResult Session::solve(double ratio, std::int64_t limit,
                                     const std::function<void(std::int64_t, std::int64_t)>& progress) {
   SolveResult out;
+  // Under mpirun each CYCLE of 100 keeps the ranks' parts (as CYCLE does: no rank handed the whole
+  // model, nor the model split again), and the ratio's sums are made on them, every rank taking
+  // part (the last step taken again there where its results were deferred); where the parts ended
+  // (a ball left the box) every rank holds the whole model and rank 0's answer is every rank's.
+  const bool on_parts = pipeline_->distributed() && comm_size_ > 1;
   out.run = cycle_in_chunks(limit, 100, progress, [&] {
-    out.ratio = unbalanced_force(model_).mean_ratio;
+    if (on_parts && parts_kept()) {
+      results_onto_parts(model_, *pipeline_);
+      out.ratio = pipeline_->contact_sums_on_parts(model_).unbalanced_ratio().mean_ratio;
+    } else {
+      out.ratio = unbalanced_force(on_parts ? model() : model_).mean_ratio;
+    }
     return out.converged = out.ratio < ratio;
-  });
+  }, on_parts);
   return out;
 }
 

@@ -339,10 +339,12 @@ class Session {
   // balls (changes_ counts them: edit, cycle, start, restart).
   CentreIndex centres_;
   // Cycles in chunks of `chunk` until `limit`, an interruption or instability, or `stop()` (asked
-  // after each chunk; every rank takes rank 0's answer): SOLVE's and CYCLE ... until's loop.
+  // after each chunk on every rank; every rank takes rank 0's answer): SOLVE's and CYCLE ...
+  // until's loop. `on_parts`: each chunk a CYCLE's (its last step's results deferred, the ranks
+  // keeping their parts).
   CycleResult cycle_in_chunks(std::int64_t limit, std::int64_t chunk,
                               const std::function<void(std::int64_t, std::int64_t)>& progress,
-                              const std::function<bool()>& stop);
+                              const std::function<bool()>& stop, bool on_parts = false);
   // BALL lines held on the ranks (hold_balls): this rank's, and the counts every rank keeps.
   HeldBalls held_;
   bool hold_balls_ = false;

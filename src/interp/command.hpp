@@ -64,7 +64,7 @@ enum class OnRanks : std::uint8_t {
               // (START, BACKEND, RENUMBER, TABLE)
   RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
               // (PRINT, SAVE, PLOT)
-  Parts,      // every rank runs it on the model as it is (CYCLE; the settings: DAMP, FRAC, TSTEP, GRAV;
+  Parts,      // every rank runs it on the model as it is (CYCLE, SOLVE; the settings: DAMP, FRAC, TSTEP, GRAV;
               // the cell's: STRAIN, SERVO; the commands that do not read the balls; RESTART, which
               // rank 0 alone reads and the others take the light state of: Session::restart)
   ModelOnZero,   // changes the model alone: rank 0 alone runs it, on its whole model, the parts' state

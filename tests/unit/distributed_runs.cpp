@@ -419,6 +419,42 @@ TEST_CASE("distributed: RESTART read by rank 0 alone, the others holding its lig
   CHECK(counter(counters_of(ranks), "decompositions") >= 1);
 }
 
+TEST_CASE("distributed: SOLVE keeps the ranks' parts between its checks and sums the ratio on them: serial's bits", "[mpi][system]") {
+  // A squeezed periodic cell let go, SOLVEd on 3 ranks: each of SOLVE's CYCLEs of 100 keeps the
+  // parts (no rank handed the whole model, nor the model split again), its last step's results
+  // made on the parts and the ratio's sums merged there (Session::solve). Before, each CYCLE of
+  // 100 ended by handing every rank the whole model, and the next split it again.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string deck = "start 0.01 0.01 0.01\nprop kn 1e5 ks 1e5 mu 0.5 dens 2650\ngen 1500 0.0004 0.0005 seed 9\n"
+                           "damp local 0.7\nstrain 150 150 150\ncycle 400\nstrain off\nprint counters file before.txt\n"
+                           "solve ratio 0.02 limit 1500\nprint counters file after.txt\nsave s.sav\n" +
+                           std::string(kOutputs);
+  TempDir serial, ranks;
+  serial.write("deck.dat", deck);
+  ranks.write("deck.dat", "backend mpi\n" + deck);
+  REQUIRE(run_deck(serial, 0) == 0);
+  REQUIRE(run_deck(ranks, 3, kEqualShares) == 0);   // (the decompositions are counted)
+  const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
+  INFO(out);
+  auto solved = [](const std::string& text) {
+    std::string kept;
+    for (const std::string& line : lines_of(text))
+      if (line.find("solved:") != std::string::npos || line.find("SOLVE stopped") != std::string::npos) kept += line + '\n';
+    return kept;
+  };
+  CHECK(!solved(serial_out).empty());
+  CHECK(solved(out) == solved(serial_out));
+  for (const char* file : {"balls.csv", "contacts.csv", "s.sav"}) {
+    INFO(file);
+    CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+  }
+  const Counters before = read_counters(ranks.path() / "before.txt"), after = read_counters(ranks.path() / "after.txt");
+  CHECK(counter(after, "cycle") - counter(before, "cycle") >= 200);   // (at least two checks)
+  CHECK(counter(after, "parts_kept") == 1);
+  CHECK(counter(after, "whole_hand_overs") == counter(before, "whole_hand_overs"));
+  CHECK(counter(after, "decompositions") == counter(before, "decompositions"));
+}
+
 TEST_CASE("distributed: DAMP, FRAC, TSTEP, GRAV, STRAIN and SERVO between CYCLEs leave the ranks their parts, with the serial bits",
           "[mpi][system]") {
   // A squeezed periodic cell whose settings change between nine CYCLEs: each setting's command runs
