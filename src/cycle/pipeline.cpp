@@ -289,41 +289,37 @@ LargestOverlap Pipeline::largest_overlap_on_parts(const Model& model, double thr
   return out;
 }
 
+namespace {
+// Each rank's sums merged over the ranks, exactly (every rank given the total): `each(sums, sum,
+// count)` visits a Sums' exact sums, then its counts and largest values, in one order.
+template <class Sums, class Each> Sums merged_over_ranks(Sums own, Each each) {
+  std::vector<double> mine, all;
+  each(own, [&](ExactSum& e) { pack(e, mine); }, [&](double& v) { mine.push_back(v); });
+  comm::allgather(mine, all);
+  Sums total;
+  const double* in = all.data();
+  for (std::size_t r = 0; r < all.size() / mine.size(); ++r) {
+    Sums rank_sums;
+    each(rank_sums, [&](ExactSum& e) { unpack(e, in); }, [&](double& v) { v = *in++; });
+    total.add(rank_sums);
+  }
+  return total;
+}
+}  // namespace
+
 StressSums Pipeline::stress_on_parts(const Model& model) {
   if (!parts_live(model)) return stress_sums(model);
-  StressSums own = bricks().own_stress(model);
-  std::vector<double> mine, all;
-  for (ExactSum& e : own.s) pack(e, mine);
-  comm::allgather(mine, all);
-  StressSums total;
-  const double* in = all.data();
-  for (std::size_t r = 0; r < all.size() / mine.size(); ++r)
-    for (ExactSum& e : total.s) {
-      ExactSum rank_sum;
-      unpack(rank_sum, in);
-      e.add(rank_sum);
-    }
-  return total;
+  return merged_over_ranks(bricks().own_stress(model), [](StressSums& s, auto&& sum, auto&&) {
+    for (ExactSum& e : s.s) sum(e);
+  });
 }
 
 ContactSums Pipeline::contact_sums_on_parts(const Model& model) {
   if (!parts_live(model)) return contact_sums(model);
-  ContactSums own = bricks().own_contact_sums();
-  std::vector<double> mine, all;
-  own.each_sum([&](ExactSum& e) { pack(e, mine); });
-  for (double v : {own.unbalanced_max, own.touching, own.sliding, own.contacts, own.free_balls}) mine.push_back(v);
-  comm::allgather(mine, all);
-  ContactSums total;
-  const double* in = all.data();
-  for (std::size_t r = 0; r < all.size() / mine.size(); ++r) {
-    ContactSums rank_sums;
-    rank_sums.each_sum([&](ExactSum& e) { unpack(e, in); });
-    for (double* v : {&rank_sums.unbalanced_max, &rank_sums.touching, &rank_sums.sliding, &rank_sums.contacts,
-                      &rank_sums.free_balls})
-      *v = *in++;
-    total.add(rank_sums);
-  }
-  return total;
+  return merged_over_ranks(bricks().own_contact_sums(), [](ContactSums& s, auto&& sum, auto&& count) {
+    s.each_sum(sum);
+    for (double* v : {&s.unbalanced_max, &s.touching, &s.sliding, &s.contacts, &s.free_balls}) count(*v);
+  });
 }
 
 ContactSums Pipeline::request_contact_sums(Model& model) {
