@@ -51,8 +51,9 @@ static std::function<double(const Model&)> until_measure(Context& ctx, Args& arg
   if (which == 0) return [](const Model& m) { return m.space.strain[2]; };
   if (which == 1) return [](const Model& m) { return volumetric_strain(m); };
   Session& session = ctx.session;
-  return [which, &session](const Model& m) {
-    const TriaxialStress s = triaxial_stress(average_stress(m, session.stress_volume()));
+  // (Rank 0's, summed on the ranks' parts where they keep them: Session::cycle_until.)
+  return [which, &session](const Model&) {
+    const TriaxialStress s = triaxial_stress(session.average_stress_in(session.stress_volume()));
     const double values[] = {s.q, s.p, s.sigma1, s.sigma3};
     return values[which - 2];
   };
@@ -71,7 +72,6 @@ static void run_cycle_until(Context& ctx, Args& args, std::int64_t limit) {
   if (args.accept("every")) every = args.count("every (cycles between checks)", 1);
   args.done();
   ctx.session.require_started();
-  ctx.session.whole_everywhere();   // (the measure reads the whole model on every rank between pieces)
   const auto measure = until_measure(ctx, args, which);
   const auto start = std::chrono::steady_clock::now();
   ProgressReporter progress(ctx, true);

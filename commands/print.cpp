@@ -133,7 +133,11 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
   }
-  const Model& m = ctx.session.model();
+  // The cell's strain, the settings, the histories, the walls and the sample read the light state
+  // alone (the walls' loads are formed at every CYCLE's last step): as it is, which under mpirun
+  // may leave rank 0's whole model hollow, the parts holding the balls. The rest read the balls.
+  const bool light = item == 4 || item == 8 || item == 9 || item == 10 || item == 11 || item == 16;
+  const Model& m = light ? ctx.session.state() : ctx.session.model();
   switch (item) {
     case 16: args.done(); print_sample(ctx); return;
     case 17: print_bonds(ctx, read_range(args, ctx.session), file); return;

@@ -198,7 +198,7 @@ void print_contacts(Context& ctx, const Range& range, const std::string& file) {
 }
 
 void print_walls(Context& ctx, const std::string& file) {
-  const Model& m = ctx.session.model();
+  const Model& m = ctx.session.state();   // (light state: PRINT)
   if (!file.empty()) {
     std::ostringstream csv;
     csv << "id,kind,type,x,y,z,nx,ny,nz,radius,vx,vy,vz,wx,wy,wz,rrate,fx,fy,fz,mx,my,mz,stress,contacts,work\n";

@@ -9,7 +9,7 @@
 namespace trubal {
 
 void print_sample(Context& ctx) {
-  const Model& m = ctx.session.model();
+  const Model& m = ctx.session.state();   // (light state: PRINT)
   if (!m.sample.declared()) {
     ctx.out << "no sample (SAMPLE platens a b cylinder c declares one)\n";
     return;

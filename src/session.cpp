@@ -542,8 +542,21 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
       if (histories) history_->sample(m, moving_cell ? L[0] * L[1] * L[2] : vol);
       if (dumps && dumps->due(m.cycle)) dumps->write(m);
     };
-  if (histories && comm::size() > 1)
-    control.share_output = [this, marks = history_->recorded()]() mutable { history_->share_rows(marks); };
+  // (The rows rank 0 recorded since: share_rows hands them on. Rows every rank recorded on the
+  // parts move the marks past them.)
+  auto marks = std::make_shared<std::vector<std::size_t>>(history_->recorded());
+  if (histories && comm::size() > 1) control.share_output = [this, marks] { history_->share_rows(*marks); };
+  // Histories of sums alone, where the ranks keep their parts: every rank records them from the
+  // sums merged over the parts, and rank 0 is not handed the whole model for them (a dump is).
+  if (histories && !dumps && control.keep_parts && pipeline_->distributed() && history_->recorded_on_parts())
+    control.after_step_on_parts = [this, vol, moving_cell, marks](const Model& m) {
+      const auto L = m.space.length();
+      HistorySums sums;
+      sums.stress = [this, &m] { return pipeline_->stress_on_parts(m); };
+      sums.contacts = [this, &m] { return pipeline_->contact_sums_on_parts(m); };
+      history_->sample_on_parts(m, moving_cell ? L[0] * L[1] * L[2] : vol, sums);
+      *marks = history_->recorded();
+    };
   control.reads_contacts = [this, histories, dumps](std::int64_t cycle) {
     return (histories && history_->due(cycle)) || (dumps && dumps->due(cycle));
   };
@@ -640,7 +653,15 @@ Session::UntilResult Session::cycle_until(std::int64_t limit, const std::functio
                                           double target, bool driven, std::int64_t every,
                                           const std::function<void(std::int64_t, std::int64_t)>& progress) {
   UntilResult out;
-  out.start = out.value = measure(model_);
+  // (Rank 0 reads; the others serve it, their parts kept, and take its value: every rank stops at
+  // the same cycle.)
+  auto measured = [&] {
+    std::vector<double> value{0.0};
+    run_on_root([&] { value[0] = measure(model_); });
+    comm::broadcast(value);
+    return value[0];
+  };
+  out.start = out.value = measured();
   // A positive target is reached at or above it, a negative one at or below; 0 from the side the
   // measure starts on.
   const bool rising = target > 0 || (target == 0 && !(out.start > 0));
@@ -655,15 +676,16 @@ Session::UntilResult Session::cycle_until(std::int64_t limit, const std::functio
   // stops there rather than cycling to the limit.
   constexpr int kChecks = 10;
   int still = 0, away = 0;
+  const bool on_parts = pipeline_->distributed() && comm_size_ > 1;
   out.run = cycle_in_chunks(limit, every, progress, [&] {
     const double before = out.value;
-    out.value = measure(model_);
+    out.value = measured();
     still = out.value == out.start ? still + 1 : 0;
     away = driven && std::abs(out.value - target) > std::abs(before - target) ? away + 1 : 0;
     out.stalled = still >= kChecks;
     out.receding = away >= kChecks;
     return (out.reached = reached()) || out.stalled || out.receding;
-  });
+  }, on_parts);
   return out;
 }
 

@@ -231,6 +231,9 @@ class Session {
   // starts on; at once where it is there already); or until it has not
   // moved from where it started over ten checks (stalled), or, for a measure `driven` one way (an
   // axial strain, the time), has gone farther from the target at each of ten checks (receding).
+  // `measure` runs on rank 0 alone, given its model (its light state where the ranks keep their
+  // parts: the stress comes from average_stress_in), the others serving it; every rank takes its
+  // value. Under mpirun the CYCLEs of k keep the ranks' parts, as CYCLE does.
   struct UntilResult {
     CycleResult run;
     double start = 0, value = 0;

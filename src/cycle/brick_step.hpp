@@ -188,6 +188,9 @@ class BrickStep {
   // same answer on every member): a sync left them, and no step, list nor split changed the parts
   // since.
   bool results_left() const { return live_ && results_left_; }
+  // The results the parts' last step wrote were read on the parts and are not wanted in the whole
+  // model (an output step's sums, CycleRun::observe): the parts go on as after a lean step.
+  void forget_step_results() { results_written_ = false; }
   // Those results into full's table (rank 0's for the ranks; a collective call where
   // results_left), of full's cycle; the parts' arrays of them are freed.
   void gather_results(Model& full);
@@ -330,6 +333,7 @@ class BrickStep {
     std::size_t ghosts = 0, least_balls = 0, most_balls = 0;
     std::size_t bonds_across = 0;   // intact bonds whose balls two members owned at the last split
     std::size_t sorts = 0;          // the sorts into space order on the parts (sort_in_space), moving balls or not
+    std::size_t gathers = 0;        // the whole model made current from the parts (sync)
   };
   // The counts as they were (a step taken again on the parts is no decomposition of the run's:
   // results_onto_parts keeps the CYCLE's).
@@ -337,9 +341,11 @@ class BrickStep {
     splits_ = c.decompositions; local_rebuilds_ = c.list_rebuilds; local_wraps_ = c.wraps; migrations_ = c.migrations;
     ghosts_ = c.ghosts; least_balls_ = c.least_balls; most_balls_ = c.most_balls; bonds_across_ = c.bonds_across;
     sorts_ = c.sorts;
+    gathers_ = c.gathers;
   }
   Counts counts() const {
-    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_, bonds_across_, sorts_};
+    return {splits_, local_rebuilds_, local_wraps_, migrations_, ghosts_, least_balls_, most_balls_, bonds_across_, sorts_,
+            gathers_};
   }
   // The bytes of the part's arrays of balls, pairs and wall contacts.
   std::size_t part_bytes() const;
@@ -500,6 +506,7 @@ class BrickStep {
   std::size_t local_wraps_ = 0;              // wraps on the parts (wrap)
   std::size_t migrations_ = 0;               // balls that changed owner at a rebuild on the parts
   std::size_t sorts_ = 0;                    // (Counts::sorts)
+  std::size_t gathers_ = 0;                  // (Counts::gathers)
   bool list_local_ = false;                  // the parts' list is newer than full's
   // Counts every change of the part's balls and lists but a step's or a wrap's (a split, a
   // rebuild on the parts, a tilt reduction, a drop): restore_copy_in_place's test.

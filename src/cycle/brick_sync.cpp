@@ -344,6 +344,7 @@ std::vector<double> BrickStep::own_largest_overlap(const Model& full, double thr
 
 void BrickStep::sync(Model& full, VerletReference* whole_ref, bool leave_results) {
   if (!live_ || current_ || model_ != &full) return;
+  ++gathers_;
   std::vector<double> out, in;
   const bool hollow = whole_hollow_;
   if (hollow) {

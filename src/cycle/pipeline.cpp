@@ -103,6 +103,7 @@ void Pipeline::invalidate() {
   list_from_parts_ = false;
   model_ = nullptr;
   whole_next_ = false;   // (a step rewind_step asked for that never came: every rank decides afresh)
+  search_after_sort_ = false;
 }
 
 bool Pipeline::any_outside(const Model& model) {

@@ -103,6 +103,12 @@ class Pipeline {
   // (its results deferred all the same: rank 0 keeps the copy of the step before, make_results'
   // way, should the parts end first). The same on every rank.
   bool results_on_parts(const Model& model) const { return parts_live(model) && bricks().results_left(); }
+  // The results the parts' last step wrote were read there (CycleControl::after_step_on_parts):
+  // no sync gathers them, and the next stale list may be rebuilt on the parts.
+  void forget_part_results(const Model& model) {
+    if (!parts_live(model)) return;
+    for (auto& part : bricks_) part->forget_step_results();
+  }
   // Where results_onto_parts has a step to take again: the parts kept, the CYCLE's results
   // deferred and not on them yet. The same on every rank.
   bool results_to_make_on_parts(const Model& model) const {
@@ -459,6 +465,11 @@ class Pipeline {
   bool list_from_parts_ = false;
   double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
   double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)
+  // The balls were put in a new order on the parts, whose lists could not be searched afresh there
+  // (sort_on_parts): the next step searches through the whole model. As serial's are after its sort
+  // (invalidate), so that the lists, and the steps at which each is searched again, are serial's (a
+  // step does not depend on its list; a save holds it).
+  bool search_after_sort_ = false;
   // The light state and the parts' copies of the rescue, put back to rank 0's whole model.
   void whole_from_part_copies(Model& model);
   Snapshot rescue_;

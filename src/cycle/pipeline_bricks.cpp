@@ -29,7 +29,7 @@
 namespace trubal {
 
 bool Pipeline::parts_go_on(Model& model) {
-  if (!bricks().live_for(model)) return false;   // (every rank decides alike: each input is the same on all)
+  if (!bricks().live_for(model)) return search_after_sort_ = false;   // (every rank decides alike: each input is the same on all)
   bool outside = false;                          // a collective call, made unconditionally
   each_part([&](BrickStep& part, int t) {
     const bool mine = part.outside_cell(model);
@@ -45,8 +45,9 @@ bool Pipeline::parts_go_on(Model& model) {
     outside = !wrapped;
   }
   const double limit2 = ref_.displacement_limit2(model);
-  const bool stale =
-      outside || !(limit2 >= 0) || !(bricks().moved2() <= limit2) || !(wall_travel_ <= 0.5 * ref_.skin());
+  const bool sorted = std::exchange(search_after_sort_, false);
+  const bool stale = outside || sorted || !(limit2 >= 0) || !(bricks().moved2() <= limit2) ||
+                     !(wall_travel_ <= 0.5 * ref_.skin());
   if (!stale) return true;
   if (outside) return false;
   // A stale list alone: the members rebuild it on their parts where they can.
@@ -168,6 +169,17 @@ bool Pipeline::sort_on_parts(Model& model) {
   hollow_whole(model);   // (sort_in_space let rank 0's whole model go: what the pipeline keeps of it too)
   if (order.empty()) return false;
   ref_.reorder(order);
+  // The parts' lists searched afresh now, as serial's are after its sort (at the step that follows,
+  // from the same positions: nothing moves between), and before the rescue copy a deferred last
+  // step takes after its sort (CycleRun::run), which is then put back on these parts in place.
+  // Where the parts cannot, the step goes through the whole model (parts_go_on).
+  const double skin = list_skin(model);
+  if (rebuild_parts(model, list_reach(model, skin))) {
+    ref_.record_cell(model, skin);
+    wall_travel_ = 0;
+  } else {
+    search_after_sort_ = true;   // (the same on every rank)
+  }
   return true;
 }
 

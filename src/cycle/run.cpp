@@ -104,6 +104,11 @@ struct StepPlan {
   // it writes its results there, and the parts keep them for the command that reads them; rank 0's
   // copy of the step before stays, should anything end the parts first.
   bool leave_results = false;
+  // An output step whose observers read the parts' sums (CycleControl::after_step_on_parts): the
+  // whole model is not gathered for it, and the results it writes on the parts are read there (and
+  // the CYCLE's last step's kept there, as a step that leaves its results: Pipeline::end_cycle).
+  bool observed_on_parts = false;
+  bool last = false;   // the CYCLE's last step
   // The step forms the walls' loads (StepKernels::wall_loads): where it writes the results, at the
   // CYCLE's last step (deferred or not: what follows a CYCLE reads the walls), at each step a
   // rescue copy is taken after (the rescue may leave the model there: the 500th steps' and, where
@@ -140,7 +145,7 @@ class CycleRun {
   bool sort_balls();   // whether any ball moved
   bool rescue(std::int64_t bad_cycle);
   CycleResult& unstable(const StepTotals& sums, std::int64_t s);
-  void observe(bool observed);
+  void observe(const StepPlan& step);
   void report_progress(std::int64_t s);
   void defer_last_results();
   // The rescue copy of the state now (a distributed run's: each rank's of its part where the parts
@@ -316,7 +321,7 @@ CycleResult CycleRun::run() {
         escapes(true);   // (its balls destroyed were counted the first time)
         return finish();
       }
-      observe(step.observed);
+      observe(step);
       // The rescue steps on to cycles on kSnapshotEvery. Not after the last step: the next CYCLE
       // takes its own copy at its start, and a deferred last step needs the copy of the step before.
       if (s < n_ && (s + 1) % kSnapshotEvery == 0) take_copy();
@@ -345,13 +350,16 @@ StepPlan CycleRun::plan(std::int64_t s) const {
     p.stopping = s % kAgreeEvery == 0 && comm::any_all(control_.interrupt->load());
   p.observed = control_.after_step && (!control_.reads_contacts || control_.reads_contacts(model_.cycle + 1));
   p.deferred = control_.defer_results && s == n_ && !p.stopping && !p.observed;
+  const bool parts_observe = p.observed && control_.after_step_on_parts && control_.keep_parts &&
+                             pipeline_.distributed() && !p.stopping;
   p.leave_results = control_.leave_results && control_.keep_parts && pipeline_.distributed() && s == n_ &&
                     !p.stopping && !p.observed;
   // (A snapshot step's results serve a whole model's copy alone: a copy on the ranks' parts holds
   // none, and rank 0 gathers no whole model for it.)
-  p.details = (s == n_ && !p.deferred) || p.stopping ||
-              (!control_.defer_results && (s + 1) % kSnapshotEvery == 0 && !pipeline_.rescue_on_parts()) ||
-              p.observed || p.leave_results;
+  const bool copied = !control_.defer_results && (s + 1) % kSnapshotEvery == 0 && !pipeline_.rescue_on_parts();
+  p.observed_on_parts = parts_observe && !copied;
+  p.last = s == n_;
+  p.details = (s == n_ && !p.deferred) || p.stopping || copied || p.observed || p.leave_results;
   p.wall_loads = p.details || s == n_ || (s + 1) % kSnapshotEvery == 0 || (control_.defer_results && s + 1 == n_);
   const std::int64_t reaches = model_.cycle + 1;   // the cycle this step reaches
   p.energies = s == 1 || p.wall_loads || reaches % EnergyGuard::kCheckEvery == 0;
@@ -406,7 +414,10 @@ StepTotals CycleRun::advance(const StepPlan& step) {
   if (!model.walls.empty()) walls_before_step(model, dt);
   pipeline_.step(model, kernels, step_sums);
   // A distributed run's ranks step their parts: the model is made current where it is read.
-  if (details && !step.leave_results) pipeline_.sync(model);   // (left: the CYCLE's end syncs, Pipeline::end_cycle)
+  // (Left: the CYCLE's end syncs, Pipeline::end_cycle. An output step read on the parts: no rank
+  // reads its results in the whole model, which stays as a lean step leaves it.)
+  const bool read_on_parts = step.observed_on_parts && pipeline_.parts_live(model);
+  if (details && !step.leave_results && !read_on_parts) pipeline_.sync(model);
   const StepTotals sums(step_sums);
   model.space.servo_measured_valid = kernels.moments;
   if (kernels.moments) model.space.servo_measured = {sums.force_moment, sums.stiffness_moment};
@@ -414,7 +425,7 @@ StepTotals CycleRun::advance(const StepPlan& step) {
   pipeline_.reduce_cell_tilt(model);                     // and its tilts, on every copy of the pairs
   pipeline_.times().step += std::chrono::duration<double>(Clock::now() - step_start).count();
   model.cycle += 1;
-  if (details) model.contacts.results_cycle = model.cycle;
+  if (details && !read_on_parts) model.contacts.results_cycle = model.cycle;
   model.time += dt;
   model.dt = dt;
   model.energy.friction_work += sums.friction_work;
@@ -572,14 +583,24 @@ CycleResult& CycleRun::unstable(const StepTotals& sums, std::int64_t s) {
 // The observers (histories, dumps). Rank 0 alone writes what an observer records (a history's
 // rows, a dump's files): its failure (a full disk) is every rank's, agreed before the next step, so
 // that no rank goes on alone into the next step's collective calls and waits there for ever.
-void CycleRun::observe(bool observed) {
+void CycleRun::observe(const StepPlan& step) {
   if (!control_.after_step) return;
+  const bool observed = step.observed;
   const auto output_start = Clock::now();
-  if (comm::size() > 1 && observed)
-    comm::together([&] { if (observes_) control_.after_step(model_); }, "recording the output");
-  else if (observes_)
-    control_.after_step(model_);
-  if (output_on_root_ && observed && control_.share_output) control_.share_output();
+  if (step.observed_on_parts && pipeline_.parts_live(model_)) {
+    // Every rank records from the sums merged over the parts (its failure agreed there). The
+    // results this step wrote on the parts are then let go, as a lean step's, so that the next
+    // stale list may still be rebuilt on the parts; but the CYCLE's last step's, which they keep
+    // (Pipeline::end_cycle: results_on_parts).
+    control_.after_step_on_parts(model_);
+    if (!step.last) pipeline_.forget_part_results(model_);
+  } else {
+    if (comm::size() > 1 && observed)
+      comm::together([&] { if (observes_) control_.after_step(model_); }, "recording the output");
+    else if (observes_)
+      control_.after_step(model_);
+    if (output_on_root_ && observed && control_.share_output) control_.share_output();
+  }
   pipeline_.times().output += std::chrono::duration<double>(Clock::now() - output_start).count();
 }
 

@@ -24,6 +24,11 @@ struct CycleControl {
   // A distributed run's output steps: after_step runs on rank 0 alone (the others' whole model is
   // not current there), then this on every rank, to hand on what it recorded (History::share_rows).
   std::function<void()> share_output;
+  // A distributed run that keeps its parts (keep_parts): where set, its output steps call this on
+  // every rank at once (a collective call) in place of after_step and share_output, from the
+  // sums made on the parts (Pipeline::stress_on_parts, contact_sums_on_parts): no rank gathers the
+  // whole model for them. Where the parts are not live at the step, after_step as above.
+  std::function<void(const Model&)> after_step_on_parts;
   // Called now and then for progress reports.
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the

@@ -212,16 +212,48 @@ std::vector<std::size_t> History::platen_balls(const Model& model, const History
 }
 
 void History::record(HistoryTable& t, const Model& model, double volume) {
+  std::vector<double> row = row_of(t, model, volume, nullptr);
+  write_row(t, row, model.cycle);
+  keep_row(t, std::move(row));
+}
+
+bool History::recorded_on_parts() const {
+  for (const auto& t : tables_)
+    for (const auto& item : t->items) {
+      const bool platens = !t->platen_ids.empty();
+      const bool from_sums = item == "stress" || item == "pq" || item == "sratio" || item == "unbal" || item == "contacts";
+      const bool light = item == "strain" || item == "volumetric" || item == "energy" || item == "rolling" ||
+                         item == "time" || item == "porosity" || item == "sample" || item.rfind("wall ", 0) == 0;
+      if (!(from_sums || light || ((item == "ratio" || item == "axial") && !platens))) return false;
+    }
+  return true;
+}
+
+void History::sample_on_parts(const Model& model, double volume, const HistorySums& sums) {
+  for (auto& t : tables_) {
+    if (model.cycle % t->every != 0) continue;
+    std::vector<double> row = row_of(*t, model, volume, &sums);   // (every rank: the sums are merged)
+    comm::on_root([&] { write_row(*t, row, model.cycle); }, "writing a history row");
+    keep_row(*t, std::move(row));
+  }
+}
+
+std::vector<double> History::row_of(const HistoryTable& t, const Model& model, double volume, const HistorySums* from) {
   std::vector<double> row = {static_cast<double>(model.cycle), model.time};
+  std::optional<StressSums> stress_sums_now;   // (stress, pq, ratio and sratio: one pass)
+  auto get_stress_sums = [&]() -> const StressSums& {
+    if (!stress_sums_now) stress_sums_now = from ? from->stress() : stress_sums(model);
+    return *stress_sums_now;
+  };
   Sym6 stress{};
   bool have_stress = false;
   auto get_stress = [&]() -> const Sym6& {
-    if (!have_stress) stress = volume > 0 ? average_stress(model, volume) : Sym6{}, have_stress = true;
+    if (!have_stress) stress = volume > 0 ? get_stress_sums().over(volume) : Sym6{}, have_stress = true;
     return stress;
   };
   std::optional<ContactSums> sums;   // (unbal and contacts: one pass)
   auto get_sums = [&]() -> const ContactSums& {
-    if (!sums) sums = contact_sums(model);
+    if (!sums) sums = from ? from->contacts() : contact_sums(model);
     return *sums;
   };
   for (const auto& item : t.items) {
@@ -250,7 +282,7 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
     } else if (item == "sratio") {
       // sigma1 / sigma3 of the assembly's own average stress, from the contact forces (Love: the sum
       // of f (x) l over the contacts; the volume cancels): s33 over the mean of s11 and s22.
-      const Sym6 s = average_stress(model, 1.0);
+      const Sym6 s = get_stress_sums().over(1.0);
       const double lateral = 0.5 * (s[0] + s[1]);
       row.push_back(lateral != 0 ? s[2] / lateral : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "axial" && !t.platen_ids.empty()) {
@@ -313,6 +345,10 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
       row.push_back(get_sums().coordination(model.balls.size()));
     }
   }
+  return row;
+}
+
+void History::write_row(HistoryTable& t, const std::vector<double>& row, std::int64_t cycle) {
   if (t.out) {
     errno = 0;
     for (std::size_t k = 0; k < row.size(); ++k) *t.out << (k ? "," : "") << csv_real(row[k]);
@@ -320,9 +356,8 @@ void History::record(HistoryTable& t, const Model& model, double volume) {
     if (!*t.out)
       throw std::runtime_error(fmt::format("cannot write the history file '{}' ({}): the rows from cycle {} on are "
                                            "not in it", t.file, errno ? std::strerror(errno) : "write failed",
-                                           model.cycle));
+                                           cycle));
   }
-  keep_row(t, std::move(row));
 }
 
 void History::keep_row(HistoryTable& t, std::vector<double> row) {

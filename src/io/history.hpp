@@ -11,6 +11,7 @@
 
 #include "model/model.hpp"
 #include "model/range.hpp"
+#include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
 
 namespace trubal {
@@ -36,6 +37,15 @@ struct HistoryTable {
   std::unique_ptr<std::ofstream> out;
   // The rows PLOT and PRINT history read: the window, or every row read back from the file when
   // the window no longer holds them all.
+};
+
+// Where a record's sums come from, in a distributed run whose ranks keep their parts through a
+// CYCLE's output steps: Love's stress sums and the contact sums merged over the parts
+// (Pipeline::stress_on_parts, contact_sums_on_parts: collective calls, the same numbers on every
+// rank and serial's bits). Unset: the model's own.
+struct HistorySums {
+  std::function<StressSums()> stress;
+  std::function<ContactSums()> contacts;
 };
 
 // What HIST ... file does with a file that is there: `new` starts it afresh, `append` keeps its rows
@@ -77,6 +87,14 @@ class History {
   static std::vector<std::size_t> platen_balls(const Model& model, const HistoryTable& table);
   // Records a row in every table whose period divides the model's cycle count.
   void sample(const Model& model, double volume);
+  // Whether every table's items are ones each rank can record at a CYCLE's output step from the
+  // sums merged over the parts and the light state it holds (the model's clock, cell, walls'
+  // loads and energies, the balls' radii): stress, pq, ratio and axial without platens, sratio,
+  // strain, volumetric, energy, rolling, unbal, contacts, time, wall, sample and porosity.
+  bool recorded_on_parts() const;
+  // sample() on every rank at once (a collective call), the sums from `sums`; rank 0 writes the
+  // files, and every rank keeps the rows. A failure to write is every rank's.
+  void sample_on_parts(const Model& model, double volume, const HistorySums& sums);
   // Whether sample() records a row at this cycle.
   bool due(std::int64_t cycle) const {
     for (const auto& t : tables_)
@@ -101,6 +119,10 @@ class History {
 
  private:
   void record(HistoryTable& table, const Model& model, double volume);
+  // A table's row now (`sums`: from the parts; else the model's own), and its line in the file.
+  static std::vector<double> row_of(const HistoryTable& table, const Model& model, double volume,
+                                    const HistorySums* sums);
+  static void write_row(HistoryTable& table, const std::vector<double>& row, std::int64_t cycle);
   // Adds a recorded row to the table (its window of rows kept).
   static void keep_row(HistoryTable& table, std::vector<double> row);
   // Opens t.file for appending after keeping its rows up to `cycle`; "" or a note.

@@ -455,6 +455,109 @@ TEST_CASE("distributed: SOLVE keeps the ranks' parts between its checks and sums
   CHECK(counter(after, "decompositions") == counter(before, "decompositions"));
 }
 
+namespace {
+// What a deck printed after each `trubal> print <what>` line, up to the next prompt.
+std::string printed(const std::string& out, const std::string& what) {
+  std::string kept;
+  bool in = false;
+  for (const std::string& line : lines_of(out)) {
+    if (line.rfind("trubal> ", 0) == 0) in = line == "trubal> print " + what;
+    else if (in) kept += line + '\n';
+  }
+  return kept;
+}
+}  // namespace
+
+TEST_CASE("distributed: HIST of sums and CYCLE until read the ranks' parts, rank 0 never handed the whole model: serial's bits",
+          "[mpi][system]") {
+  // Histories whose every item is a sum over the contacts or the balls (stress, pq, ratio, sratio,
+  // unbal, contacts) or the light state every rank holds (strain, volumetric, energy, porosity, a
+  // wall's loads, the sample's measures): at their output steps every rank records the row from
+  // the sums merged over the parts, which keep their results there (CycleControl::
+  // after_step_on_parts). Before, each output step gathered the whole model to rank 0, which then
+  // held it to the CYCLE's end. CYCLE until checks its measure every k cycles with the parts kept
+  // (rank 0 reads, the stress summed on the parts); before, it handed every rank the whole model.
+  // The sample between walls SHEARed by CYCLE until in CYCLEs of 100: one begins at a sort into
+  // space order on the parts, whose lists are searched afresh there as serial's are (the parts kept
+  // their lists, which gave serial's steps but not its save: the wall contacts' candidates).
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string cell = std::string(kSqueezedCell) +
+                           "hist stress pq ratio sratio strain volumetric energy rolling unbal contacts porosity every 10 file h.csv\n"
+                           "hist time unbal every 7\ncycle 1205\nprint counters file c1.txt\n"
+                           "print counters file c1b.txt\ncycle 300 until q 50 every 50\ncycle 2000 until axial 0.03 every 20\n"
+                           "print history\nprint strain\nprint counters file c2.txt\nsave s.sav\n" + std::string(kOutputs);
+  const std::string walls = R"(start box -0.04 0.04 -0.04 0.04 -0.01 0.11
+prop kn 2e6 ks 2e6 fric 30 dens 2650
+prop type 2 kn 2e6 ks 2e6 fric 0
+wall id 1 plane 0 0 0 0 0 1 type 2
+wall id 2 plane 0 0 0.1 0 0 -1 type 2
+wall id 3 cylinder 0 0 -0.005 0 0 1 radius 0.02 length 0.11 type 2
+sample platens 1 2 cylinder 3
+gen 1500 0.0015 0.0025 seed 11
+damp local 0.7
+servo wall 1 stress 1e5 in 3 max 0.05
+servo wall 2 stress 1e5 in 3 max 0.05
+servo wall 3 stress 1e5 between 1 2 max 0.05
+hist sample wall 3 wall 1 energy unbal contacts porosity stress every 50 file h.csv
+cycle 3000
+print counters file c1.txt
+servo wall 1 off
+servo wall 2 off
+wall id 1 velocity 0 0 0.02
+wall id 2 velocity 0 0 -0.02
+sample reset
+print counters file c1b.txt
+cycle 5000 until axial 0.004 every 100
+print history
+print walls
+print sample
+print counters file c2.txt
+save s.sav
+)" + std::string(kOutputs);
+  for (const auto& [name, deck] : {std::pair{"cell", cell}, std::pair{"walls", walls}}) {
+    INFO(name);
+    TempDir serial, ranks;
+    serial.write("deck.dat", deck);
+    ranks.write("deck.dat", "backend mpi\n" + deck);
+    REQUIRE(run_deck(serial, 0) == 0);
+    REQUIRE(run_deck(ranks, 3, kEqualShares) == 0);   // (the decompositions are counted)
+    const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
+    INFO(out);
+    for (const char* file : {"h.csv", "balls.csv", "contacts.csv", "s.sav"}) {
+      INFO(file);
+      CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+    }
+    // (Rows in memory alone, and the file's: rank 0 recorded them with the others.)
+    CHECK(lines_of(printed(serial_out, "history")).size() > 20);
+    for (const char* what : {"history", "strain", "walls", "sample"}) {
+      INFO(what);
+      CHECK(printed(out, what) == printed(serial_out, what));
+    }
+    auto reached = [](const std::string& text) {
+      std::string kept;
+      for (const std::string& line : lines_of(text))
+        if (line.rfind("reached ", 0) == 0) kept += line + '\n';
+      return kept;
+    };
+    CHECK(!reached(serial_out).empty());
+    CHECK(reached(out) == reached(serial_out));
+    // No output step, no check of CYCLE until's and no PRINT of the light state above gathered the
+    // whole model to rank 0 (the SERVO and WALL lines between the walls' CYCLEs do: c1b).
+    const Counters first = read_counters(ranks.path() / "c1.txt"), before = read_counters(ranks.path() / "c1b.txt"),
+                   after = read_counters(ranks.path() / "c2.txt");
+    CHECK(counter(first, "whole_gathers") == 0);
+    CHECK(counter(after, "whole_gathers") == counter(before, "whole_gathers"));
+    // (CYCLE until's CYCLEs of k keep the parts: the walls' first splits afresh, after the WALL
+    // lines' edits on rank 0.)
+    CHECK(counter(after, "decompositions") - counter(before, "decompositions") <= 1);
+    for (const Counters* c : {&first, &after}) {
+      CHECK(counter(*c, "parts_kept") == 1);
+      CHECK(counter(*c, "whole_hollow") == 1);
+      CHECK(counter(*c, "whole_hand_overs") == 0);
+    }
+  }
+}
+
 TEST_CASE("distributed: DAMP, FRAC, TSTEP, GRAV, STRAIN and SERVO between CYCLEs leave the ranks their parts, with the serial bits",
           "[mpi][system]") {
   // A squeezed periodic cell whose settings change between nine CYCLEs: each setting's command runs
