@@ -1,7 +1,8 @@
 #!/bin/bash
 # Each rank's peak resident memory through a deck of the peers' dense FCC block, stage by stage,
 # against its share of the serial run's peak (doc/distributed.md, "Memory per rank"): the BALL
-# lines; CYCLE 20; SAVE and PRINT contacts file; DAMP and CYCLE 10; with LONG, a long CYCLE
+# lines; CYCLE 20; SAVE and PRINT contacts file; DAMP and CYCLE 10; HIST of the stress, the
+# unbalanced force and the contacts every 5 cycles and CYCLE 10 (its output steps); with LONG, a long CYCLE
 # (LONG cycles: the sorts into space order every 1000 cycles and the rescue copies every 500 in
 # it); then, in a second run, RESTART of the serial run's save and CYCLE 10 after it. The decks
 # have BACKEND mpi first and PRINT counters after each stage; a stage's figure is each rank's `rank<r>_peak_mib`
@@ -24,7 +25,7 @@ HERE=$(cd "$(dirname "$0")" && pwd)
 mpi_bench_setup memory
 cd "$W"
 SCENES_OUT=. python3 -c "import sys; sys.path.insert(0, '$PEERS'); import gen_scenes; gen_scenes.fcc($CELLS, $CELLS, $CELLS)" >/dev/null
-STAGES="balls cycle save damp"
+STAGES="balls cycle save damp hist"
 LONG=${LONG:-}
 [ -n "$LONG" ] && STAGES="$STAGES long"
 {
@@ -39,6 +40,9 @@ LONG=${LONG:-}
   echo "damp local 0.1"
   echo "cycle 10"
   echo "print counters file damp.txt"
+  echo "hist stress unbal contacts every 5 file hist.csv"
+  echo "cycle 10"
+  echo "print counters file hist.txt"
   if [ -n "$LONG" ]; then echo "cycle $LONG"; echo "print counters file long.txt"; fi
 } > deck.dat
 printf 'backend mpi\nrestart ../p1/out.sav\nprint counters file restart.txt\ncycle 10\nprint counters file rcycle.txt\nsave again.sav\n' > restart.dat
@@ -67,7 +71,7 @@ run 1 restart.dat r
 for p in $RANKS; do
   run "$p" deck.dat p
   run "$p" restart.dat r
-  for f in out.sav contacts.csv; do cmp -s "p1/$f" "p$p/$f" || echo "$p ranks: $f differs from serial's" >&2; done
+  for f in out.sav contacts.csv hist.csv; do cmp -s "p1/$f" "p$p/$f" || echo "$p ranks: $f differs from serial's" >&2; done
   cmp -s r1/again.sav "r$p/again.sav" || echo "$p ranks: the save after RESTART differs from serial's" >&2
 done
 STAGES="$STAGES restart rcycle"
