@@ -134,9 +134,12 @@ static void run_print(Context& ctx, Args& args) {
     }
   }
   // The cell's strain, the settings, the histories, the walls and the sample read the light state
-  // alone (the walls' loads are formed at every CYCLE's last step): as it is, which under mpirun
-  // may leave rank 0's whole model hollow, the parts holding the balls. The rest read the balls.
-  const bool light = item == 4 || item == 8 || item == 9 || item == 10 || item == 11 || item == 16;
+  // alone (the walls' loads are formed at every CYCLE's last step), and so do the energies after a
+  // step (its own sums): as it is, which under mpirun may leave rank 0's whole model hollow, the
+  // parts holding the balls. The rest read the balls.
+  const bool at_step = ctx.session.state().energy_at_step.valid;
+  const bool light =
+      item == 4 || (item == 5 && at_step) || item == 8 || item == 9 || item == 10 || item == 11 || item == 16;
   const Model& m = light ? ctx.session.state() : ctx.session.model();
   switch (item) {
     case 16: args.done(); print_sample(ctx); return;
@@ -152,7 +155,7 @@ static void run_print(Context& ctx, Args& args) {
     }
     case 5: {
       args.done();
-      EnergyReport e = energy(ctx.session.model_with_masses());   // before the first CYCLE too
+      EnergyReport e = energy(at_step ? m : ctx.session.model_with_masses());   // before the first CYCLE too
       if (e.at_step)
         ctx.out << fmt::format("at the last force pass (cycle {}, time {:.8g}):\n", m.cycle - 1, m.time - m.dt);
       else

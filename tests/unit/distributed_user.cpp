@@ -364,7 +364,8 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
   // A CYCLE's end leaves rank 0's whole model hollow (BrickStep::hollow_whole): PRINT info and
   // counters then sum their counts over the parts, PRINT stress, fabric and coordination their
   // exact sums and counts over the parts (the contacts', the wall contacts', the bridges', the
-  // balls' unbalanced forces), PRINT balls and contacts merge the parts' rows by
+  // balls' unbalanced forces), PRINT energy, walls, strain and history read the light state (the
+  // energies of the last step's sums), PRINT balls and contacts merge the parts' rows by
   // id, SAVE streams the parts' arrays a chunk at a time, and CYCLE's overlap warning and its next
   // start (a load, a spin: the kernel's features; the contact-free step) read the parts. Two scenes
   // on 3 ranks against serial: balls falling in a box onto a wall, one pressed into it by an applied
@@ -372,7 +373,8 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
   // capillary bridges.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string reads =
-      "print stress\nprint stress volume 2e-6\nprint fabric\nprint coordination\nprint counters file counters.txt\n"
+      "print stress\nprint stress volume 2e-6\nprint fabric\nprint coordination\nprint energy\nprint walls\nprint strain\n"
+      "print history\nprint counters file counters.txt\n"
       "print info\nprint contacts\nsave a.sav\nprint balls file b.csv\n"
       "print contacts file c.csv\ncycle 40\nprint contacts file c2.csv\nsave c.sav\nprint balls file b2.csv\n";
   const std::string box =
@@ -413,7 +415,8 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
       for (const std::string& line : lines_of(text))
         for (const char* start : {"contacts:", "walls:", "bridges intact:", "physics:", "kernel:", "ball order:", "balls:",
                                   "deck.dat:8: warning: at cycle", "stress:", "fabric:", "coordination number:",
-                                  "sliding fraction:", "unbalanced-force ratio:"})
+                                  "sliding fraction:", "unbalanced-force ratio:", "at the last force pass", "kinetic (",
+                                  "strain:", "friction work:", "balance (should", "wall 7", "  force (", "volumetric strain:"})
           if (line.rfind(start, 0) == 0) kept += line + '\n';
       const auto rows = text.find("overlap          fn");
       kept += rows == std::string::npos ? "" : text.substr(rows, text.find("trubal>", rows) - rows);
@@ -421,7 +424,8 @@ TEST_CASE("distributed: rank 0's whole model left hollow, what reads it reads th
     };
     CHECK(model_lines(out) == model_lines(serial_out));
     if (scene == wet) CHECK(model_lines(serial_out).find("bridges intact") != std::string::npos);
-    for (const char* reading : {"stress: xx", "fabric: xx", "coordination number:", "unbalanced-force ratio: mean"})
+    for (const char* reading : {"stress: xx", "fabric: xx", "coordination number:", "unbalanced-force ratio: mean",
+                                "at the last force pass", "balance (should stay constant)"})
       CHECK(model_lines(serial_out).find(reading) != std::string::npos);
   }
 }
