@@ -419,6 +419,17 @@ TEST_CASE("distributed: RESTART read by rank 0 alone, the others holding its lig
   CHECK(counter(counters_of(ranks), "decompositions") >= 1);
 }
 
+namespace {
+// The deck serially and on 3 ranks (BACKEND mpi first, the shares equal: the tests count the
+// decompositions), each in its own folder, each ending with the exit status `status`.
+void run_both(const std::string& deck, TempDir& serial, TempDir& ranks, int status = 0) {
+  serial.write("deck.dat", deck);
+  ranks.write("deck.dat", "backend mpi\n" + deck);
+  REQUIRE(run_deck(serial, 0) == status);
+  REQUIRE(run_deck(ranks, 3, kEqualShares) == status);
+}
+}  // namespace
+
 TEST_CASE("distributed: SOLVE keeps the ranks' parts between its checks and sums the ratio on them: serial's bits", "[mpi][system]") {
   // A squeezed periodic cell let go, SOLVEd on 3 ranks: each of SOLVE's CYCLEs of 100 keeps the
   // parts (no rank handed the whole model, nor the model split again), its last step's results
@@ -430,10 +441,7 @@ TEST_CASE("distributed: SOLVE keeps the ranks' parts between its checks and sums
                            "solve ratio 0.02 limit 1500\nprint counters file after.txt\nsave s.sav\n" +
                            std::string(kOutputs);
   TempDir serial, ranks;
-  serial.write("deck.dat", deck);
-  ranks.write("deck.dat", "backend mpi\n" + deck);
-  REQUIRE(run_deck(serial, 0) == 0);
-  REQUIRE(run_deck(ranks, 3, kEqualShares) == 0);   // (the decompositions are counted)
+  run_both(deck, serial, ranks);
   const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
   INFO(out);
   auto solved = [](const std::string& text) {
@@ -517,10 +525,7 @@ save s.sav
   for (const auto& [name, deck] : {std::pair{"cell", cell}, std::pair{"walls", walls}}) {
     INFO(name);
     TempDir serial, ranks;
-    serial.write("deck.dat", deck);
-    ranks.write("deck.dat", "backend mpi\n" + deck);
-    REQUIRE(run_deck(serial, 0) == 0);
-    REQUIRE(run_deck(ranks, 3, kEqualShares) == 0);   // (the decompositions are counted)
+    run_both(deck, serial, ranks);
     const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
     INFO(out);
     for (const char* file : {"h.csv", "balls.csv", "contacts.csv", "s.sav"}) {
@@ -803,14 +808,6 @@ TEST_CASE("distributed: the balls put in space order on the ranks' parts inside 
   // start, eight sorts later: every ball array is put back from the copies, in their order. And
   // a CYCLE whose last step sorts, its results read after.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
-  // The deck serially and on 3 ranks (BACKEND mpi first), each in its own folder, each ending with
-  // the exit status `status`.
-  auto run_both = [](const std::string& deck, TempDir& serial, TempDir& ranks, int status) {
-    serial.write("deck.dat", deck);
-    ranks.write("deck.dat", "backend mpi\n" + deck);
-    REQUIRE(run_deck(serial, 0) == status);
-    REQUIRE(run_deck(ranks, 3, kEqualShares) == status);
-  };
   const std::string outputs =
       "print balls file b.csv\nprint contacts file c.csv\nsave a.sav\nprint counters file counters.txt\n";
   const std::string box =
