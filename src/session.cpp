@@ -547,8 +547,10 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   auto marks = std::make_shared<std::vector<std::size_t>>(history_->recorded());
   if (histories && comm::size() > 1) control.share_output = [this, marks] { history_->share_rows(*marks); };
   // Histories of sums alone, where the ranks keep their parts: every rank records them from the
-  // sums merged over the parts, and rank 0 is not handed the whole model for them (a dump is).
-  if (histories && !dumps && control.keep_parts && pipeline_->distributed() && history_->recorded_on_parts())
+  // sums merged over the parts, and rank 0 is not handed the whole model for them (at a dump's step
+  // it is: after_step records the rows there, and share_rows hands them on).
+  if (histories && dumps) control.reads_whole = [dumps](std::int64_t cycle) { return dumps->due(cycle); };
+  if (histories && control.keep_parts && pipeline_->distributed() && history_->recorded_on_parts())
     control.after_step_on_parts = [this, vol, moving_cell, marks](const Model& m) {
       const auto L = m.space.length();
       HistorySums sums;

@@ -351,7 +351,8 @@ StepPlan CycleRun::plan(std::int64_t s) const {
   p.observed = control_.after_step && (!control_.reads_contacts || control_.reads_contacts(model_.cycle + 1));
   p.deferred = control_.defer_results && s == n_ && !p.stopping && !p.observed;
   const bool parts_observe = p.observed && control_.after_step_on_parts && control_.keep_parts &&
-                             pipeline_.distributed() && !p.stopping;
+                             pipeline_.distributed() && !p.stopping &&
+                             !(control_.reads_whole && control_.reads_whole(model_.cycle + 1));
   p.leave_results = control_.leave_results && control_.keep_parts && pipeline_.distributed() && s == n_ &&
                     !p.stopping && !p.observed;
   // (A snapshot step's results serve a whole model's copy alone: a copy on the ranks' parts holds

@@ -29,6 +29,9 @@ struct CycleControl {
   // sums made on the parts (Pipeline::stress_on_parts, contact_sums_on_parts): no rank gathers the
   // whole model for them. Where the parts are not live at the step, after_step as above.
   std::function<void(const Model&)> after_step_on_parts;
+  // With after_step_on_parts: whether an observer reads the whole model after the step that ends at
+  // this cycle (a dump): that step goes by after_step, the whole model gathered to rank 0.
+  std::function<bool(std::int64_t cycle)> reads_whole;
   // Called now and then for progress reports.
   std::function<void(std::int64_t done, std::int64_t total)> progress;
   // The last step's results (and the 500th steps' before the rescue copies) are not written: the
