@@ -536,10 +536,14 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   const bool histories = !history_->tables().empty();
   VtkSeries* dumps = dumps_ && dumps_->every() > 0 ? dumps_.get() : nullptr;
   const bool moving_cell = !(volume > 0) && model_.space.periodic;   // STRAIN and SERVO change it
+  // The histories' volume at a step: the cell's as it is then, where it moves.
+  auto volume_at = [vol, moving_cell](const Model& m) {
+    const auto L = m.space.length();
+    return moving_cell ? L[0] * L[1] * L[2] : vol;
+  };
   if (histories || dumps)
-    control.after_step = [this, vol, histories, dumps, moving_cell](const Model& m) {
-      const auto L = m.space.length();
-      if (histories) history_->sample(m, moving_cell ? L[0] * L[1] * L[2] : vol);
+    control.after_step = [this, volume_at, histories, dumps](const Model& m) {
+      if (histories) history_->sample(m, volume_at(m));
       if (dumps && dumps->due(m.cycle)) dumps->write(m);
     };
   // (The rows rank 0 recorded since: share_rows hands them on. Rows every rank recorded on the
@@ -551,12 +555,11 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   // it is: after_step records the rows there, and share_rows hands them on).
   if (histories && dumps) control.reads_whole = [dumps](std::int64_t cycle) { return dumps->due(cycle); };
   if (histories && control.keep_parts && pipeline_->distributed() && history_->recorded_on_parts())
-    control.after_step_on_parts = [this, vol, moving_cell, marks](const Model& m) {
-      const auto L = m.space.length();
+    control.after_step_on_parts = [this, volume_at, marks](const Model& m) {
       HistorySums sums;
       sums.stress = [this, &m] { return pipeline_->stress_on_parts(m); };
       sums.contacts = [this, &m] { return pipeline_->contact_sums_on_parts(m); };
-      history_->sample_on_parts(m, moving_cell ? L[0] * L[1] * L[2] : vol, sums);
+      history_->sample_on_parts(m, volume_at(m), sums);
       *marks = history_->recorded();
     };
   control.reads_contacts = [this, histories, dumps](std::int64_t cycle) {
