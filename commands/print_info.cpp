@@ -196,8 +196,10 @@ void print_counters(Context& ctx, const std::string& file) {
   line("whole_hand_overs", c.hand_overs);
   line("whole_gathers", c.parts.gathers);
   line("peak_mib", s.rank_figures().front().peak_mib);   // (rank 0's under mpirun, gathered before PRINT)
+  line("model_held_mib", s.rank_figures().front().model_arrays_mib);
   line("copies_put_back_on_parts", c.copies_on_parts);
   line("parts_from_held_balls", c.parts_from_records);
+  line("parts_from_saves", c.parts_from_saves);
   if (comm::size() > 1) {   // (gathered before rank 0 runs PRINT: Session::gather_rank_figures)
     const auto ranks = s.rank_figures();
     for (std::size_t r = 0; r < ranks.size(); ++r) {

@@ -27,7 +27,7 @@ static void run_restart(Context& ctx, Args& args) {
   std::string file = args.word("file name");
   args.done();
   const auto notes = ctx.session.restart(file);
-  const auto& m = ctx.session.model();
+  const auto& m = ctx.session.state();   // (the light state: the ranks' parts may hold the rest)
   ctx.out << fmt::format("restarted from {}: {}, cycle {}\n", file, count_of(m.balls.size(), "ball"), m.cycle);
   const auto& tables = ctx.session.history().tables();
   if (!tables.empty())

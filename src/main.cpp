@@ -130,6 +130,9 @@ int run(int argc, char** argv) {
   // Tests: the decomposition's shares kept equal, whatever the ranks' speeds.
   if (const char* equal = std::getenv("TRUBAL_EQUAL_SHARES"); equal && std::strcmp(equal, "1") == 0)
     policy.follow_speeds = false;
+  // Tests: a save's tables read a few rows at a time at a distributed RESTART.
+  if (const char* rows = std::getenv("TRUBAL_SAVE_PIECE"); rows && std::atoi(rows) > 0)
+    policy.save_piece_rows = static_cast<std::uint64_t>(std::atoi(rows));
   int status = 0;
   // What to run is rank 0's choice (its standard input is the terminal; the others' is not).
   std::int64_t stdin_deck = deck == "-" || (deck.empty() && !::isatty(STDIN_FILENO)) ? 1 : 0;

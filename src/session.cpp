@@ -853,14 +853,28 @@ void Session::save(const std::string& path) const {
 std::vector<std::string> Session::restart(const std::string& path) {
   auto histories = std::make_unique<History>();
   Model loaded;
+  std::unique_ptr<SavedTables> saved;   // (rank 0's, where the parts are made from the file)
+  std::int64_t from_file = 0;           // 1: the parts are made from it; 2: with the contact results
   if (comm_size_ < 2) {
     loaded = load_model(path, histories.get());
   } else {
-    // Rank 0 alone reads the file, a buffer at a time, and holds the model; the others take its
-    // light state and the balls' ids, types and radii (light_everywhere), as after a command rank
-    // 0 ran alone, and the histories. A CYCLE then sends each rank its part. On a failure (every
-    // rank's) the model is kept.
-    comm::on_root([&] { loaded = load_model(path, histories.get()); }, "reading the save file");
+    // Rank 0 alone reads the file, a buffer at a time. Where the ranks' parts can be made from it
+    // (SavedTables::why_whole), it reads and checks all of it but the bulk, and each rank then
+    // takes its part of the bulk from it a piece at a time (Pipeline::parts_from_file): no rank
+    // holds the whole model. Else rank 0 holds the model and the others take its light state and
+    // the balls' ids, types and radii (light_everywhere), as after a command rank 0 ran alone; a
+    // CYCLE then sends each rank its part. A file refused is refused on every rank, the model kept.
+    const bool parts_may = pipeline_->distributed() && pipeline_->policy().local_rule >= 0;
+    comm::on_root([&] {
+      if (parts_may) {
+        saved = std::make_unique<SavedTables>(path, histories.get());
+        if (saved->why_whole().empty()) saved->check(policy_.save_piece_rows);
+        else saved.reset();
+      }
+      if (saved) from_file = saved->rows(PieceTable::Pairs) > 0 ? 2 : 1;
+      else loaded = load_model(path, histories.get());
+    }, "reading the save file");
+    comm::broadcast(from_file);
     std::string bytes;
     comm::on_root([&] { bytes = history_bytes(*histories); }, "writing its histories for the other ranks");
     comm::broadcast(bytes);
@@ -869,6 +883,7 @@ std::vector<std::string> Session::restart(const std::string& path) {
     }, "taking rank 0's histories");
     // The model it replaces goes, its parts unsynced (nothing of it is read again).
     pipeline_->drop_parts_unsynced(model_);
+    if (saved) loaded = saved->take_model();
     light_pending_ = true;
   }
   model_ = std::move(loaded);
@@ -882,6 +897,17 @@ std::vector<std::string> Session::restart(const std::string& path) {
   dumps_.reset();
   pipeline_->invalidate();
   light_everywhere();   // (under mpirun: the others' light state; a collective call)
+  if (from_file > 0) {
+    try {
+      pipeline_->parts_from_file(model_, saved.get(), from_file == 2);
+    } catch (const std::exception& e) {
+      // (Every rank's: the model is gone, its balls part way to the parts.)
+      model_ = Model{};
+      history_->clear();
+      throw std::runtime_error(fmt::format("'{}': the ranks could not take their parts of it: {}; no model is left: "
+                                           "RESTART again", path, e.what()));
+    }
+  }
   return history_->resume_files(model_.cycle);
 }
 

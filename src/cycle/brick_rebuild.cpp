@@ -29,12 +29,21 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   // A bonded scene: its bonds' other balls come in the halo where no intact bond is longer than
   // a pair may be; else the parts are made afresh from the whole model. (collective)
   if (bonded_ && !bonds_within(full.space, r.reach)) return false;
+  if (from_file_) {
+    r.from_file = true;
+    r.file_pairs = std::move(file_pairs_);
+    r.file_walls = std::move(file_walls_);
+    from_file_ = false;
+  }
 
   // Who owns each ball from now on: the brick of the split that holds it (brick_split.cpp).
   fit_shell_bins(r, full.space);   // (collective)
   together([&] { find_moves(r); }, "finding the balls that change owner");
   team_->allgather(r.moves, r.all_moves);
   r.moved = r.all_moves.size() / Rebuild::kMove;
+  // (A split's owners are those of its bricks: parts just made from a save keep their balls, and
+  // the pairs and wall contacts that came with them stay where they came.)
+  if (r.from_file && r.moved > 0) throw std::logic_error("internal error: a ball changed owner at the first list of parts made from a save");
   if (!balanced_after_moves(r)) return false;
   // The halo, which of this member's balls each other needs (brick_halo.cpp), and what leaves with
   // a moving ball (brick_migrate.cpp).
@@ -68,11 +77,19 @@ bool BrickStep::rebuild_local(const Model& full, double skin, Backend& search, T
   // The new part in the old one's place, then what is made from it.
   commit_rebuild(r);
   together([&] { index_part(); }, "indexing its new pair list");
-  // (The wall contacts are still the old part's, numbered by its balls: found afresh, then indexed.)
-  if (!full.walls.empty() || part_.wall_contacts.size() > 0)
+  // (The wall contacts are still the old part's, numbered by its balls: found afresh, then indexed.
+  // A part made from a save: those that came with its balls, their history and results carried.)
+  if (r.from_file) together([&] { install_file_walls(r.file_walls); }, "taking the wall contacts of its part from the save");
+  else if (!full.walls.empty() || part_.wall_contacts.size() > 0)
     together([&] { find_part_walls(r, full, pool); }, "finding the wall contacts of its part");
   else
     scratch_.index_walls(part_.wall_contacts, part_.balls.size());
+  if (r.from_file && from_file_results_) {
+    // The save's contact results, the model's state's, carried into the new list (zero for a pair
+    // it did not hold: one apart): the parts hold them, rank 0's table none.
+    part_.contacts.keep_results();
+    results_left_ = true;
+  }
   return true;
 }
 
@@ -176,12 +193,16 @@ void BrickStep::search_part(Rebuild& r, const Space& space, Backend& search) con
 void BrickStep::carry_history(Rebuild& r) const {
   // The history carried over by the pair (the old list holds every pair of this rank's balls),
   // matched in the whole model's numbers.
-  r.next_table = part_.contacts;
-  ContactTable& c = r.next_table;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    c.i[p] = global_ball_[c.i[p]];
-    c.j[p] = global_ball_[c.j[p]];
+  if (r.from_file) {   // (a part made from a save: its pairs came in the whole model's numbers)
+    r.next_table = std::move(r.file_pairs);
+  } else {
+    r.next_table = part_.contacts;
+    for (std::size_t p = 0; p < r.next_table.size(); ++p) {
+      r.next_table.i[p] = global_ball_[r.next_table.i[p]];
+      r.next_table.j[p] = global_ball_[r.next_table.j[p]];
+    }
   }
+  ContactTable& c = r.next_table;
   // With the pairs of the balls that moved here, in the list's order (a pair this rank held too
   // has the same history in both: either serves).
   if (r.arrived_pairs.size() > 0) {
@@ -306,6 +327,33 @@ void BrickStep::index_part() {
   }
   scratch_.index(part_.contacts, m);
   kernels_.laws = make_pair_laws(part_);
+}
+
+void BrickStep::find_walls_again(const Model& full, double reach, ThreadPool& pool) {
+  Rebuild r;
+  r.skin = reach;
+  together([&] { find_part_walls(r, full, pool); }, "finding the wall contacts of its part");
+  ++edition_;   // (a copy taken before is not put back in place: its wall contacts are another list)
+  list_local_ = true;
+  current_ = false;
+  shared_ = false;
+}
+
+void BrickStep::install_file_walls(WallContacts& w) {
+  // The save's wall contacts of this rank's balls, as the file holds them (serial's RESTART keeps
+  // its table until the next step searches: Pipeline::parts_from_file has the parts search then
+  // too), each ball renumbered the part's (whose balls are in the whole model's order).
+  for (std::size_t q = 0; q < w.size(); ++q) {
+    const auto at = std::lower_bound(global_ball_.begin(), global_ball_.end(), w.ball[q]);
+    if (at == global_ball_.end() || *at != w.ball[q] || scratch_.ghost[static_cast<std::size_t>(at - global_ball_.begin())])
+      throw std::logic_error("internal error: a wall contact of the save came to a rank that does not own its ball");
+    w.ball[q] = static_cast<std::uint32_t>(at - global_ball_.begin());
+  }
+  w.list_version = next_part_version();
+  part_.wall_contacts = std::move(w);
+  owned_walls_.resize(part_.wall_contacts.size());
+  std::iota(owned_walls_.begin(), owned_walls_.end(), 0u);
+  scratch_.index_walls(part_.wall_contacts, part_.balls.size());
 }
 
 void BrickStep::find_part_walls(Rebuild& r, const Model& full, ThreadPool& pool) {

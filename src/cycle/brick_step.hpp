@@ -59,6 +59,7 @@
 #include "cycle/verlet.hpp"
 #include "backends/backend.hpp"
 #include "model/model.hpp"
+#include "model/table_pieces.hpp"
 #include "support/thread_pool.hpp"
 
 namespace trubal {
@@ -116,6 +117,16 @@ class BrickStep {
   // found yet. A collective call; `records` is let go once sent.
   void split_from_records(const Model& full, std::vector<double>& records);
   static constexpr std::size_t kRecord = 7;
+  // The ranks' split made from a save a distributed RESTART reads (cycle/brick_from_file.cpp):
+  // `full` holds, on rank 0, the balls' ids, types, fixities, radii and centres in the whole
+  // model's order and no pair, wall contact or bond (the others, the ids, types and radii); rank 0
+  // decomposes it and reads each array of the save's balls, pairs and wall contacts a piece at a
+  // time from `file` (rank 0's; null on the others), sending each rank its own: its balls, the
+  // pairs of which it owns a ball, its balls' wall contacts. The pairs and wall contacts wait,
+  // in the whole model's numbers, for the part's first list (rebuild_local carries their history
+  // and results into it). A collective call; `results`: the save's contact results are the
+  // model's (the parts hold them after their first list: results_left).
+  void split_from_file(const Model& full, TablePieces* file, bool results);
   // The part's list reference positions its balls' own where it holds none (a part made by
   // split_from_records, whose search goes through the whole model: a sync gathers them).
   void reference_at_balls() {
@@ -160,6 +171,9 @@ class BrickStep {
   // found afresh too (`search`: the backend whose find_part_pairs searches the part; `pool`: the
   // threads of the walls' search).
   bool rebuild_local(const Model& full, double skin, Backend& search, ThreadPool& pool);
+  // The wall contacts of the part's balls found afresh within `reach` of the walls, their history
+  // and results carried, the pair list kept (Pipeline::parts_go_on, after parts made from a save).
+  void find_walls_again(const Model& full, double reach, ThreadPool& pool);
   // The balls put in space order on the parts (a collective call of the ranks, their parts live),
   // as sort_in_space (model/edit.hpp) puts the whole model's: each rank's keys of its own balls
   // go to every rank, which orders them (by key, then id: about 20 bytes a ball for the moment);
@@ -443,6 +457,8 @@ class BrickStep {
   void commit_rebuild(Rebuild& r);
   void index_part();
   void find_part_walls(Rebuild& r, const Model& full, ThreadPool& pool);
+  void install_file_walls(WallContacts& walls);
+
 
   // (keep_copy)
   struct PartCopy {
@@ -516,6 +532,11 @@ class BrickStep {
   // need not make it again, unless the part's edition changed since kept_edition_.
   bool whole_list_kept_ = false;
   std::uint64_t kept_edition_ = 0;
+  // split_from_file's pairs and wall contacts (in the whole model's numbers), which the first
+  // rebuild_local takes in; whether their results are the model's.
+  bool from_file_ = false, from_file_results_ = false;
+  ContactTable file_pairs_;
+  WallContacts file_walls_;
   double max_radius_ = 0;                    // the whole model's largest ball (at the split)
   double shell_base_ = 0;                    // the largest shell received at the first local rebuild
   // Each member's share of the balls at the next split (the same on every member), and this

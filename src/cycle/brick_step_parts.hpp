@@ -290,6 +290,11 @@ struct BrickStep::Rebuild {
   ContactTable arrived_pairs;
   WallContacts arrived_walls;
   Bonds arrived_bonds;
+  // The first list of parts made from a save (split_from_file): its pairs and wall contacts (in
+  // the whole model's numbers), which the new list takes in.
+  bool from_file = false;
+  ContactTable file_pairs;
+  WallContacts file_walls;
   // search_part: the pairs found among the entries, those kept (touching a ball of this rank), the
   // entries the part keeps and each entry's index in it (kAbsent: not kept).
   PairCandidates found;

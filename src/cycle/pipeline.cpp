@@ -103,7 +103,8 @@ void Pipeline::invalidate() {
   list_from_parts_ = false;
   model_ = nullptr;
   whole_next_ = false;   // (a step rewind_step asked for that never came: every rank decides afresh)
-  search_after_sort_ = false;
+  search_next_step_ = false;
+  walls_next_step_ = false;
 }
 
 bool Pipeline::any_outside(const Model& model) {
@@ -770,7 +771,7 @@ PipelineCounters Pipeline::counters() const {
   return {ref_.rebuilds(),    mode_ == StepMode::Space ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
           backend_->pair_tests(), results_made_, results_gathered_, bricks().counts(), cycle_peaks_,
           static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20), hand_overs_,
-          copies_on_parts_, parts_from_records_};
+          copies_on_parts_, parts_from_records_, parts_from_saves_};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {

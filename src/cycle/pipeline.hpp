@@ -41,6 +41,7 @@ struct PipelineCounters {
   std::int64_t hand_overs = 0;     // the whole model handed to every rank for a command, from kept parts
   std::int64_t copies_on_parts = 0;   // the parts put back to their rescue copies in place (restore_rescue_on_parts)
   std::int64_t parts_from_records = 0;   // the parts made from balls the ranks kept (parts_from_records)
+  std::int64_t parts_from_saves = 0;     // the parts made from a save a RESTART read (parts_from_file)
 };
 
 class Pipeline {
@@ -279,6 +280,11 @@ class Pipeline {
   // hold) and their lists searched, rank 0's whole model hollow: as a CYCLE's first split leaves
   // them, the balls never gathered whole. A collective call.
   void parts_from_records(Model& model, std::vector<double>& records);
+  // The ranks' parts made from a save a RESTART reads (BrickStep::split_from_file says what `model`
+  // and `file` hold; `results`: the save's contact results are its model's state's) and their
+  // lists searched, rank 0's whole model hollow: as a CYCLE's end leaves them, the contact results
+  // on the parts (results_on_parts). A collective call; on a failure no part is live.
+  void parts_from_file(Model& model, TablePieces* file, bool results);
   // Whether the balls are put in space order on the ranks' parts (sort_on_parts): a distributed
   // run's ranks, their parts live. The same answer on every rank.
   bool sorts_on_parts(const Model& model) const { return distributed() && comm_ranks_ > 1 && parts_live(model); }
@@ -466,10 +472,15 @@ class Pipeline {
   double wall_travel_ = 0;          // how far any wall's surface may have moved since the search
   double wall_travel_at_step_ = 0;  // wall_travel_ when the last step began (rewind_step)
   // The balls were put in a new order on the parts, whose lists could not be searched afresh there
-  // (sort_on_parts): the next step searches through the whole model. As serial's are after its sort
-  // (invalidate), so that the lists, and the steps at which each is searched again, are serial's (a
-  // step does not depend on its list; a save holds it).
-  bool search_after_sort_ = false;
+  // (sort_on_parts): the next step searches afresh (on the parts where they can, else through the
+  // whole model). As serial's are after its sort (invalidate), so that the lists, and the steps at
+  // which each is searched again, are serial's (a step does not depend on its list; a save holds it).
+  bool search_next_step_ = false;
+  // The parts were made from a save, whose wall contacts they keep as it holds them until the next
+  // step finds them afresh (parts_from_file), as serial's RESTART keeps its table until its first
+  // step's search: a save written between holds the file's. (Their pair list, searched at the
+  // same positions, is the one serial's first step finds.)
+  bool walls_next_step_ = false;
   // The light state and the parts' copies of the rescue, put back to rank 0's whole model.
   void whole_from_part_copies(Model& model);
   Snapshot rescue_;
@@ -482,6 +493,7 @@ class Pipeline {
   bool serving_ = false;   // (start_requests)
   std::int64_t sorted_cycle_ = -1;      // (parts_in_space_order)
   std::int64_t parts_from_records_ = 0;   // (PipelineCounters::parts_from_records)
+  std::int64_t parts_from_saves_ = 0;     // (PipelineCounters::parts_from_saves)
   std::uint64_t sorted_edition_ = 0;
 };
 

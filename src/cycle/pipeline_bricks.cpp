@@ -29,7 +29,7 @@
 namespace trubal {
 
 bool Pipeline::parts_go_on(Model& model) {
-  if (!bricks().live_for(model)) return search_after_sort_ = false;   // (every rank decides alike: each input is the same on all)
+  if (!bricks().live_for(model)) return search_next_step_ = false;   // (every rank decides alike: each input is the same on all)
   bool outside = false;                          // a collective call, made unconditionally
   each_part([&](BrickStep& part, int t) {
     const bool mine = part.outside_cell(model);
@@ -45,10 +45,17 @@ bool Pipeline::parts_go_on(Model& model) {
     outside = !wrapped;
   }
   const double limit2 = ref_.displacement_limit2(model);
-  const bool sorted = std::exchange(search_after_sort_, false);
+  const bool sorted = std::exchange(search_next_step_, false);
+  const bool walls = std::exchange(walls_next_step_, false);
   const bool stale = outside || sorted || !(limit2 >= 0) || !(bricks().moved2() <= limit2) ||
                      !(wall_travel_ <= 0.5 * ref_.skin());
-  if (!stale) return true;
+  if (!stale) {
+    if (walls) {
+      const double reach = list_reach(model, list_skin(model));
+      each_part([&](BrickStep& part, int t) { part.find_walls_again(model, reach, distributed() ? pool_ : *solo_pools_[t]); });
+    }
+    return true;
+  }
   if (outside) return false;
   // A stale list alone: the members rebuild it on their parts where they can.
   const double skin = list_skin(model);
@@ -158,6 +165,30 @@ void Pipeline::parts_from_records(Model& model, std::vector<double>& records) {
   ++parts_from_records_;
 }
 
+void Pipeline::parts_from_file(Model& model, TablePieces* file, bool results) {
+  // As parts_from_records, the parts made from the save's pieces; their first list carries the
+  // save's history and results in (BrickStep::rebuild_local), on the parts alone.
+  const double skin = list_skin(model);
+  ref_.record(model, skin);
+  ref_.forget_radii();
+  wall_travel_ = 0;
+  list_ = ListState::PartsToSearch;
+  for (auto& part : bricks_) part->whole_freed();
+  try {
+    bricks().split_from_file(model, file, results);
+    others_hollow_ = false;
+    hollow_whole(model);
+    if (!rebuild_parts(model, list_reach(model, skin)))   // (the same answer on every rank)
+      throw std::runtime_error("the ranks' parts made from it could not search their pair lists");
+  } catch (...) {
+    drop_parts_unsynced(model);
+    throw;
+  }
+  list_ = ListState::Current;
+  walls_next_step_ = !model.walls.empty();   // (the same on every rank)
+  ++parts_from_saves_;
+}
+
 bool Pipeline::sort_on_parts(Model& model) {
   if (!sorts_on_parts(model)) throw std::logic_error("internal error: the balls sorted on parts that are not live");
   // (The others' whole models hollow, as each step leaves them: a command or START's escapes may
@@ -178,7 +209,7 @@ bool Pipeline::sort_on_parts(Model& model) {
     ref_.record_cell(model, skin);
     wall_travel_ = 0;
   } else {
-    search_after_sort_ = true;   // (the same on every rank)
+    search_next_step_ = true;   // (the same on every rank)
   }
   return true;
 }

@@ -6,6 +6,8 @@
 // path gives the same bits.
 #pragma once
 
+#include <cstdint>
+
 namespace trubal {
 
 struct StepPolicy {
@@ -36,6 +38,10 @@ struct StepPolicy {
   // busy with other work (which slows both members by up to about two) cannot hide it.
   int slow_member = -1;
   static constexpr double kSlowFactor = 8;
+  // The rows of a save's table that a distributed RESTART reads, checks and hands out at a time
+  // (SavedTables::check, BrickStep::split_from_file): fewer (TRUBAL_SAVE_PIECE) have a test's small
+  // scene cross many pieces.
+  std::uint64_t save_piece_rows = std::uint64_t{1} << 16;
 
   // Faults (TRUBAL_TEST_FAIL_AT), each on one rank of a distributed run (-1: none), each once: the
   // rank's next split of the decomposition ("R split"), next search on its part ("R part") and

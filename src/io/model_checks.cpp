@@ -20,33 +20,44 @@ bool valid_bool(const bool& b) { return *reinterpret_cast<const unsigned char*>(
 
 }  // namespace
 
-// What must hold of a model for it to run: what a checksum cannot vouch for (a file written by
-// hand or by another program). "" when it holds, else what does not.
-std::string invalid_model(const Model& m) {
+std::string ball_problem(const Balls& b, std::size_t k, std::size_t at) {
   auto finite = [](double v) { return std::isfinite(v); };
+  if (!(b.id[k] > 0)) return fmt::format("ball ids are not positive (ball {} at position {})", b.id[k], at);
+  if (!(b.rad[k] > 0) || !finite(b.rad[k])) return fmt::format("ball {} has radius {}", b.id[k], b.rad[k]);
+  for (double v : {b.x[k], b.y[k], b.z[k], b.vx[k], b.vy[k], b.vz[k], b.wx[k], b.wy[k], b.wz[k]})
+    if (!finite(v)) return fmt::format("ball {} has a position or velocity that is not a number", b.id[k]);
+  if (b.fixed[k] > kVel + kSpin) return fmt::format("ball {} has fixities {}", b.id[k], int(b.fixed[k]));
+  return "";
+}
+
+std::string pair_problem(const ContactTable& c, std::size_t p, std::size_t at, std::size_t balls) {
+  if (!(c.i[p] < c.j[p])) return fmt::format("contact {} is not i < j", at);
+  if (!(c.j[p] < balls)) return fmt::format("contact {} names no ball", at);
+  if (p > 0 && (c.i[p] < c.i[p - 1] || (c.i[p] == c.i[p - 1] && c.j[p] < c.j[p - 1])))
+    return fmt::format("the contacts are not sorted (at {})", at);
+  if (c.state[p] > 2) return fmt::format("contact {} has state {}", at, int(c.state[p]));
+  return "";
+}
+
+std::string wall_contact_problem(const WallContacts& wc, std::size_t p, std::size_t at, const Model& m) {
   const Balls& b = m.balls;
-  if (!b.ids_indexed()) {
-    for (std::size_t r = 1; r < b.by_id.size() && b.by_id.size() == b.size(); ++r)
-      if (b.by_id[r] < b.size() && b.by_id[r - 1] < b.size() && b.id[b.by_id[r]] == b.id[b.by_id[r - 1]])
-        return fmt::format("ball id {} is given to two balls (at positions {} and {})", b.id[b.by_id[r]],
-                           b.by_id[r - 1], b.by_id[r]);
-    return "the index of the ball ids is not made";
-  }
-  for (std::size_t k = 0; k < b.size(); ++k) {
-    if (!(b.id[k] > 0))
-      return fmt::format("ball ids are not positive (ball {} at position {})", b.id[k], k);
-    if (!(b.rad[k] > 0) || !finite(b.rad[k])) return fmt::format("ball {} has radius {}", b.id[k], b.rad[k]);
-    for (double v : {b.x[k], b.y[k], b.z[k], b.vx[k], b.vy[k], b.vz[k], b.wx[k], b.wy[k], b.wz[k]})
-      if (!finite(v)) return fmt::format("ball {} has a position or velocity that is not a number", b.id[k]);
-    if (b.fixed[k] > kVel + kSpin) return fmt::format("ball {} has fixities {}", b.id[k], int(b.fixed[k]));
-  }
-  const ContactTable& c = m.contacts;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!(c.i[p] < c.j[p])) return fmt::format("contact {} is not i < j", p);
-    if (p > 0 && (c.i[p] < c.i[p - 1] || (c.i[p] == c.i[p - 1] && c.j[p] < c.j[p - 1])))
-      return fmt::format("the contacts are not sorted (at {})", p);
-    if (c.state[p] > 2) return fmt::format("contact {} has state {}", p, int(c.state[p]));
-  }
+  if (wc.ball[p] >= b.size() || wc.wall[p] >= m.walls.size() || b.id[wc.ball[p]] != wc.ball_id[p] ||
+      m.walls[wc.wall[p]].id != wc.wall_id[p] || wc.state[p] > 2)
+    return fmt::format("wall contact {} does not match the balls and walls", at);
+  return "";
+}
+
+std::string ids_problem(const Balls& b) {
+  if (b.ids_indexed()) return "";
+  for (std::size_t r = 1; r < b.by_id.size() && b.by_id.size() == b.size(); ++r)
+    if (b.by_id[r] < b.size() && b.by_id[r - 1] < b.size() && b.id[b.by_id[r]] == b.id[b.by_id[r - 1]])
+      return fmt::format("ball id {} is given to two balls (at positions {} and {})", b.id[b.by_id[r]], b.by_id[r - 1],
+                         b.by_id[r]);
+  return "the index of the ball ids is not made";
+}
+
+std::string light_problem(const Model& m) {
+  auto finite = [](double v) { return std::isfinite(v); };
   const Space& s = m.space;
   for (int a = 0; a < 3; ++a) {
     if (m.started && !(s.hi[a] > s.lo[a] && finite(s.lo[a]) && finite(s.hi[a])))
@@ -96,15 +107,26 @@ std::string invalid_model(const Model& m) {
   } else if (m.sample.platens[1] != 0 || m.sample.sides != std::array<std::int64_t, 4>{}) {
     return "the sample's walls do not match";
   }
+  return "";
+}
+
+// What must hold of a model for it to run: what a checksum cannot vouch for (a file written by
+// hand or by another program). "" when it holds, else what does not.
+std::string invalid_model(const Model& m) {
+  const Balls& b = m.balls;
+  if (std::string p = ids_problem(b); !p.empty()) return p;
+  for (std::size_t k = 0; k < b.size(); ++k)
+    if (std::string p = ball_problem(b, k, k); !p.empty()) return p;
+  const ContactTable& c = m.contacts;
+  for (std::size_t p = 0; p < c.size(); ++p)
+    if (std::string q = pair_problem(c, p, p, b.size()); !q.empty()) return q;
+  if (std::string p = light_problem(m); !p.empty()) return p;
   const WallContacts& wc = m.wall_contacts;
   bool sizes = true;
   const_cast<WallContacts&>(wc).for_each_array([&](auto& v) { sizes = sizes && v.size() == wc.size(); });
   if (!sizes) return "the wall contacts' records do not match";
-  for (std::size_t p = 0; p < wc.size(); ++p) {
-    if (wc.ball[p] >= b.size() || wc.wall[p] >= m.walls.size() || b.id[wc.ball[p]] != wc.ball_id[p] ||
-        m.walls[wc.wall[p]].id != wc.wall_id[p] || wc.state[p] > 2)
-      return fmt::format("wall contact {} does not match the balls and walls", p);
-  }
+  for (std::size_t p = 0; p < wc.size(); ++p)
+    if (std::string q = wall_contact_problem(wc, p, p, m); !q.empty()) return q;
   if (const std::string bonds = bond_table_problem(m); !bonds.empty()) return bonds;
   return "";
 }

@@ -37,6 +37,8 @@ namespace {
 
 using namespace save_bytes;
 
+constexpr std::size_t kHeaderSize = sizeof kMagic + sizeof kVersion + 2 * sizeof(std::uint64_t);
+
 // A contact table's arrays: its list, its history and its results. From format 9 the history goes
 // by name (the table's for_each_history), so that a law part added later reads older saves (its
 // history starting at zero) and a save holding a part this build lacks is refused by name; before,
@@ -188,8 +190,11 @@ void write_contacts_streamed(Writer& w, Table& t, std::uint64_t n, StateSource& 
 // One description of the layout serves both directions, so save and load cannot drift apart.
 // `state` (writing the current format): where the balls' moving arrays, the pairs and the wall
 // contacts are, the model's arrays of them empty.
+// `spans` (reading): the bulk passed over, but the balls' ids, types, fixities, radii and centres,
+// where each array lies recorded (SavedTables).
 template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, ResultSource* results = nullptr,
-                                  StateSource* state = nullptr) {
+                                  StateSource* state = nullptr, std::vector<Reader::Span>* spans = nullptr) {
+  (void)spans;
   io.pod(m.space.periodic);
   io.pod(m.space.lo); io.pod(m.space.hi); io.pod(m.space.boxes);
   if (version >= 3) io.pod(m.space.tilt);
@@ -261,9 +266,23 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, Resul
       io.pod(state->results_cycle());
     }
   }
-  if (!state) {
+  bool indexed = false;
+  if constexpr (std::is_same_v<IO, Reader>) {
+    if (spans) {
+      Balls& b = m.balls;
+      b.for_each_array([&](auto& v) {
+        const void* a = &v;
+        io.vec_at(v, *spans, a == &b.id || a == &b.type || a == &b.fixed || a == &b.rad || a == &b.x || a == &b.y || a == &b.z);
+      });
+      transfer_contacts(io, m.contacts, version, [&](auto& v) { io.vec_at(v, *spans, false); });
+      indexed = true;
+    }
+  }
+  if (!state && !indexed) {
     m.balls.for_each_array([&](auto& v) { io.vec(v); });
     transfer_pairs(io, m.contacts, version, results);
+  }
+  if (!state) {
     if (version >= 4) {
       if constexpr (std::is_same_v<IO, Reader>) {
         io.pod(m.contacts.results_cycle);
@@ -323,6 +342,12 @@ template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, Resul
     if constexpr (!std::is_same_v<IO, Reader>) {
       if (state) {
         write_contacts_streamed(io, m.wall_contacts, state->place_walls(), *state, StateSource::Table::Walls);
+        streamed = true;
+      }
+    }
+    if constexpr (std::is_same_v<IO, Reader>) {
+      if (spans) {
+        transfer_contacts(io, m.wall_contacts, version, [&](auto& v) { io.vec_at(v, *spans, false); });
         streamed = true;
       }
     }
@@ -525,7 +550,13 @@ void take_light_state(Model& model, const std::string& bytes) {
   model = std::move(light);
 }
 
-Model load_model(const std::string& path, History* history) {
+namespace {
+
+using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+
+// A save file opened and checked whole (its magic, version, length and checksum), read a buffer at
+// a time; left at its body, `version` and `size` (the body's length) set. Throws as load_model.
+File open_save(const std::string& path, std::uint32_t& version, std::uint64_t& size) {
   // Looked at before it is opened (through a link: a link to a save is a save): opening a FIFO
   // waits for a writer for ever, and a device such as /dev/zero never ends.
   namespace fs = std::filesystem;
@@ -539,21 +570,19 @@ Model load_model(const std::string& path, History* history) {
                                                                      : "a device or a socket"));
   // The file is read twice, a buffer at a time: its checksum, then the model (never the file's
   // bytes whole beside the model made of them).
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  File file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw std::runtime_error(fmt::format("cannot open the save file '{}'", path));
   std::FILE* f = file.get();
   const auto read_error = [&] {
     return std::runtime_error(fmt::format("cannot read '{}': {} (not restarted)", path, std::strerror(errno)));
   };
-  char header[sizeof kMagic + sizeof kVersion + 2 * sizeof(std::uint64_t)];
-  const std::size_t header_size = sizeof header;
-  const std::size_t got = std::fread(header, 1, header_size, f);
-  if (got < header_size && std::ferror(f)) throw read_error();
+  char header[kHeaderSize];
+  const std::size_t got = std::fread(header, 1, kHeaderSize, f);
+  if (got < kHeaderSize && std::ferror(f)) throw read_error();
   if (got < sizeof kMagic || std::memcmp(header, kMagic, sizeof kMagic) != 0)
     throw std::runtime_error(fmt::format("'{}' is not a trubal save file", path));
-  if (got < header_size) throw std::runtime_error(fmt::format("'{}' is truncated (not restarted)", path));
-  std::uint32_t version = 0;
-  std::uint64_t size = 0, sum = 0;
+  if (got < kHeaderSize) throw std::runtime_error(fmt::format("'{}' is truncated (not restarted)", path));
+  std::uint64_t sum = 0;
   std::memcpy(&version, header + sizeof kMagic, sizeof version);
   std::memcpy(&size, header + sizeof kMagic + sizeof version, sizeof size);
   std::memcpy(&sum, header + sizeof kMagic + sizeof version + sizeof size, sizeof sum);
@@ -575,7 +604,17 @@ Model load_model(const std::string& path, History* history) {
     throw std::runtime_error(fmt::format("'{}' is truncated: {} of {} bytes (not restarted)", path, body, size));
   if (body > size || body_sum != sum)
     throw std::runtime_error(fmt::format("'{}' is corrupted: its checksum does not match (not restarted)", path));
-  if (std::fseek(f, static_cast<long>(header_size), SEEK_SET) != 0) throw read_error();
+  if (std::fseek(f, static_cast<long>(kHeaderSize), SEEK_SET) != 0) throw read_error();
+  return file;
+}
+
+}  // namespace
+
+Model load_model(const std::string& path, History* history) {
+  std::uint32_t version = 0;
+  std::uint64_t size = 0;
+  File file = open_save(path, version, size);
+  std::FILE* f = file.get();
   Model m;
   Reader r(f, size, path);
   transfer(r, m, version);
@@ -601,5 +640,160 @@ Model load_model(const std::string& path, History* history) {
   if (history) *history = std::move(histories);
   return m;
 }
+
+SavedTables::SavedTables(const std::string& path, History* history) : path_(path) {
+  std::uint32_t version = 0;
+  std::uint64_t size = 0;
+  File file = open_save(path, version, size);
+  Reader r(file.get(), size, path);
+  std::vector<Reader::Span> spans;
+  transfer(r, model_, version, nullptr, nullptr, &spans);
+  History histories;
+  if (version >= 6) transfer_histories(r, histories);
+  if (!r.at_end()) r.corrupt();
+  // Each bulk array's place, numbered as the pieces are (each_piece_array): found by the vector
+  // it was read for.
+  const auto place = [&](PieceTable table, const void* array, std::size_t k) {
+    auto& to = spans_[static_cast<int>(table)];
+    if (to.size() <= k) to.resize(k + 1);
+    for (const Reader::Span& s : spans)
+      if (s.array == array) to[k] = {s.at, s.n, s.size};
+  };
+  each_piece_array(model_.balls, [&](auto& v, std::size_t k, bool) { place(PieceTable::Balls, &v, k); });
+  each_piece_array(model_.contacts, [&](auto& v, std::size_t k, bool) { place(PieceTable::Pairs, &v, k); });
+  each_piece_array(model_.wall_contacts, [&](auto& v, std::size_t k, bool) { place(PieceTable::Walls, &v, k); });
+  // Every array of a table of its count of rows (the balls' from their ids, the pairs' from the
+  // first of the list's arrays; an array the file lacks is a history part, zero).
+  const std::size_t n = model_.balls.id.size();
+  bool consistent = true;
+  for (const auto& table : spans_)
+    for (const Span& s : table) consistent = consistent && (s.size == 0 || s.n == table[0].n);
+  consistent = consistent && !spans_[0].empty() && spans_[0][0].n == n;
+  for (const Span& s : spans_[0]) consistent = consistent && s.size != 0;
+  if (!consistent) r.corrupt();
+  // Why the ranks' parts cannot be made from it (the file is then read whole, as serially).
+  const Model& m = model_;
+  if (version < 12) why_whole_ = "saved by an older format";
+  else if (n == 0) why_whole_ = "no ball";
+  else if (!m.bonds.empty()) why_whole_ = "bonds";
+  else if (!m.membrane.ids.empty()) why_whole_ = "a membrane";
+  else if (rows(PieceTable::Pairs) > 0 && m.contacts.results_cycle != m.cycle)
+    why_whole_ = "contact results of another cycle";
+  if (history) *history = std::move(histories);
+  body_at_ = kHeaderSize;
+  file_ = file.release();
+}
+
+SavedTables::~SavedTables() {
+  if (file_) std::fclose(file_);
+}
+
+std::uint64_t SavedTables::rows(PieceTable table) const {
+  const auto& t = spans_[static_cast<int>(table)];
+  return t.empty() ? 0 : t[0].n;
+}
+
+void SavedTables::read(PieceTable table, std::size_t k, std::uint64_t from, std::uint64_t n, void* out, std::size_t size) {
+  const auto& t = spans_[static_cast<int>(table)];
+  const Span s = k < t.size() ? t[k] : Span{};
+  if (s.size == 0) {   // (a history part the save did not know: zero)
+    std::memset(out, 0, n * size);
+    return;
+  }
+  if (s.size != size || from > s.n || n > s.n - from)
+    throw std::logic_error("internal error: a piece of a save's array asked for outside it");
+  const std::uint64_t at = body_at_ + s.at + from * size;
+  if (n == 0) return;
+  if (std::fseek(file_, static_cast<long>(at), SEEK_SET) != 0 || std::fread(out, size, n, file_) != n)
+    throw std::runtime_error(fmt::format("cannot read '{}': {} (not restarted)", path_,
+                                         std::ferror(file_) ? std::strerror(errno) : "it was cut short since it was checked"));
+}
+
+void SavedTables::check(std::uint64_t piece_rows) {
+  Model& m = model_;
+  const std::size_t n = m.balls.id.size();
+  const std::uint64_t kPiece = std::max<std::uint64_t>(1, piece_rows);
+  const auto fail = [&](const std::string& wrong) {
+    throw std::runtime_error(fmt::format("'{}' holds no valid model: {} (not restarted)", path_, wrong));
+  };
+  // A piece [from, from + count) of the table's arrays into `into`, each array as each_piece_array
+  // numbers it (those `want` names; the others left empty).
+  const auto piece = [&](PieceTable table, auto& into, std::uint64_t from, std::uint64_t count, auto&& want) {
+    each_piece_array(into, [&](auto& v, std::size_t k, bool) {
+      if (!want(k)) return std::decay_t<decltype(v)>().swap(v);
+      v.resize(count);
+      read(table, k, from, count, v.data(), sizeof(v[0]));
+    });
+  };
+  m.balls.index_ids();
+  if (std::string p = ids_problem(m.balls); !p.empty()) fail(p);
+  {
+    Balls b;
+    for (std::uint64_t from = 0; from < n; from += kPiece) {
+      const std::uint64_t count = std::min(kPiece, n - from);
+      piece(PieceTable::Balls, b, from, count, [](std::size_t) { return true; });
+      for (std::size_t q = 0; q < count; ++q)
+        if (std::string p = ball_problem(b, q, from + q); !p.empty()) fail(p);
+    }
+  }
+  // The pairs, each piece with the pair before it (the order is checked against it); whether the
+  // rolling and bridge parts hold any value other than zero (load_model keeps those that do).
+  bool rolling = false, bridge = false;
+  {
+    const std::uint64_t pairs = rows(PieceTable::Pairs);
+    ContactTable c;
+    c.set_history_laws({true, true});
+    std::size_t at_i = 0, at_j = 0, at_state = 0;
+    std::vector<std::size_t> at_rolling, at_bridge;
+    each_piece_array(c, [&](auto& v, std::size_t k, bool) {
+      const void* a = &v;
+      if (a == &c.i) at_i = k;
+      if (a == &c.j) at_j = k;
+      if (a == &c.state) at_state = k;
+      if (a == &c.mrx || a == &c.mry || a == &c.mrz) at_rolling.push_back(k);
+      if (a == &c.bridge) at_bridge.push_back(k);
+    });
+    const auto nonzero = [](const std::vector<double>& v) {
+      for (double x : v)
+        if (x != 0 || std::signbit(x)) return true;
+      return false;
+    };
+    for (std::uint64_t from = 0; from < pairs; from += kPiece) {
+      const std::uint64_t first = from > 0 ? from - 1 : 0, count = std::min(kPiece, pairs - from) + (from - first);
+      piece(PieceTable::Pairs, c, first, count, [&](std::size_t k) {
+        return k == at_i || k == at_j || k == at_state || std::count(at_rolling.begin(), at_rolling.end(), k) ||
+               std::count(at_bridge.begin(), at_bridge.end(), k);
+      });
+      for (std::size_t p = 0; p < count; ++p)
+        if (!(c.i[p] < n && c.j[p] < n)) throw std::runtime_error(fmt::format(
+            "'{}' is damaged: its contents do not add up (not restarted)", path_));
+      for (std::size_t p = from - first; p < count; ++p)
+        if (std::string q = pair_problem(c, p, first + p, n); !q.empty()) fail(q);
+      rolling = rolling || nonzero(c.mrx) || nonzero(c.mry) || nonzero(c.mrz);
+      bridge = bridge || nonzero(c.bridge);
+    }
+  }
+  // The parts the model's laws use, and those holding values (load_model's drop_zero_history).
+  const HistoryLaws keep = laws_with_history(m);
+  HistoryLaws held = m.contacts.history_laws;
+  held.rolling = held.rolling && (keep.rolling || rolling);
+  held.bridge = held.bridge && (keep.bridge || bridge);
+  m.contacts.set_history_laws(held);
+  m.contacts.use_history(keep);
+  if (std::string p = light_problem(m); !p.empty()) fail(p);
+  {
+    const std::uint64_t walls = rows(PieceTable::Walls);
+    WallContacts w;
+    for (std::uint64_t from = 0; from < walls; from += kPiece) {
+      const std::uint64_t count = std::min(kPiece, walls - from);
+      piece(PieceTable::Walls, w, from, count, [](std::size_t) { return true; });
+      for (std::size_t p = 0; p < count; ++p)
+        if (std::string q = wall_contact_problem(w, p, from + p, m); !q.empty()) fail(q);
+    }
+  }
+  if (const std::string bonds = bond_table_problem(m); !bonds.empty()) fail(bonds);
+}
+
+Model SavedTables::take_model() { return std::move(model_); }
 
 }  // namespace trubal

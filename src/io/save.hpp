@@ -8,8 +8,11 @@
 #include <string>
 #include <vector>
 
+#include <cstdio>
+
 #include "io/history.hpp"
 #include "model/model.hpp"
+#include "model/table_pieces.hpp"
 
 namespace trubal {
 
@@ -62,6 +65,44 @@ void save_model(const Model& model, const std::string& path, const History* hist
 // `history`, it receives the saved tables (none from a file older than version 6), their files not
 // yet opened (History::resume_files).
 Model load_model(const std::string& path, History* history = nullptr);
+
+// A save read for a distributed RESTART (Session::restart), whose ranks take their parts of its
+// bulk from rank 0 a piece at a time (BrickStep::split_from_file), so that no rank holds the whole
+// model. Made, it has checked the file whole (its checksum) and read all of it but the bulk: its
+// model (take_model) holds the balls' ids, types, fixities, radii and centres alone, no pair and
+// no wall contact; where the rest lies in the file is kept, and read() reads any piece of it again
+// (TablePieces). Throws as load_model.
+class SavedTables final : public TablePieces {
+ public:
+  SavedTables(const std::string& path, History* history);
+  ~SavedTables() override;
+  SavedTables(const SavedTables&) = delete;
+  SavedTables& operator=(const SavedTables&) = delete;
+  // "" where the ranks' parts can be made from the file; else why not (then load_model reads it):
+  // a format before 12 (the balls in id order), bonds, a membrane, no ball, or pairs whose
+  // contact results are not of the model's cycle (the parts hold results of the model's state).
+  const std::string& why_whole() const { return why_whole_; }
+  // Checks every value load_model checks, the bulk read a piece at a time, and takes the contact
+  // history parts into use as load_model does, `piece` rows of a table at a time. Throws as
+  // load_model, the same message.
+  void check(std::uint64_t piece = std::uint64_t{1} << 16);
+  // The model (once): the balls' ids, types, fixities, radii and centres, no pair, no wall contact.
+  Model take_model();
+  std::uint64_t rows(PieceTable table) const override;
+  void read(PieceTable table, std::size_t k, std::uint64_t from, std::uint64_t n, void* out, std::size_t size) override;
+
+ private:
+  struct Span {
+    std::uint64_t at = 0, n = 0;   // the elements' place in the body, their count
+    std::size_t size = 0;          // of an element; 0: no such array in the file
+  };
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  std::uint64_t body_at_ = 0;   // the header's length
+  Model model_;
+  std::vector<Span> spans_[3];   // by PieceTable, array k
+  std::string why_whole_;
+};
 
 // The model but its bulk (the balls, the pairs, the walls' contacts, the bonds), as bytes in SAVE's
 // layout, and a model made of them (without balls): what the ranks other than 0 of a distributed

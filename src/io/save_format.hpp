@@ -181,6 +181,30 @@ class Reader {
     s.resize(n);
     take(s.data(), n);
   }
+  // A vector's length, then its elements read into v (keep) or passed over, v left empty; either
+  // way where its elements lie in the body (at, the count n) is recorded in *spans (a distributed
+  // RESTART reads them again, a piece at a time: SavedTables, io/save.hpp).
+  struct Span {
+    const void* array = nullptr;   // the vector it was read for
+    std::uint64_t at = 0, n = 0;
+    std::size_t size = 0;          // of an element
+  };
+  template <class T> void vec_at(std::vector<T>& v, std::vector<Span>& spans, bool keep) {
+    if (keep) {
+      std::uint64_t n = 0;
+      const std::uint64_t length_at = pos_;
+      vec(v);
+      n = v.size();
+      spans.push_back({&v, length_at + sizeof n, n, sizeof(T)});
+      return;
+    }
+    std::uint64_t n = 0;
+    pod(n);
+    if (n > (size_ - pos_) / sizeof(T)) corrupt();
+    spans.push_back({&v, pos_, n, sizeof(T)});
+    skip(n * sizeof(T));
+    std::vector<T>().swap(v);
+  }
   bool at_end() const { return pos_ == size_; }
   const std::string& path() const { return path_; }
   [[noreturn]] void corrupt() const {
@@ -190,6 +214,23 @@ class Reader {
  private:
   void need(std::uint64_t n) const {
     if (n > size_ - pos_) corrupt();
+  }
+  // Passes over n bytes (checked to be there): those the buffer holds, then the file's beyond it.
+  void skip(std::uint64_t n) {
+    need(n);
+    if (mem_) {
+      pos_ += n;
+      return;
+    }
+    const std::uint64_t held = std::min<std::uint64_t>(n, buf_.size() - at_);
+    at_ += static_cast<std::size_t>(held);
+    pos_ += held;
+    const std::uint64_t rest = n - held;
+    if (rest == 0) return;
+    if (std::fseek(file_, static_cast<long>(rest), SEEK_CUR) != 0)
+      throw std::runtime_error(fmt::format("cannot read '{}': {} (not restarted)", path_, std::strerror(errno)));
+    read_ += rest;
+    pos_ += rest;
   }
   void take(void* to, std::size_t n) {
     need(n);

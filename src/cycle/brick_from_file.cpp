@@ -1,0 +1,162 @@
+// The ranks' parts made from a save file (BrickStep::split_from_file): rank 0 reads the balls'
+// centres, decomposes them as a split does, then reads each array of the balls, the pairs and the
+// wall contacts a piece at a time and sends each rank its rows of it, so that no rank holds the
+// whole model, rank 0 included: each holds its part, and rank 0 a piece beside it.
+#include "cycle/brick_step_parts.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+#include <type_traits>
+
+#include <fmt/format.h>
+
+#include "support/comm.hpp"
+#include "support/peak_memory.hpp"
+
+namespace trubal {
+
+void BrickStep::split_from_file(const Model& full, TablePieces* file, bool results) {
+  ++edition_;
+  update_shares();   // (a collective call)
+  const int ranks = team_->size(), me = team_->rank();
+  const bool root = comm::root();
+  const std::uint64_t kPiece = std::max<std::uint64_t>(1, policy_->save_piece_rows);   // (rows read at a time)
+  const std::string doing =
+      fmt::format("making its part of the decomposition from the save ({} balls in the whole model)", full.balls.size());
+  together([&] {
+    if (root) decompose(full);
+  }, doing);
+  share_decomposition();
+  std::vector<std::int64_t> counts(3, 0);
+  if (root)
+    for (PieceTable t : {PieceTable::Balls, PieceTable::Pairs, PieceTable::Walls})
+      counts[static_cast<std::size_t>(t)] = static_cast<std::int64_t>(file->rows(t));
+  comm::broadcast(counts);
+  const std::vector<std::uint64_t> rows(counts.begin(), counts.end());
+  const std::vector<std::uint32_t>& mine = rank_balls_[static_cast<std::size_t>(me)];
+  if (rows[0] != full.balls.size()) throw std::logic_error("internal error: a save's balls differ from its model's");
+
+  // Array k of a table, piece by piece: rank 0 reads the piece and sends each rank the rows `pick`
+  // gives it (in order), which it appends to `v`; `got(from, count)` on the others: how many come.
+  const auto hand_out = [&](PieceTable table, std::size_t k, auto& v, std::uint64_t from, std::uint64_t count,
+                            const std::vector<std::vector<std::uint32_t>>& pick, std::size_t got) {
+    using T = typename std::decay_t<decltype(v)>::value_type;
+    std::vector<std::vector<T>> out;
+    together([&] {
+      if (!root) return;
+      std::vector<T> piece(count);
+      file->read(table, k, from, count, piece.data(), sizeof(T));
+      out.assign(static_cast<std::size_t>(ranks), {});
+      for (int r = 0; r < ranks; ++r)
+        for (std::uint32_t q : pick[static_cast<std::size_t>(r)]) out[static_cast<std::size_t>(r)].push_back(piece[q]);
+    }, doing);
+    if (root) {
+      for (int r = 1; r < ranks; ++r)
+        if (!out[static_cast<std::size_t>(r)].empty())
+          comm::send_bytes(r, out[static_cast<std::size_t>(r)].data(), out[static_cast<std::size_t>(r)].size() * sizeof(T));
+      v.insert(v.end(), out[0].begin(), out[0].end());
+    } else if (got > 0) {
+      v.resize(v.size() + got);
+      comm::receive_bytes(0, v.data() + (v.size() - got), got * sizeof(T));
+    }
+  };
+
+  // The balls: each rank's rows in the whole model's order (rank_balls_ ascends).
+  Balls& b = part_.balls;
+  b.for_each_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+  {
+    std::vector<std::vector<std::uint32_t>> pick;
+    each_piece_array(b, [&](auto& v, std::size_t k, bool) {
+      v.reserve(mine.size());
+      std::size_t next = 0;   // (mine's rows before the piece)
+      for (std::uint64_t from = 0; from < rows[0]; from += kPiece) {
+        const std::uint64_t count = std::min(kPiece, rows[0] - from);
+        if (root) {
+          pick.assign(static_cast<std::size_t>(ranks), {});
+          for (std::uint64_t q = 0; q < count; ++q)
+            pick[static_cast<std::size_t>(owner_[from + q])].push_back(static_cast<std::uint32_t>(q));
+        }
+        std::size_t end = next;
+        while (end < mine.size() && mine[end] < from + count) ++end;
+        hand_out(PieceTable::Balls, k, v, from, count, pick, end - next);
+        next = end;
+      }
+    });
+  }
+
+  // The pairs and the wall contacts: rank 0 finds each row's ranks from its balls' owners (a
+  // pair's two, a wall contact's one) and tells each rank its count of the piece's rows.
+  const auto hand_out_table = [&](PieceTable table, auto& t, const std::vector<std::size_t>& ball_arrays, auto&& send) {
+    const std::uint64_t n = rows[static_cast<std::size_t>(table)];
+    std::vector<std::vector<std::uint32_t>> pick;
+    for (std::uint64_t from = 0; from < n; from += kPiece) {
+      const std::uint64_t count = std::min(kPiece, n - from);
+      together([&] {
+        if (!root) return;
+        pick.assign(static_cast<std::size_t>(ranks), {});
+        std::vector<std::vector<std::uint32_t>> ends;
+        for (std::size_t k : ball_arrays) {
+          ends.emplace_back(count);
+          file->read(table, k, from, count, ends.back().data(), sizeof(std::uint32_t));
+        }
+        for (std::uint64_t q = 0; q < count; ++q) {
+          int last = -1;
+          for (const auto& e : ends) {
+            if (e[q] >= rows[0]) throw std::runtime_error("a contact of the save names no ball");
+            const int r = owner_[e[q]];
+            if (r != last) pick[static_cast<std::size_t>(r)].push_back(static_cast<std::uint32_t>(q));
+            last = r;
+          }
+        }
+      }, doing);
+      std::size_t got = 0;
+      if (root) {
+        for (int r = 1; r < ranks; ++r) comm::send_word(r, static_cast<std::int64_t>(pick[static_cast<std::size_t>(r)].size()));
+      } else {
+        got = static_cast<std::size_t>(comm::receive_word(0));
+      }
+      each_piece_array(t, [&](auto& v, std::size_t k, bool used) {
+        if (used && send(&v)) hand_out(table, k, v, from, count, pick, got);
+      });
+    }
+  };
+  ContactTable& c = file_pairs_;
+  c = ContactTable{};
+  c.set_history_laws(split_laws_);
+  hand_out_table(PieceTable::Pairs, c, {0, 1}, [&](const void* v) { return results || c.result_index(v) < 0; });
+  WallContacts& w = file_walls_;
+  w = WallContacts{};
+  hand_out_table(PieceTable::Walls, w, {0}, [](const void*) { return true; });
+
+  together([&] {
+    // The part: this rank's balls; its pairs and wall contacts wait for its first list.
+    const std::size_t m = mine.size();
+    bool whole = true;
+    b.for_each_array([&](const auto& v) { whole = whole && v.size() == m; });
+    if (!whole) throw std::logic_error("internal error: a rank's balls did not all come from the save");
+    if (!results) c.drop_results();
+    part_.contacts.for_each_pair_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+    part_.contacts.set_history_laws(split_laws_);
+    part_.bonds.for_each_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+    part_.wall_contacts.for_each_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
+    global_ball_ = mine;
+    owned_.resize(m);
+    std::iota(owned_.begin(), owned_.end(), 0u);
+    owned_pairs_.clear();
+    owned_walls_.clear();
+    send_.assign(static_cast<std::size_t>(ranks), {});
+    recv_.assign(static_cast<std::size_t>(ranks), {});
+    scratch_.ghost.assign(m, 0);
+    ghosts_ = 0;
+    ref_.x.clear();
+    ref_.y.clear();
+    ref_.z.clear();
+  }, doing);
+  finish_part(full);
+  from_file_ = true;
+  from_file_results_ = results;
+  return_free_memory();
+}
+
+}  // namespace trubal
