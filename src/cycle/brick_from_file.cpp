@@ -5,6 +5,7 @@
 #include "cycle/brick_step_parts.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <numeric>
 #include <stdexcept>
 #include <type_traits>
@@ -38,28 +39,35 @@ void BrickStep::split_from_file(const Model& full, TablePieces* file, bool resul
   if (rows[0] != full.balls.size()) throw std::logic_error("internal error: a save's balls differ from its model's");
 
   // Array k of a table, piece by piece: rank 0 reads the piece and sends each rank the rows `pick`
-  // gives it (in order), which it appends to `v`; `got(from, count)` on the others: how many come.
+  // gives it (in order), which it appends to `v`; `got` on the others: how many come. (Rank 0's
+  // buffers are kept from piece to piece: fresh ones would each be mapped and zeroed anew.)
+  std::vector<char> raw;
+  std::vector<std::vector<char>> out(static_cast<std::size_t>(ranks));
   const auto hand_out = [&](PieceTable table, std::size_t k, auto& v, std::uint64_t from, std::uint64_t count,
                             const std::vector<std::vector<std::uint32_t>>& pick, std::size_t got) {
     using T = typename std::decay_t<decltype(v)>::value_type;
-    std::vector<std::vector<T>> out;
     together([&] {
       if (!root) return;
-      std::vector<T> piece(count);
-      file->read(table, k, from, count, piece.data(), sizeof(T));
-      out.assign(static_cast<std::size_t>(ranks), {});
-      for (int r = 0; r < ranks; ++r)
-        for (std::uint32_t q : pick[static_cast<std::size_t>(r)]) out[static_cast<std::size_t>(r)].push_back(piece[q]);
+      raw.resize(count * sizeof(T));
+      file->read(table, k, from, count, raw.data(), sizeof(T));
+      const T* piece = reinterpret_cast<const T*>(raw.data());
+      for (int r = 0; r < ranks; ++r) {
+        const std::vector<std::uint32_t>& rows_r = pick[static_cast<std::size_t>(r)];
+        std::vector<char>& to = out[static_cast<std::size_t>(r)];
+        to.resize(rows_r.size() * sizeof(T));
+        T* o = reinterpret_cast<T*>(to.data());
+        for (std::size_t q = 0; q < rows_r.size(); ++q) o[q] = piece[rows_r[q]];
+      }
     }, doing);
-    if (root) {
+    const std::size_t n = root ? out[0].size() / sizeof(T) : got;
+    if (root)
       for (int r = 1; r < ranks; ++r)
         if (!out[static_cast<std::size_t>(r)].empty())
-          comm::send_bytes(r, out[static_cast<std::size_t>(r)].data(), out[static_cast<std::size_t>(r)].size() * sizeof(T));
-      v.insert(v.end(), out[0].begin(), out[0].end());
-    } else if (got > 0) {
-      v.resize(v.size() + got);
-      comm::receive_bytes(0, v.data() + (v.size() - got), got * sizeof(T));
-    }
+          comm::send_bytes(r, out[static_cast<std::size_t>(r)].data(), out[static_cast<std::size_t>(r)].size());
+    if (n == 0) return;
+    v.resize(v.size() + n);
+    if (root) std::memcpy(v.data() + (v.size() - n), out[0].data(), n * sizeof(T));
+    else comm::receive_bytes(0, v.data() + (v.size() - n), n * sizeof(T));
   };
 
   // The balls: each rank's rows in the whole model's order (rank_balls_ ascends).
@@ -90,25 +98,42 @@ void BrickStep::split_from_file(const Model& full, TablePieces* file, bool resul
   const auto hand_out_table = [&](PieceTable table, auto& t, const std::vector<std::size_t>& ball_arrays, auto&& send) {
     const std::uint64_t n = rows[static_cast<std::size_t>(table)];
     std::vector<std::vector<std::uint32_t>> pick;
+    std::vector<std::vector<std::uint32_t>> ends(ball_arrays.size());
+    // Rank 0: each rank's rows of the piece [from, from + count).
+    const auto pick_rows = [&](std::uint64_t from, std::uint64_t count) {
+      pick.assign(static_cast<std::size_t>(ranks), {});
+      for (std::size_t e = 0; e < ball_arrays.size(); ++e) {
+        ends[e].resize(count);
+        file->read(table, ball_arrays[e], from, count, ends[e].data(), sizeof(std::uint32_t));
+      }
+      for (std::uint64_t q = 0; q < count; ++q) {
+        int last = -1;
+        for (const auto& e : ends) {
+          if (e[q] >= rows[0]) throw std::runtime_error("a contact of the save names no ball");
+          const int r = owner_[e[q]];
+          if (r != last) pick[static_cast<std::size_t>(r)].push_back(static_cast<std::uint32_t>(q));
+          last = r;
+        }
+      }
+    };
+    // Each rank's count of rows first, that it holds its arrays at their length from the start.
+    std::vector<std::int64_t> totals(static_cast<std::size_t>(ranks), 0);
+    together([&] {
+      if (!root) return;
+      for (std::uint64_t from = 0; from < n; from += kPiece) {
+        pick_rows(from, std::min(kPiece, n - from));
+        for (int r = 0; r < ranks; ++r)
+          totals[static_cast<std::size_t>(r)] += static_cast<std::int64_t>(pick[static_cast<std::size_t>(r)].size());
+      }
+    }, doing);
+    comm::broadcast(totals);
+    each_piece_array(t, [&](auto& v, std::size_t, bool used) {
+      if (used && send(&v)) v.reserve(static_cast<std::size_t>(totals[static_cast<std::size_t>(me)]));
+    });
     for (std::uint64_t from = 0; from < n; from += kPiece) {
       const std::uint64_t count = std::min(kPiece, n - from);
       together([&] {
-        if (!root) return;
-        pick.assign(static_cast<std::size_t>(ranks), {});
-        std::vector<std::vector<std::uint32_t>> ends;
-        for (std::size_t k : ball_arrays) {
-          ends.emplace_back(count);
-          file->read(table, k, from, count, ends.back().data(), sizeof(std::uint32_t));
-        }
-        for (std::uint64_t q = 0; q < count; ++q) {
-          int last = -1;
-          for (const auto& e : ends) {
-            if (e[q] >= rows[0]) throw std::runtime_error("a contact of the save names no ball");
-            const int r = owner_[e[q]];
-            if (r != last) pick[static_cast<std::size_t>(r)].push_back(static_cast<std::uint32_t>(q));
-            last = r;
-          }
-        }
+        if (root) pick_rows(from, count);
       }, doing);
       std::size_t got = 0;
       if (root) {
