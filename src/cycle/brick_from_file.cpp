@@ -26,6 +26,7 @@ void BrickStep::split_from_file(const Model& full, TablePieces* file, bool resul
   const std::string doing =
       fmt::format("making its part of the decomposition from the save ({} balls in the whole model)", full.balls.size());
   together([&] {
+    split_fault();
     if (root) decompose(full);
   }, doing);
   share_decomposition();

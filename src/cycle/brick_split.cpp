@@ -114,18 +114,20 @@ void BrickStep::update_shares() {
   if (!next.empty()) shares_ = std::move(next);
 }
 
+void BrickStep::split_fault() {
+  if (!team_->shares_whole() && team_->rank() == policy_->fail_split) {   // (a rank's test fault)
+    policy_->fail_split = -1;
+    throw std::bad_alloc();
+  }
+}
+
 void BrickStep::split(const Model& full, const VerletReference& ref) {
   ++edition_;
   update_shares();   // (a collective call)
   const std::string doing = fmt::format("making its part of the decomposition ({} balls in the whole model)", full.balls.size());
   // A rank that cannot make its part (out of memory) must not leave the others stepping theirs and
   // waiting for its ghosts: the ranks agree here, and every one stops with that rank's message.
-  auto fault = [&] {
-    if (!team_->shares_whole() && team_->rank() == policy_->fail_split) {   // (a rank's test fault)
-      policy_->fail_split = -1;
-      throw std::bad_alloc();
-    }
-  };
+  auto fault = [&] { split_fault(); };
   if (!scatters()) {
     together([&] {
       fault();

@@ -458,6 +458,8 @@ class BrickStep {
   void index_part();
   void find_part_walls(Rebuild& r, const Model& full, ThreadPool& pool);
   void install_file_walls(WallContacts& walls);
+  // A test's fault: this rank's next split fails as out of memory (StepPolicy::fail_split).
+  void split_fault();
 
 
   // (keep_copy)

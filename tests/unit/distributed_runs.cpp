@@ -440,6 +440,37 @@ TEST_CASE("distributed: RESTART hands each rank its part of the file, no rank ho
   CHECK(counter(after, "rank0_peak_mib") < counter(after, "rank1_peak_mib") + 0.25 * whole);
 }
 
+TEST_CASE("distributed: a rank out of memory while RESTART hands out the parts stops every rank, and RESTART again works", "[mpi][system]") {
+  // Rank 1 fails as out of memory as the parts are made from the file (TRUBAL_TEST_FAIL_AT "1
+  // split"): every rank stops with its one message, and no model is left (the old one was
+  // replaced, the new one part way to the parts); in the shell the next RESTART makes the parts,
+  // and the run goes on with serial's bits.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  TempDir first, serial, ranks;
+  first.write("deck.dat", std::string(kSqueezedCell) + "cycle 300\nsave s.sav\n");
+  REQUIRE(run_deck(first, 0) == 0);
+  const std::string after = "cycle 200\nsave t.sav\n" + std::string(kOutputs);
+  for (TempDir* dir : {&serial, &ranks}) dir->write("s.sav", slurp(first.path() / "s.sav"));
+  serial.write("deck.dat", "restart s.sav\n" + after);
+  REQUIRE(run_deck(serial, 0) == 0);
+  ranks.write("deck.dat", "backend mpi\nrestart s.sav\n");
+  ranks.write("more.txt", "print info\nrestart s.sav\n" + after + kCounters);
+  CHECK(run_shell(ranks, 3, "TRUBAL_TEST_FAIL_AT='1 split'") == 0);   // (not 124: no rank hangs)
+  const std::string out = slurp(ranks.path() / "out.txt");
+  INFO(out);
+  const auto at = out.find("deck.dat:2: error: 's.sav': the ranks could not take their parts of it: rank 1 ran out of "
+                           "memory making its part of the decomposition from the save");
+  REQUIRE(at != std::string::npos);
+  CHECK(out.find("no model is left: RESTART again", at) != std::string::npos);
+  CHECK(out.find("deck.dat:2:", at + 1) == std::string::npos);   // one message
+  CHECK_THAT(out, Catch::Contains("space: none (START first)"));  // (PRINT info after it)
+  for (const char* file : {"t.sav", "balls.csv", "contacts.csv"}) {
+    INFO(file);
+    CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+  }
+  CHECK(counter(counters_of(ranks), "parts_from_saves") == 1);
+}
+
 namespace {
 // The deck serially and on 3 ranks (BACKEND mpi first, the shares equal: the tests count the
 // decompositions), each in its own folder, each ending with the exit status `status`.
