@@ -172,6 +172,15 @@ void BrickStep::split_from_records(const Model& full, std::vector<double>& recor
     std::vector<std::vector<double>>().swap(recv);
     part_.materials = full.materials;
     update_mass(part_);
+    own_balls_alone(mine);
+  }, doing);
+  finish_part(full);
+  return_free_memory();
+}
+
+void BrickStep::own_balls_alone(const std::vector<std::uint32_t>& mine) {
+  const std::size_t m = mine.size();
+  const int ranks = team_->size();
     part_.contacts.for_each_pair_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
     part_.contacts.set_history_laws(split_laws_);
     part_.bonds.for_each_array([](auto& v) { std::decay_t<decltype(v)>().swap(v); });
@@ -185,14 +194,11 @@ void BrickStep::split_from_records(const Model& full, std::vector<double>& recor
     recv_.assign(static_cast<std::size_t>(ranks), {});
     scratch_.ghost.assign(m, 0);
     ghosts_ = 0;
-    // (No reference positions: the search about to be made sets them, or where it goes through
-    // the whole model, reference_at_balls.)
-    ref_.x.clear();
-    ref_.y.clear();
-    ref_.z.clear();
-  }, doing);
-  finish_part(full);
-  return_free_memory();
+  // (No reference positions: the search about to be made sets them, or where it goes through
+  // the whole model, reference_at_balls.)
+  ref_.x.clear();
+  ref_.y.clear();
+  ref_.z.clear();
 }
 
 void BrickStep::share_decomposition() {

@@ -460,6 +460,10 @@ class BrickStep {
   void install_file_walls(WallContacts& walls);
   // A test's fault: this rank's next split fails as out of memory (StepPolicy::fail_split).
   void split_fault();
+  // The part's balls made already (`mine`, their places in the whole model, ascending): the part
+  // holds them alone, no pair, bond, wall contact or ghost, its lists to be searched
+  // (split_from_records, split_from_file).
+  void own_balls_alone(const std::vector<std::uint32_t>& mine);
 
 
   // (keep_copy)

@@ -31,12 +31,6 @@ Model good_model() {
   return m;
 }
 
-std::uint64_t fnv1a(const std::string& data) {   // the save format's checksum (io/save.cpp)
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
-
 }  // namespace
 
 TEST_CASE("io restart: a model that breaks an invariant is refused with what is wrong", "[io][restart]") {

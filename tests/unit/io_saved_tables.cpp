@@ -48,12 +48,6 @@ void check_pieces(SavedTables& saved, PieceTable which, Table& loaded, std::uint
   });
 }
 
-std::uint64_t fnv1a(const std::string& data) {   // the save format's checksum (io/save.cpp)
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
-
 }  // namespace
 
 TEST_CASE("io saved tables: read a piece at a time, a save gives load_model's model", "[io][restart]") {

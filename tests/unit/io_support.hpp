@@ -3,6 +3,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cstdint>
 #include <map>
 #include <sstream>
 #include <string>
@@ -11,6 +12,14 @@
 #include "interp_support.hpp"
 
 namespace trubal::test {
+
+// The save format's checksum of a body (io/save_format.hpp): a test that changes a save's bytes
+// writes it anew, so that the file is refused for what it holds, not for its sum.
+inline std::uint64_t fnv1a(const std::string& data) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
 
 // Three balls in a row, each pressed into the next (overlap 0.1 of radius 1), and a fourth alone.
 inline const char* kPressedRow =
