@@ -24,7 +24,7 @@ static void servo_wall(Context& ctx, Args& args) {
   Wall w = *found;
   if (args.accept("off")) {
     args.done();
-    Model& m = ctx.session.edit_cell();
+    Model& m = ctx.session.edit_walls();
     m.walls[k].servo_on = false;
     m.walls[k].servo_integral = 0;
     stop_servo_motion(m.walls[k]);   // the servo's motion stops with it
@@ -67,7 +67,7 @@ static void servo_wall(Context& ctx, Args& args) {
     args.fail("an infinite plane has no area of its own: give `area a` (the platen's loaded area) or `in c` "
               "(the cross-section of cylinder c)");
   w.servo_on = true;
-  Model& m = ctx.session.edit_cell();
+  Model& m = ctx.session.edit_walls();
   m.walls[k] = w;
   ctx.out << fmt::format("wall {}: servo to stress {:.6g} over area {:.6g}, gain {}, max speed {}\n", id,
                          w.servo_target, wall_servo_area(probe, w),

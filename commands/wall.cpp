@@ -42,10 +42,27 @@ static void read_options(Args& args, Wall& w, bool& about_given) {
     args.fail("velocities, spins and points must be finite");
 }
 
+// WALL id n with motion alone (velocity, spin, about, rrate): where the ranks keep their parts,
+// every rank changes its walls (the parts read them at each step) and the parts stay; else rank
+// 0 alone, as every other form.
+static OnRanks wall_ranks(const Args& given, bool parts_kept) {
+  Args args = given;
+  if (!parts_kept || !args.accept("id") || args.empty() || !is_number(args.peek())) return OnRanks::ModelOnZero;
+  args.word("wall id");
+  if (args.empty()) return OnRanks::ModelOnZero;
+  while (!args.empty()) {
+    const std::string& w = args.word("option");
+    if (!is_number(w) && w != "velocity" && w != "spin" && w != "about" && w != "rrate") return OnRanks::ModelOnZero;
+  }
+  return OnRanks::Parts;
+}
+
 static void run_wall(Context& ctx, Args& args) {
   ctx.session.require_started();
+  // (The ranks keep their parts: every rank runs a wall's motion, reading the light state.)
+  const bool on_parts = ctx.session.parts_kept();
   {
-    const Space& s = ctx.session.model().space;
+    const Space& s = ctx.session.state().space;
     if (s.periodic && !s.mixed())
       args.fail("walls need a free region (START box ..., with some axis bounded): a periodic space has no room for "
                 "them");
@@ -66,7 +83,7 @@ static void run_wall(Context& ctx, Args& args) {
   }
   std::int64_t id = 0;
   if (args.accept("id")) id = args.count("wall id", 1);
-  const Model& now = ctx.session.model();
+  const Model& now = on_parts ? ctx.session.state() : ctx.session.model();
   const auto found = std::find_if(now.walls.begin(), now.walls.end(), [&](const Wall& w) { return w.id == id; });
   const auto kind = args.empty() ? std::nullopt : args.keyword({"plane", "polygon", "cylinder"});
   if (!kind) {   // an existing wall: its motion, its type, or delete
@@ -98,7 +115,7 @@ static void run_wall(Context& ctx, Args& args) {
     Wall w = *found;
     bool about = false;
     read_options(args, w, about);
-    Model& m = ctx.session.edit();
+    Model& m = on_parts ? ctx.session.edit_walls() : ctx.session.edit();
     m.walls[found - now.walls.begin()] = w;
     ctx.out << fmt::format("wall {}: velocity ({:.6g}, {:.6g}, {:.6g}), spin ({:.6g}, {:.6g}, {:.6g})\n", id,
                            w.velocity[0], w.velocity[1], w.velocity[2], w.spin[0], w.spin[1], w.spin[2]);
@@ -187,6 +204,6 @@ const Command wall_command = {
     "wall plane 0 0 0 0 0 1",
     {"id", "plane", "polygon", "cylinder", "radius", "length", "inside", "outside", "type", "velocity", "spin", "about",
      "rrate", "delete", "all"},
-    run_wall, false, false, OnRanks::ModelOnZero};
+    run_wall, false, false, OnRanks::ModelOnZero, HeldUse::Place, {}, wall_ranks};
 
 }  // namespace trubal

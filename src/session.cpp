@@ -51,6 +51,19 @@ void Session::mark_edited() {
   model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
 }
 
+Model& Session::edit_walls() {
+  if (!parts_kept()) return edit();
+  // (Not gathered to rank 0: the step taken again reads the walls, so it is taken before they change.)
+  results_onto_parts(model_, *pipeline_);
+  pipeline_->clear_deferred();
+  pipeline_->search_next_step();
+  ++changes_;
+  unsaved_ = true;
+  model_.energy_at_step.valid = false;
+  model_.critical_dt = 0;
+  return model_;
+}
+
 Model& Session::edit_cell() {
   results_before_setting();   // (of the state before the change)
   ++changes_;

@@ -80,6 +80,12 @@ class Session {
   // servo), with the balls unchanged; the next step is estimated afresh. Where the ranks keep their
   // parts, every rank calls it (Command::on_ranks) and the parts stay.
   Model& edit_cell();
+  // WALL's motion and SERVO wall: a wall's motion or servo, the balls unchanged. Where the ranks
+  // keep their parts, every rank calls it (Command::ranks_for, on_ranks): the contact results a
+  // CYCLE deferred are made on the parts first, of the walls as they were, and stay there; the
+  // parts stay, and the next step searches their lists afresh, as serial's after an edit. Else as
+  // edit().
+  Model& edit_walls();
   // New strain rates of the periodic cell, and the change of the velocity field they make on the
   // balls, wherever the balls are (the ranks' kept parts; rank 0's whole model made current).
   void set_cell_rates(const std::array<double, 6>& rates);

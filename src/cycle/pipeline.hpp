@@ -198,6 +198,9 @@ class Pipeline {
   // live): the balls across a periodic face wrapped on the parts, a stale list rebuilt on them,
   // where they can; false where that step must go through the whole model.
   bool parts_go_on(Model& model);
+  // The next step searches the lists afresh, on the parts where they are live (as serial's after an
+  // edit between CYCLEs: Session::edit_walls).
+  void search_next_step() { search_next_step_ = true; }
   // The bytes of this rank's part (0 where none is live).
   std::size_t part_bytes_now() const { return bricks().live() ? bricks().part_bytes() : 0; }
   // The bytes of the contact results this rank's part holds (0 where none is live).

@@ -106,6 +106,10 @@ struct Command {
   // Where held is Keep for some forms alone: the first words of those (PRINT info and counters);
   // the others place the balls.
   std::vector<std::string_view> keeps_held_after = {};
+  // Where some forms run otherwise than on_ranks says: their way, from the command's words and
+  // whether the ranks keep their parts (the same on every rank). WALL's motion alone, where the
+  // ranks keep their parts: every rank changes its walls (Session::edit_walls).
+  OnRanks (*ranks_for)(const Args& args, bool parts_kept) = nullptr;
 };
 
 // What this line of the command does with held balls (Command::held, keeps_held_after).

@@ -253,6 +253,9 @@ void Interpreter::execute(const std::string& line) {
   const bool flush = interactive || !command.quick;
   // A batch deck's BALL lines are held on the ranks, not built into rank 0's model (Session::hold_balls).
   session_.set_hold_balls(comm::size() > 1 && agree_lazily && !interactive);
+  const OnRanks on_ranks = command.ranks_for ? command.ranks_for(Args(command.usage, std::vector<std::string>(words.begin() + 1, words.end())),
+                                                                 session_.parts_kept())
+                                             : command.on_ranks;
   const HeldUse held = command.keeps_held_after.empty()
                            ? command.held
                            : held_use(command, Args(command.usage, std::vector<std::string>(words.begin() + 1, words.end())));
@@ -287,7 +290,7 @@ void Interpreter::execute(const std::string& line) {
   // (A command run lazily prints after its held echo: keep_lazy_output.)
   Context ctx{session_, *this, lazily ? static_cast<std::ostream&>(lazy_out_) : output_.out()};
   if (comm::size() == 1) command.run(ctx, args);
-  else run_agreed(command, ctx, args, lazily, held);
+  else run_agreed(command, ctx, args, lazily, held, on_ranks);
   // Ctrl-C during a command that does not look for it (RESTART, SAVE): a batch deck stops after it,
   // as at a CYCLE (exit 1), rather than the next CYCLE clearing the request. Under mpirun the ranks
   // agree (a collective call: after the commands every rank runs in step, the ones that are not quick).
@@ -306,7 +309,7 @@ static std::string with_location(const std::string& file, int line, const std::s
   return fmt::format("{} {} {}{}", line, file.size(), file, message);
 }
 
-void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, bool lazily, HeldUse held) {
+void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, bool lazily, HeldUse held, OnRanks on_ranks) {
   // Every rank runs the command; they agree whether it failed, so that they stay in step (a file
   // only rank 0 writes may fail there alone). The first failing rank's message is everyone's.
   bool failed = false, reported = false;
@@ -320,9 +323,9 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
     if (held == HeldUse::Place) session_.place_held();
     else if (held == HeldUse::Split) session_.place_held_as_parts();
     else if (hold && session_.hold_needs_start()) session_.hold_start();
-    // What the command needs of the model (Command::on_ranks): the same on every rank.
-    if (command.on_ranks != OnRanks::ModelOnZero) session_.light_everywhere();
-    switch (command.on_ranks) {
+    // What the command needs of the model (Command::on_ranks, ranks_for): the same on every rank.
+    if (on_ranks != OnRanks::ModelOnZero) session_.light_everywhere();
+    switch (on_ranks) {
       case OnRanks::Whole:
         session_.whole_everywhere();
         command.run(ctx, args);

@@ -111,7 +111,7 @@ class Interpreter {
   // Runs a command on every rank and agrees whether it failed (comm::first_failure); `lazily`: a
   // success leaves the agreement pending (agree_lazily).
   // held: what the line does with BALL lines held on the ranks (held_use).
-  void run_agreed(const Command& command, Context& ctx, Args& args, bool lazily, HeldUse held);
+  void run_agreed(const Command& command, Context& ctx, Args& args, bool lazily, HeldUse held, OnRanks on_ranks);
   // The ranks' pending agreement on the quick commands run since the last one, if any: throws the
   // first failing rank's error.
   void settle_agreement();

@@ -699,6 +699,41 @@ TEST_CASE("distributed: a RESTART's parts hold the save's wall contacts, history
   }
 }
 
+TEST_CASE("distributed: WALL's motion and SERVO wall between CYCLEs leave the ranks their parts, nothing gathered: serial's bits",
+          "[mpi][system]") {
+  // A triaxial sample consolidated between servo walls, then SERVO wall off and WALL velocity (the
+  // shear's start), later the cylinder's servo off and a radius rate of its own, each between CYCLEs on 3
+  // ranks: every rank changes its walls, the results the CYCLE deferred made on the parts first
+  // (Session::edit_walls). Before, each WALL line gathered the model to rank 0 and ended the parts,
+  // and the next CYCLE split it again; each SERVO wall gathered it to rank 0.
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string deck =
+      "start box -0.04 0.04 -0.04 0.04 -0.01 0.11\nprop kn 2e6 ks 2e6 fric 30 dens 2650\nprop type 2 kn 2e6 ks 2e6 fric 0\n"
+      "wall id 1 plane 0 0 0 0 0 1 type 2\nwall id 2 plane 0 0 0.1 0 0 -1 type 2\n"
+      "wall id 3 cylinder 0 0 -0.005 0 0 1 radius 0.02 length 0.11 type 2\nsample platens 1 2 cylinder 3\n"
+      "gen 1500 0.0015 0.0025 seed 11\ndamp local 0.7\nservo wall 1 stress 1e5 in 3 max 0.05\n"
+      "servo wall 2 stress 1e5 in 3 max 0.05\nservo wall 3 stress 1e5 between 1 2 max 0.05\ncycle 3000\n"
+      "print counters file before.txt\nservo wall 1 off\nservo wall 2 off\nwall id 1 velocity 0 0 0.02\n"
+      "wall id 2 velocity 0 0 -0.02\nprint walls\nsave s1.sav\nprint contacts file k1.csv\ncycle 1000\nsave s2.sav\n"
+      "servo wall 3 off\nwall id 3 rrate -0.01\ncycle 500\nsave s3.sav\nprint walls\n" +
+      std::string(kOutputs) + kCounters;
+  TempDir serial, ranks;
+  run_both(deck, serial, ranks);
+  const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
+  INFO(out);
+  for (const char* file : {"s1.sav", "k1.csv", "s2.sav", "s3.sav", "balls.csv", "contacts.csv"}) {
+    INFO(file);
+    CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+  }
+  CHECK_THAT(printed(serial_out, "walls"), Catch::Contains("velocity (0, 0, 0.02)") && Catch::Contains("radius rate -0.01"));
+  CHECK(printed(out, "walls") == printed(serial_out, "walls"));
+  const Counters before = read_counters(ranks.path() / "before.txt"), after = counters_of(ranks);
+  CHECK(counter(after, "parts_kept") == 1);
+  CHECK(counter(after, "decompositions") == counter(before, "decompositions"));
+  CHECK(counter(after, "whole_gathers") == counter(before, "whole_gathers"));
+  CHECK(counter(after, "whole_hand_overs") == 0);
+}
+
 TEST_CASE("distributed: DAMP, FRAC, TSTEP, GRAV, STRAIN and SERVO between CYCLEs leave the ranks their parts, with the serial bits",
           "[mpi][system]") {
   // A squeezed periodic cell whose settings change between nine CYCLEs: each setting's command runs
