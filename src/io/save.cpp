@@ -694,6 +694,7 @@ std::uint64_t SavedTables::rows(PieceTable table) const {
 }
 
 void SavedTables::read(PieceTable table, std::size_t k, std::uint64_t from, std::uint64_t n, void* out, std::size_t size) {
+  if (n == 0) return;   // (an empty piece: `out` may be no buffer at all)
   const auto& t = spans_[static_cast<int>(table)];
   const Span s = k < t.size() ? t[k] : Span{};
   if (s.size == 0) {   // (a history part the save did not know: zero)
@@ -703,7 +704,6 @@ void SavedTables::read(PieceTable table, std::size_t k, std::uint64_t from, std:
   if (s.size != size || from > s.n || n > s.n - from)
     throw std::logic_error("internal error: a piece of a save's array asked for outside it");
   const std::uint64_t at = body_at_ + s.at + from * size;
-  if (n == 0) return;
   if (std::fseek(file_, static_cast<long>(at), SEEK_SET) != 0 || std::fread(out, size, n, file_) != n)
     throw std::runtime_error(fmt::format("cannot read '{}': {} (not restarted)", path_,
                                          std::ferror(file_) ? std::strerror(errno) : "it was cut short since it was checked"));
