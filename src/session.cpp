@@ -43,12 +43,16 @@ Model& Session::edit() {
   return model_;
 }
 
-void Session::mark_edited() {
+void Session::mark_changed() {
   ++changes_;
   unsaved_ = true;
   model_.energy_at_step.valid = false;   // the balls may no longer be as the last step left them
+  model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed: the step estimated afresh
+}
+
+void Session::mark_edited() {
+  mark_changed();
   pipeline_->invalidate();
-  model_.critical_dt = 0;   // masses, stiffnesses or fixities may have changed
 }
 
 Model& Session::edit_walls() {
@@ -57,19 +61,13 @@ Model& Session::edit_walls() {
   results_onto_parts(model_, *pipeline_);
   pipeline_->clear_deferred();
   pipeline_->search_next_step();
-  ++changes_;
-  unsaved_ = true;
-  model_.energy_at_step.valid = false;
-  model_.critical_dt = 0;
+  mark_changed();
   return model_;
 }
 
 Model& Session::edit_cell() {
   results_before_setting();   // (of the state before the change)
-  ++changes_;
-  unsaved_ = true;
-  model_.energy_at_step.valid = false;
-  model_.critical_dt = 0;   // (as an edit: the step estimated afresh)
+  mark_changed();
   if (!parts_kept()) pipeline_->invalidate();
   return model_;
 }

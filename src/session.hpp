@@ -325,6 +325,8 @@ class Session {
   // What every change of the balls marks (edit(), hold_ball): a change, unsaved, the last step's
   // energy terms no longer the state's, the lists invalidated, the step estimated afresh.
   void mark_edited();
+  // The same but the lists (edit_cell, edit_walls: the parts, where kept, stay).
+  void mark_changed();
   // The contact results a CYCLE deferred, made before a setting changes (the step taken again
   // reads the settings). Where the ranks keep their parts, rank 0's alone, agreed by every rank
   // (each runs the setting's command: Command::on_ranks).

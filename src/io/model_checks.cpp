@@ -30,9 +30,8 @@ std::string ball_problem(const Balls& b, std::size_t k, std::size_t at) {
   return "";
 }
 
-std::string pair_problem(const ContactTable& c, std::size_t p, std::size_t at, std::size_t balls) {
+std::string pair_problem(const ContactTable& c, std::size_t p, std::size_t at) {
   if (!(c.i[p] < c.j[p])) return fmt::format("contact {} is not i < j", at);
-  if (!(c.j[p] < balls)) return fmt::format("contact {} names no ball", at);
   if (p > 0 && (c.i[p] < c.i[p - 1] || (c.i[p] == c.i[p - 1] && c.j[p] < c.j[p - 1])))
     return fmt::format("the contacts are not sorted (at {})", at);
   if (c.state[p] > 2) return fmt::format("contact {} has state {}", at, int(c.state[p]));
@@ -119,7 +118,7 @@ std::string invalid_model(const Model& m) {
     if (std::string p = ball_problem(b, k, k); !p.empty()) return p;
   const ContactTable& c = m.contacts;
   for (std::size_t p = 0; p < c.size(); ++p)
-    if (std::string q = pair_problem(c, p, p, b.size()); !q.empty()) return q;
+    if (std::string q = pair_problem(c, p, p); !q.empty()) return q;
   if (std::string p = light_problem(m); !p.empty()) return p;
   const WallContacts& wc = m.wall_contacts;
   bool sizes = true;

@@ -193,8 +193,7 @@ void write_contacts_streamed(Writer& w, Table& t, std::uint64_t n, StateSource& 
 // `spans` (reading): the bulk passed over, but the balls' ids, types, fixities, radii and centres,
 // where each array lies recorded (SavedTables).
 template <class IO> void transfer(IO& io, Model& m, std::uint32_t version, ResultSource* results = nullptr,
-                                  StateSource* state = nullptr, std::vector<Reader::Span>* spans = nullptr) {
-  (void)spans;
+                                  StateSource* state = nullptr, [[maybe_unused]] std::vector<Reader::Span>* spans = nullptr) {
   io.pod(m.space.periodic);
   io.pod(m.space.lo); io.pod(m.space.hi); io.pod(m.space.boxes);
   if (version >= 3) io.pod(m.space.tilt);
@@ -765,10 +764,9 @@ void SavedTables::check(std::uint64_t piece_rows) {
                std::count(at_bridge.begin(), at_bridge.end(), k);
       });
       for (std::size_t p = 0; p < count; ++p)
-        if (!(c.i[p] < n && c.j[p] < n)) throw std::runtime_error(fmt::format(
-            "'{}' is damaged: its contents do not add up (not restarted)", path_));
+        if (!(c.i[p] < n && c.j[p] < n)) damaged(path_);   // (load_model's cross-check, before the rest)
       for (std::size_t p = from - first; p < count; ++p)
-        if (std::string q = pair_problem(c, p, first + p, n); !q.empty()) fail(q);
+        if (std::string q = pair_problem(c, p, first + p); !q.empty()) fail(q);
       rolling = rolling || nonzero(c.mrx) || nonzero(c.mry) || nonzero(c.mrz);
       bridge = bridge || nonzero(c.bridge);
     }

@@ -75,6 +75,11 @@ struct MaterialV9 {
 };
 static_assert(sizeof(MaterialV9) == 8 * sizeof(double) + 8, "MaterialV9 has hidden padding");
 
+// A save whose contents do not add up (a length past its end, a value out of its range).
+[[noreturn]] inline void damaged(const std::string& path) {
+  throw std::runtime_error(fmt::format("'{}' is damaged: its contents do not add up (not restarted)", path));
+}
+
 // Writes a save's body into a file as it goes (a million balls' body is over a GB: never held
 // whole), a buffer at a time, keeping its length and checksum for the header (save_model writes
 // them last, in place). A failed write is kept (errno) and ends the writing; failed() tells.
@@ -168,9 +173,7 @@ class Reader {
     for (bool& b : v) pod(b);
   }
   template <class T> void vec(std::vector<T>& v) {
-    std::uint64_t n = 0;
-    pod(n);
-    if (n > (size_ - pos_) / sizeof(T)) corrupt();
+    const std::uint64_t n = length_of<T>();
     v.resize(n);
     if (n) take(v.data(), n * sizeof(T));
   }
@@ -190,28 +193,28 @@ class Reader {
     std::size_t size = 0;          // of an element
   };
   template <class T> void vec_at(std::vector<T>& v, std::vector<Span>& spans, bool keep) {
-    if (keep) {
-      std::uint64_t n = 0;
-      const std::uint64_t length_at = pos_;
-      vec(v);
-      n = v.size();
-      spans.push_back({&v, length_at + sizeof n, n, sizeof(T)});
+    const std::uint64_t n = length_of<T>();
+    spans.push_back({&v, pos_, n, sizeof(T)});
+    if (!keep) {
+      skip(n * sizeof(T));
+      std::vector<T>().swap(v);
       return;
     }
-    std::uint64_t n = 0;
-    pod(n);
-    if (n > (size_ - pos_) / sizeof(T)) corrupt();
-    spans.push_back({&v, pos_, n, sizeof(T)});
-    skip(n * sizeof(T));
-    std::vector<T>().swap(v);
+    v.resize(n);
+    if (n) take(v.data(), n * sizeof(T));
   }
   bool at_end() const { return pos_ == size_; }
   const std::string& path() const { return path_; }
-  [[noreturn]] void corrupt() const {
-    throw std::runtime_error(fmt::format("'{}' is damaged: its contents do not add up (not restarted)", path_));
-  }
+  [[noreturn]] void corrupt() const { damaged(path_); }
 
  private:
+  // A vector's length (of elements of T), checked against the bytes left.
+  template <class T> std::uint64_t length_of() {
+    std::uint64_t n = 0;
+    pod(n);
+    if (n > (size_ - pos_) / sizeof(T)) corrupt();
+    return n;
+  }
   void need(std::uint64_t n) const {
     if (n > size_ - pos_) corrupt();
   }
