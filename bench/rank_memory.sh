@@ -2,7 +2,8 @@
 # Each rank's peak resident memory through a deck of the peers' dense FCC block, stage by stage,
 # against its share of the serial run's peak (doc/distributed.md, "Memory per rank"): the BALL
 # lines; CYCLE 20; SAVE and PRINT contacts file; DAMP and CYCLE 10; HIST of the stress, the
-# unbalanced force and the contacts every 5 cycles and CYCLE 10 (its output steps); with LONG, a long CYCLE
+# unbalanced force and the contacts every 5 cycles and CYCLE 10 (its output steps); DUMP vtk every
+# 10 cycles and CYCLE 10 (a dump now and one in the CYCLE, the files compared with serial's); with LONG, a long CYCLE
 # (LONG cycles: the sorts into space order every 1000 cycles and the rescue copies every 500 in
 # it); then, in a second run, RESTART of the serial run's save and CYCLE 10 after it. The decks
 # have BACKEND mpi first and PRINT counters after each stage; a stage's figure is each rank's `rank<r>_peak_mib`
@@ -25,7 +26,7 @@ HERE=$(cd "$(dirname "$0")" && pwd)
 mpi_bench_setup memory
 cd "$W"
 SCENES_OUT=. python3 -c "import sys; sys.path.insert(0, '$PEERS'); import gen_scenes; gen_scenes.fcc($CELLS, $CELLS, $CELLS)" >/dev/null
-STAGES="balls cycle save damp hist"
+STAGES="balls cycle save damp hist dump"
 LONG=${LONG:-}
 [ -n "$LONG" ] && STAGES="$STAGES long"
 {
@@ -43,6 +44,10 @@ LONG=${LONG:-}
   echo "hist stress unbal contacts every 5 file hist.csv"
   echo "cycle 10"
   echo "print counters file hist.txt"
+  echo "dump vtk d/run every 10"
+  echo "cycle 10"
+  echo "print counters file dump.txt"
+  echo "dump off"
   if [ -n "$LONG" ]; then echo "cycle $LONG"; echo "print counters file long.txt"; fi
 } > deck.dat
 printf 'backend mpi\nrestart ../p1/out.sav\nprint counters file restart.txt\ncycle 10\nprint counters file rcycle.txt\nsave again.sav\n' > restart.dat
@@ -71,7 +76,8 @@ run 1 restart.dat r
 for p in $RANKS; do
   run "$p" deck.dat p
   run "$p" restart.dat r
-  for f in out.sav contacts.csv hist.csv; do cmp -s "p1/$f" "p$p/$f" || echo "$p ranks: $f differs from serial's" >&2; done
+  for f in out.sav contacts.csv hist.csv $(cd p1 && ls d/*); do cmp -s "p1/$f" "p$p/$f" || echo "$p ranks: $f differs from serial's" >&2; done
+  rm -rf "p$p/d"
   cmp -s r1/again.sav "r$p/again.sav" || echo "$p ranks: the save after RESTART differs from serial's" >&2
 done
 STAGES="$STAGES restart rcycle"

@@ -50,6 +50,11 @@ class ProgressReporter {
 // Prints what a CYCLE or SOLVE did (interrupted, unstable) and throws for an unstable run.
 void report_cycle_result(Context& ctx, const CycleResult& r, std::int64_t asked);
 
+// Command::ranks_for of the commands that change the balls where a range holds (INIT, APPLY, FIX,
+// FREE, GROUP): every rank on its part where the ranks keep their parts (Session::change_balls,
+// define_group), else rank 0 alone on its whole model.
+inline OnRanks parts_where_kept(const Args&, bool parts_kept) { return parts_kept ? OnRanks::Parts : OnRanks::ModelOnZero; }
+
 // One Command object per file in commands/.
 #define TRUBAL_COMMANDS(X)                                                                                   \
   X(start) X(gen) X(ball) X(lattice) X(delete) X(renumber) X(bond) X(group) X(prop) X(damp) X(frac) X(tstep) X(grav) X(fix)    \

@@ -19,11 +19,11 @@ static void set_fixed(Context& ctx, Args& args, bool fix) {
   ctx.session.require_started();
   std::uint8_t mask = read_dofs(args);
   Range range = read_range(args, ctx.session);
-  auto sel = ctx.session.select(range);
-  Model& m = ctx.session.edit();
-  for (auto k : sel) m.balls.fixed[k] = fix ? (m.balls.fixed[k] | mask) : (m.balls.fixed[k] & ~mask);
-  if (sel.empty()) ctx.warn("the range holds for no ball");
-  ctx.out << fmt::format("{} {}\n", count_of(sel.size(), "ball"), fix ? "fixed" : "freed");
+  const std::size_t n = ctx.session.change_balls(range, [&](Balls& b, std::size_t k) {
+    b.fixed[k] = fix ? (b.fixed[k] | mask) : (b.fixed[k] & ~mask);
+  }, true);
+  if (n == 0) ctx.warn("the range holds for no ball");
+  ctx.out << fmt::format("{} {}\n", count_of(n, "ball"), fix ? "fixed" : "freed");
 }
 
 static void run_fix(Context& ctx, Args& args) { set_fixed(ctx, args, true); }
@@ -35,12 +35,12 @@ const Command fix_command = {
     "with INIT), and the force the ball would have received is recorded as its reaction (PRINT balls, HIST "
     "platen).",
     "fix vel spin range group platens",
-    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_fix, false, false, OnRanks::ModelOnZero};
+    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_fix, false, false, OnRanks::ModelOnZero, HeldUse::Place, {}, parts_where_kept};
 
 const Command free_command = {
     "FREE", {}, "FREE xvel|yvel|zvel|xspin|yspin|zspin|vel|spin ... [range ...]", "free velocity components",
     "Frees the named velocity components of the balls in the range (undoes FIX).",
     "free zvel range group platens",
-    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_free, false, false, OnRanks::ModelOnZero};
+    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "vel", "spin", "range"}, run_free, false, false, OnRanks::ModelOnZero, HeldUse::Place, {}, parts_where_kept};
 
 }  // namespace trubal

@@ -18,6 +18,6 @@ const Command group_command = {
     "Names the set of balls where the range holds now; later ranges can use `group name`. The set does "
     "not change as balls move; deleted balls leave it.",
     "group platens range z 0 0.01",
-    {"range"}, run_group, false, false, OnRanks::ModelOnZero};
+    {"range"}, run_group, false, false, OnRanks::ModelOnZero, HeldUse::Place, {}, parts_where_kept};
 
 }  // namespace trubal

@@ -14,20 +14,19 @@ static void run_init(Context& ctx, Args& args) {
   }
   if (values.empty()) args.fail("name at least one component and its value");
   Range range = read_range(args, ctx.session);
-  auto sel = ctx.session.select(range);
-  Model& m = ctx.session.edit();
-  std::vector<double>* arrays[] = {&m.balls.vx, &m.balls.vy, &m.balls.vz, &m.balls.wx, &m.balls.wy, &m.balls.wz};
-  for (auto k : sel)
+  const std::size_t n = ctx.session.change_balls(range, [&](Balls& b, std::size_t k) {
+    std::vector<double>* arrays[] = {&b.vx, &b.vy, &b.vz, &b.wx, &b.wy, &b.wz};
     for (auto [c, v] : values) (*arrays[c])[k] = v;
-  if (sel.empty()) ctx.warn("the range holds for no ball");
-  ctx.out << fmt::format("{} set\n", count_of(sel.size(), "ball"));
+  });
+  if (n == 0) ctx.warn("the range holds for no ball");
+  ctx.out << fmt::format("{} set\n", count_of(n, "ball"));
 }
 
 const Command init_command = {
     "INIT", {}, "INIT xvel|yvel|zvel|xspin|yspin|zspin v ... [range ...]", "set velocities",
     "Sets velocity and spin components of the balls in the range (a fixed component keeps this value).",
     "init zvel -0.01 range group platens",
-    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "range"}, run_init, false, false, OnRanks::ModelOnZero};
+    {"xvel", "yvel", "zvel", "xspin", "yspin", "zspin", "range"}, run_init, false, false, OnRanks::ModelOnZero, HeldUse::Place, {}, parts_where_kept};
 
 static void run_apply(Context& ctx, Args& args) {
   ctx.session.require_started();
@@ -40,16 +39,14 @@ static void run_apply(Context& ctx, Args& args) {
   }
   if (!off && values.empty()) args.fail("name at least one load and its value, or APPLY off");
   Range range = read_range(args, ctx.session);
-  auto sel = ctx.session.select(range);
-  Model& m = ctx.session.edit();
-  std::vector<double>* arrays[] = {&m.balls.ax, &m.balls.ay, &m.balls.az, &m.balls.amx, &m.balls.amy, &m.balls.amz};
-  for (auto k : sel) {
+  const std::size_t n = ctx.session.change_balls(range, [&](Balls& b, std::size_t k) {
+    std::vector<double>* arrays[] = {&b.ax, &b.ay, &b.az, &b.amx, &b.amy, &b.amz};
     if (off)
       for (auto* a : arrays) (*a)[k] = 0;
     for (auto [c, v] : values) (*arrays[c])[k] = v;
-  }
-  if (sel.empty()) ctx.warn("the range holds for no ball");
-  ctx.out << fmt::format("{} {}\n", count_of(sel.size(), "ball"), off ? "unloaded" : "loaded");
+  });
+  if (n == 0) ctx.warn("the range holds for no ball");
+  ctx.out << fmt::format("{} {}\n", count_of(n, "ball"), off ? "unloaded" : "loaded");
 }
 
 const Command apply_command = {
@@ -58,6 +55,6 @@ const Command apply_command = {
     "Applies constant forces and moments to the balls in the range (added to contact forces and gravity "
     "every cycle). `APPLY off` removes all applied loads from the range.",
     "apply zforce -10 range id 1",
-    {"xforce", "yforce", "zforce", "xmom", "ymom", "zmom", "off", "range"}, run_apply, false, false, OnRanks::ModelOnZero};
+    {"xforce", "yforce", "zforce", "xmom", "ymom", "zmom", "off", "range"}, run_apply, false, false, OnRanks::ModelOnZero, HeldUse::Place, {}, parts_where_kept};
 
 }  // namespace trubal

@@ -16,7 +16,8 @@ static void run_prop(Context& ctx, Args& args) {
   if (args.empty())
     args.fail("PROP needs at least one property (kn, ks, fric, mu, dens, coh, shear, poisson, rest, rr_fric, bridge, "
               "tension, angle)");
-  Material m = ctx.session.model().materials.count(type) ? ctx.session.model().materials.at(type) : Material{};
+  const auto& materials = ctx.session.state().materials;   // (light state: every rank holds it)
+  Material m = materials.count(type) ? materials.at(type) : Material{};
   static const std::vector<std::string_view> names = {"kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson",
                                                       "rest", "rr_fric", "bridge", "tension", "angle"};
   double small_angle = 0;   // a fric in (0, 1): a coefficient typed where an angle goes? (0: none)
@@ -59,9 +60,7 @@ static void run_prop(Context& ctx, Args& args) {
   }
   if (m.bridge_volume > 0 && !(m.surface_tension > 0))
     args.fail("bridge V needs the liquid's surface tension: `tension gamma`, gamma > 0");
-  ctx.session.edit().materials[type] = m;
-  // A law with history new to the scene: its part of every pair's history, zero (ContactTable::history_laws).
-  ctx.session.edit().contacts.use_history(laws_with_history(ctx.session.model()));
+  ctx.session.set_material(type, m);
   // PFC's `fric` is the coefficient: 0.5 typed here is half a degree, mu 0.0087.
   if (small_angle > 0)
     ctx.warn(fmt::format("fric {0:g} is a friction angle in degrees: mu = tan({0:g} deg) = {1:.3g}; for a friction "
@@ -99,6 +98,6 @@ const Command prop_command = {
     "and theta.",
     "prop kn 1e6 ks 1e6 fric 30 dens 2650",
     {"type", "kn", "ks", "fric", "mu", "dens", "coh", "shear", "poisson", "rest", "rr_fric", "bridge", "tension", "angle"},
-    run_prop, true, false, OnRanks::ModelOnZero, HeldUse::Keep};
+    run_prop, true, false, OnRanks::ModelOnZero, HeldUse::Keep, {}, parts_where_kept};
 
 }  // namespace trubal

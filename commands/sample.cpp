@@ -1,5 +1,6 @@
 // SAMPLE: declares the specimen held by walls (platens and a cylinder or four sides), whose
-// strains and stresses HIST sample, PRINT sample and CYCLE ... until read (physics/sample.hpp).
+// strains and stresses HIST sample, PRINT sample and CYCLE ... until read (physics/sample.hpp). It
+// reads the walls alone, which every rank holds: every rank runs it, the ranks' parts kept.
 #include <fmt/format.h>
 
 #include "commands/common.hpp"
@@ -37,7 +38,7 @@ static void run_sample(Context& ctx, Args& args) {
   }
   if (args.accept("reset")) {
     args.done();
-    const Model& m = ctx.session.model();
+    const Model& m = ctx.session.state();   // (the walls: light state)
     if (!m.sample.declared()) args.fail("there is no sample to reset (SAMPLE platens a b cylinder c declares one)");
     Sample s = m.sample;
     const std::string problem = check_sample(m, s);
@@ -58,7 +59,7 @@ static void run_sample(Context& ctx, Args& args) {
     for (auto& id : s.sides) id = args.count("side id", 1);
   }
   args.done();
-  const Model& m = ctx.session.model();
+  const Model& m = ctx.session.state();   // (the walls: light state)
   const std::string problem = check_sample(m, s);
   if (!problem.empty()) args.fail(problem + " (PRINT walls lists the walls)");
   reset_sample(m, s);
@@ -86,6 +87,6 @@ const Command sample_command = {
     "`sample reset` after consolidation, `hist sample every 100 file triax.csv`, `cycle 500000 until axial 0.1`, "
     "`plot q vs ea`.",
     "sample platens 1 2 cylinder 3",
-    {"platens", "cylinder", "sides", "reset", "off"}, run_sample, false, false, OnRanks::ModelOnZero};
+    {"platens", "cylinder", "sides", "reset", "off"}, run_sample, false, false, OnRanks::Parts};
 
 }  // namespace trubal

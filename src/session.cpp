@@ -24,6 +24,7 @@
 #include "model/edit.hpp"
 #include "model/periodic_cell.hpp"
 #include "physics/bridge.hpp"
+#include "physics/scene.hpp"
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
 
@@ -55,14 +56,35 @@ void Session::mark_edited() {
   pipeline_->invalidate();
 }
 
-Model& Session::edit_walls() {
-  if (!parts_kept()) return edit();
-  // (Not gathered to rank 0: the step taken again reads the walls, so it is taken before they change.)
+void Session::edit_on_parts() {
+  // (Not gathered to rank 0: the step taken again reads the state, so it is taken before it changes.)
   results_onto_parts(model_, *pipeline_);
   pipeline_->clear_deferred();
   pipeline_->search_next_step();
   mark_changed();
+}
+
+Model& Session::edit_walls() {
+  if (!parts_kept()) return edit();
+  edit_on_parts();
   return model_;
+}
+
+std::size_t Session::change_balls(const Range& range, const std::function<void(Balls&, std::size_t)>& change,
+                                  bool fixities) {
+  if (!parts_kept()) {
+    const std::vector<std::size_t> selected = select(range);
+    Model& m = edit();
+    for (std::size_t k : selected) change(m.balls, k);
+    return selected.size();
+  }
+  edit_on_parts();
+  // Rank 0's whole model, where it holds the parts' state, changed alike (the others' are hollow).
+  if (!pipeline_->whole_hollow(model_) && comm::root())
+    for (std::size_t k : select(range)) change(model_.balls, k);
+  const std::size_t n = pipeline_->change_balls_on_parts(model_, range, change);
+  if (fixities && pipeline_->whole_hollow(model_)) pipeline_->fixities_to_root(model_);
+  return n;
 }
 
 Model& Session::edit_cell() {
@@ -506,12 +528,31 @@ Renumbering Session::renumber(RenumberOrder order) {
   return r;
 }
 
+void Session::set_material(int type, const Material& material) {
+  if (!parts_kept()) {
+    Model& m = edit();
+    m.materials[type] = material;
+    m.contacts.use_history(laws_with_history(m));
+    return;
+  }
+  // (The parts take the materials, and their balls' masses from them, at the next CYCLE's start, as
+  // serial's does; the laws' history parts at each step.)
+  edit_on_parts();
+  model_.materials[type] = material;
+  model_.contacts.use_history(laws_with_history(model_));
+}
+
 std::size_t Session::define_group(const std::string& name, const Range& range) {
-  make_results_to_read(model_, *pipeline_);   // groups are state the step taken again puts back: before the change
   require_started();
   std::vector<std::int64_t> ids;
-  for (auto k : select(range)) ids.push_back(model_.balls.id[k]);
-  std::sort(ids.begin(), ids.end());   // (a group's ids are kept ascending)
+  if (parts_kept()) {
+    results_onto_parts(model_, *pipeline_);   // (as below: on the parts, which keep them)
+    ids = pipeline_->ids_on_parts(model_, range);
+  } else {
+    make_results_to_read(model_, *pipeline_);   // groups are state the step taken again puts back: before the change
+    for (auto k : select(range)) ids.push_back(model_.balls.id[k]);
+    std::sort(ids.begin(), ids.end());   // (a group's ids are kept ascending)
+  }
   std::size_t n = ids.size();
   model_.groups[name] = std::move(ids);
   unsaved_ = true;
@@ -561,17 +602,24 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   // parts move the marks past them.)
   auto marks = std::make_shared<std::vector<std::size_t>>(history_->recorded());
   if (histories && comm::size() > 1) control.share_output = [this, marks] { history_->share_rows(*marks); };
-  // Histories of sums alone, where the ranks keep their parts: every rank records them from the
-  // sums merged over the parts, and rank 0 is not handed the whole model for them (at a dump's step
-  // it is: after_step records the rows there, and share_rows hands them on).
-  if (histories && dumps) control.reads_whole = [dumps](std::int64_t cycle) { return dumps->due(cycle); };
-  if (histories && control.keep_parts && pipeline_->distributed() && history_->recorded_on_parts())
-    control.after_step_on_parts = [this, volume_at, marks](const Model& m) {
-      HistorySums sums;
-      sums.stress = [this, &m] { return pipeline_->stress_on_parts(m); };
-      sums.contacts = [this, &m] { return pipeline_->contact_sums_on_parts(m); };
-      history_->sample_on_parts(m, volume_at(m), sums);
-      *marks = history_->recorded();
+  // Histories of sums alone and dumps, where the ranks keep their parts: every rank records the
+  // histories from the sums merged over the parts, and the dumps' rows come to rank 0 from the parts
+  // in order (dump_from_parts): rank 0 is not handed the whole model for them. A bonded model's
+  // dumps read it whole: their steps go by after_step, which records the rows on rank 0 (share_rows
+  // hands them on).
+  const bool on_parts = control.keep_parts && pipeline_->distributed() && (!histories || history_->recorded_on_parts());
+  const bool dumps_on_parts = dumps && on_parts && bonds_agreed_empty();
+  if (histories && dumps && !dumps_on_parts) control.reads_whole = [dumps](std::int64_t cycle) { return dumps->due(cycle); };
+  if (on_parts && (histories || dumps_on_parts))
+    control.after_step_on_parts = [this, volume_at, marks, histories, dumps_on_parts, dumps](const Model& m) {
+      if (histories) {
+        HistorySums sums;
+        sums.stress = [this, &m] { return pipeline_->stress_on_parts(m); };
+        sums.contacts = [this, &m] { return pipeline_->contact_sums_on_parts(m); };
+        history_->sample_on_parts(m, volume_at(m), sums);
+        *marks = history_->recorded();
+      }
+      if (dumps_on_parts && dumps->due(m.cycle)) dump_from_parts(*dumps, m);
     };
   control.reads_contacts = [this, histories, dumps](std::int64_t cycle) {
     return (histories && history_->due(cycle)) || (dumps && dumps->due(cycle));
@@ -606,8 +654,43 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
     make_results_to_read(model_, *pipeline_);
     return dumps_->write(model_);
   }
+  // Where the ranks' kept parts alone hold the model, the rows come to rank 0 from them (the
+  // results made there first where the CYCLE deferred them): rank 0 is not handed the whole model.
+  if (pipeline_->whole_hollow(model_) && bonds_agreed_empty()) {
+    results_onto_parts(model_, *pipeline_);
+    if (pipeline_->results_on_parts(model_)) return dump_from_parts(*dumps_, model_);
+  }
   results_on_root();   // (with every rank: made on the parts where they are kept, and gathered)
   comm::on_root([&] { dumps_->write(model_); }, "writing the dump");
+}
+
+namespace {
+// A dump's balls and lines from the ranks' kept parts (Pipeline::vtk_ball_rows, ...): each pass a
+// collective call, rank 0 writing.
+class PartRows final : public VtkRows {
+ public:
+  PartRows(const Model& model, Pipeline& pipeline) : model_(model), pipeline_(pipeline) {}
+  bool writes() const override { return comm::root(); }
+  std::uint64_t lines() override { return pipeline_.vtk_lines(model_); }
+  void ball_rows(const Take& take) override { pipeline_.vtk_ball_rows(take); }
+  void line_rows(const Take& take) override { pipeline_.vtk_line_rows(model_, take); }
+
+ private:
+  const Model& model_;
+  Pipeline& pipeline_;
+};
+}  // namespace
+
+void Session::dump_from_parts(VtkSeries& dumps, const Model& model) {
+  PartRows rows(model, *pipeline_);
+  // (Every pass runs on every rank whatever failed: a failure, rank 0's writing, is every rank's.)
+  comm::together([&] { dumps.write(model, &rows); }, "writing the dump");
+}
+
+bool Session::bonds_agreed_empty() const {
+  std::int64_t empty = model_.bonds.empty() ? 1 : 0;
+  comm::broadcast(empty);   // (rank 0's answer: the others may not hold the bonds)
+  return empty != 0;
 }
 
 CycleResult Session::cycle_in_chunks(std::int64_t limit, std::int64_t chunk,

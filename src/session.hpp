@@ -86,6 +86,15 @@ class Session {
   // parts stay, and the next step searches their lists afresh, as serial's after an edit. Else as
   // edit().
   Model& edit_walls();
+  // INIT, APPLY, FIX and FREE: change(balls, k) on each ball where `range` holds; the count. Where
+  // the ranks keep their parts every rank calls it (Command::ranks_for: parts_where_kept): each
+  // changes its part's balls, its own and its ghosts, as edit_walls the walls (the results made on
+  // the parts first, the parts kept, the next step searching afresh; rank 0's whole model, where not
+  // hollow, changed alike), and the count is summed over the ranks. Else on edit()'s model.
+  // `fixities`: it changes Balls::fixed, which rank 0's hollow whole model keeps (streamed to it from
+  // the parts after).
+  std::size_t change_balls(const Range& range, const std::function<void(Balls&, std::size_t)>& change,
+                           bool fixities = false);
   // New strain rates of the periodic cell, and the change of the velocity field they make on the
   // balls, wherever the balls are (the ranks' kept parts; rank 0's whole model made current).
   void set_cell_rates(const std::array<double, 6>& rates);
@@ -219,6 +228,13 @@ class Session {
   // order; groups, the membrane, the histories' platens and GEN's last balls follow them. The balls
   // themselves do not change: the last step's energies and step estimate stay the state's.
   Renumbering renumber(RenumberOrder order);
+  // PROP: type's material. Where the ranks keep their parts every rank calls it (parts_where_kept):
+  // each sets it, and each part takes the materials and its balls' masses from them (as edit_walls:
+  // the results made on the parts first, the parts kept); else on edit()'s model. A law with history
+  // new to the scene gets its part of every pair's history, zero (ContactTable::history_laws).
+  void set_material(int type, const Material& material);
+  // GROUP: the ids where `range` holds now; where the ranks keep their parts (every rank calling
+  // it) read on their own balls, every rank given them all.
   std::size_t define_group(const std::string& name, const Range& range);
 
   // Selected balls (ascending index), and a check that the range selects some (warning text).
@@ -327,6 +343,14 @@ class Session {
   void mark_edited();
   // The same but the lists (edit_cell, edit_walls: the parts, where kept, stay).
   void mark_changed();
+  // edit_walls' and change_balls' work on the kept parts before the change (every rank): the results
+  // made there, the next step searching afresh.
+  void edit_on_parts();
+  // A dump from the ranks' kept parts (their rows merged to rank 0, which writes): every rank calls
+  // it, at a CYCLE's output step or for DUMP, the results on the parts.
+  void dump_from_parts(VtkSeries& dumps, const Model& model);
+  // Whether rank 0's model has no bond, agreed by every rank (a collective call under mpirun).
+  bool bonds_agreed_empty() const;
   // The contact results a CYCLE deferred, made before a setting changes (the step taken again
   // reads the settings). Where the ranks keep their parts, rank 0's alone, agreed by every rank
   // (each runs the setting's command: Command::on_ranks).

@@ -3,6 +3,7 @@
 #include "cycle/brick_step.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <iterator>
@@ -14,6 +15,7 @@
 
 #include "cycle/sum_exchange.hpp"
 #include "model/periodic_cell.hpp"
+#include "physics/scene.hpp"
 #include "physics/timestep.hpp"
 #include "support/comm.hpp"
 #include "support/peak_memory.hpp"
@@ -252,6 +254,55 @@ void BrickStep::loads_changed(const Model& full) {
     to.ax[q] = from.ax[k]; to.ay[q] = from.ay[k]; to.az[q] = from.az[k];
     to.amx[q] = from.amx[k]; to.amy[q] = from.amy[k]; to.amz[q] = from.amz[k];
   }
+}
+
+std::size_t BrickStep::change_balls(const Model& full, const Range& range,
+                                    const std::function<void(Balls&, std::size_t)>& change) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: balls changed on parts where none is live");
+  std::vector<double> mine{0}, all;
+  together([&] {
+    Balls& b = part_.balls;
+    std::vector<std::uint8_t> own(b.size(), 0);
+    for (std::uint32_t q : owned_) own[q] = 1;
+    for (std::size_t k = 0; k < b.size(); ++k)
+      if (holds(full, range, view_of(part_, k))) {
+        change(b, k);
+        mine[0] += own[k];
+      }
+  }, "changing its balls");
+  team_->allgather(mine, all);   // (rank 0's whole model, where it is not hollow, is changed alike: Session::change_balls)
+  double n = 0;
+  for (double v : all) n += v;
+  return static_cast<std::size_t>(n);
+}
+
+std::vector<std::int64_t> BrickStep::ids_where(const Model& full, const Range& range) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a range read on parts where none is live");
+  std::vector<double> mine, all;
+  together([&] {
+    for (std::uint32_t q : owned_)
+      if (holds(full, range, view_of(part_, q))) mine.push_back(std::bit_cast<double>(part_.balls.id[q]));   // (its bits: any id travels exactly)
+  }, "reading the range on its balls");
+  team_->allgather(mine, all);
+  std::vector<std::int64_t> ids;
+  together([&] {
+    ids.reserve(all.size());
+    for (double v : all) ids.push_back(std::bit_cast<std::int64_t>(v));
+    std::sort(ids.begin(), ids.end());
+  }, "reading the range on its balls");
+  return ids;
+}
+
+void BrickStep::take_settings(const Model& full) {
+  part_.settings = full.settings;
+  together([&] {
+    part_.materials = full.materials;
+    update_mass(part_);
+    const Balls& b = part_.balls;
+    for (std::uint32_t k : owned_)
+      if (std::string why = ball_mass_problem(b.id[k], b.mass[k], b.inertia[k], b.rad[k]); !why.empty())
+        throw std::runtime_error(why);
+  }, "taking the materials");
 }
 
 void BrickStep::release() {

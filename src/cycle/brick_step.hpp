@@ -59,6 +59,7 @@
 #include "cycle/verlet.hpp"
 #include "backends/backend.hpp"
 #include "model/model.hpp"
+#include "model/range.hpp"
 #include "model/table_pieces.hpp"
 #include "support/thread_pool.hpp"
 
@@ -98,8 +99,11 @@ class BrickStep {
   // The parts hold the current state of `full` (which may be older).
   bool live_for(const Model& full) const;
   bool live() const { return live_; }
-  // The whole model's settings to the part (they change between CYCLEs on the kept parts).
-  void take_settings(const Model& full) { part_.settings = full.settings; }
+  // The whole model's settings and materials to the part (they change between CYCLEs on the kept
+  // parts), and its balls' (its own and its ghosts') masses and inertias from their types, as a
+  // CYCLE's start sets the whole model's (a collective call: a ball too light for a step is every
+  // rank's failure).
+  void take_settings(const Model& full);
   // The whole model holds the part's state again (Pipeline::apply_field_kept made the same change there).
   void mark_current() { current_ = true; }
   // The whole model no longer holds the part's state: the next sync gathers it again.
@@ -229,6 +233,12 @@ class BrickStep {
   // The applied loads of `full`'s balls changed (a following membrane's, between steps, on every
   // rank alike): the part's copies take them.
   void loads_changed(const Model& full);
+  // INIT, APPLY, FIX and FREE where the ranks keep their parts (a collective call): change(balls, k)
+  // on each of the part's balls, its own and its ghosts, where `range` holds (read with full's
+  // groups); the count of every member's own balls changed. GROUP's: the ids of every member's own
+  // balls where it holds, ascending, on every member.
+  std::size_t change_balls(const Model& full, const Range& range, const std::function<void(Balls&, std::size_t)>& change);
+  std::vector<std::int64_t> ids_where(const Model& full, const Range& range);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what
   // a CYCLE and the light commands read there (the balls' ids, types, fixities, radii, masses and
@@ -283,6 +293,13 @@ class BrickStep {
   static std::int64_t row_id(double v) { return std::bit_cast<std::int64_t>(v); }
   void stream_ball_rows(const std::function<void(const double*)>& take);
   void stream_contact_rows(bool bridges, const std::function<void(const double*)>& take);
+  // DUMP's rows (io/vtk.hpp) where the parts are live (a collective call of the ranks), merged to
+  // rank 0 in the whole model's order as above: every member's own balls' (vtk_ball_rows), its own
+  // pairs' that touch in the results the part holds (vtk_line_rows; vtk_lines: their count over
+  // every member). `full`: the cell as it is now.
+  void vtk_ball_rows(const std::function<void(const double*)>& take);
+  std::uint64_t vtk_lines(const Model& full);
+  void vtk_line_rows(const Model& full, const std::function<void(const double*)>& take);
   // The parts are dropped (the whole model was changed, or is to be stepped another way). Not
   // where they alone hold the model (whole_hollow: an internal error; sync first).
   void drop() {
@@ -425,6 +442,9 @@ class BrickStep {
   // A test's fault in gather_results, gather_result_array, place_saved_pairs and
   // stream_contact_rows (StepPolicy::fail_results).
   void results_fault();
+  // This member's own pairs that touch in the results the part holds (vtk_lines), the part's cell
+  // set to full's.
+  std::vector<std::uint32_t> own_lines(const Model& full);
   // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
   template <class T> void gather_whole(const std::vector<T>& mine, std::vector<T>& all);
   // Runs `work` so that a member's failure is every member's (ranks: comm::together; threads: the

@@ -16,6 +16,8 @@
 #include <exception>
 #include <stdexcept>
 
+#include "model/dump_rows.hpp"
+#include "model/periodic_cell.hpp"
 #include "support/comm.hpp"
 
 namespace trubal {
@@ -289,6 +291,47 @@ void BrickStep::stream_contact_rows(bool bridges, const std::function<void(const
   }, [](const double* p, const double* q) {
     return row_id(p[0]) != row_id(q[0]) ? row_id(p[0]) < row_id(q[0]) : row_id(p[1]) < row_id(q[1]);
   }, take);
+}
+
+void BrickStep::vtk_ball_rows(const std::function<void(const double*)>& take) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a dump's balls streamed where no rank's part is live");
+  merge_rows_to_root(owned_.size(), kVtkBallRow, [&](std::size_t q, double* out) {
+    vtk_ball_row(part_.balls, owned_[q], out);
+    out[0] = global_ball_[owned_[q]];
+  }, [](const double* p, const double* q) { return p[0] < q[0]; }, take);
+}
+
+std::vector<std::uint32_t> BrickStep::own_lines(const Model& full) {
+  part_.space = full.space;   // (the cell as it is now, as own_stress)
+  const ContactTable& c = part_.contacts;
+  std::vector<std::uint32_t> rows;
+  if (!c.results_kept()) return rows;
+  for (std::uint32_t p : owned_pairs_)
+    if (c.state[p] != 0) rows.push_back(p);
+  return rows;
+}
+
+std::uint64_t BrickStep::vtk_lines(const Model& full) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a dump's lines counted where no rank's part is live");
+  std::vector<double> mine, all;
+  together([&] { mine = {static_cast<double>(own_lines(full).size())}; }, "counting its contacts");
+  team_->allgather(mine, all);
+  double n = 0;
+  for (double v : all) n += v;
+  return static_cast<std::uint64_t>(n);
+}
+
+void BrickStep::vtk_line_rows(const Model& full, const std::function<void(const double*)>& take) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a dump's lines streamed where no rank's part is live");
+  std::vector<std::uint32_t> rows;
+  together([&] { rows = own_lines(full); }, "listing its contacts");
+  const CellFrame frame = cell_frame(part_.space);
+  // (A rank's own pairs are those of its own balls i, in the whole list's order among themselves:
+  // merged by ball i's place, they are the whole list's.)
+  merge_rows_to_root(rows.size(), kVtkLineRow, [&](std::size_t q, double* out) {
+    (void)vtk_line_row(part_, frame, rows[q], out);   // (each touches: own_lines)
+    out[0] = global_ball_[part_.contacts.i[rows[q]]];
+  }, [](const double* p, const double* q) { return p[0] < q[0]; }, take);
 }
 
 }  // namespace trubal

@@ -383,6 +383,19 @@ void Pipeline::request_contact_rows(Model& model, bool bridges, const std::funct
   bricks().stream_contact_rows(bridges, take);
 }
 
+void Pipeline::fixities_to_root(Model& model) {
+  if (!whole_hollow(model)) throw std::logic_error("internal error: fixities streamed where rank 0's whole model holds them");
+  std::size_t k = 0, fixed = 0;
+  model.balls.for_each_array([&](const auto& v) {
+    if (static_cast<const void*>(&v) == static_cast<const void*>(&model.balls.fixed)) fixed = k;
+    ++k;
+  });
+  std::size_t at = 0;
+  bricks().stream_table(0, fixed, [&](const std::vector<double>& chunk) {
+    for (double v : chunk) model.balls.fixed.at(at++) = static_cast<std::uint8_t>(v);
+  });
+}
+
 void Pipeline::request_free_saved() {
   std::int64_t word = kFreeSaved;
   comm::broadcast(word);

@@ -186,11 +186,30 @@ class Pipeline {
   // (BrickStep::stream_ball_rows, stream_contact_rows), take(row) here on each.
   void request_ball_rows(Model& model, const std::function<void(const double*)>& take);
   void request_contact_rows(Model& model, bool bridges, const std::function<void(const double*)>& take);
+  // INIT, APPLY, FIX, FREE and GROUP on the kept parts (BrickStep::change_balls, ids_where):
+  // collective calls where parts_live.
+  std::size_t change_balls_on_parts(const Model& model, const Range& range,
+                                    const std::function<void(Balls&, std::size_t)>& change) {
+    return bricks().change_balls(model, range, change);
+  }
+  std::vector<std::int64_t> ids_on_parts(const Model& model, const Range& range) { return bricks().ids_where(model, range); }
+  // The balls' fixities from the kept parts into rank 0's hollow whole model, which keeps them (FIX
+  // and FREE on the parts), a chunk at a time: a collective call where whole_hollow.
+  void fixities_to_root(Model& model);
+  // DUMP's rows from the kept parts, merged to rank 0 in the whole model's order (io/vtk.hpp;
+  // BrickStep::vtk_ball_rows, vtk_lines, vtk_line_rows): collective calls where parts_live, every
+  // rank in them (a CYCLE's output step, or DUMP, which every rank runs), take(row) on rank 0.
+  void vtk_ball_rows(const std::function<void(const double*)>& take) { bricks().vtk_ball_rows(take); }
+  std::uint64_t vtk_lines(const Model& model) { return bricks().vtk_lines(model); }
+  void vtk_line_rows(const Model& model, const std::function<void(const double*)>& take) {
+    bricks().vtk_line_rows(model, take);
+  }
   // Whether rank 0's whole model holds none of the state but its light arrays: the kept parts
   // alone hold it (BrickStep::hollow_whole). The same answer on every rank.
   bool whole_hollow(const Model& model) const { return parts_live(model) && bricks().whole_hollow(); }
-  // The settings (Model::settings: DAMP, FRAC, TSTEP, GRAV, which leave the parts kept) to each
-  // part from the model, at a CYCLE's start from kept parts.
+  // The settings (Model::settings: DAMP, FRAC, TSTEP, GRAV, which leave the parts kept) and the
+  // materials (PROP) to each part from the model, its balls' masses made from them, at a CYCLE's
+  // start from kept parts (a collective call: BrickStep::take_settings).
   void parts_take_settings(const Model& model) {
     for (auto& part : bricks_) part->take_settings(model);
   }

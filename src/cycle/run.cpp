@@ -180,9 +180,9 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // The parts a distributed CYCLE left (Pipeline::parts_live) are gone on from where nothing needs
   // the whole model first: the first step's sort, a servo's first reading of the contact table (a
   // step estimated afresh is estimated on the parts). Then the ranks other than 0 hold no more of the whole model than the
-  // balls' ids, types and radii, and rank 0's is current; nothing that sets a mass, a law or a
-  // fixity ran since the last CYCLE checked them (such a command has the whole model handed over
-  // first, which ends the parts: Session::whole_everywhere).
+  // balls' ids, types and radii, and rank 0's is current; what changed the materials or the
+  // fixities since the last CYCLE (PROP, FIX, FREE) changed them on the parts, which take the
+  // materials and their masses from them at the start (Pipeline::parts_take_settings).
   const Space& cell = model.space;
   servo_reads_table_ =
       cell.periodic && (cell.servo_on[0] || cell.servo_on[1] || cell.servo_on[2]) && !cell.servo_measured_valid;
@@ -202,6 +202,9 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // A servo's first reading of the contact table needs the whole model's list searched on every
   // rank: handed over first, from the parts or from rank 0.
   if (servo_reads_table_) pipeline.share_whole(model);
+  // (The parts' settings, materials and masses first: what follows reads them, a rebuild of their
+  // lists too.)
+  if (pipeline.parts_live(model)) pipeline.parts_take_settings(model);
   // (A step estimated afresh reads the pairs touching now: the parts' list made current first.)
   if (pipeline.parts_live(model) && !(model.critical_dt > 0) && !pipeline.parts_go_on(model)) pipeline.share_whole(model);
   // The ranks other than 0 may hold no more of the model than its balls' ids, types and radii, and
@@ -209,9 +212,9 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // and decides alone, and sends each rank its part at the split.
   const bool from_parts = pipeline.parts_live(model);
   const bool from_root = pipeline.others_hollow();
-  if (from_parts) pipeline.parts_take_settings(model);
   const bool whole_here = !(from_parts || from_root) || comm::root();
-  // (Rank 0's whole model hollow: the parts hold the masses, which no command changed since.)
+  // (Rank 0's whole model hollow: the parts hold the masses, made from the materials as they are
+  // now when they took the settings, above.)
   const bool hollow = pipeline.whole_hollow(model);
   check_ready(model);
   if (whole_here && !hollow) update_mass(model);

@@ -65,13 +65,13 @@ enum class OnRanks : std::uint8_t {
   RankZero,   // only reads the model, and only rank 0's reading is printed or written: rank 0 alone runs it
               // (PRINT, SAVE, PLOT)
   Parts,      // every rank runs it on the model as it is (CYCLE, SOLVE; the settings: DAMP, FRAC, TSTEP, GRAV;
-              // the cell's: STRAIN, SERVO; the commands that do not read the balls; RESTART, which
+              // the cell's: STRAIN, SERVO; SAMPLE; the commands that do not read the balls; RESTART, which
               // rank 0 alone reads and the others take the light state of: Session::restart)
   ModelOnZero,   // changes the model alone: rank 0 alone runs it, on its whole model, the parts' state
                  // given to it first (Session::model_on_zero); the others take rank 0's model but the
                  // balls' arrays before the next command of another kind (Session::light_everywhere)
                  // (BALL, GEN, LATTICE, PROP, INIT, APPLY, FIX, FREE, GROUP, DELETE, WALL, BOND,
-                 // MEMBRANE, SAMPLE)
+                 // MEMBRANE; some forms run on the parts where the ranks keep them: ranks_for)
 };
 
 // What a command does with BALL lines a batch deck's ranks hold (Session::hold_balls,
@@ -108,7 +108,8 @@ struct Command {
   std::vector<std::string_view> keeps_held_after = {};
   // Where some forms run otherwise than on_ranks says: their way, from the command's words and
   // whether the ranks keep their parts (the same on every rank). WALL's motion alone, where the
-  // ranks keep their parts: every rank changes its walls (Session::edit_walls).
+  // ranks keep their parts: every rank changes its walls (Session::edit_walls); PROP, INIT, APPLY,
+  // FIX, FREE and GROUP likewise its materials or its part's balls (parts_where_kept).
   OnRanks (*ranks_for)(const Args& args, bool parts_kept) = nullptr;
 };
 

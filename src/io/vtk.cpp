@@ -6,9 +6,15 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <exception>
 #include <map>
+#include <memory>
 #include <stdexcept>
+
+#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -21,16 +27,51 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, "the VTK files are declared LittleEndian");
 
-// A PolyData piece being built: the XML header grows with each array, the raw bytes of the
-// arrays go into `appended` (each preceded by its UInt64 byte count), addressed by offset.
+// The appended arrays of a PolyData piece and its XML: each array's place in the appended block
+// (its UInt64 byte count, then its bytes), in the order they are declared.
+class PolyDataLayout {
+ public:
+  // The array's place in the appended block.
+  std::uint64_t array(std::string_view section, std::string_view type, std::string_view name, int components,
+                      std::uint64_t bytes) {
+    std::string& xml = sections_[std::string(section)];
+    xml += fmt::format("        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" "
+                       "offset=\"{}\"/>\n",
+                       type, name, components, size_);
+    const std::uint64_t at = size_;
+    size_ += sizeof(std::uint64_t) + bytes;
+    return at;
+  }
+  // The file up to the appended block, and after it.
+  std::string head(std::uint64_t points, std::uint64_t verts, std::uint64_t lines, std::uint64_t polys) const {
+    std::string out =
+        "<?xml version=\"1.0\"?>\n"
+        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+        "  <PolyData>\n";
+    out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" "
+                       "NumberOfStrips=\"0\" NumberOfPolys=\"{}\">\n",
+                       points, verts, lines, polys);
+    for (const char* s : {"PointData", "CellData", "Points", "Verts", "Lines", "Polys"}) {
+      auto it = sections_.find(s);
+      if (it == sections_.end()) continue;
+      out += fmt::format("      <{}>\n{}      </{}>\n", s, it->second, s);
+    }
+    return out + "    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
+  }
+  static constexpr std::string_view kTail = "\n  </AppendedData>\n</VTKFile>\n";
+  std::uint64_t size() const { return size_; }
+
+ private:
+  std::map<std::string, std::string> sections_;
+  std::uint64_t size_ = 0;
+};
+
+// A PolyData piece built in memory (the small files: walls, domain, bonds).
 class PolyDataWriter {
  public:
   void array(std::string_view section, std::string_view type, std::string_view name, int components,
              const void* data, std::size_t bytes) {
-    std::string& xml = sections_[std::string(section)];
-    xml += fmt::format("        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" "
-                       "offset=\"{}\"/>\n",
-                       type, name, components, appended_.size());
+    layout_.array(section, type, name, components, bytes);
     const std::uint64_t count = bytes;
     appended_.append(reinterpret_cast<const char*>(&count), sizeof count);
     if (bytes) appended_.append(static_cast<const char*>(data), bytes);
@@ -41,38 +82,169 @@ class PolyDataWriter {
     array(section, type, name, components, v.data(), v.size() * sizeof(T));
   }
 
-  // The piece to `path` (write_file_atomically), the raw bytes streamed from where they were built
-  // (a million balls' arrays are not copied into a second string).
   void write(const std::string& path, std::size_t points, std::size_t verts, std::size_t lines, std::size_t polys = 0) {
     write_file_atomically(path, [&](std::ostream& out) {
-      out << "<?xml version=\"1.0\"?>\n"
-             "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-             "  <PolyData>\n";
-      out << fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"{}\" NumberOfLines=\"{}\" "
-                         "NumberOfStrips=\"0\" NumberOfPolys=\"{}\">\n",
-                         points, verts, lines, polys);
-      for (const char* s : {"PointData", "CellData", "Points", "Verts", "Lines", "Polys"}) {
-        auto it = sections_.find(s);
-        if (it == sections_.end()) continue;
-        out << fmt::format("      <{}>\n{}      </{}>\n", s, it->second, s);
-      }
-      out << "    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
+      out << layout_.head(points, verts, lines, polys);
       out.write(appended_.data(), static_cast<std::streamsize>(appended_.size()));
-      out << "\n  </AppendedData>\n</VTKFile>\n";
+      out << PolyDataLayout::kTail;
     });
   }
 
  private:
-  std::map<std::string, std::string> sections_;
+  PolyDataLayout layout_;
   std::string appended_;
 };
 
-std::vector<double> interleave(const std::vector<double>& a, const std::vector<double>& b,
-                               const std::vector<double>& c) {
-  std::vector<double> v(3 * a.size());
-  for (std::size_t k = 0; k < a.size(); ++k) v[3 * k] = a[k], v[3 * k + 1] = b[k], v[3 * k + 2] = c[k];
-  return v;
+// An array of a file written a row at a time: per row, `per_row` values of `kind`: Real, the row's
+// values from `first` on (Float64); Bits, the row's value at `first` as an Int64's bits; Int32, that
+// value as an Int32; Count, an Int64 counter: the row's number times `step`, plus `add`, plus the
+// value's place in the row.
+struct RowField {
+  enum Kind { Real, Bits, Int32, Count };
+  const char* section;
+  const char* name;
+  int components;
+  std::size_t per_row;
+  Kind kind;
+  std::size_t first = 0;
+  std::int64_t step = 0, add = 0;
+  std::size_t value_bytes() const { return kind == Int32 ? 4 : 8; }
+  const char* type() const { return kind == Real ? "Float64" : kind == Int32 ? "Int32" : "Int64"; }
+};
+
+// A PolyData file written a row at a time into a temporary beside it: each array's values go to
+// its place in the file through a buffer of its own. finish() renames it over the target.
+class RowsFile {
+ public:
+  RowsFile(const std::string& path, const std::vector<RowField>& fields, std::uint64_t rows, std::uint64_t points,
+           std::uint64_t verts, std::uint64_t lines)
+      : path_(path), fields_(fields) {
+    check_replaceable(path);
+    tmp_ = std::make_unique<TemporaryFile>(path);
+    PolyDataLayout layout;
+    std::vector<std::uint64_t> at;
+    for (const RowField& f : fields) at.push_back(layout.array(f.section, f.type(), f.name, f.components, rows * f.per_row * f.value_bytes()));
+    const std::string head = layout.head(points, verts, lines, 0);
+    place(0, head.data(), head.size());
+    for (std::size_t a = 0; a < fields.size(); ++a) {
+      const std::uint64_t bytes = rows * fields[a].per_row * fields[a].value_bytes();
+      place(head.size() + at[a], &bytes, sizeof bytes);
+      columns_.push_back({head.size() + at[a] + sizeof bytes, {}});
+      columns_.back().buffer.reserve(kBuffer);
+    }
+    place(head.size() + layout.size(), PolyDataLayout::kTail.data(), PolyDataLayout::kTail.size());
+  }
+
+  void row(const double* r) {
+    for (std::size_t a = 0; a < fields_.size(); ++a) {
+      const RowField& f = fields_[a];
+      std::string& out = columns_[a].buffer;
+      for (std::size_t v = 0; v < f.per_row; ++v) {
+        switch (f.kind) {
+          case RowField::Real: append(out, r[f.first + v]); break;
+          case RowField::Bits: append(out, std::bit_cast<std::int64_t>(r[f.first])); break;
+          case RowField::Int32: append(out, static_cast<std::int32_t>(r[f.first])); break;
+          case RowField::Count: append(out, static_cast<std::int64_t>(rows_) * f.step + f.add + static_cast<std::int64_t>(v)); break;
+        }
+      }
+      if (out.size() >= kBuffer) flush(columns_[a]);
+    }
+    ++rows_;
+  }
+
+  void finish(std::uint64_t rows) {
+    if (rows_ != rows) throw std::logic_error("internal error: a dump's rows came short");
+    for (Column& c : columns_) flush(c);
+    if (!tmp_->close() && !error_) error_ = errno ? errno : EIO;
+    if (error_) throw std::runtime_error(fmt::format("cannot write '{}': {}", path_, std::strerror(error_)));
+    tmp_->rename_over_target();
+  }
+
+ private:
+  static constexpr std::size_t kBuffer = std::size_t{1} << 16;
+  struct Column {
+    std::uint64_t at;
+    std::string buffer;
+  };
+  template <class T> static void append(std::string& out, T v) { out.append(reinterpret_cast<const char*>(&v), sizeof v); }
+  void place(std::uint64_t at, const void* data, std::size_t bytes) {
+    const char* p = static_cast<const char*>(data);
+    while (bytes > 0 && !error_) {
+      const ssize_t n = ::pwrite(tmp_->fd(), p, bytes, static_cast<off_t>(at));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        error_ = n < 0 && errno ? errno : EIO;
+        break;
+      }
+      p += n, at += static_cast<std::uint64_t>(n), bytes -= static_cast<std::size_t>(n);
+    }
+    if (error_) throw std::runtime_error(fmt::format("cannot write '{}': {}", path_, std::strerror(error_)));
+  }
+  void flush(Column& c) {
+    place(c.at, c.buffer.data(), c.buffer.size());
+    c.at += c.buffer.size();
+    c.buffer.clear();
+  }
+
+  std::string path_;
+  std::vector<RowField> fields_;
+  std::unique_ptr<TemporaryFile> tmp_;
+  std::vector<Column> columns_;
+  std::uint64_t rows_ = 0;
+  int error_ = 0;
+};
+
+// A rows file where `writes`, from one pass of the rows (run in any case: under mpirun a collective
+// call); the first failure thrown once the pass is over.
+void write_rows(const std::string& path, const std::vector<RowField>& fields, std::uint64_t rows, std::uint64_t points,
+                std::uint64_t verts, std::uint64_t lines, bool writes,
+                const std::function<void(const VtkRows::Take&)>& pass) {
+  std::unique_ptr<RowsFile> file;
+  std::exception_ptr failed;
+  if (writes) {
+    try {
+      file = std::make_unique<RowsFile>(path, fields, rows, points, verts, lines);
+    } catch (...) {
+      failed = std::current_exception();
+    }
+  }
+  if (!writes) {
+    pass(nullptr);
+  } else {
+    pass([&](const double* row) {
+      if (failed) return;
+      try {
+        file->row(row);
+      } catch (...) {
+        failed = std::current_exception();
+      }
+    });
+  }
+  if (failed) std::rethrow_exception(failed);
+  if (file) file->finish(rows);
 }
+
+const std::vector<RowField> kBallFields = {
+    {"Points", "Points", 3, 3, RowField::Real, 1},
+    {"Verts", "connectivity", 1, 1, RowField::Count, 0, 1, 0},
+    {"Verts", "offsets", 1, 1, RowField::Count, 0, 1, 1},
+    {"PointData", "id", 1, 1, RowField::Bits, 4},
+    {"PointData", "type", 1, 1, RowField::Int32, 5},
+    {"PointData", "radius", 1, 1, RowField::Real, 6},
+    {"PointData", "velocity", 3, 3, RowField::Real, 7},
+    {"PointData", "spin", 3, 3, RowField::Real, 10},
+    {"PointData", "force", 3, 3, RowField::Real, 13},
+};
+
+const std::vector<RowField> kLineFields = {
+    {"Points", "Points", 3, 6, RowField::Real, 1},
+    {"Lines", "connectivity", 1, 2, RowField::Count, 0, 2, 0},
+    {"Lines", "offsets", 1, 1, RowField::Count, 0, 2, 2},
+    {"CellData", "normal_force", 1, 1, RowField::Real, 7},
+    {"CellData", "force", 3, 3, RowField::Real, 8},
+    {"CellData", "id_i", 1, 1, RowField::Bits, 11},
+    {"CellData", "id_j", 1, 1, RowField::Bits, 12},
+};
 
 // 0 .. n-1 and 1 .. n (or 2, 4, .. 2n): a cell per point, or a line per pair of points.
 std::vector<std::int64_t> iota64(std::size_t n, std::int64_t step, std::int64_t first) {
@@ -96,53 +268,32 @@ void perpendicular_pair(const Vec3& n, Vec3& u, Vec3& v) {
 
 }  // namespace
 
-void write_balls_vtp(const Model& model, const std::string& path) {
-  const Balls& b = model.balls;
-  const std::size_t n = b.size();
-  PolyDataWriter w;
-  w.array("Points", "Float64", "Points", interleave(b.x, b.y, b.z), 3);
-  w.array("Verts", "Int64", "connectivity", iota64(n, 1, 0));
-  w.array("Verts", "Int64", "offsets", iota64(n, 1, 1));
-  w.array("PointData", "Int64", "id", b.id);
-  const std::vector<std::int32_t> type(b.type.begin(), b.type.end());
-  w.array("PointData", "Int32", "type", type);
-  w.array("PointData", "Float64", "radius", b.rad);
-  w.array("PointData", "Float64", "velocity", interleave(b.vx, b.vy, b.vz), 3);
-  w.array("PointData", "Float64", "spin", interleave(b.wx, b.wy, b.wz), 3);
-  w.array("PointData", "Float64", "force", interleave(b.fx, b.fy, b.fz), 3);
-  w.write(path, n, n, 0);
+std::uint64_t ModelRows::lines() {
+  std::uint64_t n = 0;
+  const ContactTable& c = model_.contacts;
+  const Balls& b = model_.balls;
+  for (std::size_t p = 0; p < c.size(); ++p) n += c.touching(p) && c.i[p] < b.x.size() && c.j[p] < b.x.size();
+  return n;
 }
 
-void write_contacts_vtp(const Model& model, const std::string& path) {
-  const Balls& b = model.balls;
-  const ContactTable& c = model.contacts;
-  const CellFrame frame = cell_frame(model.space);
-  std::vector<double> points;
-  std::vector<double> fn, force;
-  std::vector<std::int64_t> id_i, id_j;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (p >= c.state.size() || c.state[p] == 0) continue;
-    const std::size_t i = c.i[p], j = c.j[p];
-    if (i >= b.size() || j >= b.size()) continue;
-    // j as seen from i: across the periodic cell when the contact is with an image.
-    double shift[3] = {0.0, 0.0, 0.0};
-    if (model.space.periodic) image_offset(frame, c.image_x[p], c.image_y[p], c.image_z[p], shift[0], shift[1], shift[2]);
-    points.insert(points.end(), {b.x[i], b.y[i], b.z[i], b.x[j] + shift[0], b.y[j] + shift[1], b.z[j] + shift[2]});
-    fn.push_back(std::abs(c.fn[p]));
-    force.insert(force.end(), {c.fx[p], c.fy[p], c.fz[p]});
-    id_i.push_back(b.id[i]);
-    id_j.push_back(b.id[j]);
+void ModelRows::ball_rows(const Take& take) {
+  double row[kVtkBallRow];
+  for (std::size_t k = 0; k < model_.balls.size(); ++k) {
+    vtk_ball_row(model_.balls, k, row);
+    row[0] = static_cast<double>(k);
+    take(row);
   }
-  const std::size_t lines = fn.size();
-  PolyDataWriter w;
-  w.array("Points", "Float64", "Points", points, 3);
-  w.array("Lines", "Int64", "connectivity", iota64(2 * lines, 1, 0));
-  w.array("Lines", "Int64", "offsets", iota64(lines, 2, 2));
-  w.array("CellData", "Float64", "normal_force", fn);
-  w.array("CellData", "Float64", "force", force, 3);
-  w.array("CellData", "Int64", "id_i", id_i);
-  w.array("CellData", "Int64", "id_j", id_j);
-  w.write(path, 2 * lines, 0, lines);
+}
+
+void ModelRows::line_rows(const Take& take) {
+  const CellFrame frame = cell_frame(model_.space);
+  const ContactTable& c = model_.contacts;
+  double row[kVtkLineRow];
+  for (std::size_t p = 0; p < c.size(); ++p)
+    if (vtk_line_row(model_, frame, p, row)) {
+      row[0] = static_cast<double>(c.i[p]);
+      take(row);
+    }
 }
 
 void write_bonds_vtp(const Model& model, const std::string& path) {
@@ -321,18 +472,40 @@ std::string VtkSeries::domain_path(std::int64_t cycle) const {
   return fmt::format("{}_domain_{:06d}.vtp", base_, cycle);
 }
 
-void VtkSeries::write(const Model& model) {
-  write_balls_vtp(model, balls_path(model.cycle));
-  write_contacts_vtp(model, contacts_path(model.cycle));
+void VtkSeries::write(const Model& model, VtkRows* rows) {
+  ModelRows own(model);
+  VtkRows& from = rows ? *rows : own;
+  const bool writes = from.writes();
+  // (Every pass runs whatever failed before it: under mpirun each is a collective call.)
+  std::exception_ptr failed;
+  auto attempt = [&](const std::function<void()>& work) {
+    try {
+      work();
+    } catch (...) {
+      if (!failed) failed = std::current_exception();
+    }
+  };
+  const std::uint64_t n = model.balls.size();
+  attempt([&] {
+    write_rows(balls_path(model.cycle), kBallFields, n, n, n, 0, writes, [&](const VtkRows::Take& take) { from.ball_rows(take); });
+  });
+  attempt([&] {
+    const std::uint64_t lines = from.lines();
+    write_rows(contacts_path(model.cycle), kLineFields, lines, 2 * lines, 0, lines, writes,
+               [&](const VtkRows::Take& take) { from.line_rows(take); });
+  });
   const bool walls = !model.walls.empty();
-  if (walls) write_walls_vtp(model, walls_path(model.cycle));
-  write_domain_vtp(model, domain_path(model.cycle));
   const bool bonds = !model.bonds.empty();
-  if (bonds) write_bonds_vtp(model, bonds_path(model.cycle));
+  if (writes) {
+    if (walls) attempt([&] { write_walls_vtp(model, walls_path(model.cycle)); });
+    attempt([&] { write_domain_vtp(model, domain_path(model.cycle)); });
+    if (bonds) attempt([&] { write_bonds_vtp(model, bonds_path(model.cycle)); });
+  }
+  if (failed) std::rethrow_exception(failed);
   // A second dump at the same cycle replaces the first.
   if (!entries_.empty() && entries_.back().cycle == model.cycle) entries_.pop_back();
   entries_.push_back({model.cycle, model.time, walls, bonds});
-  write_pvd();
+  if (writes) write_pvd();
 }
 
 void VtkSeries::write_pvd() const {

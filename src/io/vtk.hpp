@@ -25,30 +25,58 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "model/model.hpp"
+#include "model/dump_rows.hpp"
 
 namespace trubal {
 
 // The quads around a cylinder wall in the walls file.
 inline constexpr int kCylinderSegments = 48;
 
-// Writes the ball, contact and wall files of one dump. Throws std::runtime_error if a file cannot
+// Writes the wall, domain and bond files of one dump. Throws std::runtime_error if a file cannot
 // be written.
-void write_balls_vtp(const Model& model, const std::string& path);
-void write_contacts_vtp(const Model& model, const std::string& path);
 void write_walls_vtp(const Model& model, const std::string& path);
 void write_domain_vtp(const Model& model, const std::string& path);
 void write_bonds_vtp(const Model& model, const std::string& path);
+
+// Where a dump's balls and lines come from: the model's arrays (ModelRows), or a distributed run's
+// kept parts, every rank calling VtkSeries::write alike (each pass a collective call: the rows
+// merged to rank 0 in order), rank 0 alone writing the files (writes()).
+class VtkRows {
+ public:
+  using Take = std::function<void(const double*)>;
+  virtual ~VtkRows() = default;
+  virtual bool writes() const { return true; }
+  virtual std::uint64_t lines() = 0;   // the touching pairs, over the whole model
+  // take(row) for each row in order, where writes() (else nullptr).
+  virtual void ball_rows(const Take& take) = 0;
+  virtual void line_rows(const Take& take) = 0;
+};
+
+// The rows of a model that holds its balls and contacts.
+class ModelRows final : public VtkRows {
+ public:
+  explicit ModelRows(const Model& model) : model_(model) {}
+  std::uint64_t lines() override;
+  void ball_rows(const Take& take) override;
+  void line_rows(const Take& take) override;
+
+ private:
+  const Model& model_;
+};
 
 class VtkSeries {
  public:
   // BASE is the file name without extension (a .vtp or .pvd given is dropped).
   explicit VtkSeries(std::string base, std::int64_t every = 0);
-  // Writes one dump of the model now and adds it to the collection.
-  void write(const Model& model);
+  // Writes one dump of the model now and adds it to the collection; the balls and lines from
+  // `rows` where given (the model's light state the rest), every pass of it run however a file
+  // fails (the first failure thrown after). Without writes(), the passes alone and the entry.
+  void write(const Model& model, VtkRows* rows = nullptr);
   // True when periodic dumps are on and this cycle is due.
   bool due(std::int64_t cycle) const { return every_ > 0 && cycle % every_ == 0; }
   const std::string& base() const { return base_; }
