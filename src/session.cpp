@@ -88,6 +88,15 @@ std::size_t Session::change_balls(const Range& range, const std::function<void(B
 }
 
 Model& Session::edit_cell() {
+  // Where the ranks keep their parts and no servo drives the cell, as edit_walls: the results made
+  // on the parts (of the state before the change) and left there, the next step searching afresh
+  // as serial's does. (With a servo on, a change gathers them to rank 0 first: left on the parts,
+  // the servo's next steps parted from serial's.)
+  const Space& s = model_.space;
+  if (parts_kept() && !(s.servo_on[0] || s.servo_on[1] || s.servo_on[2])) {
+    edit_on_parts();
+    return model_;
+  }
   results_before_setting();   // (of the state before the change)
   mark_changed();
   if (!parts_kept()) pipeline_->invalidate();
@@ -616,6 +625,9 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
         HistorySums sums;
         sums.stress = [this, &m] { return pipeline_->stress_on_parts(m); };
         sums.contacts = [this, &m] { return pipeline_->contact_sums_on_parts(m); };
+        sums.ball = [this](std::int64_t id, std::size_t count, const HistorySums::BallRead& read) {
+          return pipeline_->ball_on_parts(id, count, read);
+        };
         history_->sample_on_parts(m, volume_at(m), sums);
         *marks = history_->recorded();
       }

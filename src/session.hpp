@@ -78,7 +78,8 @@ class Session {
   }
   // STRAIN and SERVO: the cell's and walls' settings (the space's strain rates and servo, a wall's
   // servo), with the balls unchanged; the next step is estimated afresh. Where the ranks keep their
-  // parts, every rank calls it (Command::on_ranks) and the parts stay.
+  // parts, every rank calls it (Command::on_ranks) and the parts stay, as edit_walls: the results a
+  // CYCLE deferred made on them, not gathered (but where a servo drives the cell: gathered to rank 0).
   Model& edit_cell();
   // WALL's motion and SERVO wall: a wall's motion or servo, the balls unchanged. Where the ranks
   // keep their parts, every rank calls it (Command::ranks_for, on_ranks): the contact results a

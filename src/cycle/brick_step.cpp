@@ -293,6 +293,22 @@ std::vector<std::int64_t> BrickStep::ids_where(const Model& full, const Range& r
   return ids;
 }
 
+std::vector<double> BrickStep::own_ball_values(std::int64_t id, std::size_t count,
+                                               const std::function<std::vector<double>(const Balls&, std::size_t)>& read) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a ball read on parts where none is live");
+  std::vector<double> mine, all;
+  together([&] {
+    for (std::uint32_t q : owned_)
+      if (part_.balls.id[q] == id) {
+        mine = read(part_.balls, q);
+        break;
+      }
+  }, "reading a ball's history");
+  team_->allgather(mine, all);   // (the owner's values alone)
+  if (all.size() != count) all.assign(count, std::numeric_limits<double>::quiet_NaN());   // (no ball has that id)
+  return all;
+}
+
 void BrickStep::take_settings(const Model& full) {
   part_.settings = full.settings;
   together([&] {

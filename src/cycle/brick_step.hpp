@@ -239,6 +239,10 @@ class BrickStep {
   // balls where it holds, ascending, on every member.
   std::size_t change_balls(const Model& full, const Range& range, const std::function<void(Balls&, std::size_t)>& change);
   std::vector<std::int64_t> ids_where(const Model& full, const Range& range);
+  // A ball's history item where the parts are live (a collective call): read(balls, k) on the
+  // member that owns the ball of that id, its `count` values to every member (NaN where none does).
+  std::vector<double> own_ball_values(std::int64_t id, std::size_t count,
+                                      const std::function<std::vector<double>(const Balls&, std::size_t)>& read);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what
   // a CYCLE and the light commands read there (the balls' ids, types, fixities, radii, masses and

@@ -193,6 +193,12 @@ class Pipeline {
     return bricks().change_balls(model, range, change);
   }
   std::vector<std::int64_t> ids_on_parts(const Model& model, const Range& range) { return bricks().ids_where(model, range); }
+  // A ball's history item from the kept parts (BrickStep::own_ball_values): a collective call where
+  // parts_live.
+  std::vector<double> ball_on_parts(std::int64_t id, std::size_t count,
+                                    const std::function<std::vector<double>(const Balls&, std::size_t)>& read) {
+    return bricks().own_ball_values(id, count, read);
+  }
   // The balls' fixities from the kept parts into rank 0's hollow whole model, which keeps them (FIX
   // and FREE on the parts), a chunk at a time: a collective call where whole_hollow.
   void fixities_to_root(Model& model);

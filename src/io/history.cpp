@@ -223,7 +223,8 @@ bool History::recorded_on_parts() const {
       const bool platens = !t->platen_ids.empty();
       const bool from_sums = item == "stress" || item == "pq" || item == "sratio" || item == "unbal" || item == "contacts";
       const bool light = item == "strain" || item == "volumetric" || item == "energy" || item == "rolling" ||
-                         item == "time" || item == "porosity" || item == "sample" || item.rfind("wall ", 0) == 0;
+                         item == "time" || item == "porosity" || item == "sample" || item.rfind("wall ", 0) == 0 ||
+                         item.rfind("ball ", 0) == 0;   // (a ball's: from its owner, HistorySums::ball)
       if (!(from_sums || light || ((item == "ratio" || item == "axial") && !platens))) return false;
     }
   return true;
@@ -324,10 +325,23 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
       }
     } else if (item.rfind("ball ", 0) == 0) {
       const BallItem b = ball_item(item);
+      auto read = [&](const Balls& balls, std::size_t k) {
+        std::vector<double> values;
+        for (const auto& q : b.quantities) values.push_back(ball_array(balls, q)[k]);
+        return values;
+      };
+      if (from && from->ball) {
+        const std::vector<double> values = from->ball(b.id, b.quantities.size(), read);
+        row.insert(row.end(), values.begin(), values.end());
+        continue;
+      }
       const std::int64_t k = find_ball(model, b.id);
-      for (const auto& q : b.quantities)   // a ball deleted since: NaN, the row says so rather than stopping
-        row.push_back(k >= 0 ? ball_array(model.balls, q)[static_cast<std::size_t>(k)]
-                             : std::numeric_limits<double>::quiet_NaN());
+      if (k >= 0) {
+        const std::vector<double> values = read(model.balls, static_cast<std::size_t>(k));
+        row.insert(row.end(), values.begin(), values.end());
+      } else {   // a ball deleted since: NaN, the row says so rather than stopping
+        row.insert(row.end(), b.quantities.size(), std::numeric_limits<double>::quiet_NaN());
+      }
     } else if (item.rfind("wall ", 0) == 0) {
       const Wall* it = find_wall(model, std::stoll(item.substr(5)));
       if (!it) {   // deleted since: the row says so rather than stopping

@@ -46,6 +46,10 @@ struct HistoryTable {
 struct HistorySums {
   std::function<StressSums()> stress;
   std::function<ContactSums()> contacts;
+  // A ball's item: read(balls, k) on the ball of that id where it is, its values to every rank
+  // (NaN where no ball has it).
+  using BallRead = std::function<std::vector<double>(const Balls&, std::size_t)>;
+  std::function<std::vector<double>(std::int64_t id, std::size_t count, const BallRead& read)> ball;
 };
 
 // What HIST ... file does with a file that is there: `new` starts it afresh, `append` keeps its rows
@@ -89,8 +93,9 @@ class History {
   void sample(const Model& model, double volume);
   // Whether every table's items are ones each rank can record at a CYCLE's output step from the
   // sums merged over the parts and the light state it holds (the model's clock, cell, walls'
-  // loads and energies, the balls' radii): stress, pq, ratio and axial without platens, sratio,
-  // strain, volumetric, energy, rolling, unbal, contacts, time, wall, sample and porosity.
+  // loads and energies, the balls' radii) and a ball's values its owner sends: stress, pq, ratio
+  // and axial without platens, sratio, strain, volumetric, energy, rolling, unbal, contacts, time,
+  // wall, sample, porosity and ball.
   bool recorded_on_parts() const;
   // sample() on every rank at once (a collective call), the sums from `sums`; rank 0 writes the
   // files, and every rank keeps the rows. A failure to write is every rank's.

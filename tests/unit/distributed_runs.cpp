@@ -304,7 +304,7 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   // (HIST and DUMP run on every rank, rank 0 reading the balls for them: no hand-over either.)
   const std::string deck = "init xvel 0.01 range x 0 10\ncycle 20\n"
                            "print contacts file first.csv\nprint stress\nprint energy\n"
-                           "hist energy ball 7 x vx every 5 file h.csv\ndump vtk d/s\ncycle 30\n" +
+                           "hist energy ball 7 x vx measure sphere 15 15 15 5 every 5 file h.csv\ndump vtk d/s\ncycle 30\n" +
                            std::string(kOutputs);
   const std::string init = "init xvel 0.02 range x 0 10\n", after = "cycle 10\nprint balls file last.csv\n";
   TempDir serial, two;
@@ -339,10 +339,11 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   // balls and pairs) and no result, rank 0 the whole model with its results (43 MiB) and its part.
   const Counters kept = read_counters(two.path() / "kept.txt");
   CHECK(counter(kept, "parts_kept") == 1);
-  // (For first.csv, the step taken again on the parts, where PRINT stress and DUMP read them; the
-  // second CYCLE's last step is one HIST records, whose results rank 0's model takes at that step.)
+  // (For first.csv, the step taken again on the parts, where PRINT stress and DUMP read them, and
+  // gathered whole to rank 0 for HIST's check of its measurement sphere; the second CYCLE's last
+  // step is one HIST records, whose results rank 0's model takes at that step.)
   CHECK(counter(kept, "results_made") == 1);
-  CHECK(counter(kept, "results_gathered") == 0);
+  CHECK(counter(kept, "results_gathered") == 1);
   CHECK(counter(kept, "rank0_contact_results_mib") >= 20);
   CHECK(counter(kept, "rank1_contact_results_mib") == 0);
   CHECK(counter(kept, "rank0_model_held_mib") >= 40);
@@ -534,8 +535,9 @@ TEST_CASE("distributed: HIST of sums, DUMP and CYCLE until read the ranks' parts
           "[mpi][system]") {
   // Histories whose every item is a sum over the contacts or the balls (stress, pq, ratio, sratio,
   // unbal, contacts) or the light state every rank holds (strain, volumetric, energy, porosity, a
-  // wall's loads, the sample's measures): at their output steps every rank records the row from
-  // the sums merged over the parts, which keep their results there (CycleControl::
+  // wall's loads, the sample's measures) or a ball's values (its owner's: HistorySums::ball): at
+  // their output steps every rank records the row from the sums merged over the parts, which keep
+  // their results there (CycleControl::
   // after_step_on_parts). Before, each output step gathered the whole model to rank 0, which then
   // held it to the CYCLE's end. CYCLE until checks its measure every k cycles with the parts kept
   // (rank 0 reads, the stress summed on the parts); before, it handed every rank the whole model.
@@ -547,7 +549,7 @@ TEST_CASE("distributed: HIST of sums, DUMP and CYCLE until read the ranks' parts
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string cell = std::string(kSqueezedCell) +
                            "hist stress pq ratio sratio strain volumetric energy rolling unbal contacts porosity every 10 file h.csv\n"
-                           "hist time unbal every 7\ncycle 1205\nprint counters file c1.txt\n"
+                           "hist time unbal ball 7 x vx fz ball 300 y wz every 7\ncycle 1205\nprint counters file c1.txt\n"
                            "print counters file c1b.txt\ncycle 600 until q -500 every 50\ncycle 2000 until axial 0.2 every 20\n"
                            "print history\nprint strain\nprint counters file c2.txt\nsave s.sav\n" + std::string(kOutputs);
   const std::string walls = R"(start box -0.04 0.04 -0.04 0.04 -0.01 0.11
@@ -748,7 +750,8 @@ TEST_CASE("distributed: INIT, APPLY, FIX, FREE, GROUP and PROP between CYCLEs ch
   // which keeps them, and the counts printed are summed over the ranks; PROP's density and a law
   // new to the scene (rolling resistance: its history part added) go to each part, which takes its
   // balls' masses from them (BrickStep::take_materials). Then the same after a
-  // CYCLE whose last step a ball's history read (rank 0's whole model current: changed alike).
+  // CYCLE whose last step a measurement sphere's history read (rank 0's whole model current:
+  // changed alike).
   // Before, each line gathered the model to rank 0 and ended the parts, and the next CYCLE split it
   // again (3 decompositions and 2 gathers where 1 and 0 are asserted).
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
@@ -769,7 +772,7 @@ apply off range id 1 400
 free vel range group low
 cycle 200
 print counters file c3.txt
-hist ball 7 x vx every 100
+hist measure sphere 0.0035 0.0035 0.0035 0.002 every 100
 cycle 200
 print counters file c4.txt
 init yvel 0.001 range z 0 0.003
@@ -806,7 +809,7 @@ save s2.sav
     CHECK(counter(*c, "whole_hollow") == 1);
     CHECK(counter(*c, "parts_kept") == 1);
   }
-  CHECK(counter(whole_end, "whole_hollow") == 0);   // (the ball's history read the last step whole)
+  CHECK(counter(whole_end, "whole_hollow") == 0);   // (the sphere's history read the last step whole)
   CHECK(counter(whole_end, "parts_kept") == 1);
 }
 
@@ -866,10 +869,12 @@ cycle 100
     // The ranks took a CYCLE's last step again on their parts for first.csv, for the STRAIN and
     // the SERVOs that change the cell's rates (the settings leave the results deferred: the step
     // taken again reads the settings it was taken with) and for the outputs, and gathered the
-    // results to rank 0 for the three changes (first.csv and the outputs read them from the parts,
-    // an array at a time).
+    // results to rank 0 twice: for the servo's first reading of the contact table, and for SERVO
+    // off, a change where a servo drives the cell; the STRAIN and the first SERVO lines leave them
+    // on the parts (Session::edit_cell; before, each of the three changes gathered them), and
+    // first.csv and the outputs read them there, an array at a time.
     CHECK(counter(counters, "results_made") == 5);
-    CHECK(counter(counters, "results_gathered") == 3);
+    CHECK(counter(counters, "results_gathered") == 2);
   }
 }
 
