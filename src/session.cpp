@@ -628,6 +628,10 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
         sums.ball = [this](std::int64_t id, std::size_t count, const HistorySums::BallRead& read) {
           return pipeline_->ball_on_parts(id, count, read);
         };
+        sums.bridges = [this, &m] {
+          const Pipeline::PartCounts c = pipeline_->part_counts(m);
+          return c.bridges + c.wall_bridges;
+        };
         history_->sample_on_parts(m, volume_at(m), sums);
         *marks = history_->recorded();
       }

@@ -221,7 +221,8 @@ bool History::recorded_on_parts() const {
   for (const auto& t : tables_)
     for (const auto& item : t->items) {
       const bool platens = !t->platen_ids.empty();
-      const bool from_sums = item == "stress" || item == "pq" || item == "sratio" || item == "unbal" || item == "contacts";
+      const bool from_sums = item == "stress" || item == "pq" || item == "sratio" || item == "unbal" || item == "contacts" ||
+                             item == "bridges";
       const bool light = item == "strain" || item == "volumetric" || item == "energy" || item == "rolling" ||
                          item == "time" || item == "porosity" || item == "sample" || item.rfind("wall ", 0) == 0 ||
                          item.rfind("ball ", 0) == 0;   // (a ball's: from its owner, HistorySums::ball)
@@ -304,7 +305,8 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
     } else if (item == "rolling") {
       row.push_back(energy(model).rolling_work);
     } else if (item == "bridges") {
-      row.push_back(static_cast<double>(count_bridges(model.contacts) + count_bridges(model.wall_contacts)));
+      row.push_back(static_cast<double>(from && from->bridges ? from->bridges()
+                                                               : count_bridges(model.contacts) + count_bridges(model.wall_contacts)));
       row.push_back(energy(model).capillary_work);
     } else if (item == "bonds") {
       const BondCounts n = count_bonds(model.bonds);
