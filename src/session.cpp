@@ -687,7 +687,7 @@ class PartRows final : public VtkRows {
  public:
   PartRows(const Model& model, Pipeline& pipeline) : model_(model), pipeline_(pipeline) {}
   bool writes() const override { return comm::root(); }
-  std::uint64_t lines() override { return pipeline_.vtk_lines(model_); }
+  std::uint64_t lines() override { return pipeline_.part_counts(model_).touching; }
   void ball_rows(const Take& take) override { pipeline_.vtk_ball_rows(take); }
   void line_rows(const Take& take) override { pipeline_.vtk_line_rows(model_, take); }
 

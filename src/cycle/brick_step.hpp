@@ -299,10 +299,9 @@ class BrickStep {
   void stream_contact_rows(bool bridges, const std::function<void(const double*)>& take);
   // DUMP's rows (io/vtk.hpp) where the parts are live (a collective call of the ranks), merged to
   // rank 0 in the whole model's order as above: every member's own balls' (vtk_ball_rows), its own
-  // pairs' that touch in the results the part holds (vtk_line_rows; vtk_lines: their count over
-  // every member). `full`: the cell as it is now.
+  // pairs' that touch in the results the part holds (vtk_line_rows: as many as own_counts' touching).
+  // `full`: the cell as it is now.
   void vtk_ball_rows(const std::function<void(const double*)>& take);
-  std::uint64_t vtk_lines(const Model& full);
   void vtk_line_rows(const Model& full, const std::function<void(const double*)>& take);
   // The parts are dropped (the whole model was changed, or is to be stepped another way). Not
   // where they alone hold the model (whole_hollow: an internal error; sync first).
@@ -446,9 +445,6 @@ class BrickStep {
   // A test's fault in gather_results, gather_result_array, place_saved_pairs and
   // stream_contact_rows (StepPolicy::fail_results).
   void results_fault();
-  // This member's own pairs that touch in the results the part holds (vtk_lines), the part's cell
-  // set to full's.
-  std::vector<std::uint32_t> own_lines(const Model& full);
   // Every member's `mine` concatenated into `all`: on every thread; on rank 0 alone of the ranks.
   template <class T> void gather_whole(const std::vector<T>& mine, std::vector<T>& all);
   // Runs `work` so that a member's failure is every member's (ranks: comm::together; threads: the

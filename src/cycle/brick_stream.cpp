@@ -301,30 +301,17 @@ void BrickStep::vtk_ball_rows(const std::function<void(const double*)>& take) {
   }, [](const double* p, const double* q) { return p[0] < q[0]; }, take);
 }
 
-std::vector<std::uint32_t> BrickStep::own_lines(const Model& full) {
+void BrickStep::vtk_line_rows(const Model& full, const std::function<void(const double*)>& take) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a dump's lines streamed where no rank's part is live");
+  // (The pairs own_counts counts as touching: their count is Pipeline::part_counts' touching.)
   part_.space = full.space;   // (the cell as it is now, as own_stress)
   const ContactTable& c = part_.contacts;
   std::vector<std::uint32_t> rows;
-  if (!c.results_kept()) return rows;
-  for (std::uint32_t p : owned_pairs_)
-    if (c.state[p] != 0) rows.push_back(p);
-  return rows;
-}
-
-std::uint64_t BrickStep::vtk_lines(const Model& full) {
-  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a dump's lines counted where no rank's part is live");
-  std::vector<double> mine, all;
-  together([&] { mine = {static_cast<double>(own_lines(full).size())}; }, "counting its contacts");
-  team_->allgather(mine, all);
-  double n = 0;
-  for (double v : all) n += v;
-  return static_cast<std::uint64_t>(n);
-}
-
-void BrickStep::vtk_line_rows(const Model& full, const std::function<void(const double*)>& take) {
-  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: a dump's lines streamed where no rank's part is live");
-  std::vector<std::uint32_t> rows;
-  together([&] { rows = own_lines(full); }, "listing its contacts");
+  together([&] {
+    if (c.results_kept())
+      for (std::uint32_t p : owned_pairs_)
+        if (c.state[p] != 0) rows.push_back(p);
+  }, "listing its contacts");
   const CellFrame frame = cell_frame(part_.space);
   // (A rank's own pairs are those of its own balls i, in the whole list's order among themselves:
   // merged by ball i's place, they are the whole list's.)

@@ -203,10 +203,10 @@ class Pipeline {
   // and FREE on the parts), a chunk at a time: a collective call where whole_hollow.
   void fixities_to_root(Model& model);
   // DUMP's rows from the kept parts, merged to rank 0 in the whole model's order (io/vtk.hpp;
-  // BrickStep::vtk_ball_rows, vtk_lines, vtk_line_rows): collective calls where parts_live, every
-  // rank in them (a CYCLE's output step, or DUMP, which every rank runs), take(row) on rank 0.
+  // BrickStep::vtk_ball_rows, vtk_line_rows; the lines' count is part_counts' touching):
+  // collective calls where parts_live, every rank in them (a CYCLE's output step, or DUMP, which
+  // every rank runs), take(row) on rank 0.
   void vtk_ball_rows(const std::function<void(const double*)>& take) { bricks().vtk_ball_rows(take); }
-  std::uint64_t vtk_lines(const Model& model) { return bricks().vtk_lines(model); }
   void vtk_line_rows(const Model& model, const std::function<void(const double*)>& take) {
     bricks().vtk_line_rows(model, take);
   }

@@ -332,18 +332,15 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
         for (const auto& q : b.quantities) values.push_back(ball_array(balls, q)[k]);
         return values;
       };
+      std::vector<double> values;
       if (from && from->ball) {
-        const std::vector<double> values = from->ball(b.id, b.quantities.size(), read);
-        row.insert(row.end(), values.begin(), values.end());
-        continue;
-      }
-      const std::int64_t k = find_ball(model, b.id);
-      if (k >= 0) {
-        const std::vector<double> values = read(model.balls, static_cast<std::size_t>(k));
-        row.insert(row.end(), values.begin(), values.end());
+        values = from->ball(b.id, b.quantities.size(), read);
+      } else if (const std::int64_t k = find_ball(model, b.id); k >= 0) {
+        values = read(model.balls, static_cast<std::size_t>(k));
       } else {   // a ball deleted since: NaN, the row says so rather than stopping
-        row.insert(row.end(), b.quantities.size(), std::numeric_limits<double>::quiet_NaN());
+        values.assign(b.quantities.size(), std::numeric_limits<double>::quiet_NaN());
       }
+      row.insert(row.end(), values.begin(), values.end());
     } else if (item.rfind("wall ", 0) == 0) {
       const Wall* it = find_wall(model, std::stoll(item.substr(5)));
       if (!it) {   // deleted since: the row says so rather than stopping

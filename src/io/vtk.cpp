@@ -122,14 +122,16 @@ class RowsFile {
     check_replaceable(path);
     tmp_ = std::make_unique<TemporaryFile>(path);
     PolyDataLayout layout;
-    std::vector<std::uint64_t> at;
-    for (const RowField& f : fields) at.push_back(layout.array(f.section, f.type(), f.name, f.components, rows * f.per_row * f.value_bytes()));
+    std::vector<std::uint64_t> at, bytes;
+    for (const RowField& f : fields) {
+      bytes.push_back(rows * f.per_row * f.value_bytes());
+      at.push_back(layout.array(f.section, f.type(), f.name, f.components, bytes.back()));
+    }
     const std::string head = layout.head(points, verts, lines, 0);
     place(0, head.data(), head.size());
     for (std::size_t a = 0; a < fields.size(); ++a) {
-      const std::uint64_t bytes = rows * fields[a].per_row * fields[a].value_bytes();
-      place(head.size() + at[a], &bytes, sizeof bytes);
-      columns_.push_back({head.size() + at[a] + sizeof bytes, {}});
+      place(head.size() + at[a], &bytes[a], sizeof bytes[a]);
+      columns_.push_back({head.size() + at[a] + sizeof(std::uint64_t), {}});
       columns_.back().buffer.reserve(kBuffer);
     }
     place(head.size() + layout.size(), PolyDataLayout::kTail.data(), PolyDataLayout::kTail.size());
@@ -270,9 +272,7 @@ void perpendicular_pair(const Vec3& n, Vec3& u, Vec3& v) {
 
 std::uint64_t ModelRows::lines() {
   std::uint64_t n = 0;
-  const ContactTable& c = model_.contacts;
-  const Balls& b = model_.balls;
-  for (std::size_t p = 0; p < c.size(); ++p) n += c.touching(p) && c.i[p] < b.x.size() && c.j[p] < b.x.size();
+  for (std::size_t p = 0; p < model_.contacts.size(); ++p) n += vtk_line(model_, p);
   return n;
 }
 

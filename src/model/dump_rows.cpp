@@ -17,12 +17,16 @@ void vtk_ball_row(const Balls& b, std::size_t k, double* row) {
   row[13] = b.fx[k], row[14] = b.fy[k], row[15] = b.fz[k];
 }
 
+bool vtk_line(const Model& model, std::size_t p) {
+  const ContactTable& c = model.contacts;
+  return c.touching(p) && c.i[p] < model.balls.x.size() && c.j[p] < model.balls.x.size();
+}
+
 bool vtk_line_row(const Model& model, const CellFrame& frame, std::size_t p, double* row) {
+  if (!vtk_line(model, p)) return false;
   const Balls& b = model.balls;
   const ContactTable& c = model.contacts;
-  if (p >= c.state.size() || c.state[p] == 0) return false;
   const std::size_t i = c.i[p], j = c.j[p];
-  if (i >= b.x.size() || j >= b.x.size()) return false;
   // j as seen from i: across the periodic cell when the contact is with an image.
   double shift[3] = {0.0, 0.0, 0.0};
   if (model.space.periodic) image_offset(frame, c.image_x[p], c.image_y[p], c.image_z[p], shift[0], shift[1], shift[2]);

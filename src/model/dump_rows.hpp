@@ -18,7 +18,9 @@ namespace trubal {
 inline constexpr std::size_t kVtkBallRow = 16, kVtkLineRow = 13;
 // Ball k's row, its place left 0.
 void vtk_ball_row(const Balls& b, std::size_t k, double* row);
-// Pair p's row where it touches in the table's results (its place left 0); false where not.
+// Whether pair p is a line: it touches in the table's results.
+bool vtk_line(const Model& model, std::size_t p);
+// Pair p's row where it is a line (its place left 0); false where not.
 bool vtk_line_row(const Model& model, const CellFrame& frame, std::size_t p, double* row);
 
 }  // namespace trubal
