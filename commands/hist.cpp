@@ -13,8 +13,8 @@
 namespace trubal {
 
 // Under mpirun HIST runs on every rank (OnRanks::Parts), which may hold no more of the model than
-// its light state and the balls' ids (Session::light_everywhere): what reads the balls themselves
-// (a measurement sphere's check, the platen balls of a range) is rank 0's, its failure every rank's
+// its light state and the balls' ids, types and radii (Session::light_everywhere): what reads the
+// balls themselves (the platen balls of a range) is rank 0's, its failure every rank's
 // (comm::on_root).
 
 static void run_hist(Context& ctx, Args& args) {
@@ -79,9 +79,13 @@ static void run_hist(Context& ctx, Args& args) {
           for (const auto& it : t->items) id += it.rfind("measure ", 0) == 0;
         for (const auto& it : items) id += it.rfind("measure ", 0) == 0;
       }
-      // A sphere the cell cannot hold is refused now.
-      ctx.session.results_on_root();
-      comm::on_root([&] { measure_sphere(ctx.session.model(), sphere); }, "checking the measurement sphere");
+      // A sphere the cell cannot hold is refused now (from the balls' radii, which every rank holds).
+      const auto& rad = ctx.session.state().balls.rad;
+      try {
+        check_measure_sphere(ctx.session.state().space, sphere, rad.empty() ? 0.0 : *std::max_element(rad.begin(), rad.end()));
+      } catch (const std::runtime_error& e) {
+        args.fail(e.what());
+      }
       item = measure_item(id, sphere);
     }
     items.push_back(std::move(item));

@@ -88,6 +88,33 @@ static void run_print(Context& ctx, Args& args) {
     case 15: args.done(); print_counters(ctx, file); return;
     case 1: print_balls(ctx, read_range(args, ctx.session), file); return;
     case 2: print_contacts(ctx, read_range(args, ctx.session), file); return;
+    // (A sphere's measurement, under mpirun from the ranks' parts where they hold the model:
+    // Session::measure_in; the whole space's porosity reads the balls' radii alone.)
+    case 13: {
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
+      ctx.session.require_started();
+      if (sphere) {
+        const SphereMeasurement sm = ctx.session.measure_in(*sphere);
+        print_sphere_header(ctx, *sphere, sm);
+        print_porosity(ctx, sm.porosity, sm.void_ratio, sm.solid, sm.volume);
+        return;
+      }
+      const Porosity p = space_porosity(ctx.session.state(), ctx.session.stress_volume());
+      print_porosity(ctx, p.porosity, p.void_ratio, p.solid, p.volume);
+      return;
+    }
+    case 14: {
+      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
+      if (!sphere) args.fail("PRINT measure needs its sphere: `range sphere x y z r`");
+      ctx.session.require_started();
+      const SphereMeasurement sm = ctx.session.measure_in(*sphere);
+      print_sphere_header(ctx, *sphere, sm);
+      print_sym(ctx, "stress", sm.stress);
+      print_porosity(ctx, sm.porosity, sm.void_ratio, sm.solid, sm.volume);
+      ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\n", sm.coordination, sm.sliding);
+      print_sym(ctx, "fabric", sm.fabric);
+      return;
+    }
     case 3: {
       double volume = 0;
       if (args.accept("volume")) volume = args.real("volume");
@@ -95,7 +122,7 @@ static void run_print(Context& ctx, Args& args) {
       ctx.session.require_started();
       if (sphere) {
         if (volume > 0) args.fail("`volume` goes with the whole space's stress, not a measurement sphere's");
-        const SphereMeasurement sm = measure_sphere(ctx.session.model(), *sphere);
+        const SphereMeasurement sm = ctx.session.measure_in(*sphere);
         print_sphere_header(ctx, *sphere, sm);
         print_sym(ctx, "stress", sm.stress);
         return;
@@ -108,7 +135,7 @@ static void run_print(Context& ctx, Args& args) {
     // Session::whole_contact_sums.)
     case 6: {
       if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
-        const SphereMeasurement sm = measure_sphere(ctx.session.model(), *sphere);
+        const SphereMeasurement sm = ctx.session.measure_in(*sphere);
         print_sphere_header(ctx, *sphere, sm);
         print_sym(ctx, "fabric", sm.fabric);
         return;
@@ -118,7 +145,7 @@ static void run_print(Context& ctx, Args& args) {
     }
     case 7: {
       if (const auto sphere = measurement_sphere(args, read_range(args, ctx.session))) {
-        const SphereMeasurement sm = measure_sphere(ctx.session.model(), *sphere);
+        const SphereMeasurement sm = ctx.session.measure_in(*sphere);
         print_sphere_header(ctx, *sphere, sm);
         ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\ncontacts: {}\n", sm.coordination,
                                sm.sliding, sm.contacts);
@@ -206,31 +233,6 @@ static void run_print(Context& ctx, Args& args) {
     case 10: args.done(); print_history(ctx); return;
     case 11: args.done(); print_walls(ctx, file); return;
     case 12: args.done(); print_psd(ctx, file); return;
-    case 13: {
-      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
-      ctx.session.require_started();
-      if (sphere) {
-        const SphereMeasurement sm = measure_sphere(m, *sphere);
-        print_sphere_header(ctx, *sphere, sm);
-        print_porosity(ctx, sm.porosity, sm.void_ratio, sm.solid, sm.volume);
-        return;
-      }
-      const Porosity p = space_porosity(m, ctx.session.stress_volume());
-      print_porosity(ctx, p.porosity, p.void_ratio, p.solid, p.volume);
-      return;
-    }
-    case 14: {
-      const auto sphere = measurement_sphere(args, read_range(args, ctx.session));
-      if (!sphere) args.fail("PRINT measure needs its sphere: `range sphere x y z r`");
-      ctx.session.require_started();
-      const SphereMeasurement sm = measure_sphere(m, *sphere);
-      print_sphere_header(ctx, *sphere, sm);
-      print_sym(ctx, "stress", sm.stress);
-      print_porosity(ctx, sm.porosity, sm.void_ratio, sm.solid, sm.volume);
-      ctx.out << fmt::format("coordination number: {:.6g}\nsliding fraction: {:.6g}\n", sm.coordination, sm.sliding);
-      print_sym(ctx, "fabric", sm.fabric);
-      return;
-    }
   }
 }
 

@@ -30,9 +30,10 @@ namespace trubal {
 namespace {
 constexpr auto row_id = &BrickStep::row_id;
 
-// PRINT balls and contacts of every ball and pair, from the rows the ranks' kept parts stream where
-// rank 0's whole model is hollow (Session::rows_from_parts): the same text as from the whole model.
-void print_balls_streamed(Context& ctx, const std::string& file) {
+// PRINT balls and contacts, of every ball and pair or a range's, from the rows the ranks' kept parts
+// stream where rank 0's whole model is hollow (Session::rows_from_parts): the same text as from the
+// whole model.
+void print_balls_streamed(Context& ctx, const std::string& file, const Range& range) {
   std::size_t count = 0;
   if (!file.empty()) {
     write_file_atomically(file, [&](std::ostream& csv) {
@@ -42,7 +43,7 @@ void print_balls_streamed(Context& ctx, const std::string& file) {
         for (std::size_t k = 2; k < BrickStep::kBallRow; ++k) csv << ',' << csv_real(r[k]);
         csv << '\n';
         ++count;
-      });
+      }, range);
     });
     ctx.out << fmt::format("{} written to {}\n", count_of(count, "ball"), file);
     return;
@@ -53,10 +54,10 @@ void print_balls_streamed(Context& ctx, const std::string& file) {
     ctx.out << fmt::format("{:>8} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>10.4g} {:>11.4g} {:>11.4g} {:>11.4g} {:>11.4g} "
                            "{:>11.4g} {:>11.4g}\n",
                            row_id(r[0]), static_cast<int>(r[1]), r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[12], r[13], r[14]);
-  });
+  }, range);
 }
 
-void print_contacts_streamed(Context& ctx, const std::string& file) {
+void print_contacts_streamed(Context& ctx, const std::string& file, const Range& range) {
   const Model& m = ctx.session.state();   // (the materials: which columns there are)
   const bool bridges = has_bridges(m), rolling = has_rolling(m);
   std::size_t count = 0;
@@ -73,7 +74,7 @@ void print_contacts_streamed(Context& ctx, const std::string& file) {
         if (bridges) csv << ',' << (r[14] != 0 ? 1 : 0);
         csv << '\n';
         ++count;
-      });
+      }, range);
     });
     ctx.out << fmt::format("{} contacts written to {}\n", count, file);
     return;
@@ -86,12 +87,12 @@ void print_contacts_streamed(Context& ctx, const std::string& file) {
                            row_id(r[1]), r[2], r[3], r[4], r[5], r[6], std::sqrt(r[7] * r[7] + r[8] * r[8] + r[9] * r[9]),
                            rolling ? fmt::format("{:>11.4g} ", std::sqrt(r[10] * r[10] + r[11] * r[11] + r[12] * r[12])) : "",
                            r[13] == 2 ? "yes" : "no", bridges ? (r[14] != 0 ? "     yes" : "      no") : "");
-  });
+  }, range);
 }
 }  // namespace
 
 void print_balls(Context& ctx, const Range& range, const std::string& file) {
-  if (range.empty() && ctx.session.rows_from_parts()) return print_balls_streamed(ctx, file);
+  if (ctx.session.rows_from_parts()) return print_balls_streamed(ctx, file, range);
   const Model& m = ctx.session.model_but_results();   // (the unbalanced forces are the balls')
   const Balls& b = m.balls;
   auto sel = ctx.session.select(range);
@@ -120,7 +121,7 @@ void print_balls(Context& ctx, const Range& range, const std::string& file) {
 }
 
 void print_contacts(Context& ctx, const Range& range, const std::string& file) {
-  if (range.empty() && ctx.session.rows_from_parts()) return print_contacts_streamed(ctx, file);
+  if (ctx.session.rows_from_parts()) return print_contacts_streamed(ctx, file, range);
   const Model& m = ctx.session.model_but_results();
   const ContactTable& c = m.contacts;
   std::vector<bool> in(m.balls.size(), range.empty());

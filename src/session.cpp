@@ -628,6 +628,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
         sums.ball = [this](std::int64_t id, std::size_t count, const HistorySums::BallRead& read) {
           return pipeline_->ball_on_parts(id, count, read);
         };
+        sums.sphere = [this, &m](const MeasureSphere& s) { return pipeline_->sphere_on_parts(m, s); };
         sums.bridges = [this, &m] {
           const Pipeline::PartCounts c = pipeline_->part_counts(m);
           return c.bridges + c.wall_bridges;
@@ -840,6 +841,12 @@ ContactSums Session::whole_contact_sums() const {
   return contact_sums(model());
 }
 
+SphereMeasurement Session::measure_in(const MeasureSphere& sphere) const {
+  check_measure_sphere(model_.space, sphere, 0);   // (a radius that is not positive: before any request)
+  if (pipeline_->serving() && pipeline_->whole_hollow(model_)) return pipeline_->request_sphere(model_, sphere);
+  return measure_sphere(model(), sphere);
+}
+
 Session::StateCounts Session::state_counts() const {
   if (pipeline_->serving() && pipeline_->whole_hollow(model_)) {
     const Pipeline::PartCounts c = pipeline_->request_part_counts(model_);
@@ -873,10 +880,12 @@ bool Session::rows_from_parts() const {
   return pipeline_->whole_hollow(model_);
 }
 
-void Session::ball_rows(const std::function<void(const double*)>& take) const { pipeline_->request_ball_rows(model_, take); }
+void Session::ball_rows(const std::function<void(const double*)>& take, const Range& range) const {
+  pipeline_->request_ball_rows(model_, take, range);
+}
 
-void Session::contact_rows(bool bridges, const std::function<void(const double*)>& take) const {
-  pipeline_->request_contact_rows(model_, bridges, take);
+void Session::contact_rows(bool bridges, const std::function<void(const double*)>& take, const Range& range) const {
+  pipeline_->request_contact_rows(model_, bridges, take, range);
 }
 
 LargestOverlap Session::largest_overlap_now() {

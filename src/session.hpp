@@ -323,6 +323,9 @@ class Session {
   // unbalanced force) of the whole space, as average_stress_in: from the parts where rank 0's
   // whole model is hollow.
   ContactSums whole_contact_sums() const;
+  // A measurement sphere's measurement (physics/measure_sphere.hpp), as average_stress_in: from
+  // the parts where rank 0's whole model is hollow. Throws std::runtime_error as measure_sphere.
+  SphereMeasurement measure_in(const MeasureSphere& sphere) const;
   // Ball array `of` of the model (one of its arrays of reals): itself, or streamed from the kept
   // parts into `into` where rank 0's whole model is hollow (as state_counts).
   const std::vector<double>& ball_array(const std::vector<double>& of, std::vector<double>& into) const;
@@ -331,8 +334,8 @@ class Session {
   // bridge where `bridges`, by ids) streamed from the kept parts (BrickStep::stream_ball_rows,
   // stream_contact_rows); rows_from_parts says where. The results made on the parts first.
   bool rows_from_parts() const;
-  void ball_rows(const std::function<void(const double*)>& take) const;
-  void contact_rows(bool bridges, const std::function<void(const double*)>& take) const;
+  void ball_rows(const std::function<void(const double*)>& take, const Range& range = {}) const;
+  void contact_rows(bool bridges, const std::function<void(const double*)>& take, const Range& range = {}) const;
   // The largest overlap (physics/overlap.hpp) on rank 0: from the kept parts where rank 0's whole
   // model is hollow (a collective call, every rank taking part); else rank 0's whole model's.
   LargestOverlap largest_overlap_now();

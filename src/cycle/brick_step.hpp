@@ -49,6 +49,7 @@
 #include "cycle/kernels.hpp"
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
+#include "physics/measure_sphere.hpp"
 #include "support/exact_sum.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
@@ -272,6 +273,10 @@ class BrickStep {
   // The contact measures' sums (physics/measure.hpp contact_sums) over the pairs, wall contacts
   // and balls this member owns, from the results the part holds.
   ContactSums own_contact_sums() const { return contact_sums(part_, &owned_pairs_, &owned_walls_, &owned_); }
+  // A measurement sphere's sums (physics/measure_sphere.hpp sphere_sums) over the balls, pairs and
+  // wall contacts this member owns, its pairs' other balls read where the part holds them, with
+  // full's space.
+  SphereSums own_sphere_sums(const Model& full, const MeasureSphere& sphere);
   // The part's state streamed to rank 0 in the whole model's order (SAVE where rank 0's whole
   // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
   // the pairs this member owns that SAVE keeps (touching in the results the part holds, where
@@ -295,8 +300,12 @@ class BrickStep {
   static constexpr std::size_t kBallRow = 15, kContactRow = 15;
   // An id as a row holds it (its bits).
   static std::int64_t row_id(double v) { return std::bit_cast<std::int64_t>(v); }
-  void stream_ball_rows(const std::function<void(const double*)>& take);
-  void stream_contact_rows(bool bridges, const std::function<void(const double*)>& take);
+  // With `range` (read with full's groups), the balls where it holds, and the pairs with a ball
+  // where it holds (its copy read where another member owns it).
+  void stream_ball_rows(const std::function<void(const double*)>& take, const Model* full = nullptr,
+                        const Range* range = nullptr);
+  void stream_contact_rows(bool bridges, const std::function<void(const double*)>& take, const Model* full = nullptr,
+                           const Range* range = nullptr);
   // DUMP's rows (io/vtk.hpp) where the parts are live (a collective call of the ranks), merged to
   // rank 0 in the whole model's order as above: every member's own balls' (vtk_ball_rows), its own
   // pairs' that touch in the results the part holds (vtk_line_rows: as many as own_counts' touching).

@@ -240,12 +240,15 @@ void BrickStep::merge_rows_to_root(std::size_t count, std::size_t width, const s
   if (failed) std::rethrow_exception(failed);
 }
 
-void BrickStep::stream_ball_rows(const std::function<void(const double*)>& take) {
+void BrickStep::stream_ball_rows(const std::function<void(const double*)>& take, const Model* full, const Range* range) {
   if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: balls streamed where no rank's part is live");
   const Balls& b = part_.balls;
   std::vector<std::uint32_t> order;
   together([&] {
-    order = owned_;
+    if (!range || range->empty()) order = owned_;
+    else
+      for (std::uint32_t k : owned_)
+        if (holds(*full, *range, view_of(part_, k))) order.push_back(k);
     std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) { return b.id[p] < b.id[q]; });
   }, "listing its balls by id");
   merge_rows_to_root(order.size(), kBallRow, [&](std::size_t q, double* out) {
@@ -257,7 +260,8 @@ void BrickStep::stream_ball_rows(const std::function<void(const double*)>& take)
   }, [](const double* p, const double* q) { return row_id(p[0]) < row_id(q[0]); }, take);
 }
 
-void BrickStep::stream_contact_rows(bool bridges, const std::function<void(const double*)>& take) {
+void BrickStep::stream_contact_rows(bool bridges, const std::function<void(const double*)>& take, const Model* full,
+                                    const Range* range) {
   if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: contacts streamed where no rank's part is live");
   const ContactTable& c = part_.contacts;
   const auto& id = part_.balls.id;
@@ -267,9 +271,16 @@ void BrickStep::stream_contact_rows(bool bridges, const std::function<void(const
   together([&] { results_fault(); }, "gathering the contact results from the parts");
   const auto low = [&](std::size_t p) { return std::min(id[c.i[p]], id[c.j[p]]); };
   const auto high = [&](std::size_t p) { return std::max(id[c.i[p]], id[c.j[p]]); };
+  const bool ranged = range && !range->empty();
   together([&] {
+    std::vector<char> in;   // (where the range holds, on the part's balls: its own and its copies)
+    if (ranged) {
+      in.resize(part_.balls.size());
+      for (std::size_t k = 0; k < in.size(); ++k) in[k] = holds(*full, *range, view_of(part_, k));
+    }
     for (std::uint32_t p : owned_pairs_)
-      if ((results && c.state[p] != 0) || (bridged && c.bridge[p] != 0)) rows.push_back(p);
+      if (((results && c.state[p] != 0) || (bridged && c.bridge[p] != 0)) && (!ranged || in[c.i[p]] || in[c.j[p]]))
+        rows.push_back(p);
     // (Two images of one pair are one rank's, its ball i's owner's: they keep the list's order.)
     std::stable_sort(rows.begin(), rows.end(), [&](std::uint32_t p, std::uint32_t q) {
       return low(p) != low(q) ? low(p) < low(q) : high(p) < high(q);

@@ -324,6 +324,12 @@ StressSums BrickStep::own_stress(const Model& full) {
   return stress_sums(part_, &owned_pairs_, &owned_walls_);
 }
 
+SphereSums BrickStep::own_sphere_sums(const Model& full, const MeasureSphere& sphere) {
+  part_.space = full.space;   // (as own_stress)
+  part_.walls = full.walls;
+  return sphere_sums(part_, sphere, &owned_, &owned_pairs_, &owned_walls_);
+}
+
 std::vector<double> BrickStep::own_largest_overlap(const Model& full, double threshold) {
   part_.space = full.space;   // (a step since the part's last: the cell and the walls moved on)
   part_.walls = full.walls;

@@ -228,7 +228,7 @@ namespace {
 enum RootRequest : std::int64_t {
   kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5,
   kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12, kStress = 13,
-  kContactSums = 14
+  kContactSums = 14, kSphere = 15
 };
 }  // namespace
 
@@ -324,25 +324,43 @@ ContactSums Pipeline::contact_sums_on_parts(const Model& model) {
   });
 }
 
-ContactSums Pipeline::request_contact_sums(Model& model) {
-  std::int64_t word = kContactSums;
+SphereMeasurement Pipeline::sphere_on_parts(const Model& model, const MeasureSphere& sphere) {
+  if (!parts_live(model)) return measure_sphere(model, sphere);
+  return sphere_measurement(model.space, sphere,
+                            merged_over_ranks(bricks().own_sphere_sums(model, sphere), [](SphereSums& s, auto&& sum, auto&& count) {
+                              s.each_sum(sum);
+                              s.each_count(count);
+                            }));
+}
+
+namespace {
+// Rank 0's side of a reading the ranks make together where it serves them: the word (and `extra`,
+// the reading's arguments) to every rank, the results the CYCLE deferred made on the parts, then
+// read() (Pipeline::serve_root, the others' side).
+template <class Read> auto request_reading(Model& model, Pipeline& pipeline, std::int64_t word, Read&& read,
+                                           std::vector<double> extra = {}) {
   comm::broadcast(word);
-  results_onto_parts(model, *this);
-  return contact_sums_on_parts(model);
+  if (!extra.empty()) comm::broadcast(extra);
+  results_onto_parts(model, pipeline);
+  return read();
+}
+}  // namespace
+
+ContactSums Pipeline::request_contact_sums(Model& model) {
+  return request_reading(model, *this, kContactSums, [&] { return contact_sums_on_parts(model); });
 }
 
 StressSums Pipeline::request_stress(Model& model) {
-  std::int64_t word = kStress;
-  comm::broadcast(word);
-  results_onto_parts(model, *this);
-  return stress_on_parts(model);
+  return request_reading(model, *this, kStress, [&] { return stress_on_parts(model); });
 }
 
 Pipeline::PartCounts Pipeline::request_part_counts(Model& model) {
-  std::int64_t word = kCounts;
-  comm::broadcast(word);
-  results_onto_parts(model, *this);
-  return part_counts(model);
+  return request_reading(model, *this, kCounts, [&] { return part_counts(model); });
+}
+
+SphereMeasurement Pipeline::request_sphere(Model& model, const MeasureSphere& sphere) {
+  return request_reading(model, *this, kSphere, [&] { return sphere_on_parts(model, sphere); },
+                         {sphere.centre[0], sphere.centre[1], sphere.centre[2], sphere.radius});
 }
 
 std::uint64_t Pipeline::request_place_pairs(Model& model) {
@@ -368,19 +386,24 @@ void Pipeline::request_stream(Model& model, int table, std::size_t k,
   bricks().stream_table(table, k, write);
 }
 
-void Pipeline::request_ball_rows(Model& model, const std::function<void(const double*)>& take) {
+void Pipeline::request_ball_rows(Model& model, const std::function<void(const double*)>& take, const Range& range) {
   if (!whole_hollow(model)) throw std::logic_error("internal error: balls streamed where rank 0's whole model holds them");
   std::int64_t word = kBallRows;
   comm::broadcast(word);
-  bricks().stream_ball_rows(take);
+  std::vector<double> numbers = range_numbers(range);
+  comm::broadcast(numbers);
+  bricks().stream_ball_rows(take, &model, &range);
 }
 
-void Pipeline::request_contact_rows(Model& model, bool bridges, const std::function<void(const double*)>& take) {
+void Pipeline::request_contact_rows(Model& model, bool bridges, const std::function<void(const double*)>& take,
+                                    const Range& range) {
   if (!whole_hollow(model)) throw std::logic_error("internal error: contacts streamed where rank 0's whole model holds them");
   std::int64_t word = kContactRows, flag = bridges ? 1 : 0;
   comm::broadcast(word);
   comm::broadcast(flag);
-  bricks().stream_contact_rows(bridges, take);
+  std::vector<double> numbers = range_numbers(range);
+  comm::broadcast(numbers);
+  bricks().stream_contact_rows(bridges, take, &model, &range);
 }
 
 void Pipeline::fixities_to_root(Model& model) {
@@ -425,12 +448,26 @@ void Pipeline::serve_root(Model& model) {
     if (word == kResultArray || word == kStream || word == kContactRows) comm::broadcast(array);
     else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts && word != kPlacePairs &&
              word != kPlaceWalls && word != kFreeSaved && word != kBallRows && word != kStress &&
-             word != kContactSums)
+             word != kContactSums && word != kSphere)
       throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
+    Range range;   // (the rows' range: every rank reads it the same, so no failure is one rank's)
+    if (word == kBallRows || word == kContactRows) {
+      std::vector<double> numbers;
+      comm::broadcast(numbers);
+      range = range_of_numbers(numbers);
+    }
+    MeasureSphere sphere;
+    if (word == kSphere) {
+      std::vector<double> given;
+      comm::broadcast(given);
+      if (given.size() != 4) throw std::logic_error("internal error: a measurement sphere sent without its four numbers");
+      sphere.centre = {given[0], given[1], given[2]};
+      sphere.radius = given[3];
+    }
     // (A failure here is every rank's, in the collective calls: rank 0's command reports it.)
     try {
-      if (word == kBallRows) bricks().stream_ball_rows(nullptr);
-      if (word == kContactRows) bricks().stream_contact_rows(array != 0, nullptr);
+      if (word == kBallRows) bricks().stream_ball_rows(nullptr, &model, &range);
+      if (word == kContactRows) bricks().stream_contact_rows(array != 0, nullptr, &model, &range);
       if (word == kBallRows || word == kContactRows) continue;
       if (word == kPlacePairs) bricks().place_saved_pairs(bricks().results_left());
       if (word == kPlaceWalls) bricks().place_saved_walls();
@@ -452,6 +489,10 @@ void Pipeline::serve_root(Model& model) {
       }
       if (word == kContactSums) {
         contact_sums_on_parts(model);
+        continue;
+      }
+      if (word == kSphere) {
+        sphere_on_parts(model, sphere);
         continue;
       }
       if (word == kGatherResults) gather_part_results(model);

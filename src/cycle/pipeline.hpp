@@ -173,6 +173,11 @@ class Pipeline {
   // The same of the contact measures' sums (physics/measure.hpp contact_sums).
   ContactSums contact_sums_on_parts(const Model& model);
   ContactSums request_contact_sums(Model& model);
+  // And of a measurement sphere's sums (physics/measure_sphere.hpp sphere_sums), each rank's own
+  // balls, pairs and wall contacts: the measurement, the whole model's bits (elsewhere rank 0's
+  // whole model's). Throws as sphere_measurement, on every rank alike.
+  SphereMeasurement sphere_on_parts(const Model& model, const MeasureSphere& sphere);
+  SphereMeasurement request_sphere(Model& model, const MeasureSphere& sphere);
   // Rank 0, serving(), where whole_hollow: the parts' state streamed for SAVE, every rank taking
   // part (the others in serve_root): the pairs SAVE keeps placed in the whole order (touching in
   // the results the parts hold, or with history) and the wall contacts, their counts; array k of a
@@ -183,9 +188,11 @@ class Pipeline {
   void request_stream(Model& model, int table, std::size_t k, const std::function<void(const std::vector<double>&)>& write);
   void request_free_saved();
   // Rank 0, serving(), where whole_hollow: PRINT balls' and contacts' rows from the parts, in order
-  // (BrickStep::stream_ball_rows, stream_contact_rows), take(row) here on each.
-  void request_ball_rows(Model& model, const std::function<void(const double*)>& take);
-  void request_contact_rows(Model& model, bool bridges, const std::function<void(const double*)>& take);
+  // (BrickStep::stream_ball_rows, stream_contact_rows), those of `range` (every one where empty),
+  // take(row) here on each.
+  void request_ball_rows(Model& model, const std::function<void(const double*)>& take, const Range& range = {});
+  void request_contact_rows(Model& model, bool bridges, const std::function<void(const double*)>& take,
+                            const Range& range = {});
   // INIT, APPLY, FIX, FREE and GROUP on the kept parts (BrickStep::change_balls, ids_where):
   // collective calls where parts_live.
   std::size_t change_balls_on_parts(const Model& model, const Range& range,

@@ -225,7 +225,8 @@ bool History::recorded_on_parts() const {
                              item == "bridges";
       const bool light = item == "strain" || item == "volumetric" || item == "energy" || item == "rolling" ||
                          item == "time" || item == "porosity" || item == "sample" || item.rfind("wall ", 0) == 0 ||
-                         item.rfind("ball ", 0) == 0;   // (a ball's: from its owner, HistorySums::ball)
+                         item.rfind("ball ", 0) == 0 ||   // (a ball's: from its owner, HistorySums::ball)
+                         item.rfind("measure ", 0) == 0;  // (a sphere's: its sums merged, HistorySums::sphere)
       if (!(from_sums || light || ((item == "ratio" || item == "axial") && !platens))) return false;
     }
   return true;
@@ -317,7 +318,8 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
       row.push_back(p.void_ratio);
     } else if (item.rfind("measure ", 0) == 0) {
       try {
-        const SphereMeasurement m = measure_sphere(model, measure_item_sphere(item));
+        const MeasureSphere sphere = measure_item_sphere(item);
+        const SphereMeasurement m = from && from->sphere ? from->sphere(sphere) : measure_sphere(model, sphere);
         for (double v : m.stress) row.push_back(v);
         for (double v : {m.porosity, m.void_ratio, m.coordination, m.sliding}) row.push_back(v);
         for (double v : m.fabric) row.push_back(v);

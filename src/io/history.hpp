@@ -52,6 +52,8 @@ struct HistorySums {
   std::function<std::vector<double>(std::int64_t id, std::size_t count, const BallRead& read)> ball;
   // The capillary bridges intact, between balls and to walls.
   std::function<std::size_t()> bridges;
+  // A measurement sphere's measurement (throws std::runtime_error as measure_sphere).
+  std::function<SphereMeasurement(const MeasureSphere&)> sphere;
 };
 
 // What HIST ... file does with a file that is there: `new` starts it afresh, `append` keeps its rows
@@ -97,7 +99,7 @@ class History {
   // sums merged over the parts and the light state it holds (the model's clock, cell, walls'
   // loads and energies, the balls' radii) and a ball's values its owner sends: stress, pq, ratio
   // and axial without platens, sratio, strain, volumetric, energy, rolling, unbal, contacts, time,
-  // wall, sample, porosity, ball and bridges.
+  // wall, sample, porosity, ball, bridges and measure.
   bool recorded_on_parts() const;
   // sample() on every rank at once (a collective call), the sums from `sums`; rank 0 writes the
   // files, and every rank keeps the rows. A failure to write is every rank's.

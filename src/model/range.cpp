@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace trubal {
 
@@ -52,6 +53,40 @@ std::vector<std::size_t> select(const Model& model, const Range& range) {
   for (std::size_t k = 0; k < model.balls.size(); ++k)
     if (holds(model, range, view_of(model, k))) out.push_back(k);
   return out;
+}
+
+std::vector<double> range_numbers(const Range& range) {
+  std::vector<double> out;
+  for (const RangeElement& e : range) {
+    out.push_back(static_cast<double>(e.kind));
+    out.push_back(e.negate ? 1.0 : 0.0);
+    out.insert(out.end(), e.v.begin(), e.v.end());
+    out.push_back(static_cast<double>(e.group.size()));
+    for (char ch : e.group) out.push_back(static_cast<unsigned char>(ch));
+  }
+  return out;
+}
+
+Range range_of_numbers(const std::vector<double>& numbers) {
+  Range range;
+  std::size_t at = 0;
+  auto next = [&] {
+    if (at >= numbers.size()) throw std::runtime_error("internal error: a range's numbers cut short");
+    return numbers[at++];
+  };
+  while (at < numbers.size()) {
+    RangeElement e;
+    const double kind = next();
+    if (!(kind >= 0 && kind <= static_cast<double>(RangeElement::Kind::Octagon)))
+      throw std::runtime_error("internal error: a range's numbers name no kind");
+    e.kind = static_cast<RangeElement::Kind>(static_cast<int>(kind));
+    e.negate = next() != 0;
+    for (double& v : e.v) v = next();
+    const auto length = static_cast<std::size_t>(next());
+    for (std::size_t k = 0; k < length; ++k) e.group.push_back(static_cast<char>(static_cast<unsigned char>(next())));
+    range.push_back(std::move(e));
+  }
+  return range;
 }
 
 }  // namespace trubal

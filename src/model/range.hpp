@@ -33,4 +33,10 @@ BallView view_of(const Model& model, std::size_t index);
 // Indices of the balls where the range holds, ascending.
 std::vector<std::size_t> select(const Model& model, const Range& range);
 
+// A range as numbers, for another process (each element: its kind, negate, its four values, its
+// group's length and characters), and back. range_of_numbers throws std::runtime_error for numbers
+// range_numbers did not make.
+std::vector<double> range_numbers(const Range& range);
+Range range_of_numbers(const std::vector<double>& numbers);
+
 }  // namespace trubal

@@ -40,32 +40,6 @@ void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, do
   s[5] += 0.5 * (ay * bz + az * by);
 }
 
-namespace {
-
-// The symmetric part of a (x) b, in Sym6 order, into six exact sums (each term as add_dyad's).
-struct DyadSums {
-  explicit DyadSums(std::array<ExactSum, 6>& s) : xx(s[0]), yy(s[1]), zz(s[2]), xy(s[3]), xz(s[4]), yz(s[5]) {}
-  void add(double ax, double ay, double az, double bx, double by, double bz) {
-    xx.add(ax * bx); yy.add(ay * by); zz.add(az * bz);
-    xy.add(0.5 * (ax * by + ay * bx));
-    xz.add(0.5 * (ax * bz + az * bx));
-    yz.add(0.5 * (ay * bz + az * by));
-  }
-  ExactSum::Stream xx, yy, zz, xy, xz, yz;
-};
-
-// f(p) for the rows given (every row of n where null).
-template <class F> void each_row(const std::vector<std::uint32_t>* rows, std::size_t n, F&& f) {
-  if (!rows) {
-    for (std::size_t p = 0; p < n; ++p) f(p);
-    return;
-  }
-  for (std::uint32_t p : *rows)
-    if (p < n) f(p);
-}
-
-}  // namespace
-
 Sym6 StressSums::over(double volume) const {
   Sym6 out;
   for (int k = 0; k < 6; ++k) out[k] = s[k].value() / volume;

@@ -15,6 +15,28 @@ using Sym6 = std::array<double, 6>;   // xx yy zz xy xz yz
 
 // Adds the symmetric part of a (x) b to s, in Sym6 order.
 void add_dyad(Sym6& s, double ax, double ay, double az, double bx, double by, double bz);
+// The symmetric part of a (x) b, in Sym6 order, into six exact sums (each term as add_dyad's).
+struct DyadSums {
+  explicit DyadSums(std::array<ExactSum, 6>& s) : xx(s[0]), yy(s[1]), zz(s[2]), xy(s[3]), xz(s[4]), yz(s[5]) {}
+  void add(double ax, double ay, double az, double bx, double by, double bz) {
+    xx.add(ax * bx); yy.add(ay * by); zz.add(az * bz);
+    xy.add(0.5 * (ax * by + ay * bx));
+    xz.add(0.5 * (ax * bz + az * bx));
+    yz.add(0.5 * (ay * bz + az * by));
+  }
+  ExactSum::Stream xx, yy, zz, xy, xz, yz;
+};
+
+// f(p) for the rows given (every row of n where null): the share of a table a sum is taken over.
+template <class F> void each_row(const std::vector<std::uint32_t>* rows, std::size_t n, F&& f) {
+  if (!rows) {
+    for (std::size_t p = 0; p < n; ++p) f(p);
+    return;
+  }
+  for (std::uint32_t p : *rows)
+    if (p < n) f(p);
+}
+
 // Love's formula's sums over the contacts, sum_c f_a l_b (the force on j by the branch vector i ->
 // j; a wall contact's force on the wall by the branch from the ball's centre to the contact point;
 // the capillary bridges' forces likewise), each component an exact sum (support/exact_sum.hpp), so

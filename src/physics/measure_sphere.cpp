@@ -30,25 +30,35 @@ double ball_sphere_overlap(double r, double R, double d) {
   return kPi * s * s * (d * d + 2 * d * r - 3 * r * r + 2 * d * R + 6 * r * R - 3 * R * R) / (12 * d);
 }
 
-SphereMeasurement measure_sphere(const Model& model, const MeasureSphere& sphere) {
+void check_measure_sphere(const Space& space, const MeasureSphere& sphere, double largest) {
   if (!(sphere.radius > 0) || !std::isfinite(sphere.radius))
     throw std::runtime_error(fmt::format("a measurement sphere needs a positive radius, not {}", sphere.radius));
+  if (!space.periodic) return;
+  // One image of a ball at most may reach the sphere, so the nearest image is the one to take.
+  const auto widths = cell_widths(space);
+  double narrowest = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)
+    if (space.wraps(a)) narrowest = std::min(narrowest, widths[a]);
+  if (sphere.radius + largest > 0.5 * narrowest)
+    throw std::runtime_error(fmt::format(
+        "a measurement sphere of radius {} is too large for the periodic cell: its radius plus the largest ball "
+        "radius ({}) must not pass half the cell's narrowest periodic width ({})",
+        sphere.radius, largest, 0.5 * narrowest));
+}
+
+void SphereSums::add(const SphereSums& o) {
+  solid.add(o.solid);
+  inside_volume.add(o.inside_volume);
+  for (int k = 0; k < 6; ++k) moment[k].add(o.moment[k]), fabric[k].add(o.fabric[k]);
+  balls += o.balls, ball_contacts += o.ball_contacts, contacts += o.contacts, sliding += o.sliding;
+  largest = std::max(largest, o.largest);
+}
+
+SphereSums sphere_sums(const Model& model, const MeasureSphere& sphere, const std::vector<std::uint32_t>* balls,
+                       const std::vector<std::uint32_t>* pairs, const std::vector<std::uint32_t>* walls) {
   const Balls& b = model.balls;
   const Space& space = model.space;
   const CellFrame frame = cell_frame(space);
-  if (space.periodic) {
-    // One image of a ball at most may reach the sphere, so the nearest image is the one to take.
-    const double largest = b.size() ? *std::max_element(b.rad.begin(), b.rad.end()) : 0.0;
-    const auto widths = cell_widths(space);
-    double narrowest = std::numeric_limits<double>::infinity();
-    for (int a = 0; a < 3; ++a)
-      if (space.wraps(a)) narrowest = std::min(narrowest, widths[a]);
-    if (sphere.radius + largest > 0.5 * narrowest)
-      throw std::runtime_error(fmt::format(
-          "a measurement sphere of radius {} is too large for the periodic cell: its radius plus the largest ball "
-          "radius ({}) must not pass half the cell's narrowest periodic width ({})",
-          sphere.radius, largest, 0.5 * narrowest));
-  }
   // Each ball's distance from the centre, the nearest image's in a periodic space.
   auto distance = [&](std::size_t k) {
     double dx = b.x[k] - sphere.centre[0], dy = b.y[k] - sphere.centre[1], dz = b.z[k] - sphere.centre[2];
@@ -61,60 +71,82 @@ SphereMeasurement measure_sphere(const Model& model, const MeasureSphere& sphere
     }
     return std::sqrt(dx * dx + dy * dy + dz * dz);
   };
+  SphereSums s;
+  // Whether each ball's centre is inside: every ball the rows below may name (a pair's second ball
+  // need not be among `balls`).
+  std::vector<char> inside(b.size(), 0);
+  std::vector<double> dist(b.size());
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    dist[k] = distance(k);
+    inside[k] = dist[k] <= sphere.radius;
+  }
+  {
+    ExactSum::Stream solid(s.solid), volume(s.inside_volume);
+    each_row(balls, b.size(), [&](std::size_t k) {
+      s.largest = std::max(s.largest, b.rad[k]);
+      if (const double v = ball_sphere_overlap(b.rad[k], sphere.radius, dist[k]); v != 0) solid.add(v);
+      if (!inside[k]) return;
+      ++s.balls;
+      volume.add(ball_volume(b.rad[k]));
+    });
+  }
+  // Each inside ball's contacts: (contact point - centre) (x) (force on the ball), the sign turned
+  // for compression positive. A pair with both balls inside adds its whole branch vector.
+  // (The streams flush into s as this block ends, before s is returned.)
+  {
+    DyadSums moment(s.moment), fabric(s.fabric);
+    const ContactTable& c = model.contacts;
+    each_row(pairs, c.size(), [&](std::size_t p) {
+      if (!c.touching(p)) return;
+      const bool in_i = inside[c.i[p]], in_j = inside[c.j[p]];
+      if (!in_i && !in_j) return;
+      // n points from i to j, the force f is on j: i's arm (r_i - u/2) n carries -f, j's arm
+      // -(r_j - u/2) n carries f; both give + arm length n (x) f.
+      double arm = 0;
+      if (in_i) arm += b.rad[c.i[p]] - 0.5 * c.overlap[p], ++s.ball_contacts;
+      if (in_j) arm += b.rad[c.j[p]] - 0.5 * c.overlap[p], ++s.ball_contacts;
+      moment.add(c.fx[p], c.fy[p], c.fz[p], arm * c.nx[p], arm * c.ny[p], arm * c.nz[p]);
+      fabric.add(c.nx[p], c.ny[p], c.nz[p], c.nx[p], c.ny[p], c.nz[p]);
+      ++s.contacts;
+      s.sliding += c.state[p] == 2;
+    });
+    // Wall contacts of inside balls: the arm from the centre to the contact point, the force on the wall.
+    const WallContacts& w = model.wall_contacts;
+    if (w.fx.size() == w.size() && w.overlap.size() == w.size())
+      each_row(walls, w.size(), [&](std::size_t p) {
+        if (w.state[p] == 0 || w.ball[p] >= b.size() || !inside[w.ball[p]]) return;
+        const double arm = b.rad[w.ball[p]] - w.overlap[p];
+        moment.add(w.fx[p], w.fy[p], w.fz[p], arm * w.nx[p], arm * w.ny[p], arm * w.nz[p]);
+      });
+  }
+  return s;
+}
+
+SphereMeasurement sphere_measurement(const Space& space, const MeasureSphere& sphere, const SphereSums& s) {
+  check_measure_sphere(space, sphere, s.largest);
   SphereMeasurement m;
   m.volume = ball_volume(sphere.radius);
-  std::vector<char> inside(b.size(), 0);
-  double inside_volume = 0;   // of the balls whose centres are inside, whole
-  for (std::size_t k = 0; k < b.size(); ++k) {
-    const double d = distance(k);
-    m.solid += ball_sphere_overlap(b.rad[k], sphere.radius, d);
-    if (d <= sphere.radius) {
-      inside[k] = 1;
-      ++m.balls;
-      inside_volume += ball_volume(b.rad[k]);
-    }
-  }
+  m.solid = s.solid.value();
+  m.balls = static_cast<std::size_t>(s.balls);
+  m.contacts = static_cast<std::size_t>(s.contacts);
   m.porosity = 1 - m.solid / m.volume;
   m.void_ratio = m.solid > 0 ? m.porosity / (1 - m.porosity) : std::numeric_limits<double>::infinity();
-  // Each inside ball's contacts: sum of (contact point - centre) (x) (force on the ball), the sign
-  // turned for compression positive. A pair with both balls inside adds its whole branch vector.
-  Sym6 moment{};
-  std::size_t ball_contacts = 0, sliding = 0;
-  const ContactTable& c = model.contacts;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!c.touching(p)) continue;
-    const bool in_i = inside[c.i[p]], in_j = inside[c.j[p]];
-    if (!in_i && !in_j) continue;
-    // n points from i to j, the force f is on j: i's arm (r_i - u/2) n carries -f, j's arm
-    // -(r_j - u/2) n carries f; both give + arm length n (x) f.
-    double arm = 0;
-    if (in_i) arm += b.rad[c.i[p]] - 0.5 * c.overlap[p], ++ball_contacts;
-    if (in_j) arm += b.rad[c.j[p]] - 0.5 * c.overlap[p], ++ball_contacts;
-    add_dyad(moment, c.fx[p], c.fy[p], c.fz[p], arm * c.nx[p], arm * c.ny[p], arm * c.nz[p]);
-    add_dyad(m.fabric, c.nx[p], c.ny[p], c.nz[p], c.nx[p], c.ny[p], c.nz[p]);
-    ++m.contacts;
-    sliding += c.state[p] == 2;
-  }
-  // Wall contacts of inside balls: the arm from the centre to the contact point, the force on the wall.
-  const WallContacts& w = model.wall_contacts;
-  if (w.fx.size() == w.size() && w.overlap.size() == w.size())
-    for (std::size_t p = 0; p < w.size(); ++p) {
-      if (w.state[p] == 0 || w.ball[p] >= b.size() || !inside[w.ball[p]]) continue;
-      const double arm = b.rad[w.ball[p]] - w.overlap[p];
-      add_dyad(moment, w.fx[p], w.fy[p], w.fz[p], arm * w.nx[p], arm * w.ny[p], arm * w.nz[p]);
-    }
   if (m.balls > 0) {
     // PFC's correction: the balls whose centres are inside stand for the solid in the sphere.
-    const double scale = (1 - m.porosity) / inside_volume;
-    for (double& v : moment) v *= scale;
-    m.stress = moment;
-    m.coordination = static_cast<double>(ball_contacts) / static_cast<double>(m.balls);
+    const double scale = (1 - m.porosity) / s.inside_volume.value();
+    for (int k = 0; k < 6; ++k) m.stress[k] = s.moment[k].value() * scale;
+    m.coordination = s.ball_contacts / s.balls;
   }
   if (m.contacts > 0) {
-    for (double& v : m.fabric) v /= static_cast<double>(m.contacts);
-    m.sliding = static_cast<double>(sliding) / static_cast<double>(m.contacts);
+    for (int k = 0; k < 6; ++k) m.fabric[k] = s.fabric[k].value() / s.contacts;
+    m.sliding = s.sliding / s.contacts;
   }
   return m;
+}
+
+SphereMeasurement measure_sphere(const Model& model, const MeasureSphere& sphere) {
+  check_measure_sphere(model.space, sphere, 0);   // (the radius, before reading the balls)
+  return sphere_measurement(model.space, sphere, sphere_sums(model, sphere));
 }
 
 Porosity space_porosity(const Model& model, double volume) {

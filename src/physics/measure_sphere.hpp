@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 #include <string>
 
 #include "model/model.hpp"
@@ -29,9 +31,39 @@ struct SphereMeasurement {
   Sym6 fabric{};                   // mean n (x) n over them
 };
 
-// Throws std::runtime_error for a sphere a periodic cell cannot hold (a ball could meet it as two
-// images: its radius plus the largest ball radius must not pass half the cell's narrowest width)
-// or a radius that is not positive.
+// What a sphere's measurement is made of, over any share of the balls, pairs and wall contacts:
+// exact sums, counts and a largest, so that merged over the shares (the ranks' parts) they are the
+// whole model's, bit for bit, whatever the order.
+struct SphereSums {
+  ExactSum solid;                        // the parts of balls inside the sphere
+  ExactSum inside_volume;                // the balls whose centres are inside, whole
+  std::array<ExactSum, 6> moment;        // (contact point - centre) (x) force, compression positive
+  std::array<ExactSum, 6> fabric;        // n (x) n over the touching pairs with a ball inside
+  double balls = 0, ball_contacts = 0, contacts = 0, sliding = 0;   // counts
+  double largest = 0;                    // the largest ball radius (the periodic cell's check)
+  void add(const SphereSums& o);
+  template <class F> void each_sum(F&& f) {
+    f(solid);
+    f(inside_volume);
+    for (ExactSum& e : moment) f(e);
+    for (ExactSum& e : fabric) f(e);
+  }
+  template <class F> void each_count(F&& f) {
+    for (double* v : {&balls, &ball_contacts, &contacts, &sliding, &largest}) f(*v);
+  }
+};
+// `balls`, `pairs`, `walls`: the rows taken (every one where null). A pair or wall contact is read
+// where one of its balls lies inside, whether or not that ball is among `balls` (a rank's part: its
+// own pairs, whose second ball may be a copy of another rank's).
+SphereSums sphere_sums(const Model& model, const MeasureSphere& sphere, const std::vector<std::uint32_t>* balls = nullptr,
+                       const std::vector<std::uint32_t>* pairs = nullptr, const std::vector<std::uint32_t>* walls = nullptr);
+// The measurement from the sums over the whole model. Throws std::runtime_error for a sphere a
+// periodic cell cannot hold (a ball could meet it as two images: its radius plus the largest ball
+// radius must not pass half the cell's narrowest width) or a radius that is not positive.
+SphereMeasurement sphere_measurement(const Space& space, const MeasureSphere& sphere, const SphereSums& sums);
+// Throws as sphere_measurement for a sphere `space` cannot hold with balls of that largest radius.
+void check_measure_sphere(const Space& space, const MeasureSphere& sphere, double largest_radius);
+// sphere_measurement of the whole model's sums.
 SphereMeasurement measure_sphere(const Model& model, const MeasureSphere& sphere);
 
 // The volume common to a ball of radius r and a sphere of radius R whose centres are d apart.

@@ -304,7 +304,7 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   // (HIST and DUMP run on every rank, rank 0 reading the balls for them: no hand-over either.)
   const std::string deck = "init xvel 0.01 range x 0 10\ncycle 20\n"
                            "print contacts file first.csv\nprint stress\nprint energy\n"
-                           "hist energy ball 7 x vx measure sphere 15 15 15 5 every 5 file h.csv\ndump vtk d/s\ncycle 30\n" +
+                           "hist energy ball 7 x vx platen every 5 file h.csv range id 1 30\ndump vtk d/s\ncycle 30\n" +
                            std::string(kOutputs);
   const std::string init = "init xvel 0.02 range x 0 10\n", after = "cycle 10\nprint balls file last.csv\n";
   TempDir serial, two;
@@ -340,7 +340,7 @@ TEST_CASE("distributed: between CYCLEs the ranks keep their parts, rank 0 alone 
   const Counters kept = read_counters(two.path() / "kept.txt");
   CHECK(counter(kept, "parts_kept") == 1);
   // (For first.csv, the step taken again on the parts, where PRINT stress and DUMP read them, and
-  // gathered whole to rank 0 for HIST's check of its measurement sphere; the second CYCLE's last
+  // gathered whole to rank 0 for HIST's choice of its platen balls; the second CYCLE's last
   // step is one HIST records, whose results rank 0's model takes at that step.)
   CHECK(counter(kept, "results_made") == 1);
   CHECK(counter(kept, "results_gathered") == 1);
@@ -531,10 +531,21 @@ std::string printed(const std::string& out, const std::string& what) {
 }
 }  // namespace
 
+// A measurement sphere's readings, one of them near the cell's corner (its nearest images).
+constexpr const char* kSphereReadings =
+    "print measure range sphere 0.0035 0.0035 0.0035 0.0015\nprint stress range sphere 0.0003 0.0066 0.0012 0.0012\n"
+    "print fabric range sphere 0.0035 0.0035 0.0035 0.0015\nprint coordination range sphere 0.0035 0.0035 0.0035 0.0015\n"
+    "print porosity range sphere 0.0035 0.0035 0.0035 0.0015\nprint porosity\n"
+    // And PRINT balls and contacts of a range (a group, a negated element; the pairs with a ball
+    // in it), from the parts' rows.
+    "group corner range x 0 0.003 y 0 0.003\nprint balls file rb.csv range group corner not z 0.002 0.004\n"
+    "print contacts file rc.csv range z 0.001 0.004 not type 2\nprint balls range id 1 12\n"
+    "print contacts range id 40 60\n";
+
 TEST_CASE("distributed: HIST of sums, DUMP and CYCLE until read the ranks' parts, rank 0 never handed the whole model: serial's bits",
           "[mpi][system]") {
   // Histories whose every item is a sum over the contacts or the balls (stress, pq, ratio, sratio,
-  // unbal, contacts) or the light state every rank holds (strain, volumetric, energy, porosity, a
+  // unbal, contacts, a measurement sphere's) or the light state every rank holds (strain, volumetric, energy, porosity, a
   // wall's loads, the sample's measures) or a ball's values (its owner's: HistorySums::ball): at
   // their output steps every rank records the row from the sums merged over the parts (the
   // capillary bridges' count too), which keep
@@ -550,7 +561,9 @@ TEST_CASE("distributed: HIST of sums, DUMP and CYCLE until read the ranks' parts
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string cell = std::string(kSqueezedCell) +
                            "hist stress pq ratio sratio strain volumetric energy rolling unbal contacts porosity every 10 file h.csv\n"
-                           "hist time unbal ball 7 x vx fz ball 300 y wz every 7\ncycle 1205\nprint counters file c1.txt\n"
+                           "hist time unbal ball 7 x vx fz ball 300 y wz measure sphere 0.0035 0.0035 0.0035 0.0015 "
+                           "measure sphere 0.0003 0.0066 0.0012 0.0012 every 7\ncycle 1205\n" + std::string(kSphereReadings) +
+                           "print counters file c1.txt\n"
                            "print counters file c1b.txt\ncycle 600 until q -500 every 50\ncycle 2000 until axial 0.2 every 20\n"
                            "print history\nprint strain\nprint counters file c2.txt\nsave s.sav\n" + std::string(kOutputs);
   const std::string walls = R"(start box -0.04 0.04 -0.04 0.04 -0.01 0.11
@@ -565,9 +578,10 @@ damp local 0.7
 servo wall 1 stress 1e5 in 3 max 0.05
 servo wall 2 stress 1e5 in 3 max 0.05
 servo wall 3 stress 1e5 between 1 2 max 0.05
-hist sample wall 3 wall 1 energy unbal contacts porosity stress every 50 file h.csv
+hist sample wall 3 wall 1 energy unbal contacts porosity stress measure sphere 0 0.002 0.008 0.01 every 50 file h.csv
 dump vtk d/w every 2000
 cycle 3000
+print measure range sphere 0.005 0 0.006 0.008
 print counters file c1.txt
 servo wall 1 off
 servo wall 2 off
@@ -600,10 +614,19 @@ save s.sav
     run_both(deck, serial, ranks);
     const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
     INFO(out);
-    for (const char* file : {"h.csv", "balls.csv", "contacts.csv", "s.sav"}) {
+    for (const char* file : {"h.csv", "balls.csv", "contacts.csv", "s.sav", "rb.csv", "rc.csv"}) {
       INFO(file);
+      const bool cell_only = std::string(file).starts_with("r");
+      if (cell_only && name == std::string("walls")) continue;
       CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+      if (cell_only) CHECK(lines_of(slurp(serial.path() / file)).size() > 5);
     }
+    if (name != std::string("walls"))
+      for (const char* what : {"balls range id 1 12", "contacts range id 40 60"}) {
+        INFO(what);
+        CHECK(lines_of(printed(serial_out, what)).size() > 5);
+        CHECK(printed(out, what) == printed(serial_out, what));
+      }
     // The dumps a CYCLE wrote (after the one DUMP wrote at cycle 0) up to a cycle: serial's files.
     std::vector<std::int64_t> dumps;
     if (std::filesystem::exists(serial.path() / "d"))
@@ -619,6 +642,17 @@ save s.sav
     CHECK(lines_of(printed(serial_out, "history")).size() > 20);
     for (const char* what : {"history", "strain", "walls", "sample"}) {
       INFO(what);
+      CHECK(printed(out, what) == printed(serial_out, what));
+    }
+    // A measurement sphere's readings between CYCLEs, from the sums over the parts (the wall
+    // contacts' too, in the walled sample's sphere on its base), print serial's.
+    for (const std::string what : {"measure range sphere 0.0035 0.0035 0.0035 0.0015", "stress range sphere 0.0003 0.0066 0.0012 0.0012",
+                                   "fabric range sphere 0.0035 0.0035 0.0035 0.0015", "coordination range sphere 0.0035 0.0035 0.0035 0.0015",
+                                   "porosity range sphere 0.0035 0.0035 0.0035 0.0015", "porosity", "measure range sphere 0.005 0 0.006 0.008"}) {
+      INFO(what);
+      const bool walled = what.ends_with("0.008");
+      if (walled != (name == std::string("walls"))) continue;
+      CHECK_THAT(printed(serial_out, what), Catch::Contains(what == "porosity" ? "porosity: " : "measurement sphere at"));
       CHECK(printed(out, what) == printed(serial_out, what));
     }
     auto reached = [](const std::string& text) {
@@ -761,8 +795,7 @@ TEST_CASE("distributed: INIT, APPLY, FIX, FREE, GROUP and PROP between CYCLEs ch
   // which keeps them, and the counts printed are summed over the ranks; PROP's density and a law
   // new to the scene (rolling resistance: its history part added) go to each part, which takes its
   // balls' masses from them (BrickStep::take_materials). Then the same after a
-  // CYCLE whose last step a measurement sphere's history read (rank 0's whole model current:
-  // changed alike).
+  // CYCLE whose last step a platen's history read (rank 0's whole model current: changed alike).
   // Before, each line gathered the model to rank 0 and ended the parts, and the next CYCLE split it
   // again (3 decompositions and 2 gathers where 1 and 0 are asserted).
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
@@ -783,7 +816,7 @@ apply off range id 1 400
 free vel range group low
 cycle 200
 print counters file c3.txt
-hist measure sphere 0.0035 0.0035 0.0035 0.002 every 100
+hist platen every 100 range id 1 20
 cycle 200
 print counters file c4.txt
 init yvel 0.001 range z 0 0.003
@@ -820,7 +853,7 @@ save s2.sav
     CHECK(counter(*c, "whole_hollow") == 1);
     CHECK(counter(*c, "parts_kept") == 1);
   }
-  CHECK(counter(whole_end, "whole_hollow") == 0);   // (the sphere's history read the last step whole)
+  CHECK(counter(whole_end, "whole_hollow") == 0);   // (the platen's history read the last step whole)
   CHECK(counter(whole_end, "parts_kept") == 1);
 }
 

@@ -125,6 +125,45 @@ TEST_CASE("measure sphere: the stress of a uniform sample is the cell's with coo
                               Catch::Contains(fmt::format("stress: xx {:.6g}", s.stress[0])));
 }
 
+TEST_CASE("measure sphere: its sums over any shares of the balls and contacts, merged, are the whole model's bits",
+          "[physics][measure]") {
+  // What a rank's part gives (physics/measure_sphere.hpp sphere_sums): its own balls, its own pairs
+  // (whose other ball it reads as a copy), its own wall contacts. Shares taken in another order
+  // (the even rows from the end, then the odd) and merged give the whole model's measurement bit
+  // for bit: the sums are exact.
+  Harness h;
+  REQUIRE(h.deck(kFccPressed));
+  const Model& m = h.session.model();
+  const MeasureSphere sphere{{4.37, 6.11, 3.93}, 4.0};
+  const SphereMeasurement whole = measure_sphere(m, sphere);
+  REQUIRE(whole.contacts > 1000);
+  auto share = [](std::size_t n, int which) {
+    std::vector<std::uint32_t> rows;
+    for (std::size_t k = n; k-- > 0;)
+      if (static_cast<int>(k % 2) == which) rows.push_back(static_cast<std::uint32_t>(k));
+    return rows;
+  };
+  SphereSums merged;
+  for (int which : {0, 1}) {
+    const auto balls = share(m.balls.size(), which), pairs = share(m.contacts.size(), which),
+               walls = share(m.wall_contacts.size(), which);
+    merged.add(sphere_sums(m, sphere, &balls, &pairs, &walls));
+  }
+  const SphereMeasurement parts = sphere_measurement(m.space, sphere, merged);
+  CHECK(parts.balls == whole.balls);
+  CHECK(parts.contacts == whole.contacts);
+  CHECK(parts.solid == whole.solid);
+  CHECK(parts.porosity == whole.porosity);
+  CHECK(parts.coordination == whole.coordination);
+  for (int k = 0; k < 6; ++k) {
+    CHECK(parts.stress[k] == whole.stress[k]);
+    CHECK(parts.fabric[k] == whole.fabric[k]);
+  }
+  // The periodic cell's check reads the largest radius over the shares.
+  CHECK(merged.largest == 0.5);
+  CHECK_THROWS_WITH(sphere_measurement(m.space, {{5, 5, 5}, 4.6}, merged), Catch::Contains("too large for the periodic cell"));
+}
+
 TEST_CASE("measure sphere: HIST measure and HIST porosity record the same numbers as the measurement",
           "[physics][measure]") {
   TempDir dir;
