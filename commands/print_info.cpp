@@ -194,6 +194,7 @@ void print_counters(Context& ctx, const std::string& file) {
   line("parts_kept", s.parts_kept() ? 1 : 0);
   line("whole_hollow", s.pipeline().whole_hollow(m) ? 1 : 0);
   line("whole_hand_overs", c.hand_overs);
+  line("cycle_hand_overs", c.cycle_hand_overs);
   line("whole_gathers", c.parts.gathers);
   line("peak_mib", s.rank_figures().front().peak_mib);   // (rank 0's under mpirun, gathered before PRINT)
   line("model_held_mib", s.rank_figures().front().model_arrays_mib);

@@ -518,7 +518,7 @@ void Pipeline::refresh_whole(Model& model, bool even_hollow) {
 void Pipeline::share_whole(Model& model, bool for_command) {
   // (The contact results a step taken again left on the parts are nowhere else: rank 0's first.)
   gather_part_results(model);
-  if (for_command && (others_hollow_ || parts_live(model))) ++hand_overs_;
+  if (others_hollow_ || parts_live(model)) ++(for_command ? hand_overs_ : cycle_hand_overs_);
   hand_over_to_hollow(model);
   refresh_whole(model);   // (rank 0's whole model, where it is hollow and no results came)
   if (!bricks().live_for(model)) return;
@@ -825,7 +825,7 @@ PipelineCounters Pipeline::counters() const {
   return {ref_.rebuilds(),    mode_ == StepMode::Space ? pool_.size() : step_.active(), backend_->keeps_list() ? ref_.skin() : 0.0,
           backend_->pair_tests(), results_made_, results_gathered_, bricks().counts(), cycle_peaks_,
           static_cast<double>(held_whole_) / (1 << 20), static_cast<double>(held_part_) / (1 << 20), hand_overs_,
-          copies_on_parts_, parts_from_records_, parts_from_saves_};
+          cycle_hand_overs_, copies_on_parts_, parts_from_records_, parts_from_saves_};
 }
 
 std::vector<std::pair<std::string, std::string>> Pipeline::info() const {

@@ -39,6 +39,7 @@ struct PipelineCounters {
   std::vector<double> cycle_peaks_mib;   // per rank: peak memory by the end of the last distributed CYCLE
   double whole_arrays_mib = 0, part_arrays_mib = 0;   // this rank's arrays in the last distributed step
   std::int64_t hand_overs = 0;     // the whole model handed to every rank for a command, from kept parts
+  std::int64_t cycle_hand_overs = 0;   // and for a CYCLE (a periodic servo's first reading of the table, ...)
   std::int64_t copies_on_parts = 0;   // the parts put back to their rescue copies in place (restore_rescue_on_parts)
   std::int64_t parts_from_records = 0;   // the parts made from balls the ranks kept (parts_from_records)
   std::int64_t parts_from_saves = 0;     // the parts made from a save a RESTART read (parts_from_file)
@@ -95,6 +96,14 @@ class Pipeline {
   // Whether a distributed run's ranks hold their live parts of this model (between CYCLEs: after an
   // end_cycle that kept them), the ranks other than 0 no more of the whole model than the balls'
   // ids, types and radii (hollow). The same answer on every rank.
+  // Before the copy of the step before a CYCLE's last step is taken, the step's results deferred
+  // (a collective call where parts_live, the same answer on every rank): where the kept parts'
+  // lists are stale and no ball is outside the cell, they are rebuilt now (parts_go_on), so that
+  // the copy is of the parts as the step goes on from them and can be put back in place when the
+  // step is taken again (results_onto_parts; a copy of the parts before a rebuild cannot, and the
+  // model would be gathered to rank 0 for it). Where a ball is outside, the step wraps it after
+  // the servo's new rates, which the wrap reads: left to the step. Whether it rebuilt.
+  bool rebuild_before_copy(Model& model);
   bool parts_live(const Model& model) const { return distributed() && comm_ranks_ > 1 && bricks().live_for(model); }
   // Rank 0's whole model no longer holds the parts' state (a failed make_results_to_read put it
   // part way back); refresh_whole, a collective call where parts_live, gathers it again.
@@ -488,6 +497,7 @@ class Pipeline {
   bool whole_stale_ = false;        // mark_whole_stale (rank 0's word counts)
   bool others_hollow_ = false;      // others_hollow
   std::int64_t hand_overs_ = 0;     // PipelineCounters::hand_overs
+  std::int64_t cycle_hand_overs_ = 0;   // PipelineCounters::cycle_hand_overs
   bool whole_next_ = false;         // the next step on the whole model, on every rank (rewind_step)
   // threads_in_space's answer for one list (a memo of a function of the list, not a state).
   struct SpaceVerdict {

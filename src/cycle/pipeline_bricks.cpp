@@ -65,6 +65,24 @@ bool Pipeline::parts_go_on(Model& model) {
   return true;
 }
 
+bool Pipeline::rebuild_before_copy(Model& model) {
+  if (!parts_live(model)) return false;   // (the same answer on every rank)
+  bool outside = false;
+  each_part([&](BrickStep& part, int t) {
+    const bool mine = part.outside_cell(model);   // (every member's answer, the same on each)
+    if (t == 0) outside = mine;
+  });
+  if (outside) return false;
+  const double limit2 = ref_.displacement_limit2(model);
+  const bool stale = search_next_step_ || walls_next_step_ || !(limit2 >= 0) || !(bricks().moved2() <= limit2) ||
+                     !(wall_travel_ <= 0.5 * ref_.skin());
+  if (!stale) return false;
+  const std::uint64_t edition = bricks().edition();
+  // (Where the parts cannot go on, the step decides again: its list searched afresh.)
+  if (!parts_go_on(model)) search_next_step_ = true;
+  return bricks().edition() != edition;
+}
+
 void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& sums) {
   // The last step's findings (every rank's): the parts go on where the serial pipeline would only
   // step; a wrap or a rebuild goes through the whole model.

@@ -162,6 +162,9 @@ class CycleRun {
   double cap_ = 0;         // the Hertz cap of the critical step
   double free_step_ = 0;   // the estimate between contact episodes (next_critical_step)
   bool servo_reads_table_ = false;
+  // The servo's first reading where the run knows it without the table (a distributed run's: none
+  // touches, CycleRun's constructor), read at the run's first step in place of the table's.
+  std::optional<ContactMoments> first_reading_;
   // A distributed run's output steps gather to rank 0 alone, which alone runs the observers.
   bool output_on_root_ = false, observes_ = true;
   std::optional<EnergyGuard> guard_;   // made once the masses and the step are known
@@ -172,6 +175,21 @@ class CycleRun {
   // step whose results are deferred), at this cycle; advance() then makes none (-1: none made).
   std::int64_t sorted_ahead_ = -1;
 };
+
+namespace {
+// Whether no pair or wall contact of the model's tables touches and no capillary bridge holds (what
+// a servo's first reading of the table reads: physics/cell.cpp, average_stress and
+// servo_stiffness, of the touching contacts and the bridges).
+bool touches_nothing(const Model& model) {
+  const ContactTable& c = model.contacts;
+  const WallContacts& w = model.wall_contacts;
+  for (std::size_t p = 0; p < c.size(); ++p)
+    if (c.touching(p) || (c.bridge.size() == c.size() && c.bridge[p] != 0)) return false;
+  for (std::size_t p = 0; p < w.size(); ++p)
+    if ((p < w.state.size() && w.state[p] != 0) || (w.bridge.size() == w.size() && w.bridge[p] != 0)) return false;
+  return true;
+}
+}  // namespace
 
 CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control)
     : model_(model), pipeline_(pipeline), n_(n), control_(control) {
@@ -199,8 +217,23 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   if (pipeline.parts_live(model) && sort_due(model) && !pipeline.results_deferred(model) && !presorted &&
       !pipeline.whole_hollow(model))
     pipeline.release_parts(model);
-  // A servo's first reading of the contact table needs the whole model's list searched on every
-  // rank: handed over first, from the parts or from rank 0.
+  // A servo's first reading of the contact table where rank 0 alone holds the whole model (no
+  // part kept, no step deferred): where nothing in its table touches and no capillary bridge holds,
+  // the reading is of no force and no stiffness, as serial's is (a search makes no contact touch),
+  // and no rank needs the whole model for it (GEN, SERVO and CYCLE: the first reading of most
+  // servo decks). (Rank 0's answer, which the others take.)
+  if (servo_reads_table_ && pipeline.distributed() && comm::size() > 1 && !pipeline.parts_live(model) &&
+      !pipeline.results_deferred(model)) {
+    std::int64_t none = 0;
+    comm::on_root([&] { none = touches_nothing(model) ? 1 : 0; }, "reading the contact table");
+    comm::broadcast(none);
+    if (none != 0) {
+      first_reading_ = ContactMoments{};
+      servo_reads_table_ = false;
+    }
+  }
+  // Else it needs the whole model's list searched on every rank: handed over first, from the parts
+  // or from rank 0.
   if (servo_reads_table_) pipeline.share_whole(model);
   // (The parts' settings, materials and masses first: what follows reads them, a rebuild of their
   // lists too.)
@@ -305,7 +338,10 @@ CycleResult CycleRun::run() {
           sorted = sort_balls();
           sorted_ahead_ = model_.cycle;
         }
-        if (sorted || pipeline_.rescue().cycle != model_.cycle) take_copy();
+        // (And the parts' lists rebuilt first where they are stale: a copy of the parts before
+        // a rebuild in the step could not be put back in place.)
+        const bool rebuilt = pipeline_.rebuild_before_copy(model_);
+        if (sorted || rebuilt || pipeline_.rescue().cycle != model_.cycle) take_copy();
       }
       const StepTotals sums = advance(step);
       if (step.energies) {
@@ -413,7 +449,11 @@ StepTotals CycleRun::advance(const StepPlan& step) {
   }
   // Periodic space: the servo's rates, from the last force pass (Space::servo_measured).
   FieldChange field;   // the servo's new rates change the balls' velocities: where the pipeline holds them
-  cell_before_step(model, dt, space.servo_measured_valid ? &space.servo_measured : nullptr, &field);
+  cell_before_step(model, dt,
+                   space.servo_measured_valid                                     ? &space.servo_measured
+                   : first_reading_ && model.cycle == start_cycle_ ? &*first_reading_
+                                                                   : nullptr,
+                   &field);
   pipeline_.apply_field(model, field);
   if (!model.walls.empty()) walls_before_step(model, dt);
   pipeline_.step(model, kernels, step_sums);
