@@ -277,6 +277,9 @@ class BrickStep {
   // wall contacts this member owns, its pairs' other balls read where the part holds them, with
   // full's space.
   SphereSums own_sphere_sums(const Model& full, const MeasureSphere& sphere);
+  // A periodic servo's stiffness sums (physics/cell.hpp servo_stiffness_sums) over the pairs this
+  // member owns, from the results the part holds.
+  std::array<ExactSum, 3> own_servo_stiffness() const;
   // The part's state streamed to rank 0 in the whole model's order (SAVE where rank 0's whole
   // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
   // the pairs this member owns that SAVE keeps (touching in the results the part holds, where

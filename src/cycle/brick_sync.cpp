@@ -324,6 +324,8 @@ StressSums BrickStep::own_stress(const Model& full) {
   return stress_sums(part_, &owned_pairs_, &owned_walls_);
 }
 
+std::array<ExactSum, 3> BrickStep::own_servo_stiffness() const { return servo_stiffness_sums(part_, &owned_pairs_); }
+
 SphereSums BrickStep::own_sphere_sums(const Model& full, const MeasureSphere& sphere) {
   part_.space = full.space;   // (as own_stress)
   part_.walls = full.walls;

@@ -333,6 +333,26 @@ SphereMeasurement Pipeline::sphere_on_parts(const Model& model, const MeasureSph
                             }));
 }
 
+std::optional<ContactMoments> Pipeline::servo_reading_on_parts(Model& model) {
+  if (!whole_hollow(model)) return std::nullopt;   // (the same answer on every rank)
+  results_onto_parts(model, *this);
+  if (!results_on_parts(model)) return std::nullopt;
+  const StressSums force = stress_on_parts(model);
+  struct Stiffness {
+    std::array<ExactSum, 3> s;
+    void add(const Stiffness& o) {
+      for (int a = 0; a < 3; ++a) s[a].add(o.s[a]);
+    }
+  };
+  const Stiffness stiffness = merged_over_ranks(Stiffness{bricks().own_servo_stiffness()}, [](Stiffness& k, auto&& sum, auto&&) {
+    for (ExactSum& e : k.s) sum(e);
+  });
+  ContactMoments m;
+  for (int a = 0; a < 6; ++a) m.force[a] = force.s[a].value();
+  for (int a = 0; a < 3; ++a) m.stiffness[a] = stiffness.s[a].value();
+  return m;
+}
+
 namespace {
 // Rank 0's side of a reading the ranks make together where it serves them: the word (and `extra`,
 // the reading's arguments) to every rank, the results the CYCLE deferred made on the parts, then

@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -98,11 +99,12 @@ class Pipeline {
   // ids, types and radii (hollow). The same answer on every rank.
   // Before the copy of the step before a CYCLE's last step is taken, the step's results deferred
   // (a collective call where parts_live, the same answer on every rank): where the kept parts'
-  // lists are stale and no ball is outside the cell, they are rebuilt now (parts_go_on), so that
-  // the copy is of the parts as the step goes on from them and can be put back in place when the
-  // step is taken again (results_onto_parts; a copy of the parts before a rebuild cannot, and the
-  // model would be gathered to rank 0 for it). Where a ball is outside, the step wraps it after
-  // the servo's new rates, which the wrap reads: left to the step. Whether it rebuilt.
+  // lists are stale or a ball is outside the cell, they go on now (parts_go_on: the wrap, the
+  // rebuild), so that the copy is of the parts as the step goes on from them and can be put back
+  // in place when the step is taken again (results_onto_parts; a copy of the parts before a
+  // rebuild cannot, and the model would be gathered to rank 0 for it). Not a wrap where a periodic
+  // servo drives the cell: the step wraps after the servo's new rates, which the wrap reads (nor
+  // beside a following membrane). Whether the parts changed.
   bool rebuild_before_copy(Model& model);
   bool parts_live(const Model& model) const { return distributed() && comm_ranks_ > 1 && bricks().live_for(model); }
   // Rank 0's whole model no longer holds the parts' state (a failed make_results_to_read put it
@@ -187,6 +189,13 @@ class Pipeline {
   // whole model's). Throws as sphere_measurement, on every rank alike.
   SphereMeasurement sphere_on_parts(const Model& model, const MeasureSphere& sphere);
   SphereMeasurement request_sphere(Model& model, const MeasureSphere& sphere);
+  // A periodic servo's first reading from the kept parts where rank 0's whole model is hollow (a
+  // collective call, every rank given it): the results the CYCLE deferred made on them first
+  // (results_onto_parts: serial's make_results), then Love's sums and the stiffness sums
+  // (physics/cell.hpp servo_stiffness_sums) merged exactly, as ContactMoments (physics/cell.cpp
+  // cell_before_step reads them as it reads a step's: the same bits as its reading of the whole
+  // table). Empty where the parts do not hold the results.
+  std::optional<ContactMoments> servo_reading_on_parts(Model& model);
   // Rank 0, serving(), where whole_hollow: the parts' state streamed for SAVE, every rank taking
   // part (the others in serve_root): the pairs SAVE keeps placed in the whole order (touching in
   // the results the parts hold, or with history) and the wall contacts, their counts; array k of a

@@ -72,15 +72,19 @@ bool Pipeline::rebuild_before_copy(Model& model) {
     const bool mine = part.outside_cell(model);   // (every member's answer, the same on each)
     if (t == 0) outside = mine;
   });
-  if (outside) return false;
+  // (A wrap reads the cell's rates, which a periodic servo changes before the step: where one
+  // drives the cell, the step wraps, after them; so beside a following membrane, whose loads are
+  // made before the step.)
+  const Space& s = model.space;
+  if (outside && (s.servo_on[0] || s.servo_on[1] || s.servo_on[2] || model.membrane.follow_every > 0)) return false;
   const double limit2 = ref_.displacement_limit2(model);
-  const bool stale = search_next_step_ || walls_next_step_ || !(limit2 >= 0) || !(bricks().moved2() <= limit2) ||
+  const bool stale = outside || search_next_step_ || walls_next_step_ || !(limit2 >= 0) || !(bricks().moved2() <= limit2) ||
                      !(wall_travel_ <= 0.5 * ref_.skin());
   if (!stale) return false;
   const std::uint64_t edition = bricks().edition();
   // (Where the parts cannot go on, the step decides again: its list searched afresh.)
   if (!parts_go_on(model)) search_next_step_ = true;
-  return bricks().edition() != edition;
+  return outside || bricks().edition() != edition;
 }
 
 void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& sums) {

@@ -232,6 +232,13 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
       servo_reads_table_ = false;
     }
   }
+  // Where the ranks keep parts that alone hold the model (a SERVO between CYCLEs): the reading
+  // summed on them, the results the last CYCLE deferred made there first, as serial's make_results
+  // makes them for its reading (Pipeline::servo_reading_on_parts).
+  if (servo_reads_table_ && pipeline.distributed() && comm::size() > 1) {
+    first_reading_ = pipeline.servo_reading_on_parts(model);
+    if (first_reading_) servo_reads_table_ = false;
+  }
   // Else it needs the whole model's list searched on every rank: handed over first, from the parts
   // or from rank 0.
   if (servo_reads_table_) pipeline.share_whole(model);

@@ -88,19 +88,25 @@ static double servo_gain_for(double m, double dt) {
   return kServoFraction / (m * dt);
 }
 
-double servo_stiffness(const Model& model, int axis) {
+std::array<ExactSum, 3> servo_stiffness_sums(const Model& model, const std::vector<std::uint32_t>* pairs) {
   const ContactTable& c = model.contacts;
   const Balls& b = model.balls;
+  std::array<ExactSum, 3> m;
+  each_row(pairs, c.size(), [&](std::size_t p) {
+    if (!c.touching(p)) return;
+    const double l = b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p];
+    const double n[3] = {c.nx[p], c.ny[p], c.nz[p]};
+    for (int a = 0; a < 3; ++a) {
+      const double la = l * n[a];
+      m[a].add(c.kn_eff[p] * la * la);
+    }
+  });
+  return m;
+}
+
+double servo_stiffness(const Model& model, int axis) {
   const auto L = model.space.length();
-  const double volume = L[0] * L[1] * L[2];
-  const std::vector<double>* normal[3] = {&c.nx, &c.ny, &c.nz};
-  double m = 0;
-  for (std::size_t p = 0; p < c.size(); ++p) {
-    if (!c.touching(p)) continue;
-    const double l = (b.rad[c.i[p]] + b.rad[c.j[p]] - c.overlap[p]) * (*normal[axis])[p];
-    m += c.kn_eff[p] * l * l;
-  }
-  return m / volume;
+  return servo_stiffness_sums(model)[axis].value() / (L[0] * L[1] * L[2]);
 }
 
 double default_servo_max_rate(double dt) { return dt > 0 ? 1e-4 / dt : 0; }

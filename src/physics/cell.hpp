@@ -6,9 +6,12 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <cstdlib>
+#include <vector>
 
 #include "model/model.hpp"
+#include "support/exact_sum.hpp"
 
 namespace trubal {
 
@@ -56,6 +59,10 @@ inline constexpr double kServoIntegral = 0.25;
 double servo_rate(double error, double gain, double closes, double& integral, double most, double old);
 // M_a of the contact table's per-pair results (the servo's first step, before a force pass summed it).
 double servo_stiffness(const Model& model, int axis);
+// Its sums, sum k_n (l n_a)^2 over the touching pairs (`pairs`: the rows taken, every one where null),
+// each an exact sum, so that merged over shares of the pairs (the ranks' parts) they are the whole
+// table's bits.
+std::array<ExactSum, 3> servo_stiffness_sums(const Model& model, const std::vector<std::uint32_t>* pairs = nullptr);
 // Default largest servo rate: rate dt <= 1e-4, the cell changes by at most 1e-4 of its size per step.
 double default_servo_max_rate(double dt);
 

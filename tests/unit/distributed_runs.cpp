@@ -867,9 +867,8 @@ TEST_CASE("distributed: DAMP, FRAC, TSTEP, GRAV, STRAIN and SERVO between CYCLEs
   // afresh on the parts, their list made current first (it read a stale list, and the estimate went
   // 14% long, when it was not: the third CYCLE parted from serial). STRAIN's change of the velocity
   // field goes to the parts and to rank 0's model alike (Pipeline::apply_field_kept), its work summed
-  // exactly as serial's is; SERVO's first reading of the contact table hands the whole model over
-  // and every rank reads rank 0's results (the ranks parted, one rebuilding its list while the other
-  // stepped, when only rank 0 had them).
+  // exactly as serial's is; SERVO's first reading of the contact table is summed on the parts, the
+  // stress and the stiffness exact sums as serial's are.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = std::string(kSqueezedCell) + R"(set sort 0
 cycle 700
@@ -914,15 +913,15 @@ cycle 100
     // The ranks took a CYCLE's last step again on their parts for first.csv, for the STRAIN and
     // the SERVOs that change the cell's rates (the settings leave the results deferred: the step
     // taken again reads the settings it was taken with) and for the outputs, and gathered the
-    // results to rank 0 twice: for the servo's first reading of the contact table, and for SERVO
-    // off, a change where a servo drives the cell; the STRAIN and the first SERVO lines leave them
-    // on the parts (Session::edit_cell; before, each of the three changes gathered them), and
-    // first.csv and the outputs read them there, an array at a time.
+    // results to rank 0 once, for SERVO off, a change where a servo drives the cell; the STRAIN
+    // and the first SERVO lines leave them on the parts (Session::edit_cell; before, each of the
+    // three changes gathered them), and first.csv and the outputs read them there, an array at a
+    // time. The servo's first reading of the contact table, where contacts touch, is summed on the
+    // parts (Pipeline::servo_reading_on_parts; before, the results were gathered and the whole
+    // model handed to every rank for it: results_gathered 2, cycle_hand_overs 1).
     CHECK(counter(counters, "results_made") == 5);
-    CHECK(counter(counters, "results_gathered") == 2);
-    // (The SERVO between CYCLEs: its first reading of the contact table, where contacts touch,
-    // had the whole model handed to every rank.)
-    CHECK(counter(counters, "cycle_hand_overs") == 1);
+    CHECK(counter(counters, "results_gathered") == 1);
+    CHECK(counter(counters, "cycle_hand_overs") == 0);
   }
   // A servo from the start (GEN, SERVO, CYCLE): its first reading, of a table where nothing
   // touches yet, is of no force and no stiffness, as serial's: no rank is handed the whole model
@@ -943,6 +942,9 @@ cycle 100
   CHECK(counter(counters, "cycle_hand_overs") == 0);
   CHECK(counter(counters, "whole_hand_overs") == 0);
   CHECK(counter(counters, "parts_kept") == 1);
+  // (One gather: the second SERVO, a change where a servo drives the cell, has the results made
+  // through rank 0's whole model, Session::edit_cell. No CYCLE's end did.)
+  CHECK(counter(counters, "whole_gathers") == 1);
 }
 
 TEST_CASE("a setting between CYCLEs leaves the results deferred: read after it, they are of the step as it was taken",
