@@ -162,8 +162,9 @@ class CycleRun {
   double cap_ = 0;         // the Hertz cap of the critical step
   double free_step_ = 0;   // the estimate between contact episodes (next_critical_step)
   bool servo_reads_table_ = false;
-  // The servo's first reading where the run knows it without the table (a distributed run's: none
-  // touches, CycleRun's constructor), read at the run's first step in place of the table's.
+  // The servo's first reading where a distributed run makes it without the whole model's table on
+  // every rank (nothing touches in rank 0's, or summed on the kept parts: CycleRun's constructor),
+  // read at the run's first step in place of the table's.
   std::optional<ContactMoments> first_reading_;
   // A distributed run's output steps gather to rank 0 alone, which alone runs the observers.
   bool output_on_root_ = false, observes_ = true;
