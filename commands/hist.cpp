@@ -80,9 +80,8 @@ static void run_hist(Context& ctx, Args& args) {
         for (const auto& it : items) id += it.rfind("measure ", 0) == 0;
       }
       // A sphere the cell cannot hold is refused now (from the balls' radii, which every rank holds).
-      const auto& rad = ctx.session.state().balls.rad;
       try {
-        check_measure_sphere(ctx.session.state().space, sphere, rad.empty() ? 0.0 : *std::max_element(rad.begin(), rad.end()));
+        check_measure_sphere(ctx.session.state().space, sphere, ctx.session.state().balls.max_radius());
       } catch (const std::runtime_error& e) {
         args.fail(e.what());
       }

@@ -347,10 +347,7 @@ std::optional<ContactMoments> Pipeline::servo_reading_on_parts(Model& model) {
   const Stiffness stiffness = merged_over_ranks(Stiffness{bricks().own_servo_stiffness()}, [](Stiffness& k, auto&& sum, auto&&) {
     for (ExactSum& e : k.s) sum(e);
   });
-  ContactMoments m;
-  for (int a = 0; a < 6; ++a) m.force[a] = force.s[a].value();
-  for (int a = 0; a < 3; ++a) m.stiffness[a] = stiffness.s[a].value();
-  return m;
+  return table_moments(force.s, stiffness.s);
 }
 
 namespace {

@@ -2,6 +2,7 @@
 // cycle/energy_guard.cpp.
 #include "cycle/run.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -16,7 +17,9 @@
 #include "cycle/kernels.hpp"
 #include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
+#include "physics/bridge.hpp"
 #include "physics/cell.hpp"
+#include "physics/measure.hpp"
 #include "physics/membrane.hpp"
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
@@ -182,13 +185,9 @@ namespace {
 // a servo's first reading of the table reads: physics/cell.cpp, average_stress and
 // servo_stiffness, of the touching contacts and the bridges).
 bool touches_nothing(const Model& model) {
-  const ContactTable& c = model.contacts;
-  const WallContacts& w = model.wall_contacts;
-  for (std::size_t p = 0; p < c.size(); ++p)
-    if (c.touching(p) || (c.bridge.size() == c.size() && c.bridge[p] != 0)) return false;
-  for (std::size_t p = 0; p < w.size(); ++p)
-    if ((p < w.state.size() && w.state[p] != 0) || (w.bridge.size() == w.size() && w.bridge[p] != 0)) return false;
-  return true;
+  const auto& walls = model.wall_contacts.state;
+  return contact_count(model) == 0 && count_bridges(model.contacts) == 0 && count_bridges(model.wall_contacts) == 0 &&
+         std::none_of(walls.begin(), walls.end(), [](std::uint8_t s) { return s != 0; });
 }
 }  // namespace
 

@@ -104,9 +104,11 @@ std::array<ExactSum, 3> servo_stiffness_sums(const Model& model, const std::vect
   return m;
 }
 
-double servo_stiffness(const Model& model, int axis) {
-  const auto L = model.space.length();
-  return servo_stiffness_sums(model)[axis].value() / (L[0] * L[1] * L[2]);
+ContactMoments table_moments(const std::array<ExactSum, 6>& force, const std::array<ExactSum, 3>& stiffness) {
+  ContactMoments m;
+  for (int a = 0; a < 6; ++a) m.force[a] = force[a].value();
+  for (int a = 0; a < 3; ++a) m.stiffness[a] = stiffness[a].value();
+  return m;
 }
 
 double default_servo_max_rate(double dt) { return dt > 0 ? 1e-4 / dt : 0; }
@@ -139,11 +141,10 @@ void cell_before_step(Model& model, double dt, const ContactMoments* last, Field
   }
   const auto L = s.length();
   const double volume = L[0] * L[1] * L[2];
+  // Where no step has summed them yet, the contact table's results (the same values: exact sums).
+  const ContactMoments read = last ? *last : table_moments(stress_sums(model).s, servo_stiffness_sums(model));
   Sym6 stress;
-  if (last)
-    for (int a = 0; a < 6; ++a) stress[a] = last->force[a] / volume;
-  else
-    stress = average_stress(model, volume);
+  for (int a = 0; a < 6; ++a) stress[a] = read.force[a] / volume;
   std::array<double, 3> rates{s.strain_rate[0], s.strain_rate[1], s.strain_rate[2]};
   const double most = s.servo_max_rate > 0 ? s.servo_max_rate : default_servo_max_rate(dt);
   // STRAIN's rule (check_cell_step) for the rates the servo may choose: a max rate that would let
@@ -157,7 +158,7 @@ void cell_before_step(Model& model, double dt, const ContactMoments* last, Field
   for (int a = 0; a < 3; ++a) {
     double& integral = s.servo_integral[a];
     if (!s.servo_on[a]) { integral = 0; continue; }
-    const double m = last ? last->stiffness[a] / volume : servo_stiffness(model, a);
+    const double m = read.stiffness[a] / volume;
     const double gain = s.servo_gain > 0 ? s.servo_gain : servo_gain_for(m, dt);
     const double error = s.servo_target[a] - stress[a];   // too little compression: compress (rate > 0)
     // The fraction of the error this gain closes per step where the stress follows the contact

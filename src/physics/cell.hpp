@@ -57,12 +57,14 @@ inline constexpr double kServoIntegral = 0.25;
 // the rate now (the rate changes by at most a quarter of the largest per step). An infinite
 // proportional rate (nothing touches) moves at the largest rate toward the target.
 double servo_rate(double error, double gain, double closes, double& integral, double most, double old);
-// M_a of the contact table's per-pair results (the servo's first step, before a force pass summed it).
-double servo_stiffness(const Model& model, int axis);
-// Its sums, sum k_n (l n_a)^2 over the touching pairs (`pairs`: the rows taken, every one where null),
-// each an exact sum, so that merged over shares of the pairs (the ranks' parts) they are the whole
-// table's bits.
+// The sums of M_a = (1/V) sum k_n (l n_a)^2 over the touching pairs of the contact table's results
+// (the servo's first step, before a force pass summed them; `pairs`: the rows taken, every one
+// where null), each an exact sum, so that merged over shares of the pairs (the ranks' parts) they
+// are the whole table's bits.
 std::array<ExactSum, 3> servo_stiffness_sums(const Model& model, const std::vector<std::uint32_t>* pairs = nullptr);
+// What a servo reads of a step from the contact table's sums, Love's (physics/measure.hpp
+// stress_sums) and the stiffness's: their values, as a step's own sums give them.
+ContactMoments table_moments(const std::array<ExactSum, 6>& force, const std::array<ExactSum, 3>& stiffness);
 // Default largest servo rate: rate dt <= 1e-4, the cell changes by at most 1e-4 of its size per step.
 double default_servo_max_rate(double dt);
 
