@@ -182,8 +182,8 @@ class CycleRun {
 
 namespace {
 // Whether no pair or wall contact of the model's tables touches and no capillary bridge holds (what
-// a servo's first reading of the table reads: physics/cell.cpp, average_stress and
-// servo_stiffness, of the touching contacts and the bridges).
+// a servo's first reading of the table reads: physics/cell.cpp, Love's sums and
+// servo_stiffness_sums, of the touching contacts and the bridges).
 bool touches_nothing(const Model& model) {
   const auto& walls = model.wall_contacts.state;
   return contact_count(model) == 0 && count_bridges(model.contacts) == 0 && count_bridges(model.wall_contacts) == 0 &&
