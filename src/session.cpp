@@ -88,18 +88,15 @@ std::size_t Session::change_balls(const Range& range, const std::function<void(B
 }
 
 Model& Session::edit_cell() {
-  // Where the ranks keep their parts and no servo drives the cell, as edit_walls: the results made
-  // on the parts (of the state before the change) and left there, the next step searching afresh
-  // as serial's does. (With a servo on, a change gathers them to rank 0 first: left on the parts,
-  // the servo's next steps parted from serial's.)
-  const Space& s = model_.space;
-  if (parts_kept() && !(s.servo_on[0] || s.servo_on[1] || s.servo_on[2])) {
+  // Where the ranks keep their parts, as edit_walls: the results made on the parts (of the state
+  // before the change) and left there, the next step searching afresh as serial's does.
+  if (parts_kept()) {
     edit_on_parts();
     return model_;
   }
   results_before_setting();   // (of the state before the change)
   mark_changed();
-  if (!parts_kept()) pipeline_->invalidate();
+  pipeline_->invalidate();
   return model_;
 }
 

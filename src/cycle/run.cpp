@@ -246,6 +246,12 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // lists too.)
   if (pipeline.parts_live(model)) pipeline.parts_take_settings(model);
   // (A step estimated afresh reads the pairs touching now: the parts' list made current first.)
+  // The first step's sort before it, as serial's sorts before its list is prepared (a wrap of a
+  // ball across a periodic face among it: the sort reads the centres before that wrap).
+  if (pipeline.parts_live(model) && !(model.critical_dt > 0) && sort_due(model) && !pipeline.results_deferred(model)) {
+    if (!presorted) sort_balls();
+    sorted_at_start_ = true;
+  }
   if (pipeline.parts_live(model) && !(model.critical_dt > 0) && !pipeline.parts_go_on(model)) pipeline.share_whole(model);
   // The ranks other than 0 may hold no more of the model than its balls' ids, types and radii, and
   // no part (after a command rank 0 alone ran: Pipeline::others_hollow): rank 0 then checks, sorts
@@ -269,7 +275,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // The first step's sort (Model::order) before the run's first search; not where a step a CYCLE
   // deferred is to be taken again first (make_results: it is of the order before), which the first
   // step then sorts after.
-  if (sort_due(model) && !pipeline.results_deferred(model)) {
+  if (sort_due(model) && !pipeline.results_deferred(model) && !sorted_at_start_) {
     if (!presorted) sort_balls();
     sorted_at_start_ = true;
   }

@@ -912,15 +912,15 @@ cycle 100
     CHECK(counter(counters, "whole_hand_overs") == 0);
     // The ranks took a CYCLE's last step again on their parts for first.csv, for the STRAIN and
     // the SERVOs that change the cell's rates (the settings leave the results deferred: the step
-    // taken again reads the settings it was taken with) and for the outputs, and gathered the
-    // results to rank 0 once, for SERVO off, a change where a servo drives the cell; the STRAIN
-    // and the first SERVO lines leave them on the parts (Session::edit_cell; before, each of the
-    // three changes gathered them), and first.csv and the outputs read them there, an array at a
+    // taken again reads the settings it was taken with) and for the outputs, and never gathered
+    // them to rank 0: the STRAIN and both SERVO lines leave them on the parts (Session::edit_cell;
+    // before, each of the three changes gathered them, and SERVO off, a change where a servo
+    // drives the cell, still did), and first.csv and the outputs read them there, an array at a
     // time. The servo's first reading of the contact table, where contacts touch, is summed on the
     // parts (Pipeline::servo_reading_on_parts; before, the results were gathered and the whole
     // model handed to every rank for it: results_gathered 2, cycle_hand_overs 1).
     CHECK(counter(counters, "results_made") == 5);
-    CHECK(counter(counters, "results_gathered") == 1);
+    CHECK(counter(counters, "results_gathered") == 0);
     CHECK(counter(counters, "cycle_hand_overs") == 0);
   }
   // A servo from the start (GEN, SERVO, CYCLE): its first reading, of a table where nothing
@@ -942,9 +942,10 @@ cycle 100
   CHECK(counter(counters, "cycle_hand_overs") == 0);
   CHECK(counter(counters, "whole_hand_overs") == 0);
   CHECK(counter(counters, "parts_kept") == 1);
-  // (One gather: the second SERVO, a change where a servo drives the cell, has the results made
-  // through rank 0's whole model, Session::edit_cell. No CYCLE's end did.)
-  CHECK(counter(counters, "whole_gathers") == 1);
+  // (No gather: the second SERVO, a change where a servo drives the cell, has the results made on
+  // the parts, Session::edit_cell, where they were gathered through rank 0's whole model. No
+  // CYCLE's end gathers either.)
+  CHECK(counter(counters, "whole_gathers") == 0);
 }
 
 TEST_CASE("a setting between CYCLEs leaves the results deferred: read after it, they are of the step as it was taken",
