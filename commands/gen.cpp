@@ -229,6 +229,6 @@ const Command gen_command = {
     "gen 500 0.002 0.003 seed 7",
     {"porosity", "void", "psd", "uniform", "volume", "normal", "lognormal", "sieve", "cut", "file", "type", "types",
      "seed", "range"},
-    run_gen, false, false, OnRanks::ModelOnZero};
+    run_gen, false, false, OnRanks::ModelOnZero, HeldUse::Generate};
 
 }  // namespace trubal

@@ -160,13 +160,14 @@ static void run_print(Context& ctx, Args& args) {
       return;
     }
   }
-  // The cell's strain, the settings, the histories, the walls and the sample read the light state
-  // alone (the walls' loads are formed at every CYCLE's last step), and so do the energies after a
+  // The cell's strain, the settings, the histories, the walls, the sample and the grading (the
+  // balls' radii, which rank 0 keeps where its whole model is hollow) read the light state alone
+  // (the walls' loads are formed at every CYCLE's last step), and so do the energies after a
   // step (its own sums): as it is, which under mpirun may leave rank 0's whole model hollow, the
   // parts holding the balls. The rest read the balls.
   const bool at_step = ctx.session.state().energy_at_step.valid;
   const bool light =
-      item == 4 || (item == 5 && at_step) || item == 8 || item == 9 || item == 10 || item == 11 || item == 16;
+      item == 4 || (item == 5 && at_step) || item == 8 || item == 9 || item == 10 || item == 11 || item == 12 || item == 16;
   const Model& m = light ? ctx.session.state() : ctx.session.model();
   switch (item) {
     case 16: args.done(); print_sample(ctx); return;

@@ -245,7 +245,7 @@ void print_walls(Context& ctx, const std::string& file) {
 void print_psd(Context& ctx, const std::string& file) {
   const auto& sizes = ctx.session.last_sizes();
   if (!sizes) throw std::runtime_error("PRINT psd: no GEN since START or RESTART (it compares the last GEN's balls with its sizes)");
-  const Model& m = ctx.session.model();
+  const Model& m = ctx.session.state();   // (the radii and ids alone)
   std::vector<double> radii;
   for (std::int64_t id : ctx.session.last_generated())
     if (const std::int64_t k = find_ball(m, id); k >= 0) radii.push_back(m.balls.rad[static_cast<std::size_t>(k)]);

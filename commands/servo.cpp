@@ -172,6 +172,7 @@ const Command servo_command = {
     "wall touching nothing approaches. The other velocity components stay as WALL set them. `SERVO wall n "
     "off` stops it (and its motion along the normal).",
     "servo 1e5 1e5 1e5",
-    {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area", "in", "between"}, run_servo, false, false, OnRanks::Parts};
+    {"xx", "yy", "zz", "gain", "max", "off", "wall", "stress", "area", "in", "between"}, run_servo, false, false, OnRanks::Parts,
+    HeldUse::Keep, {}, nullptr, {"off"}};
 
 }  // namespace trubal

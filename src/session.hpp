@@ -191,6 +191,13 @@ class Session {
   // (Interpreter::run_agreed, Command::held).
   std::uint64_t held_balls() const { return held_.total; }
   void place_held();
+  // GEN under hold_balls: whether the model holds no ball, none is held and no bond (rank 0's
+  // word, broadcast: a collective call). Where it does, GEN (rank 0 alone running it) keeps the
+  // balls it makes aside, and hand_out_generated (a collective call) has every rank hold them as
+  // BALL lines, rank 0 broadcasting them a chunk at a time: no rank builds the whole model.
+  bool generates_held();
+  void hand_out_generated();
+  void end_generating_held() { generating_held_ = false; }
   // For a CYCLE: the held balls made the ranks' parts straight away where the model holds no other
   // ball (nor a bond) and none lies outside a periodic cell (Pipeline::parts_from_records: rank 0 gathers their ids,
   // types, radii and centres alone, checks them, sorts them into space order and decomposes them,
@@ -374,6 +381,12 @@ class Session {
   RunTotals totals_;
   std::optional<SizeDistribution> last_sizes_;
   std::vector<std::int64_t> last_generated_;
+  bool generating_held_ = false;   // generates_held's word, for the GEN it runs before
+  // The balls GEN made for hand_out_generated (rank 0's), x y z r and type, in their order.
+  std::vector<std::array<double, 5>> generated_;
+  // The balls GEN made, x y z r, their types and their order: added to the model, or held.
+  void keep_generated(const std::vector<std::array<double, 4>>& balls, const std::vector<int>& types,
+                      const std::vector<std::size_t>& order);
   // BALL's check that no two balls share a centre, built afresh after any other change of the
   // balls (changes_ counts them: edit, cycle, start, restart).
   CentreIndex centres_;

@@ -12,6 +12,7 @@
 #include <random>
 #include <stdexcept>
 #include <unordered_map>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -23,6 +24,80 @@
 #include "physics/measure.hpp"
 
 namespace trubal {
+namespace {
+
+// GEN's balls numbered in space order: by cells of the largest diameter (rmax the largest radius
+// of the model's and the new balls), z slowest, then y, then x (generation order within a cell).
+// Balls near in space are then near in number, which the pair lists' cache use and the threaded
+// backend's split (contiguous number ranges) depend on. The balls' indices in that order.
+std::vector<std::size_t> space_numbering(const Space& s, const std::vector<std::array<double, 4>>& balls, double rmax) {
+  const double cell = 2 * rmax;
+  struct Placed { std::array<std::int64_t, 3> key; std::size_t k; };   // key: z, y, x cell
+  std::vector<Placed> sorted;
+  sorted.reserve(balls.size());
+  for (std::size_t k = 0; k < balls.size(); ++k) {
+    const auto& q = balls[k];
+    auto cell_of = [&](int a) { return static_cast<std::int64_t>(std::floor((q[a] - s.lo[a]) / cell)); };
+    sorted.push_back({{cell_of(2), cell_of(1), cell_of(0)}, k});
+  }
+  std::stable_sort(sorted.begin(), sorted.end(), [](const Placed& p, const Placed& q) { return p.key < q.key; });
+  std::vector<std::size_t> order(sorted.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = sorted[k].k;
+  return order;
+}
+
+}  // namespace
+
+bool Session::generates_held() {
+  generating_held_ = false;
+  if (!hold_balls()) return false;   // (the same on every rank)
+  std::int64_t empty = 0;
+  comm::on_root([&] { empty = model_.balls.size() == 0 && held_.total == 0 && model_.bonds.empty() ? 1 : 0; },
+                "looking at the model before GEN");
+  comm::broadcast(empty);
+  return generating_held_ = empty != 0;
+}
+
+void Session::keep_generated(const std::vector<std::array<double, 4>>& balls, const std::vector<int>& types,
+                             const std::vector<std::size_t>& order) {
+  last_generated_.clear();
+  if (generating_held_) {   // (rank 0 alone: held on every rank by hand_out_generated)
+    generated_.clear();
+    generated_.reserve(order.size());
+    for (std::size_t k : order)
+      generated_.push_back({balls[k][0], balls[k][1], balls[k][2], balls[k][3], static_cast<double>(types[k])});
+    return;
+  }
+  Model& m = edit();
+  for (std::size_t k : order) {
+    const auto& q = balls[k];
+    last_generated_.push_back(m.balls.id[trubal::add_ball(m, 0, types[k], q[0], q[1], q[2], q[3])]);
+  }
+}
+
+void Session::hand_out_generated() {
+  if (!std::exchange(generating_held_, false)) return;   // (the same on every rank)
+  // Rank 0's balls a chunk at a time to every rank, each holding those its hash picks, numbered
+  // as add_ball numbers them; rank 0 alone keeps their ids (PRINT psd reads them there).
+  constexpr std::size_t kChunk = std::size_t{1} << 16;
+  std::int64_t n = comm::root() ? static_cast<std::int64_t>(generated_.size()) : 0;
+  comm::broadcast(n);
+  std::vector<double> chunk;
+  for (std::size_t lo = 0; lo < static_cast<std::size_t>(n); lo += kChunk) {
+    const std::size_t hi = std::min(static_cast<std::size_t>(n), lo + kChunk);
+    chunk.clear();
+    if (comm::root())
+      for (std::size_t k = lo; k < hi; ++k) chunk.insert(chunk.end(), generated_[k].begin(), generated_[k].end());
+    comm::broadcast(chunk);
+    comm::together([&] {
+      for (std::size_t q = 0; q + 5 <= chunk.size(); q += 5) {
+        const std::int64_t id = hold_ball(0, static_cast<int>(chunk[q + 4]), chunk[q], chunk[q + 1], chunk[q + 2], chunk[q + 3]);
+        if (comm::root()) last_generated_.push_back(id);
+      }
+    }, "holding the balls GEN made");
+  }
+  std::vector<std::array<double, 5>>().swap(generated_);
+}
 
 std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, std::uint64_t seed, const Range& range) {
   require_started();
@@ -98,23 +173,8 @@ std::size_t Session::generate(std::size_t n, double rlo, double rhi, int type, s
     ++placed;
   }
   gen_missed_range = placed < n && !gen_interrupted && misses >= most_misses;
-  // Numbered in space order: by cells of the largest diameter, z slowest, then y, then x (generation
-  // order within a cell). Balls near in space are then near in number, which the pair lists' cache
-  // use and the threaded backend's split (contiguous number ranges) depend on.
-  const double cell = 2 * rmax;
-  struct Placed { std::array<std::int64_t, 3> key; std::array<double, 4> ball; };   // key: z, y, x cell
-  std::vector<Placed> sorted;
-  sorted.reserve(made.size());
-  for (const auto& q : made) {
-    auto cell_of = [&](int a) { return static_cast<std::int64_t>(std::floor((q[a] - s.lo[a]) / cell)); };
-    sorted.push_back({{cell_of(2), cell_of(1), cell_of(0)}, q});
-  }
-  std::stable_sort(sorted.begin(), sorted.end(), [](const Placed& p, const Placed& q) { return p.key < q.key; });
-  Model& m = edit();
   last_sizes_ = SizeDistribution{SizeDistribution::Kind::Uniform, rlo, rhi, rlo, rhi, {}, {}};
-  last_generated_.clear();
-  for (const auto& [key, q] : sorted)
-    last_generated_.push_back(m.balls.id[trubal::add_ball(m, 0, type, q[0], q[1], q[2], q[3])]);
+  keep_generated(made, std::vector<int>(made.size(), type), space_numbering(s, made, rmax));
   return placed;
 }
 
@@ -157,27 +217,11 @@ PackResult Session::generate(const GenSpec& spec) {
     }
   }
   // Numbered in space order, as GEN n rlo rhi numbers them.
-  const Space& s = model_.space;
   double rmax = 0;
   for (double r : model_.balls.rad) rmax = std::max(rmax, r);
   for (const auto& b : made.balls) rmax = std::max(rmax, b[3]);
-  const double cell = 2 * rmax;
-  struct Placed { std::array<std::int64_t, 3> key; std::size_t k; };
-  std::vector<Placed> sorted;
-  sorted.reserve(made.balls.size());
-  for (std::size_t k = 0; k < made.balls.size(); ++k) {
-    const auto& q = made.balls[k];
-    auto cell_of = [&](int a) { return static_cast<std::int64_t>(std::floor((q[a] - s.lo[a]) / cell)); };
-    sorted.push_back({{cell_of(2), cell_of(1), cell_of(0)}, k});
-  }
-  std::stable_sort(sorted.begin(), sorted.end(), [](const Placed& p, const Placed& q) { return p.key < q.key; });
-  Model& m = edit();
   last_sizes_ = sizes;
-  last_generated_.clear();
-  for (const auto& [key, k] : sorted) {
-    const auto& q = made.balls[k];
-    last_generated_.push_back(m.balls.id[trubal::add_ball(m, 0, type_of[k], q[0], q[1], q[2], q[3])]);
-  }
+  keep_generated(made.balls, type_of, space_numbering(model_.space, made.balls, rmax));
   return made;
 }
 

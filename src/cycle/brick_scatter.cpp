@@ -144,6 +144,7 @@ void BrickStep::split_from_records(const Model& full, std::vector<double>& recor
   comm::exchange(send, recv);
   std::vector<std::vector<double>>().swap(send);
   together([&] {
+    split_fault();   // (a rank's test fault, as split's)
     // The part: this rank's balls in the whole model's order (rank_balls_ ascends), at rest, their
     // masses from their types' densities as a CYCLE sets the whole model's.
     const std::vector<std::uint32_t>& mine = rank_balls_[me];

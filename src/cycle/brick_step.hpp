@@ -280,6 +280,8 @@ class BrickStep {
   // A periodic servo's stiffness sums (physics/cell.hpp servo_stiffness_sums) over the pairs this
   // member owns, from the results the part holds.
   std::array<ExactSum, 3> own_servo_stiffness() const;
+  // Whether nothing in the part's tables touches and no bridge holds (physics/cell.hpp).
+  bool part_touches_nothing() const { return touches_nothing(part_); }
   // The part's state streamed to rank 0 in the whole model's order (SAVE where rank 0's whole
   // model is hollow; cycle/brick_stream.cpp), each a collective call of the ranks. place_saved_pairs:
   // the pairs this member owns that SAVE keeps (touching in the results the part holds, where

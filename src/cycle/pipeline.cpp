@@ -336,7 +336,12 @@ SphereMeasurement Pipeline::sphere_on_parts(const Model& model, const MeasureSph
 std::optional<ContactMoments> Pipeline::servo_reading_on_parts(Model& model) {
   if (!whole_hollow(model)) return std::nullopt;   // (the same answer on every rank)
   results_onto_parts(model, *this);
-  if (!results_on_parts(model)) return std::nullopt;
+  if (!results_on_parts(model)) {
+    // Parts that hold no results: where nothing on any of them touches and no bridge holds (their
+    // lists searched since any step: parts made from held balls, Pipeline::parts_from_records),
+    // the reading is of no force and no stiffness, as serial's after its search.
+    return comm::any_all(!bricks().part_touches_nothing()) ? std::nullopt : std::optional<ContactMoments>(ContactMoments{});
+  }
   const StressSums force = stress_on_parts(model);
   struct Stiffness {
     std::array<ExactSum, 3> s;

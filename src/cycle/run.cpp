@@ -180,17 +180,6 @@ class CycleRun {
   std::int64_t sorted_ahead_ = -1;
 };
 
-namespace {
-// Whether no pair or wall contact of the model's tables touches and no capillary bridge holds (what
-// a servo's first reading of the table reads: physics/cell.cpp, Love's sums and
-// servo_stiffness_sums, of the touching contacts and the bridges).
-bool touches_nothing(const Model& model) {
-  const auto& walls = model.wall_contacts.state;
-  return contact_count(model) == 0 && count_bridges(model.contacts) == 0 && count_bridges(model.wall_contacts) == 0 &&
-         std::none_of(walls.begin(), walls.end(), [](std::uint8_t s) { return s != 0; });
-}
-}  // namespace
-
 CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const CycleControl& control)
     : model_(model), pipeline_(pipeline), n_(n), control_(control) {
   if (model.balls.size() == 0)

@@ -144,6 +144,8 @@ const Command& find_command(std::string_view keyword) {
 }
 
 HeldUse held_use(const Command& command, const Args& args) {
+  if (!command.places_held_after.empty())
+    return !args.empty() && match_keyword(args.peek(), command.places_held_after) ? HeldUse::Place : command.held;
   if (command.keeps_held_after.empty()) return command.held;
   Args look = args;   // (a copy: the command reads its words itself)
   try {

@@ -82,6 +82,9 @@ enum class HeldUse : std::uint8_t {
   Add,     // BALL: holds one more
   Split,   // CYCLE, SOLVE: placed in the ranks' parts where they can be, without rank 0 holding
            // them all (Session::place_held_as_parts); else as Place
+  Generate,   // GEN: where the model holds no ball and none is held, rank 0 generates the balls and
+              // every rank holds those its hash picks, as BALL lines (Session::generates_held,
+              // hand_out_generated); else as Place
 };
 
 struct Command {
@@ -111,9 +114,13 @@ struct Command {
   // ranks keep their parts: every rank changes its walls (Session::edit_walls); PROP, INIT, APPLY,
   // FIX, FREE and GROUP likewise its materials or its part's balls (parts_where_kept).
   OnRanks (*ranks_for)(const Args& args, bool parts_kept) = nullptr;
+  // Where held is Keep but for some forms: the first words of those, which place the balls
+  // (SERVO off, whose change of the cell's rates changes the balls' velocities).
+  std::vector<std::string_view> places_held_after = {};
 };
 
-// What this line of the command does with held balls (Command::held, keeps_held_after).
+// What this line of the command does with held balls (Command::held, keeps_held_after,
+// places_held_after).
 HeldUse held_use(const Command& command, const Args& args);
 
 // The command table (commands/table.cpp): the dispatcher, HELP, completion and the man-page test

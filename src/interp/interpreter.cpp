@@ -256,7 +256,7 @@ void Interpreter::execute(const std::string& line) {
   const OnRanks on_ranks = command.ranks_for ? command.ranks_for(Args(command.usage, std::vector<std::string>(words.begin() + 1, words.end())),
                                                                  session_.parts_kept())
                                              : command.on_ranks;
-  const HeldUse held = command.keeps_held_after.empty()
+  const HeldUse held = command.keeps_held_after.empty() && command.places_held_after.empty()
                            ? command.held
                            : held_use(command, Args(command.usage, std::vector<std::string>(words.begin() + 1, words.end())));
   // Before the command, a collective call: the held balls placed in the model, or the first held
@@ -317,6 +317,8 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
   try {
     if (fail_line_for_test > 0 && !frames_.empty() && frames_.back().line == fail_line_for_test)
       throw std::runtime_error(fmt::format("rank {} fails here for a test (TRUBAL_TEST_FAIL_AT)", comm::rank()));
+    // GEN: held where the model holds no ball (rank 0's word, every rank's), else placed first.
+    if (held == HeldUse::Generate) held = session_.generates_held() ? HeldUse::Add : HeldUse::Place;
     // The balls of BALL lines held on the ranks, placed in the model where the command reads them
     // (Command::held); or the start of holding them.
     const bool hold = held == HeldUse::Add && session_.hold_balls();
@@ -341,6 +343,22 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
         command.run(ctx, args);
         break;
       case OnRanks::ModelOnZero:
+        if (hold && command.held == HeldUse::Generate) {
+          // Rank 0 generates the balls alone, then hands them out to be held (a collective call:
+          // what it made before a failure too, as serial's GEN keeps what it placed).
+          std::exception_ptr failure;
+          if (comm::root()) {
+            RankAlone alone;
+            try {
+              command.run(ctx, args);
+            } catch (...) {
+              failure = std::current_exception();
+            }
+          }
+          session_.hand_out_generated();
+          if (failure) std::rethrow_exception(failure);
+          break;
+        }
         if (hold) {   // (every rank: each checks its part of the rules, one keeps the ball)
           RankAlone alone;
           command.run(ctx, args);
@@ -361,6 +379,7 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
     failed = true;
     message = e.what();
   }
+  session_.end_generating_held();
   if (lazily) keep_lazy_output();
   if (!failed && lazily) {
     agreement_pending_ = true;

@@ -10,6 +10,7 @@
 #include "model/periodic_cell.hpp"
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
+#include "physics/bridge.hpp"
 #include "physics/measure.hpp"
 #include "support/exact_sum.hpp"
 
@@ -102,6 +103,12 @@ std::array<ExactSum, 3> servo_stiffness_sums(const Model& model, const std::vect
     }
   });
   return m;
+}
+
+bool touches_nothing(const Model& model) {
+  const auto& walls = model.wall_contacts.state;
+  return contact_count(model) == 0 && count_bridges(model.contacts) == 0 && count_bridges(model.wall_contacts) == 0 &&
+         std::none_of(walls.begin(), walls.end(), [](std::uint8_t s) { return s != 0; });
 }
 
 ContactMoments table_moments(const std::array<ExactSum, 6>& force, const std::array<ExactSum, 3>& stiffness) {

@@ -62,6 +62,11 @@ double servo_rate(double error, double gain, double closes, double& integral, do
 // where null), each an exact sum, so that merged over shares of the pairs (the ranks' parts) they
 // are the whole table's bits.
 std::array<ExactSum, 3> servo_stiffness_sums(const Model& model, const std::vector<std::uint32_t>* pairs = nullptr);
+// Whether no pair or wall contact of the model's tables touches and no capillary bridge holds: a
+// servo's first reading of the table is then of no force and no stiffness (Love's sums and
+// servo_stiffness_sums read the touching contacts and the bridges alone). A search makes no
+// contact touch.
+bool touches_nothing(const Model& model);
 // What a servo reads of a step from the contact table's sums, Love's (physics/measure.hpp
 // stress_sums) and the stiffness's: their values, as a step's own sums give them.
 ContactMoments table_moments(const std::array<ExactSum, 6>& force, const std::array<ExactSum, 3>& stiffness);

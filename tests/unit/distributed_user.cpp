@@ -114,22 +114,27 @@ TEST_CASE("distributed: bad input on 3 ranks stops every rank with one message a
     // for its ghosts.
     // Rank 0 makes every rank's part and sends it: where it fails cutting rank 2's ("2 cut"), rank
     // 1 has its part already and rank 2 is told to go without; each must stop with rank 0's message.
-    for (const std::string where : {"part", "search", "split", "cut"}) {
-      INFO(where);
+    // The split from rank 0's whole model (INIT places GEN's balls there), and the split of the
+    // balls GEN left held on the ranks (Pipeline::parts_from_records), at the CYCLE's line.
+    for (const auto& [where, held] : {std::pair{"part", false}, std::pair{"search", false}, std::pair{"split", false},
+                                      std::pair{"cut", false}, std::pair{"part", true}, std::pair{"split", true}}) {
+      INFO(where << (held ? ", held" : ""));
       TempDir dir;
-      dir.write("deck.dat", "start 0.01 0.01 0.01\ngen 300 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
-                            "cycle 30\nprint info\n");
-      CHECK(run_deck(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{} {}'{}", where == "cut" ? 2 : 1, where,
-                                         where == "search" ? " TRUBAL_REBUILD_WHOLE=1" : "")) == 1);   // not 124
+      dir.write("deck.dat", fmt::format("start 0.01 0.01 0.01\ngen 300 0.0004 0.0006\nprop kn 1e5 ks 1e5 fric 0.5 dens 2650\n"
+                                        "{}cycle 30\nprint info\n", held ? "" : "init xvel 0\n"));
+      CHECK(run_deck(dir, 3, fmt::format("TRUBAL_TEST_FAIL_AT='{} {}'{}", std::string(where) == "cut" ? 2 : 1, where,
+                                         std::string(where) == "search" ? " TRUBAL_REBUILD_WHOLE=1" : "")) == 1);   // not 124
       const std::string out = slurp(dir.path() / "out.txt");
       INFO(out);
-      const auto at = out.find(fmt::format("deck.dat:4: error: rank {} ran out of memory {}", where == "cut" ? 0 : 1,
-                                           where == "search"  ? "searching its share of the pairs"
-                                           : where == "part" ? "making a new pair list for its part"
-                                           : where == "cut"  ? "making the ranks' parts of the decomposition"
-                                                             : "making its part of the decomposition"));
+      const std::string line = held ? "deck.dat:4:" : "deck.dat:5:";
+      const std::string w = where;
+      const auto at = out.find(fmt::format("{} error: rank {} ran out of memory {}", line, w == "cut" ? 0 : 1,
+                                           w == "search"  ? "searching its share of the pairs"
+                                           : w == "part" ? "making a new pair list for its part"
+                                           : w == "cut"  ? "making the ranks' parts of the decomposition"
+                                                         : "making its part of the decomposition"));
       REQUIRE(at != std::string::npos);
-      CHECK(out.find("deck.dat:4:", at + 1) == std::string::npos);
+      CHECK(out.find(line, at + 1) == std::string::npos);
       CHECK(out.find("cycle: ") == std::string::npos);
     }
   }
@@ -531,14 +536,16 @@ TEST_CASE("distributed: a batch deck's BALL lines held on the ranks: serial's mo
   }
 }
 
-TEST_CASE("distributed: a CYCLE after held BALL lines makes the ranks' parts of them, or places them on rank 0",
+TEST_CASE("distributed: a CYCLE after held BALL lines or GEN makes the ranks' parts of them, or places them on rank 0",
           "[mpi][system]") {
   // The CYCLE right after the BALL lines makes the parts from the balls the ranks hold, rank 0
   // sorting their ids and centres alone (Session::place_held_as_parts): serial's bits, with the
   // first step's sort or without it (SET sort 0), in a box or a periodic cell. Where the model holds
   // other balls, a ball lies outside the periodic cell (the first step wraps it first), or the CYCLE
   // refuses a type, rank 0 places them in its model (place_held) and the CYCLE goes on, or fails, as
-  // serially.
+  // serially. GEN in a model that holds no ball has rank 0 make the balls alone and every rank hold
+  // those its hash picks, as BALL lines (Session::hand_out_generated): no rank builds the whole
+  // model for it; a GEN after other balls runs on rank 0's model (placed there first).
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   std::string balls;
   for (int k = 0; k < 3000; ++k)
@@ -556,6 +563,14 @@ TEST_CASE("distributed: a CYCLE after held BALL lines makes the ranks' parts of 
       {"periodic", "start 0.4 0.4 0.4\n" + prop + balls + after, 1},
       {"a lattice", "start box 0 1 0 1 0 1\n" + prop + "lattice fcc 0.0102 20 20 12 origin 0.1 0.1 0.1\n" + after, 1},
       {"periodic, a ball outside the cell", "start 0.4 0.4 0.4\n" + prop + balls + "ball 0.45 0.2 0.2 0.005\n" + after, 0},
+      {"GEN n", "start box 0 0.3 0 0.3 0 0.3\n" + prop + "gen 3000 0.004 0.006 seed 5\n" + after, 1},
+      {"GEN porosity, two types, a servo", "start 0.05 0.05 0.05\n" + prop + "prop type 2 kn 2e5 ks 1e5 mu 0.3 dens 2000\n" +
+                                               "gen porosity 0.42 psd uniform 0.002 0.003 types 1 0.6 2 0.4 seed 3\n" +
+                                               "servo 1e3 1e3 1e3\n" + after + "print psd\n", 1},
+      {"GEN after a ball", "start box 0 0.3 0 0.3 0 0.3\n" + prop + "ball 0.29 0.29 0.29 0.004\n" +
+                               "gen 3000 0.004 0.006 seed 5\n" + after, 0},
+      {"GEN twice", "start box 0 0.3 0 0.3 0 0.3\n" + prop + "gen 2000 0.004 0.006 seed 5 range z 0 0.15\n" +
+                        "gen 1000 0.004 0.006 seed 6 range z 0.15 0.3\n" + after, 0},
   };
   for (const Scene& scene : scenes) {
     INFO(scene.name);
@@ -569,9 +584,27 @@ TEST_CASE("distributed: a CYCLE after held BALL lines makes the ranks' parts of 
       INFO(file);
       CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
     }
-    if (scene.name != "a lattice")   // (its balls touch, falling together)
+    if (scene.name != "a lattice" && scene.name.find("GEN") == std::string::npos)   // (its balls touch, falling together)
       CHECK(lines_of(slurp(serial.path() / "contacts.csv")).size() > 100);   // (balls in contact)
-    CHECK(counter(counters_of(ranks), "parts_from_held_balls") == scene.from_held);
+    if (scene.name.rfind("GEN porosity", 0) == 0)   // (GEN's balls overlap a little: the servo's first reading)
+      CHECK(lines_of(slurp(serial.path() / "contacts.csv")).size() > 100);
+    const Counters counters = counters_of(ranks);
+    CHECK(counter(counters, "parts_from_held_balls") == scene.from_held);
+    // (Nothing gathered whole to rank 0 or handed to every rank: the servo's first reading, of parts
+    // whose lists were searched and whose contacts nothing touches yet, is made on them; PRINT psd
+    // reads the radii rank 0 keeps.)
+    if (scene.from_held == 1) {
+      CHECK(counter(counters, "whole_gathers") == 0);
+      CHECK(counter(counters, "cycle_hand_overs") == 0);
+    }
+    if (scene.name.rfind("GEN porosity", 0) == 0) {   // PRINT psd: serial's table
+      auto psd = [](const std::string& text) {
+        const auto at = text.find("grading of the last GEN");
+        return at == std::string::npos ? std::string() : text.substr(at, text.find("largest difference", at) - at);
+      };
+      CHECK(!psd(slurp(serial.path() / "out.txt")).empty());
+      CHECK(psd(slurp(ranks.path() / "out.txt")) == psd(slurp(serial.path() / "out.txt")));
+    }
     // ECHO, run lazily, prints after its line's echo and the lines before, as serially (its text
     // is held with the echo until the ranks agree).
     const std::string out = slurp(ranks.path() / "out.txt");
@@ -585,7 +618,9 @@ TEST_CASE("distributed: a CYCLE after held BALL lines makes the ranks' parts of 
   const std::vector<std::pair<std::string, std::string>> failures = {
       {"start box 0 1 0 1 0 1\nprop kn 1e5 ks 1e5 mu 0.5\n" + balls + "cycle 10\n", "has no density"},
       {"start box 0 1 0 1 0 1\n" + prop + "lattice fcc 0.0102 20 20 12 origin 0.1 0.1 0.1\nball 0.1 0.1 0.1 0.004\ncycle 10\n",
-       "ball 1 is already at (0.1, 0.1, 0.1)"}};
+       "ball 1 is already at (0.1, 0.1, 0.1)"},
+      // GEN's own refusal, on rank 0 alone where it makes the balls: every rank stops with it.
+      {"start box 0 0.1 0 0.1 0 0.1\n" + prop + "gen 1000000 0.004 0.006\ncycle 10\n", "cannot fit in the region"}};
   for (const auto& [deck, says] : failures) {
     TempDir serial, ranks;
     serial.write("deck.dat", deck);
