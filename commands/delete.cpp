@@ -15,6 +15,6 @@ const Command delete_command = {
     "DELETE", {}, "DELETE [range ...]", "remove balls",
     "Removes the balls where the range holds (all balls without a range), with their contacts.",
     "delete range z 0.15 0.2",
-    {"range"}, run_delete, false, false, OnRanks::ModelOnZero};
+    {"range"}, run_delete, false, false, OnRanks::ModelOnZero, HeldUse::Delete};
 
 }  // namespace trubal

@@ -496,8 +496,83 @@ void Session::place_held_as_parts() {
   pipeline_->parts_from_records(model_, records);
 }
 
+bool Session::deletes_held() {
+  deleting_held_ = false;
+  if (!hold_balls() || held_.total == 0) return false;   // (the same on every rank)
+  std::int64_t alone = 0;
+  comm::on_root([&] { alone = model_.balls.size() == 0 && model_.bonds.empty() ? 1 : 0; },
+                "looking at the model before DELETE");
+  comm::broadcast(alone);
+  return deleting_held_ = alone != 0;
+}
+
+std::size_t Session::delete_held(const Range& range) {
+  light_everywhere();   // (the groups a range reads, every rank's)
+  // This rank's held balls where the range holds; their lines and ids to every rank.
+  auto bits = [](std::int64_t v) { return std::bit_cast<double>(v); };
+  auto integer = [](double v) { return std::bit_cast<std::int64_t>(v); };
+  HeldBalls& h = held_;
+  std::vector<std::uint8_t> gone(h.size(), 0);
+  std::vector<double> mine, all;
+  comm::together([&] {
+    for (std::size_t k = 0; k < h.size(); ++k)
+      if (holds(model_, range, {h.id[k], h.type[k], h.x[k], h.y[k], h.z[k]})) {
+        gone[k] = 1;
+        mine.push_back(bits(static_cast<std::int64_t>(h.line[k])));
+        mine.push_back(bits(h.id[k]));
+      }
+  }, "deleting the held balls");
+  comm::allgather(mine, all);
+  mark_edited();   // (as serial's DELETE, which edits whether or not a ball goes)
+  const std::size_t removed = all.size() / 2;
+  if (removed == 0) return 0;
+  std::vector<std::uint64_t> lines(removed);
+  std::vector<std::int64_t> ids(removed);
+  for (std::size_t q = 0; q < removed; ++q) {
+    lines[q] = static_cast<std::uint64_t>(integer(all[2 * q]));
+    ids[q] = integer(all[2 * q + 1]);
+  }
+  std::vector<double>().swap(all);
+  std::sort(lines.begin(), lines.end());
+  std::sort(ids.begin(), ids.end());
+  std::int64_t largest = 0;
+  comm::together([&] {
+    // The rest in their order, each line less the lines gone before it (the lines stay 0, 1, ...).
+    std::size_t w = 0;
+    for (std::size_t k = 0; k < h.size(); ++k) {
+      if (gone[k]) continue;
+      const auto before = std::lower_bound(lines.begin(), lines.end(), h.line[k]) - lines.begin();
+      h.line[w] = h.line[k] - static_cast<std::uint64_t>(before);
+      h.id[w] = h.id[k];
+      h.type[w] = h.type[k];
+      h.x[w] = h.x[k];
+      h.y[w] = h.y[k];
+      h.z[w] = h.z[k];
+      h.rad[w] = h.rad[k];
+      largest = std::max(largest, h.id[w]);
+      ++w;
+    }
+    for (auto* v : {&h.x, &h.y, &h.z, &h.rad}) v->resize(w);
+    h.line.resize(w);
+    h.id.resize(w);
+    h.type.resize(w);
+    h.centres.rebuild(h);
+    h.ids.erase_all(ids);
+    for (auto& [name, members] : model_.groups)
+      std::erase_if(members, [&](std::int64_t id) { return std::binary_search(ids.begin(), ids.end(), id); });
+  }, "deleting the held balls");
+  h.total -= removed;
+  // The next free id follows the largest left, as serial's DELETE leaves it.
+  std::vector<double> most{bits(largest)}, every;
+  comm::allgather(most, every);
+  h.max_id = 0;
+  for (double v : every) h.max_id = std::max(h.max_id, integer(v));
+  return removed;
+}
+
 std::size_t Session::delete_balls(const Range& range) {
   require_started();
+  if (deleting_held_) return delete_held(range);
   std::vector<bool> remove(model_.balls.size(), false);
   for (auto k : select(range)) remove[k] = true;
   return remove_balls(edit(), remove);

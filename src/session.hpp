@@ -197,7 +197,14 @@ class Session {
   // BALL lines, rank 0 broadcasting them a chunk at a time: no rank builds the whole model.
   bool generates_held();
   void hand_out_generated();
-  void end_generating_held() { generating_held_ = false; }
+  // DELETE under hold_balls: whether balls are held and the model holds no other ball and no bond
+  // (rank 0's word, broadcast: a collective call). Where so, DELETE (every rank running it) deletes
+  // those of each rank's held balls the range holds (each read as the ball it will be), the lines
+  // renumbered and the next free id found again as serial's DELETE leaves them: delete_balls, a
+  // collective call, until end_held_command.
+  bool deletes_held();
+  // The command that generates_held or deletes_held was asked for has run.
+  void end_held_command() { generating_held_ = deleting_held_ = false; }
   // For a CYCLE: the held balls made the ranks' parts straight away where the model holds no other
   // ball (nor a bond) and none lies outside a periodic cell (Pipeline::parts_from_records: rank 0 gathers their ids,
   // types, radii and centres alone, checks them, sorts them into space order and decomposes them,
@@ -382,6 +389,8 @@ class Session {
   std::optional<SizeDistribution> last_sizes_;
   std::vector<std::int64_t> last_generated_;
   bool generating_held_ = false;   // generates_held's word, for the GEN it runs before
+  bool deleting_held_ = false;     // deletes_held's, for the DELETE
+  std::size_t delete_held(const Range& range);
   // The balls GEN made for hand_out_generated (rank 0's), x y z r and type, in their order.
   std::vector<std::array<double, 5>> generated_;
   // The balls GEN made, x y z r, their types and their order: added to the model, or held.

@@ -85,6 +85,8 @@ enum class HeldUse : std::uint8_t {
   Generate,   // GEN: where the model holds no ball and none is held, rank 0 generates the balls and
               // every rank holds those its hash picks, as BALL lines (Session::generates_held,
               // hand_out_generated); else as Place
+  Delete,     // DELETE: where the model holds no ball but held ones, every rank deletes those of
+              // its held balls where the range holds (Session::deletes_held); else as Place
 };
 
 struct Command {

@@ -319,6 +319,13 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
       throw std::runtime_error(fmt::format("rank {} fails here for a test (TRUBAL_TEST_FAIL_AT)", comm::rank()));
     // GEN: held where the model holds no ball (rank 0's word, every rank's), else placed first.
     if (held == HeldUse::Generate) held = session_.generates_held() ? HeldUse::Add : HeldUse::Place;
+    // DELETE: on every rank's held balls where the model holds no other (rank 0's word), else
+    // placed first.
+    bool on_held = false;
+    if (held == HeldUse::Delete) {
+      on_held = session_.deletes_held();
+      held = on_held ? HeldUse::Keep : HeldUse::Place;
+    }
     // The balls of BALL lines held on the ranks, placed in the model where the command reads them
     // (Command::held); or the start of holding them.
     const bool hold = held == HeldUse::Add && session_.hold_balls();
@@ -343,6 +350,10 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
         command.run(ctx, args);
         break;
       case OnRanks::ModelOnZero:
+        if (on_held) {   // (every rank, in step: a collective call)
+          command.run(ctx, args);
+          break;
+        }
         if (hold && command.held == HeldUse::Generate) {
           // Rank 0 generates the balls alone, then hands them out to be held (a collective call:
           // what it made before a failure too, as serial's GEN keeps what it placed).
@@ -379,7 +390,7 @@ void Interpreter::run_agreed(const Command& command, Context& ctx, Args& args, b
     failed = true;
     message = e.what();
   }
-  session_.end_generating_held();
+  session_.end_held_command();
   if (lazily) keep_lazy_output();
   if (!failed && lazily) {
     agreement_pending_ = true;

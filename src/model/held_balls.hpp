@@ -7,6 +7,7 @@
 // the model, in the lines' order, when a command reads the balls (Session::place_held).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -33,6 +34,14 @@ class IdSet {
   void clear() {
     std::vector<std::int64_t>().swap(slots_);
     count_ = 0;
+  }
+  // The ids of `gone` (ascending) taken out: the others put in afresh.
+  void erase_all(const std::vector<std::int64_t>& gone) {
+    std::vector<std::int64_t> old;
+    old.swap(slots_);
+    count_ = 0;
+    for (std::int64_t id : old)
+      if (id != 0 && !std::binary_search(gone.begin(), gone.end(), id)) insert(id);
   }
   std::size_t bytes() const { return slots_.capacity() * sizeof(std::int64_t); }
   static std::uint64_t mix(std::int64_t id) {

@@ -545,7 +545,9 @@ TEST_CASE("distributed: a CYCLE after held BALL lines or GEN makes the ranks' pa
   // refuses a type, rank 0 places them in its model (place_held) and the CYCLE goes on, or fails, as
   // serially. GEN in a model that holds no ball has rank 0 make the balls alone and every rank hold
   // those its hash picks, as BALL lines (Session::hand_out_generated): no rank builds the whole
-  // model for it; a GEN after other balls runs on rank 0's model (placed there first).
+  // model for it; a GEN after other balls runs on rank 0's model (placed there first). DELETE where
+  // the model holds held balls alone deletes them where they are held (Session::deletes_held): the
+  // lines renumbered, the next free id the largest left's successor (the BALL after it), as serially.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   std::string balls;
   for (int k = 0; k < 3000; ++k)
@@ -569,6 +571,11 @@ TEST_CASE("distributed: a CYCLE after held BALL lines or GEN makes the ranks' pa
                                                "servo 1e3 1e3 1e3\n" + after + "print psd\n", 1},
       {"GEN after a ball", "start box 0 0.3 0 0.3 0 0.3\n" + prop + "ball 0.29 0.29 0.29 0.004\n" +
                                "gen 3000 0.004 0.006 seed 5\n" + after, 0},
+      {"GEN, DELETE, BALL", "start box 0 0.3 0 0.3 0 0.3\n" + prop + "gen 3000 0.004 0.006 seed 5\n" +
+                                "delete range not cylinder 0.15 0.15 0.1\ndelete range z 0.25 0.3\n" +
+                                "delete range id 7 40\nball 0.15 0.15 0.29 0.004\n" + after, 1},
+      {"BALL lines, DELETE", "start box 0 1 0 1 0 1\n" + prop + balls + "delete range sphere 0.15 0.15 0.02 0.05\ndelete range id 2900 3000\n" +
+                                 "ball 0.9 0.9 0.9 0.004\n" + after, 1},
       {"GEN twice", "start box 0 0.3 0 0.3 0 0.3\n" + prop + "gen 2000 0.004 0.006 seed 5 range z 0 0.15\n" +
                         "gen 1000 0.004 0.006 seed 6 range z 0.15 0.3\n" + after, 0},
   };
@@ -578,7 +585,7 @@ TEST_CASE("distributed: a CYCLE after held BALL lines or GEN makes the ranks' pa
     serial.write("deck.dat", scene.deck + kOutputs + kCounters);
     ranks.write("deck.dat", scene.deck + kOutputs + kCounters);
     REQUIRE(run_deck(serial, 0) == 0);
-    REQUIRE(run_deck(ranks, 3) == 0);
+    REQUIRE(run_deck(ranks, 3, kEqualShares) == 0);   // (the gathers counted below: no new shares by speed)
     INFO(slurp(ranks.path() / "out.txt").substr(0, 3000));
     for (const char* file : {"a.sav", "balls.csv", "contacts.csv"}) {
       INFO(file);
@@ -596,6 +603,16 @@ TEST_CASE("distributed: a CYCLE after held BALL lines or GEN makes the ranks' pa
     if (scene.from_held == 1) {
       CHECK(counter(counters, "whole_gathers") == 0);
       CHECK(counter(counters, "cycle_hand_overs") == 0);
+    }
+    if (scene.name.find("DELETE") != std::string::npos) {   // DELETE's counts, and the BALL's id after them
+      auto said = [](const std::string& text) {
+        std::string lines;
+        for (const std::string& line : lines_of(text))
+          if (line.find(" deleted") != std::string::npos) lines += line + '\n';
+        return lines;
+      };
+      CHECK(lines_of(said(slurp(serial.path() / "out.txt"))).size() == 3 - (scene.name[0] == 'B'));
+      CHECK(said(slurp(ranks.path() / "out.txt")) == said(slurp(serial.path() / "out.txt")));
     }
     if (scene.name.rfind("GEN porosity", 0) == 0) {   // PRINT psd: serial's table
       auto psd = [](const std::string& text) {
