@@ -105,13 +105,12 @@ static void run_hist(Context& ctx, Args& args) {
   std::vector<std::int64_t> ids;
   double gap0 = 0;
   if (!range.empty()) {
-    ctx.session.results_on_root();
+    PlatenBalls rows;
+    ids = ctx.session.platen_choice(range, rows);   // (rank 0's; a collective call)
     comm::on_root([&] {
-      const Model& model = ctx.session.model();
-      auto sel = ctx.session.select(range);
-      if (sel.empty()) args.fail("the range holds for no ball: name the platen balls (e.g. range group platens)");
-      for (auto k : sel) ids.push_back(model.balls.id[k]);
-      const Platens p = platens(model, sel);
+      const Model& model = ctx.session.state();   // (the membrane's area and pressure)
+      if (ids.empty()) args.fail("the range holds for no ball: name the platen balls (e.g. range group platens)");
+      const Platens p = platens(rows);
       if (rowe && !p.two)
         args.fail("`ratio` and `axial` with a range need both platens in it (balls at two heights)");
       gap0 = p.gap;

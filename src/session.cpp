@@ -623,6 +623,25 @@ void Session::set_material(int type, const Material& material) {
   model_.contacts.use_history(laws_with_history(model_));
 }
 
+std::vector<std::int64_t> Session::platen_choice(const Range& range, PlatenBalls& rows) {
+  std::vector<std::int64_t> ids;
+  if (parts_kept()) {
+    results_onto_parts(model_, *pipeline_);   // (the balls' forces of the last step, where deferred)
+    ids = pipeline_->ids_on_parts(model_, range);
+    rows = pipeline_->platens_on_parts(ids);
+    return ids;
+  }
+  results_on_root();
+  comm::on_root([&] {
+    const std::vector<std::size_t> selected = select(range);
+    const Model& m = model();
+    for (std::size_t k : selected) ids.push_back(m.balls.id[k]);
+    std::sort(ids.begin(), ids.end());   // (as the parts give them: a save's bytes the same)
+    rows = platen_balls_of(m, selected);
+  }, "choosing the platen balls");
+  return ids;
+}
+
 std::size_t Session::define_group(const std::string& name, const Range& range) {
   require_started();
   std::vector<std::int64_t> ids;
@@ -701,6 +720,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
           return pipeline_->ball_on_parts(id, count, read);
         };
         sums.sphere = [this, &m](const MeasureSphere& s) { return pipeline_->sphere_on_parts(m, s); };
+        sums.platens = [this](const std::vector<std::int64_t>& ids) { return pipeline_->platens_on_parts(ids); };
         sums.bridges = [this, &m] {
           const Pipeline::PartCounts c = pipeline_->part_counts(m);
           return c.bridges + c.wall_bridges;

@@ -319,6 +319,10 @@ class Session {
   // Rank 0's whole model is made current too, gathered from the kept parts where a CYCLE left it
   // hollow (Pipeline::whole_hollow: results_before_setting).
   void results_on_root() { results_before_setting(); }
+  // HIST's platen balls where `range` holds now: their ids, and their heights and forces in `rows`
+  // (rank 0's; a collective call). Read on the parts where the ranks keep them, rank 0 gathering
+  // no whole model for it.
+  std::vector<std::int64_t> platen_choice(const Range& range, PlatenBalls& rows);
   // What PRINT info and counters tell of the state without the whole model on rank 0: the pairs
   // and wall contacts touching, the capillary bridges between balls and to walls, and whether some
   // ball spins or carries a load (where the model's arrays do not say: `flags` empty where they do). Under

@@ -3,6 +3,7 @@
 #include "cycle/brick_step.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -307,6 +308,33 @@ std::vector<double> BrickStep::own_ball_values(std::int64_t id, std::size_t coun
   team_->allgather(mine, all);   // (the owner's values alone)
   if (all.size() != count) all.assign(count, std::numeric_limits<double>::quiet_NaN());   // (no ball has that id)
   return all;
+}
+
+PlatenBalls BrickStep::own_platen_balls(const std::vector<std::int64_t>& ids) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: platen balls read on parts where none is live");
+  std::vector<std::int64_t> sorted = ids;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<double> mine, all;
+  together([&] {
+    const Balls& b = part_.balls;
+    for (std::uint32_t q : owned_)
+      if (std::binary_search(sorted.begin(), sorted.end(), b.id[q]))
+        for (double v : {static_cast<double>(global_ball_[q]), b.z[q], b.fx[q], b.fy[q], b.fz[q]}) mine.push_back(v);
+  }, "reading the platen balls");
+  team_->allgather(mine, all);
+  // (In the whole model's order, serial's: its sums over them are made in that order.)
+  const std::size_t n = all.size() / 5;
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return all[5 * p] < all[5 * q]; });
+  PlatenBalls out;
+  for (std::size_t p : order) {
+    out.z.push_back(all[5 * p + 1]);
+    out.fx.push_back(all[5 * p + 2]);
+    out.fy.push_back(all[5 * p + 3]);
+    out.fz.push_back(all[5 * p + 4]);
+  }
+  return out;
 }
 
 void BrickStep::take_settings(const Model& full) {

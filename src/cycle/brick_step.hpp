@@ -244,6 +244,9 @@ class BrickStep {
   // member that owns the ball of that id, its `count` values to every member (NaN where none does).
   std::vector<double> own_ball_values(std::int64_t id, std::size_t count,
                                       const std::function<std::vector<double>(const Balls&, std::size_t)>& read);
+  // The balls of these ids where the parts are live (a collective call): every member's own, their
+  // heights and unbalanced forces to every member in the whole model's order (HIST's platens).
+  PlatenBalls own_platen_balls(const std::vector<std::int64_t>& ids);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what
   // a CYCLE and the light commands read there (the balls' ids, types, fixities, radii, masses and

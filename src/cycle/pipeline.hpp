@@ -224,6 +224,9 @@ class Pipeline {
                                     const std::function<std::vector<double>(const Balls&, std::size_t)>& read) {
     return bricks().own_ball_values(id, count, read);
   }
+  // HIST's platen balls of these ids from the kept parts (BrickStep::own_platen_balls): a
+  // collective call where parts_live.
+  PlatenBalls platens_on_parts(const std::vector<std::int64_t>& ids) { return bricks().own_platen_balls(ids); }
   // The balls' fixities from the kept parts into rank 0's hollow whole model, which keeps them (FIX
   // and FREE on the parts), a chunk at a time: a collective call where whole_hollow.
   void fixities_to_root(Model& model);

@@ -227,7 +227,10 @@ bool History::recorded_on_parts() const {
                          item == "time" || item == "porosity" || item == "sample" || item.rfind("wall ", 0) == 0 ||
                          item.rfind("ball ", 0) == 0 ||   // (a ball's: from its owner, HistorySums::ball)
                          item.rfind("measure ", 0) == 0;  // (a sphere's: its sums merged, HistorySums::sphere)
-      if (!(from_sums || light || ((item == "ratio" || item == "axial") && !platens))) return false;
+      // (ratio, axial and platen of platen balls: their rows from the parts, HistorySums::platens;
+      // `platen` of every ball, with no range, reads the whole model.)
+      const bool platen_rows = (item == "ratio" || item == "axial" || item == "platen") && platens;
+      if (!(from_sums || light || platen_rows || ((item == "ratio" || item == "axial") && !platens))) return false;
     }
   return true;
 }
@@ -254,6 +257,12 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
     if (!have_stress) stress = volume > 0 ? get_stress_sums().over(volume) : Sym6{}, have_stress = true;
     return stress;
   };
+  std::optional<PlatenBalls> platen_rows;   // (ratio, axial and platen: one reading)
+  auto get_platens = [&]() -> const PlatenBalls& {
+    if (!platen_rows)
+      platen_rows = from && from->platens ? from->platens(t.platen_ids) : platen_balls_of(model, platen_balls(model, t));
+    return *platen_rows;
+  };
   std::optional<ContactSums> sums;   // (unbal and contacts: one pass)
   auto get_sums = [&]() -> const ContactSums& {
     if (!sums) sums = from ? from->contacts() : contact_sums(model);
@@ -276,7 +285,7 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
     } else if (item == "ratio" && !t.platen_ids.empty()) {
       // Rowe's R = sigma1 / sigma2 = F1 / (A sigma2).
       const double load = (t.membrane_area ? model.membrane.area : t.area) * t.pressure;
-      row.push_back(load > 0 ? platens(model, platen_balls(model, t)).force / load
+      row.push_back(load > 0 ? platens(get_platens()).force / load
                              : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "ratio") {
       const Sym6& s = get_stress();
@@ -290,14 +299,14 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
       row.push_back(lateral != 0 ? s[2] / lateral : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "axial" && !t.platen_ids.empty()) {
       // eps1 = 2 delta / dh: the platens' approach over their first distance apart.
-      const Platens p = platens(model, platen_balls(model, t));
+      const Platens p = platens(get_platens());
       row.push_back(t.platen_gap0 > 0 && p.two ? (t.platen_gap0 - p.gap) / t.platen_gap0
                                                : std::numeric_limits<double>::quiet_NaN());
     } else if (item == "axial") {
       row.push_back(model.space.strain[2]);
     } else if (item == "platen") {
-      row.push_back(reaction_force(model, t.platen_ids.empty() ? select(model, t.platen_range)
-                                                               : platen_balls(model, t))[2]);
+      row.push_back((t.platen_ids.empty() ? reaction_force(model, select(model, t.platen_range))
+                                          : reaction_force(get_platens()))[2]);
     } else if (item == "energy") {
       EnergyReport e = energy(model);
       for (double v : {e.kinetic_translation + e.kinetic_rotation, e.strain, e.friction_work, e.damping_work,

@@ -54,6 +54,8 @@ struct HistorySums {
   std::function<std::size_t()> bridges;
   // A measurement sphere's measurement (throws std::runtime_error as measure_sphere).
   std::function<SphereMeasurement(const MeasureSphere&)> sphere;
+  // The platen balls of these ids, in the model's order.
+  std::function<PlatenBalls(const std::vector<std::int64_t>& ids)> platens;
 };
 
 // What HIST ... file does with a file that is there: `new` starts it afresh, `append` keeps its rows

@@ -244,26 +244,46 @@ ContactSums contact_sums(const Model& model, const std::vector<std::uint32_t>* p
   return out;
 }
 
-std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls) {
-  std::array<double, 3> f{0, 0, 0};
+PlatenBalls platen_balls_of(const Model& model, const std::vector<std::size_t>& balls) {
+  PlatenBalls p;
+  const Balls& b = model.balls;
   for (std::size_t i : balls) {
-    f[0] += model.balls.fx[i];
-    f[1] += model.balls.fy[i];
-    f[2] += model.balls.fz[i];
+    p.z.push_back(b.z[i]);
+    p.fx.push_back(b.fx[i]);
+    p.fy.push_back(b.fy[i]);
+    p.fz.push_back(b.fz[i]);
+  }
+  return p;
+}
+
+std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls) {
+  return reaction_force(platen_balls_of(model, balls));
+}
+
+std::array<double, 3> reaction_force(const PlatenBalls& b) {
+  std::array<double, 3> f{0, 0, 0};
+  for (std::size_t i = 0; i < b.z.size(); ++i) {
+    f[0] += b.fx[i];
+    f[1] += b.fy[i];
+    f[2] += b.fz[i];
   }
   return f;
 }
 
 Platens platens(const Model& model, const std::vector<std::size_t>& balls) {
+  return platens(platen_balls_of(model, balls));
+}
+
+Platens platens(const PlatenBalls& b) {
   Platens out;
-  if (balls.empty()) return out;
-  const Balls& b = model.balls;
-  double lo = b.z[balls[0]], hi = lo;
-  for (std::size_t i : balls) lo = std::min(lo, b.z[i]), hi = std::max(hi, b.z[i]);
+  const std::size_t n = b.z.size();
+  if (n == 0) return out;
+  double lo = b.z[0], hi = lo;
+  for (std::size_t i = 0; i < n; ++i) lo = std::min(lo, b.z[i]), hi = std::max(hi, b.z[i]);
   const double mid = 0.5 * (lo + hi);
   double force_upper = 0, force_lower = 0, z_upper = 0, z_lower = 0;
   std::size_t upper = 0, lower = 0;
-  for (std::size_t i : balls) {
+  for (std::size_t i = 0; i < n; ++i) {
     if (b.z[i] > mid) force_upper += b.fz[i], z_upper += b.z[i], ++upper;
     else force_lower += b.fz[i], z_lower += b.z[i], ++lower;
   }

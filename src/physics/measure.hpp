@@ -113,6 +113,13 @@ ContactSums contact_sums(const Model& model, const std::vector<std::uint32_t>* p
 
 // Sum of the unbalanced force on the given balls (for fixed balls: the reaction force they carry).
 std::array<double, 3> reaction_force(const Model& model, const std::vector<std::size_t>& balls);
+// The platen balls' heights and unbalanced forces in the model's order (the order their sums are
+// made in): from the model's balls, or from the ranks' parts (Pipeline::platens_on_parts).
+struct PlatenBalls {
+  std::vector<double> z, fx, fy, fz;
+};
+PlatenBalls platen_balls_of(const Model& model, const std::vector<std::size_t>& balls);
+std::array<double, 3> reaction_force(const PlatenBalls& balls);
 
 // Two platens among the given balls (Rowe's triaxial test): the balls above and below the middle of
 // their z extent. force: the axial force F1 they carry, (Fz_upper - Fz_lower) / 2 from their
@@ -122,5 +129,6 @@ struct Platens {
   bool two = false;                // both platens hold balls and are apart
 };
 Platens platens(const Model& model, const std::vector<std::size_t>& balls);
+Platens platens(const PlatenBalls& balls);
 
 }  // namespace trubal
