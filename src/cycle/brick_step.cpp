@@ -337,6 +337,59 @@ PlatenBalls BrickStep::own_platen_balls(const std::vector<std::int64_t>& ids) {
   return out;
 }
 
+namespace {
+// The membrane's loaded balls as (id, place in its ids), by id.
+std::vector<std::pair<std::int64_t, std::size_t>> membrane_places(const Membrane& m) {
+  std::vector<std::pair<std::int64_t, std::size_t>> at(m.ids.size());
+  for (std::size_t q = 0; q < m.ids.size(); ++q) at[q] = {m.ids[q], q};
+  std::sort(at.begin(), at.end());
+  return at;
+}
+std::int64_t membrane_place(const std::vector<std::pair<std::int64_t, std::size_t>>& at, std::int64_t id) {
+  const auto it = std::lower_bound(at.begin(), at.end(), std::pair<std::int64_t, std::size_t>{id, 0});
+  return it != at.end() && it->first == id ? static_cast<std::int64_t>(it->second) : -1;
+}
+}  // namespace
+
+MembraneCentres BrickStep::own_membrane_centres(const Membrane& m) {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: the membrane followed on parts where none is live");
+  std::vector<double> mine, all;
+  together([&] {
+    const auto at = membrane_places(m);
+    const Balls& b = part_.balls;
+    for (std::uint32_t k : owned_)
+      if (const std::int64_t q = membrane_place(at, b.id[k]); q >= 0)
+        for (double v : {static_cast<double>(q), b.x[k], b.y[k], b.z[k]}) mine.push_back(v);
+  }, "following the membrane");
+  team_->allgather(mine, all);
+  MembraneCentres c;
+  const std::size_t n = m.ids.size();
+  c.x.assign(n, 0);
+  c.y.assign(n, 0);
+  c.z.assign(n, 0);
+  c.present.assign(n, 0);
+  for (std::size_t r = 0; r + 4 <= all.size(); r += 4) {
+    const auto q = static_cast<std::size_t>(all[r]);
+    c.x[q] = all[r + 1];
+    c.y[q] = all[r + 2];
+    c.z[q] = all[r + 3];
+    c.present[q] = 1;
+  }
+  return c;
+}
+
+void BrickStep::set_membrane_loads(const Membrane& m, const MembraneFollow& loads) {
+  together([&] {
+    const auto at = membrane_places(m);
+    Balls& b = part_.balls;
+    for (std::size_t k = 0; k < b.size(); ++k)
+      if (const std::int64_t q = membrane_place(at, b.id[k]); q >= 0) {
+        b.ax[k] = loads.ax[static_cast<std::size_t>(q)];
+        b.ay[k] = loads.ay[static_cast<std::size_t>(q)];
+      }
+  }, "following the membrane");
+}
+
 void BrickStep::take_settings(const Model& full) {
   part_.settings = full.settings;
   together([&] {

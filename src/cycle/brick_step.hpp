@@ -50,6 +50,7 @@
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
+#include "physics/membrane.hpp"
 #include "support/exact_sum.hpp"
 #include "cycle/parallel_step.hpp"
 #include "cycle/phase_times.hpp"
@@ -247,6 +248,11 @@ class BrickStep {
   // The balls of these ids where the parts are live (a collective call): every member's own, their
   // heights and unbalanced forces to every member in the whole model's order (HIST's platens).
   PlatenBalls own_platen_balls(const std::vector<std::int64_t>& ids);
+  // MEMBRANE follow on the live parts (collective calls): the loaded balls' centres by their place
+  // in the membrane's ids, every member's own to every member; then their x and y loads set on
+  // the part's balls (its own and its copies).
+  MembraneCentres own_membrane_centres(const Membrane& m);
+  void set_membrane_loads(const Membrane& m, const MembraneFollow& loads);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what
   // a CYCLE and the light commands read there (the balls' ids, types, fixities, radii, masses and

@@ -227,6 +227,11 @@ class Pipeline {
   // HIST's platen balls of these ids from the kept parts (BrickStep::own_platen_balls): a
   // collective call where parts_live.
   PlatenBalls platens_on_parts(const std::vector<std::int64_t>& ids) { return bricks().own_platen_balls(ids); }
+  // MEMBRANE follow where a distributed run's parts are live (a collective call): the loads made
+  // from the loaded balls' centres on the parts, set there and in rank 0's whole model, whose
+  // hollow arrays keep the applied loads (physics/membrane.hpp follow_loads). False, doing
+  // nothing, elsewhere (the same answer on every rank).
+  bool follow_membrane_on_parts(Model& model);
   // The balls' fixities from the kept parts into rank 0's hollow whole model, which keeps them (FIX
   // and FREE on the parts), a chunk at a time: a collective call where whole_hollow.
   void fixities_to_root(Model& model);

@@ -17,6 +17,7 @@
 #include "cycle/pair_list.hpp"
 #include "cycle/wall_list.hpp"
 #include "support/comm.hpp"
+#include "model/edit.hpp"
 #include "model/wall_shape.hpp"
 #include "model/periodic_cell.hpp"
 #include "physics/bridge.hpp"
@@ -62,6 +63,22 @@ bool Pipeline::parts_go_on(Model& model) {
   if (!rebuild_parts(model, list_reach(model, skin))) return false;
   ref_.record_cell(model, skin);
   wall_travel_ = 0;
+  return true;
+}
+
+bool Pipeline::follow_membrane_on_parts(Model& model) {
+  if (!distributed() || comm_ranks_ < 2 || !bricks().live_for(model)) return false;
+  Membrane& m = model.membrane;
+  const MembraneFollow loads = follow_loads(m, bricks().own_membrane_centres(m));
+  bricks().set_membrane_loads(m, loads);
+  Balls& b = model.balls;
+  if (b.ax.size() == b.size() && b.ay.size() == b.size())   // (rank 0's hollow arrays; any whole model)
+    for (std::size_t q = 0; q < m.ids.size(); ++q)
+      if (const std::int64_t k = find_ball(model, m.ids[q]); k >= 0) {
+        b.ax[static_cast<std::size_t>(k)] = loads.ax[q];
+        b.ay[static_cast<std::size_t>(k)] = loads.ay[q];
+      }
+  m.area = loads.area;
   return true;
 }
 

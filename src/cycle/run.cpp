@@ -444,7 +444,8 @@ StepTotals CycleRun::advance(const StepPlan& step) {
   sorted_ahead_ = -1;
   // MEMBRANE follow: the perimeter forces from the positions now, on cycles of the absolute count
   // (the same steps however the run is cut).
-  if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0) {
+  if (model.membrane.follow_every > 0 && model.cycle % model.membrane.follow_every == 0 &&
+      !pipeline_.follow_membrane_on_parts(model)) {
     pipeline_.sync_all(model);
     follow_membrane(model);
     pipeline_.loads_changed(model);

@@ -110,22 +110,45 @@ MembraneLoads membrane_loads(const Model& model, const std::vector<std::size_t>&
 void follow_membrane(Model& model) {
   Membrane& m = model.membrane;
   Balls& b = model.balls;
-  const std::size_t layers = m.extent_x.size();
-  if (!(m.pressure > 0) || layers == 0) return;
-  // The loaded balls now (a deleted one no longer carries a load), their layers' heights and extents.
+  if (!(m.pressure > 0) || m.extent_x.empty()) return;
+  // The loaded balls now (a deleted one no longer carries a load).
+  MembraneCentres at;
   std::vector<std::int64_t> index(m.ids.size(), -1);
+  for (std::size_t q = 0; q < m.ids.size(); ++q) {
+    const std::int64_t k = find_ball(model, m.ids[q]);
+    index[q] = k;
+    at.present.push_back(k >= 0);
+    at.x.push_back(k >= 0 ? b.x[k] : 0);
+    at.y.push_back(k >= 0 ? b.y[k] : 0);
+    at.z.push_back(k >= 0 ? b.z[k] : 0);
+  }
+  const MembraneFollow loads = follow_loads(m, at);
+  for (std::size_t q = 0; q < m.ids.size(); ++q) {
+    if (index[q] < 0) continue;
+    b.ax[index[q]] = loads.ax[q];
+    b.ay[index[q]] = loads.ay[q];
+  }
+  m.area = loads.area;
+}
+
+MembraneFollow follow_loads(const Membrane& m, const MembraneCentres& at) {
+  MembraneFollow out;
+  const std::size_t layers = m.extent_x.size();
+  out.ax.assign(m.ids.size(), 0);
+  out.ay.assign(m.ids.size(), 0);
+  out.area = m.area;
+  if (!(m.pressure > 0) || layers == 0) return out;
+  // The loaded balls' layers' heights and extents now.
   std::vector<double> z_sum(layers, 0), count(layers, 0);
   std::vector<double> xmin(layers, 0), xmax(layers, 0), ymin(layers, 0), ymax(layers, 0);
   for (std::size_t q = 0; q < m.ids.size(); ++q) {
-    const std::int64_t k = find_ball(model, m.ids[q]);
-    if (k < 0) continue;
-    index[q] = k;
+    if (!at.present[q]) continue;
     const std::size_t L = static_cast<std::size_t>(m.layer[q]);
-    const double x = b.x[k], y = b.y[k];
+    const double x = at.x[q], y = at.y[q];
     if (count[L] == 0) { xmin[L] = xmax[L] = x; ymin[L] = ymax[L] = y; }
     xmin[L] = std::min(xmin[L], x); xmax[L] = std::max(xmax[L], x);
     ymin[L] = std::min(ymin[L], y); ymax[L] = std::max(ymax[L], y);
-    z_sum[L] += b.z[k];
+    z_sum[L] += at.z[q];
     count[L] += 1;
   }
   std::vector<double> z(layers, 0), stretch_x(layers, 1), stretch_y(layers, 1);
@@ -139,13 +162,14 @@ void follow_membrane(Model& model) {
     const double height = layers > 1 ? 0.5 * (z[L + 1 < layers ? L + 1 : L] - z[L > 0 ? L - 1 : L]) : m.cell;
     const double face = m.pressure * m.cell * height;
     for (std::size_t q = 0; q < m.ids.size(); ++q) {
-      if (index[q] < 0 || static_cast<std::size_t>(m.layer[q]) != L) continue;
-      b.ax[index[q]] = face * stretch_y[L] * m.face_x[q];   // a face normal to x spans y
-      b.ay[index[q]] = face * stretch_x[L] * m.face_y[q];
+      if (!at.present[q] || static_cast<std::size_t>(m.layer[q]) != L) continue;
+      out.ax[q] = face * stretch_y[L] * m.face_x[q];   // a face normal to x spans y
+      out.ay[q] = face * stretch_x[L] * m.face_y[q];
     }
     if (m.layer_cells[L] > m.layer_cells[widest]) widest = L;
   }
-  m.area = m.layer_cells[widest] * m.cell * m.cell * stretch_x[widest] * stretch_y[widest];
+  out.area = m.layer_cells[widest] * m.cell * m.cell * stretch_x[widest] * stretch_y[widest];
+  return out;
 }
 
 }  // namespace trubal

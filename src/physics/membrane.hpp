@@ -47,5 +47,17 @@ MembraneLoads membrane_loads(const Model& model, const std::vector<std::size_t>&
 // each side stay p times its area as the sample bulges; the area A of HIST ratio follows the widest
 // layer's extent (its cells times both stretches). The balls' x and y applied loads are set.
 void follow_membrane(Model& model);
+// Its parts, for the ranks' parts (Pipeline::follow_membrane_on_parts): the loaded balls' centres
+// by their place in Membrane::ids (present 0 where the ball is gone), and from them the x and y
+// loads of each (0 where gone) and the area, every one made as follow_membrane makes it.
+struct MembraneCentres {
+  std::vector<double> x, y, z;
+  std::vector<std::uint8_t> present;
+};
+struct MembraneFollow {
+  std::vector<double> ax, ay;
+  double area = 0;
+};
+MembraneFollow follow_loads(const Membrane& m, const MembraneCentres& at);
 
 }  // namespace trubal

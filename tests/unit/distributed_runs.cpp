@@ -1083,10 +1083,13 @@ tstep 7.05e-5
 
 TEST_CASE("distributed: Rowe's test with a following membrane runs by the spatial decomposition, with the serial bits",
           "[mpi][system]") {
-  // The membrane's forces are made again from the positions every 3 cycles: the whole model is made
-  // current, the forces are set on it, and each rank's part takes its balls' new loads
-  // (BrickStep::loads_changed). A part that kept the old loads parts from serial at the first
-  // cycle after 3.
+  // The membrane's forces are made again from the positions every 3 cycles: where the ranks' parts
+  // are live, from the loaded balls' centres their owners send to every rank in the membrane's
+  // order, each rank setting the loads on its part's balls, rank 0 on its hollow whole model's
+  // arrays (Pipeline::follow_membrane_on_parts); else through the whole model (loads_changed). A
+  // part that kept the old loads parted from serial at the first cycle after 3. Rowe's history,
+  // its platens' ratio and axial strain, is recorded on the parts too: nothing gathers the whole
+  // model (before, every follow and every row did), the second CYCLE going on from the parts.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string deck = R"(start box -200 440 -200 440 -100 450
 prop kn 1.5e9 ks 1.5e9 fric 7 dens 2000
@@ -1098,22 +1101,29 @@ membrane 5e4 follow every 3
 damp 0.05 0.5
 apply zforce -8e7 range group top
 apply zforce 8e7 range group bottom
+hist ratio axial unbal every 10 file h.csv range not z 10 330
 cycle 400
+cycle 200
 )";
   TempDir serial;
   serial.write("deck.dat", deck + kOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
   const std::string balls = slurp(serial.path() / "balls.csv"), contacts = slurp(serial.path() / "contacts.csv");
   REQUIRE(lines_of(contacts).size() > 200);
+  REQUIRE(lines_of(slurp(serial.path() / "h.csv")).size() == 61);
   for (int ranks : {2, 3}) {
     TempDir dir;
-    dir.write("deck.dat", "backend mpi\n" + deck + kOutputs + "print info\n");
-    REQUIRE(run_deck(dir, ranks) == 0);
+    dir.write("deck.dat", "backend mpi\n" + deck + kOutputs + "print info\n" + kCounters);
+    REQUIRE(run_deck(dir, ranks, kEqualShares) == 0);   // (the gathers counted: no new shares by speed)
     const std::string out = slurp(dir.path() / "out.txt");
     INFO(ranks << " ranks\n" << out);
     CHECK_THAT(out, Catch::Contains("last step shared by: the spatial decomposition"));
     CHECK(slurp(dir.path() / "balls.csv") == balls);
     CHECK(slurp(dir.path() / "contacts.csv") == contacts);
+    CHECK(slurp(dir.path() / "h.csv") == slurp(serial.path() / "h.csv"));
+    const Counters counters = counters_of(dir);
+    CHECK(counter(counters, "whole_gathers") == 0);
+    CHECK(counter(counters, "parts_kept") == 1);
   }
 }
 
