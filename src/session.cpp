@@ -721,6 +721,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
         };
         sums.sphere = [this, &m](const MeasureSphere& s) { return pipeline_->sphere_on_parts(m, s); };
         sums.platens = [this](const std::vector<std::int64_t>& ids) { return pipeline_->platens_on_parts(ids); };
+        sums.bonds = [this] { return pipeline_->bond_counts_on_parts(); };
         sums.bridges = [this, &m] {
           const Pipeline::PartCounts c = pipeline_->part_counts(m);
           return c.bridges + c.wall_bridges;

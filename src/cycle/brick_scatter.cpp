@@ -223,7 +223,9 @@ void BrickStep::share_decomposition() {
   comm::broadcast(split_bond_ball_i_);
   std::vector<double> values{bonded_ ? 1.0 : 0.0, static_cast<double>(bonds_across_), max_radius_,
                              static_cast<double>(full_balls_), walls_any_ ? 1.0 : 0.0,
-                             split_laws_.rolling ? 1.0 : 0.0, split_laws_.bridge ? 1.0 : 0.0};
+                             split_laws_.rolling ? 1.0 : 0.0, split_laws_.bridge ? 1.0 : 0.0,
+                             static_cast<double>(split_off_.intact), static_cast<double>(split_off_.tension),
+                             static_cast<double>(split_off_.shear)};
   comm::broadcast(values);
   bonded_ = values[0] != 0;
   bonds_across_ = static_cast<std::size_t>(values[1]);
@@ -231,6 +233,8 @@ void BrickStep::share_decomposition() {
   full_balls_ = static_cast<std::size_t>(values[3]);
   walls_any_ = values[4] != 0;
   split_laws_ = HistoryLaws{values[5] != 0, values[6] != 0};
+  split_off_ = BondCounts{static_cast<std::size_t>(values[7]), static_cast<std::size_t>(values[8]),
+                          static_cast<std::size_t>(values[9])};
 }
 
 }  // namespace trubal

@@ -163,10 +163,17 @@ void BrickStep::decompose(const Model& full) {
   split_bond_ball_i_.clear();
   bonded_ = false;
   bonds_across_ = 0;
+  split_off_ = BondCounts{};
   for (std::size_t q : bt.empty() ? std::vector<std::size_t>{} : bond_rows_by_id(bt)) {
+    // (The bonds no part holds, counted as count_bonds counts them: own_bond_counts adds them.)
+    if (bt.fate[q] == static_cast<std::uint8_t>(BondFate::Tension)) ++split_off_.tension;
+    else if (bt.fate[q] == static_cast<std::uint8_t>(BondFate::Shear)) ++split_off_.shear;
     if (bt.fate[q] != 0) continue;
     const std::int64_t bi = find_ball(full, bt.id_i[q]), bj = find_ball(full, bt.id_j[q]);
-    if (bi < 0 || bj < 0) continue;
+    if (bi < 0 || bj < 0) {
+      ++split_off_.intact;
+      continue;
+    }
     const int oi = owner_[static_cast<std::size_t>(bi)], oj = owner_[static_cast<std::size_t>(bj)];
     bonded_ = true;
     rank_bonds_[oi].push_back(static_cast<std::uint32_t>(q));

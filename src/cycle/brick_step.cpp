@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "cycle/sum_exchange.hpp"
+#include "model/edit.hpp"
 #include "model/periodic_cell.hpp"
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
@@ -350,6 +351,27 @@ std::int64_t membrane_place(const std::vector<std::pair<std::int64_t, std::size_
   return it != at.end() && it->first == id ? static_cast<std::int64_t>(it->second) : -1;
 }
 }  // namespace
+
+BondCounts BrickStep::own_bond_counts() {
+  if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: bonds counted on parts where none is live");
+  std::vector<double> mine(3, 0), all;
+  together([&] {
+    const Bonds& t = part_.bonds;
+    for (std::size_t q = 0; q < t.size(); ++q) {
+      const std::int64_t i = find_ball(part_, t.id_i[q]);
+      if (i < 0 || scratch_.ghost[static_cast<std::size_t>(i)]) continue;
+      ++mine[t.fate[q] == static_cast<std::uint8_t>(BondFate::Tension) ? 1 : t.fate[q] == static_cast<std::uint8_t>(BondFate::Shear) ? 2 : 0];
+    }
+  }, "counting its bonds");
+  team_->allgather(mine, all);
+  BondCounts c = split_off_;
+  for (std::size_t r = 0; r + 3 <= all.size(); r += 3) {
+    c.intact += static_cast<std::size_t>(all[r]);
+    c.tension += static_cast<std::size_t>(all[r + 1]);
+    c.shear += static_cast<std::size_t>(all[r + 2]);
+  }
+  return c;
+}
 
 MembraneCentres BrickStep::own_membrane_centres(const Membrane& m) {
   if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: the membrane followed on parts where none is live");

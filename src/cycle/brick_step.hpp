@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "cycle/kernels.hpp"
+#include "physics/bond.hpp"
 #include "physics/cell.hpp"
 #include "physics/measure.hpp"
 #include "physics/measure_sphere.hpp"
@@ -252,6 +253,9 @@ class BrickStep {
   // in the membrane's ids, every member's own to every member; then their x and y loads set on
   // the part's balls (its own and its copies).
   MembraneCentres own_membrane_centres(const Membrane& m);
+  // The bonds' counts where the parts are live (a collective call): every member's own bonds (its
+  // ball i's) by their fates now, summed over the members, with the bonds no part holds (HIST bonds).
+  BondCounts own_bond_counts();
   void set_membrane_loads(const Membrane& m, const MembraneFollow& loads);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what
@@ -558,6 +562,7 @@ class BrickStep {
   std::vector<std::uint32_t> split_bond_rows_, split_bond_ball_i_;
   bool bonded_ = false;
   std::size_t bonds_across_ = 0;
+  BondCounts split_off_;   // the whole table's bonds no part holds at the split (broken, or a ball gone)
   HistoryLaws split_laws_;                  // the whole model's pairs' history parts at the split
   // Per rank: the part's balls sent to it each step (its ghosts), and the ghosts it sends.
   std::vector<std::vector<std::uint32_t>> send_, recv_;

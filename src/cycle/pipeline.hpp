@@ -232,6 +232,8 @@ class Pipeline {
   // hollow arrays keep the applied loads (physics/membrane.hpp follow_loads). False, doing
   // nothing, elsewhere (the same answer on every rank).
   bool follow_membrane_on_parts(Model& model);
+  // HIST bonds from the kept parts (BrickStep::own_bond_counts): a collective call where parts_live.
+  BondCounts bond_counts_on_parts() { return bricks().own_bond_counts(); }
   // The balls' fixities from the kept parts into rank 0's hollow whole model, which keeps them (FIX
   // and FREE on the parts), a chunk at a time: a collective call where whole_hollow.
   void fixities_to_root(Model& model);

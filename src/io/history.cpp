@@ -222,7 +222,7 @@ bool History::recorded_on_parts() const {
     for (const auto& item : t->items) {
       const bool platens = !t->platen_ids.empty();
       const bool from_sums = item == "stress" || item == "pq" || item == "sratio" || item == "unbal" || item == "contacts" ||
-                             item == "bridges";
+                             item == "bridges" || item == "bonds";
       const bool light = item == "strain" || item == "volumetric" || item == "energy" || item == "rolling" ||
                          item == "time" || item == "porosity" || item == "sample" || item.rfind("wall ", 0) == 0 ||
                          item.rfind("ball ", 0) == 0 ||   // (a ball's: from its owner, HistorySums::ball)
@@ -319,7 +319,7 @@ std::vector<double> History::row_of(const HistoryTable& t, const Model& model, d
                                                                : count_bridges(model.contacts) + count_bridges(model.wall_contacts)));
       row.push_back(energy(model).capillary_work);
     } else if (item == "bonds") {
-      const BondCounts n = count_bonds(model.bonds);
+      const BondCounts n = from && from->bonds ? from->bonds() : count_bonds(model.bonds);
       for (std::size_t v : {n.intact, n.broken(), n.tension, n.shear}) row.push_back(static_cast<double>(v));
     } else if (item == "porosity") {
       const Porosity p = space_porosity(model, volume);

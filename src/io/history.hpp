@@ -12,6 +12,7 @@
 #include "model/model.hpp"
 #include "model/range.hpp"
 #include "physics/measure.hpp"
+#include "physics/bond.hpp"
 #include "physics/measure_sphere.hpp"
 
 namespace trubal {
@@ -56,6 +57,8 @@ struct HistorySums {
   std::function<SphereMeasurement(const MeasureSphere&)> sphere;
   // The platen balls of these ids, in the model's order.
   std::function<PlatenBalls(const std::vector<std::int64_t>& ids)> platens;
+  // The bonds' counts by fate.
+  std::function<BondCounts()> bonds;
 };
 
 // What HIST ... file does with a file that is there: `new` starts it afresh, `append` keeps its rows

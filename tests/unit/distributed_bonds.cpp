@@ -30,18 +30,40 @@ const char* kBondOutputs = "print balls file balls.csv\nprint bonds file bonds.c
 
 TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted on 2, gives the serial bits",
           "[mpi][system][bond]") {
+  // HIST bonds is recorded on the parts (every rank's own bonds counted by fate, with the bonds no
+  // part holds, broken before the split: BrickStep::own_bond_counts): no row gathers the model (each
+  // did before), and after the RESTART on 2 ranks the bonds broken before the save are counted.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string hist = "hist bonds every 10 file h.csv\n";
   TempDir serial;
-  serial.write("deck.dat", std::string(kBlock) + "cycle 400\n" + kBondOutputs);
+  serial.write("deck.dat", std::string(kBlock) + hist + "cycle 400\n" + kBondOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
   const std::string balls = slurp(serial.path() / "balls.csv"), bonds = slurp(serial.path() / "bonds.csv");
   REQUIRE(bonds.find("tension") != std::string::npos);   // bonds broke, in tension and in shear
   REQUIRE(bonds.find("shear") != std::string::npos);
+  const std::string history = slurp(serial.path() / "h.csv");
+  REQUIRE(lines_of(history).size() == 41);   // (the header and cycles 10 to 400)
+  // (Bonds broke before the save at cycle 170 below, which the restarted run's parts do not hold:
+  // its row's bonds_broken, the fourth column.)
+  std::string row170;
+  for (const std::string& line : lines_of(history))
+    if (line.rfind("170,", 0) == 0) row170 = line;
+  std::vector<std::string> fields;
+  for (std::size_t at = 0; at <= row170.size();) {
+    const std::size_t comma = std::min(row170.find(',', at), row170.size());
+    fields.push_back(row170.substr(at, comma - at));
+    at = comma + 1;
+  }
+  INFO(row170);
+  REQUIRE(fields.size() == 6);
+  REQUIRE(std::stoi(fields[3]) > 0);
 
   TempDir two;
-  two.write("deck.dat", "backend mpi\n" + std::string(kBlock) + "cycle 400\n" + kBondOutputs);
+  two.write("deck.dat", "backend mpi\n" + std::string(kBlock) + hist + "cycle 400\nprint counters file k.txt\n" + kBondOutputs);
   REQUIRE(run_deck(two, 2, kEqualShares) == 0);
   INFO(slurp(two.path() / "out.txt"));
+  CHECK(slurp(two.path() / "h.csv") == history);
+  CHECK(counter(read_counters(two.path() / "k.txt"), "whole_gathers") == 0);
   const Counters counters = read_counters(two.path() / "counters.txt");
   CHECK(counter(counters, "ranks") == 2);
   // The ranks rebuild the list on their parts, balls changing rank with their bonds (6 rebuilds
@@ -53,9 +75,9 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
 
   // The save's bytes do not depend on the rank count, and a 2-rank run resumes a 3-rank save.
   TempDir cut, cut_serial;
-  cut.write("deck.dat", "backend mpi\n" + std::string(kBlock) + "cycle 170\nsave s.sav\n");
+  cut.write("deck.dat", "backend mpi\n" + std::string(kBlock) + hist + "cycle 170\nsave s.sav\n");
   REQUIRE(run_deck(cut, 3) == 0);
-  cut_serial.write("deck.dat", std::string(kBlock) + "cycle 170\nsave s.sav\n");
+  cut_serial.write("deck.dat", std::string(kBlock) + hist + "cycle 170\nsave s.sav\n");
   REQUIRE(run_deck(cut_serial, 0) == 0);
   CHECK(slurp(cut.path() / "s.sav") == slurp(cut_serial.path() / "s.sav"));
   cut.write("deck.dat", "restart s.sav\nbackend mpi\ncycle 230\n" + std::string(kBondOutputs));
@@ -63,6 +85,7 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
   INFO(slurp(cut.path() / "out.txt"));
   CHECK(slurp(cut.path() / "balls.csv") == balls);
   CHECK(slurp(cut.path() / "bonds.csv") == bonds);
+  CHECK(slurp(cut.path() / "h.csv") == history);   // (the history resumed from the save)
 }
 
 TEST_CASE("distributed: a bond across two ranks' parts is stepped on both and breaks there as serially",
