@@ -167,7 +167,8 @@ static void run_print(Context& ctx, Args& args) {
   // parts holding the balls. The rest read the balls.
   const bool at_step = ctx.session.state().energy_at_step.valid;
   const bool light =
-      item == 4 || (item == 5 && at_step) || item == 8 || item == 9 || item == 10 || item == 11 || item == 12 || item == 16;
+      item == 4 || (item == 5 && at_step) || item == 8 || item == 9 || item == 10 || item == 11 || item == 12 || item == 16 ||
+      item == 17;   // (PRINT bonds reads its own: print_bonds)
   const Model& m = light ? ctx.session.state() : ctx.session.model();
   switch (item) {
     case 16: args.done(); print_sample(ctx); return;

@@ -25,7 +25,9 @@ const char* fate_name(std::uint8_t fate) {
 }  // namespace
 
 void print_bonds(Context& ctx, const Range& range, const std::string& file) {
-  const Model& m = ctx.session.model();
+  // (Without a range, the table and the balls' ids alone: under mpirun the parts' bonds gathered
+  // into rank 0's table, no whole model; a range reads the balls.)
+  const Model& m = range.empty() ? ctx.session.model_for_bonds() : ctx.session.model();
   const Bonds& t = m.bonds;
   std::vector<bool> in(m.balls.size(), range.empty());
   if (!range.empty())

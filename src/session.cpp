@@ -916,6 +916,12 @@ class PartResults final : public ResultSource {
 };
 }  // namespace
 
+const Model& Session::model_for_bonds() const {
+  if (!pipeline_->serving() || !pipeline_->whole_hollow(model_)) return model();
+  pipeline_->request_bonds(model_);
+  return model_;
+}
+
 const Model& Session::model_but_results() const {
   if (!pipeline_->serving()) return model();
   pipeline_->request_results_onto_parts(model_);   // (the balls' unbalanced forces are made with them)
@@ -1039,7 +1045,9 @@ void Session::save(const std::string& path) const {
     pipeline_->request_results_onto_parts(model_);
     // Rank 0's whole model hollow: the parts' state streamed into the file, a chunk at a time (but
     // a bonded model's, whose bonds' state the parts hold: gathered whole first).
-    if (pipeline_->whole_hollow(model_) && model_.bonds.empty()) {
+    if (pipeline_->whole_hollow(model_)) {
+      // (A bonded model's bonds from rank 0's table, their state gathered into it first.)
+      if (!model_.bonds.empty()) pipeline_->request_bonds(model_);
       PartState state(model_, *pipeline_);
       try {
         save_model(model_, path, history_.get(), 0, nullptr, &state);

@@ -48,6 +48,10 @@ class Session {
   // (touching_pairs): under mpirun, where they are made on the ranks' parts (results_onto_parts) and the
   // others serve rank 0's command, without them (rank 0 never holding them all); else model().
   const Model& model_but_results() const;
+  // The model for what reads the bonds' table and the balls' ids alone (PRINT bonds): under mpirun,
+  // where rank 0 serves a command and the parts alone hold the model, rank 0's hollow model with
+  // the bonds' state gathered into its table (Pipeline::request_bonds); else model().
+  const Model& model_for_bonds() const;
   // The pairs of balls that touch (physics/measure.hpp contact_count): from the parts' results
   // where model_but_results leaves them there (one array of bytes).
   std::size_t touching_pairs() const;

@@ -352,6 +352,13 @@ std::int64_t membrane_place(const std::vector<std::pair<std::int64_t, std::size_
 }
 }  // namespace
 
+void BrickStep::bonds_to_root(Model& full) {
+  if (!live_ || team_->shares_whole() || model_ != &full) throw std::logic_error("internal error: bonds gathered from parts where none is live");
+  if (!bonded_) return;   // (the same on every rank: no part holds a bond)
+  std::vector<double> out, in;
+  gather_bonds(full, out, in);
+}
+
 BondCounts BrickStep::own_bond_counts() {
   if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: bonds counted on parts where none is live");
   std::vector<double> mine(3, 0), all;

@@ -256,6 +256,9 @@ class BrickStep {
   // The bonds' counts where the parts are live (a collective call): every member's own bonds (its
   // ball i's) by their fates now, summed over the members, with the bonds no part holds (HIST bonds).
   BondCounts own_bond_counts();
+  // The state and fates of the bonds the parts hold into full's table on rank 0 (a collective call
+  // of the ranks, as sync() gathers them), nothing else of the model.
+  void bonds_to_root(Model& full);
   void set_membrane_loads(const Membrane& m, const MembraneFollow& loads);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what

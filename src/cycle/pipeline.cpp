@@ -228,7 +228,7 @@ namespace {
 enum RootRequest : std::int64_t {
   kCommandEnded = 0, kGatherResults = 1, kResultArray = 2, kOntoParts = 3, kWhole = 4, kCounts = 5,
   kPlacePairs = 7, kPlaceWalls = 8, kStream = 9, kFreeSaved = 10, kBallRows = 11, kContactRows = 12, kStress = 13,
-  kContactSums = 14, kSphere = 15
+  kContactSums = 14, kSphere = 15, kBonds = 16
 };
 }  // namespace
 
@@ -447,6 +447,12 @@ void Pipeline::request_free_saved() {
   bricks().free_saved();
 }
 
+void Pipeline::request_bonds(Model& model) {
+  std::int64_t word = kBonds;
+  comm::broadcast(word);
+  bricks().bonds_to_root(model);
+}
+
 void Pipeline::request_whole(Model& model) {
   if (!whole_to_refresh(model)) return;   // (rank 0's answer, which the others follow)
   std::int64_t word = kWhole;
@@ -470,7 +476,7 @@ void Pipeline::serve_root(Model& model) {
     if (word == kResultArray || word == kStream || word == kContactRows) comm::broadcast(array);
     else if (word != kGatherResults && word != kOntoParts && word != kWhole && word != kCounts && word != kPlacePairs &&
              word != kPlaceWalls && word != kFreeSaved && word != kBallRows && word != kStress &&
-             word != kContactSums && word != kSphere)
+             word != kContactSums && word != kSphere && word != kBonds)
       throw std::logic_error("internal error: rank 0 asked for work this rank does not know");
     Range range;   // (the rows' range: every rank reads it the same, so no failure is one rank's)
     if (word == kBallRows || word == kContactRows) {
@@ -495,7 +501,8 @@ void Pipeline::serve_root(Model& model) {
       if (word == kPlaceWalls) bricks().place_saved_walls();
       if (word == kFreeSaved) bricks().free_saved();
       if (word == kStream) bricks().stream_table(static_cast<int>(array / 1024), static_cast<std::size_t>(array % 1024), nullptr);
-      if (word == kPlacePairs || word == kPlaceWalls || word == kFreeSaved || word == kStream) continue;
+      if (word == kBonds) bricks().bonds_to_root(model);
+      if (word == kPlacePairs || word == kPlaceWalls || word == kFreeSaved || word == kStream || word == kBonds) continue;
       if (word == kWhole) {
         refresh_whole(model);
         continue;

@@ -205,6 +205,10 @@ class Pipeline {
   std::uint64_t request_place_walls(Model& model);
   void request_stream(Model& model, int table, std::size_t k, const std::function<void(const std::vector<double>&)>& write);
   void request_free_saved();
+  // Rank 0, serving(), where whole_hollow: the bonds' state and fates the parts hold gathered into
+  // rank 0's bond table (which a hollow whole model keeps), nothing else: PRINT bonds and a bonded
+  // model's SAVE read the table there (BrickStep::bonds_to_root).
+  void request_bonds(Model& model);
   // Rank 0, serving(), where whole_hollow: PRINT balls' and contacts' rows from the parts, in order
   // (BrickStep::stream_ball_rows, stream_contact_rows), those of `range` (every one where empty),
   // take(row) here on each.

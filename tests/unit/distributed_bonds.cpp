@@ -33,6 +33,8 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
   // HIST bonds is recorded on the parts (every rank's own bonds counted by fate, with the bonds no
   // part holds, broken before the split: BrickStep::own_bond_counts): no row gathers the model (each
   // did before), and after the RESTART on 2 ranks the bonds broken before the save are counted.
+  // PRINT bonds and SAVE read rank 0's bond table, the parts' bonds' state gathered into it alone
+  // (Pipeline::request_bonds): no whole model gathered for them either (both did before).
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string hist = "hist bonds every 10 file h.csv\n";
   TempDir serial;
@@ -65,6 +67,7 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
   CHECK(slurp(two.path() / "h.csv") == history);
   CHECK(counter(read_counters(two.path() / "k.txt"), "whole_gathers") == 0);
   const Counters counters = read_counters(two.path() / "counters.txt");
+  CHECK(counter(counters, "whole_gathers") == 0);   // (after PRINT bonds)
   CHECK(counter(counters, "ranks") == 2);
   // The ranks rebuild the list on their parts, balls changing rank with their bonds (6 rebuilds
   // in the runs measured, 2 to 20 balls moved: the moves follow the shares, which follow the
@@ -75,8 +78,9 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
 
   // The save's bytes do not depend on the rank count, and a 2-rank run resumes a 3-rank save.
   TempDir cut, cut_serial;
-  cut.write("deck.dat", "backend mpi\n" + std::string(kBlock) + hist + "cycle 170\nsave s.sav\n");
-  REQUIRE(run_deck(cut, 3) == 0);
+  cut.write("deck.dat", "backend mpi\n" + std::string(kBlock) + hist + "cycle 170\nsave s.sav\nprint counters file k.txt\n");
+  REQUIRE(run_deck(cut, 3, kEqualShares) == 0);
+  CHECK(counter(read_counters(cut.path() / "k.txt"), "whole_gathers") == 0);
   cut_serial.write("deck.dat", std::string(kBlock) + hist + "cycle 170\nsave s.sav\n");
   REQUIRE(run_deck(cut_serial, 0) == 0);
   CHECK(slurp(cut.path() / "s.sav") == slurp(cut_serial.path() / "s.sav"));
