@@ -708,7 +708,7 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   // dumps read it whole: their steps go by after_step, which records the rows on rank 0 (share_rows
   // hands them on).
   const bool on_parts = control.keep_parts && pipeline_->distributed() && (!histories || history_->recorded_on_parts());
-  const bool dumps_on_parts = dumps && on_parts && bonds_agreed_empty();
+  const bool dumps_on_parts = dumps && on_parts;
   if (histories && dumps && !dumps_on_parts) control.reads_whole = [dumps](std::int64_t cycle) { return dumps->due(cycle); };
   if (on_parts && (histories || dumps_on_parts))
     control.after_step_on_parts = [this, volume_at, marks, histories, dumps_on_parts, dumps](const Model& m) {
@@ -766,7 +766,7 @@ void Session::dump_vtk(const std::string& base, std::int64_t every) {
   }
   // Where the ranks' kept parts alone hold the model, the rows come to rank 0 from them (the
   // results made there first where the CYCLE deferred them): rank 0 is not handed the whole model.
-  if (pipeline_->whole_hollow(model_) && bonds_agreed_empty()) {
+  if (pipeline_->whole_hollow(model_)) {
     results_onto_parts(model_, *pipeline_);
     if (pipeline_->results_on_parts(model_)) return dump_from_parts(*dumps_, model_);
   }
@@ -792,9 +792,17 @@ class PartRows final : public VtkRows {
 }  // namespace
 
 void Session::dump_from_parts(VtkSeries& dumps, const Model& model) {
+  // A bonded model's bonds' file reads rank 0's bond table and the balls' centres: its bonds'
+  // state and the centres gathered there (24 bytes a ball), let go after.
+  const bool bonded = !bonds_agreed_empty();
+  Balls& b = model_.balls;
+  const bool centres_held = b.x.size() == b.size();   // (rank 0's hollow model holds none)
+  if (bonded) pipeline_->bonds_and_centres_to_root(model_);
   PartRows rows(model, *pipeline_);
   // (Every pass runs on every rank whatever failed: a failure, rank 0's writing, is every rank's.)
   comm::together([&] { dumps.write(model, &rows); }, "writing the dump");
+  if (bonded && !centres_held)
+    for (auto* v : {&b.x, &b.y, &b.z}) std::vector<double>().swap(*v);
 }
 
 bool Session::bonds_agreed_empty() const {

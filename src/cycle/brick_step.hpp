@@ -259,6 +259,9 @@ class BrickStep {
   // The state and fates of the bonds the parts hold into full's table on rank 0 (a collective call
   // of the ranks, as sync() gathers them), nothing else of the model.
   void bonds_to_root(Model& full);
+  // The balls' centres the parts hold into full's x, y and z on rank 0, made whole-sized there (a
+  // collective call of the ranks; a bonded model's dump draws its bonds from them).
+  void centres_to_root(Model& full);
   void set_membrane_loads(const Membrane& m, const MembraneFollow& loads);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what

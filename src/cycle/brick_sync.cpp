@@ -557,6 +557,18 @@ template <class T> void BrickStep::gather_whole(const std::vector<T>& mine, std:
   else comm::gather_to_root(mine, all);
 }
 
+void BrickStep::centres_to_root(Model& full) {
+  if (!live_ || team_->shares_whole() || model_ != &full) throw std::logic_error("internal error: centres gathered from parts where none is live");
+  Balls& b = full.balls;
+  comm::together([&] {
+    if (!comm::root()) return;
+    for (auto* v : {&b.x, &b.y, &b.z}) v->assign(b.size(), 0.0);
+  }, "gathering the balls' centres");
+  std::vector<double> out, in;
+  for (auto [from, to] : {std::pair{&part_.balls.x, &b.x}, std::pair{&part_.balls.y, &b.y}, std::pair{&part_.balls.z, &b.z}})
+    gather_array(*team_, *from, *to, owned_, rank_balls_, out, in);
+}
+
 void BrickStep::share(Model& full, VerletReference* whole_ref, bool release_parts) {
   if (!live_ || model_ != &full) return;
   sync(full, whole_ref);

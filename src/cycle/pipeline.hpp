@@ -209,6 +209,13 @@ class Pipeline {
   // rank 0's bond table (which a hollow whole model keeps), nothing else: PRINT bonds and a bonded
   // model's SAVE read the table there (BrickStep::bonds_to_root).
   void request_bonds(Model& model);
+  // A bonded model's dump from the kept parts (a collective call where parts_live): the bonds'
+  // state and the balls' centres into rank 0's hollow whole model, which its bonds' file reads
+  // (BrickStep::bonds_to_root, centres_to_root).
+  void bonds_and_centres_to_root(Model& model) {
+    bricks().bonds_to_root(model);
+    bricks().centres_to_root(model);
+  }
   // Rank 0, serving(), where whole_hollow: PRINT balls' and contacts' rows from the parts, in order
   // (BrickStep::stream_ball_rows, stream_contact_rows), those of `range` (every one where empty),
   // take(row) here on each.

@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <string>
 
 #include "counters.hpp"
@@ -34,11 +35,14 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
   // part holds, broken before the split: BrickStep::own_bond_counts): no row gathers the model (each
   // did before), and after the RESTART on 2 ranks the bonds broken before the save are counted.
   // PRINT bonds and SAVE read rank 0's bond table, the parts' bonds' state gathered into it alone
-  // (Pipeline::request_bonds): no whole model gathered for them either (both did before).
+  // (Pipeline::request_bonds): no whole model gathered for them either (both did before). Its
+  // dumps, in the CYCLE and between, draw the bonds from rank 0's table and the balls' centres
+  // gathered there alone (Session::dump_from_parts): serial's files, no whole model (each gathered it).
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   const std::string hist = "hist bonds every 10 file h.csv\n";
+  const std::string dumps = "dump vtk d/b every 100\n";
   TempDir serial;
-  serial.write("deck.dat", std::string(kBlock) + hist + "cycle 400\n" + kBondOutputs);
+  serial.write("deck.dat", std::string(kBlock) + hist + dumps + "cycle 400\ndump vtk d/b\n" + kBondOutputs);
   REQUIRE(run_deck(serial, 0) == 0);
   const std::string balls = slurp(serial.path() / "balls.csv"), bonds = slurp(serial.path() / "bonds.csv");
   REQUIRE(bonds.find("tension") != std::string::npos);   // bonds broke, in tension and in shear
@@ -61,10 +65,18 @@ TEST_CASE("distributed: a bonded block on 2 ranks, and saved on 3 and restarted 
   REQUIRE(std::stoi(fields[3]) > 0);
 
   TempDir two;
-  two.write("deck.dat", "backend mpi\n" + std::string(kBlock) + hist + "cycle 400\nprint counters file k.txt\n" + kBondOutputs);
+  two.write("deck.dat", "backend mpi\n" + std::string(kBlock) + hist + dumps + "cycle 400\ndump vtk d/b\nprint counters file k.txt\n" +
+                            kBondOutputs);
   REQUIRE(run_deck(two, 2, kEqualShares) == 0);
   INFO(slurp(two.path() / "out.txt"));
   CHECK(slurp(two.path() / "h.csv") == history);
+  int dumped = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(serial.path() / "d")) {
+    INFO(entry.path().filename().string());
+    CHECK(slurp(two.path() / "d" / entry.path().filename()) == slurp(entry.path()));
+    dumped += entry.path().filename().string().find("_bonds_") != std::string::npos;
+  }
+  CHECK(dumped == 5);   // (cycles 0, 100, 200, 300 and 400, the last dumped twice: one file)
   CHECK(counter(read_counters(two.path() / "k.txt"), "whole_gathers") == 0);
   const Counters counters = read_counters(two.path() / "counters.txt");
   CHECK(counter(counters, "whole_gathers") == 0);   // (after PRINT bonds)
