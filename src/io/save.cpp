@@ -675,7 +675,6 @@ SavedTables::SavedTables(const std::string& path, History* history) : path_(path
   if (version < 12) why_whole_ = "saved by an older format";
   else if (n == 0) why_whole_ = "no ball";
   else if (!m.bonds.empty()) why_whole_ = "bonds";
-  else if (!m.membrane.ids.empty()) why_whole_ = "a membrane";
   else if (rows(PieceTable::Pairs) > 0 && m.contacts.results_cycle != m.cycle)
     why_whole_ = "contact results of another cycle";
   if (history) *history = std::move(histories);

@@ -695,6 +695,7 @@ TEST_CASE("distributed: a RESTART's parts hold the save's wall contacts, history
   // parts hold the file's wall contacts as serial's table does until the first step's search (a
   // SAVE then is the file's bytes), the pairs' history and the contact results (PRINT reads them
   // there); the CYCLEs after, a rank-0 edit, WALL and SERVO go on from the parts as after a CYCLE.
+  // And Rowe's sample with a following membrane and its platens' history.
   if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
   struct Scene {
     const char* name;
@@ -721,6 +722,18 @@ TEST_CASE("distributed: a RESTART's parts hold the save's wall contacts, history
        "print contacts file c0.csv\ncycle 800\nsave t.sav\nprint energy\nprop type 1 fric 10\ncycle 200\nsave u.sav\n",
        {"again.sav", "c0.csv", "t.sav", "u.sav", "h.csv"},
        {"stress", "energy"}},
+      // (A following membrane: its loads are the balls' applied loads, handed out with them; it
+      // follows on the parts after, Pipeline::follow_membrane_on_parts. Before, such a save was
+      // read whole on rank 0.)
+      {"membrane",
+       "start box -200 440 -200 440 -100 450\nprop kn 1.5e9 ks 1.5e9 fric 7 dens 2000\n"
+       "lattice fcc 40 7 7 13 layers even range octagon 120 120 120 127\n"
+       "lattice fcc 40 7 7 13 layers odd  range octagon 120 120 120 99\ngroup bottom range z -10 10\n"
+       "group top range z 330 350\nmembrane 5e4 follow every 3\ndamp 0.05 0.5\napply zforce -8e7 range group top\n"
+       "apply zforce 8e7 range group bottom\nhist ratio axial unbal every 10 file h.csv range not z 10 330\ncycle 301\nsave s.sav\n",
+       "restart s.sav\nprint counters file r.txt\nsave again.sav\nprint stress\ncycle 299\nsave t.sav\n",
+       {"again.sav", "t.sav", "h.csv"},
+       {"stress"}},
   };
   for (const Scene& scene : scenes) {
     INFO(scene.name);
