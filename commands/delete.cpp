@@ -15,6 +15,8 @@ const Command delete_command = {
     "DELETE", {}, "DELETE [range ...]", "remove balls",
     "Removes the balls where the range holds (all balls without a range), with their contacts.",
     "delete range z 0.15 0.2",
-    {"range"}, run_delete, false, false, OnRanks::ModelOnZero, HeldUse::Delete};
+    {"range"}, run_delete, false, false, OnRanks::ModelOnZero, HeldUse::Delete, {},
+    // (Where the ranks keep their parts, every rank deletes its own: Session::delete_balls.)
+    [](const Args&, bool parts_kept) { return parts_kept ? OnRanks::Parts : OnRanks::ModelOnZero; }};
 
 }  // namespace trubal

@@ -573,6 +573,24 @@ std::size_t Session::delete_held(const Range& range) {
 std::size_t Session::delete_balls(const Range& range) {
   require_started();
   if (deleting_held_) return delete_held(range);
+  // Where the ranks keep their parts (every rank runs DELETE then: commands/delete.cpp): on the
+  // parts, the results the CYCLE deferred made there first; a bonded model's on rank 0's whole
+  // model, the parts' state given to it first (Session::model_on_zero), as before.
+  if (parts_kept()) {
+    if (bonds_agreed_empty()) {
+      edit_on_parts();
+      return pipeline_->delete_on_parts(model_, range);
+    }
+    model_on_zero();
+    std::int64_t n = 0;
+    comm::on_root([&] {
+      std::vector<bool> remove(model_.balls.size(), false);
+      for (auto k : select(range)) remove[k] = true;
+      n = static_cast<std::int64_t>(remove_balls(edit(), remove));
+    }, "deleting the balls");
+    comm::broadcast(n);
+    return static_cast<std::size_t>(n);
+  }
   std::vector<bool> remove(model_.balls.size(), false);
   for (auto k : select(range)) remove[k] = true;
   return remove_balls(edit(), remove);

@@ -262,6 +262,11 @@ class BrickStep {
   // The balls' centres the parts hold into full's x, y and z on rank 0, made whole-sized there (a
   // collective call of the ranks; a bonded model's dump draws its bonds from them).
   void centres_to_root(Model& full);
+  // DELETE where the parts are live and hold no bond (a collective call): the balls where `range`
+  // holds (read by their owners) taken out of every member's part and of the whole model's arrays
+  // every rank holds, the rest numbered again in their order (cycle/brick_delete.cpp). Returns how
+  // many, every member's.
+  std::size_t delete_balls(Model& full, const Range& range);
   void set_membrane_loads(const Membrane& m, const MembraneFollow& loads);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what

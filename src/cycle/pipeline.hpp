@@ -209,6 +209,9 @@ class Pipeline {
   // rank 0's bond table (which a hollow whole model keeps), nothing else: PRINT bonds and a bonded
   // model's SAVE read the table there (BrickStep::bonds_to_root).
   void request_bonds(Model& model);
+  // DELETE on the kept parts of a model with no bond (BrickStep::delete_balls): a collective call
+  // where parts_live; the next step searches afresh, as serial's after remove_balls.
+  std::size_t delete_on_parts(Model& model, const Range& range);
   // A bonded model's dump from the kept parts (a collective call where parts_live): the bonds'
   // state and the balls' centres into rank 0's hollow whole model, which its bonds' file reads
   // (BrickStep::bonds_to_root, centres_to_root).

@@ -66,6 +66,20 @@ bool Pipeline::parts_go_on(Model& model) {
   return true;
 }
 
+std::size_t Pipeline::delete_on_parts(Model& model, const Range& range) {
+  if (!parts_live(model)) throw std::logic_error("internal error: balls deleted on parts that are not live");
+  if (!comm::root()) hollow(model);   // (as sort_on_parts: the others' whole models hollow)
+  for (auto& part : bricks_) part->whole_freed();
+  const std::size_t n = bricks().delete_balls(model, range);
+  hollow_whole(model);
+  // The list's reference of the balls left (as parts_from_records: the parts hold the positions),
+  // and a search at the next step, as serial's after remove_balls.
+  ref_.record(model, list_skin(model));
+  ref_.forget_radii();
+  search_next_step_ = true;   // (the same on every rank)
+  return n;
+}
+
 bool Pipeline::follow_membrane_on_parts(Model& model) {
   if (!distributed() || comm_ranks_ < 2 || !bricks().live_for(model)) return false;
   Membrane& m = model.membrane;

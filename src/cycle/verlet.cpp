@@ -64,6 +64,16 @@ void VerletReference::reorder(const std::vector<std::uint32_t>& order) {
   }
 }
 
+void VerletReference::keep_rows(const std::vector<std::uint32_t>& rows, std::size_t n) {
+  for (auto* v : {&x, &y, &z, &rad_}) {
+    if (v->size() != n) continue;
+    std::vector<double> out(rows.size());
+    for (std::size_t k = 0; k < rows.size(); ++k) out[k] = (*v)[rows[k]];
+    v->swap(out);
+  }
+  if (count_ == n) count_ = rows.size();
+}
+
 void VerletReference::record_cell(const Model& model, double skin) {
   cell_ = model.space.length();
   tilt_ = model.space.tilt;

@@ -47,6 +47,9 @@ class VerletReference {
   // list (a distributed run's sort on its parts: Pipeline::sort_on_parts): the positions and radii
   // held follow them.
   void reorder(const std::vector<std::uint32_t>& order);
+  // Of `n` balls, those `rows` names kept, in that order, the others gone (DELETE on the parts):
+  // the positions and radii held for n balls follow them.
+  void keep_rows(const std::vector<std::uint32_t>& rows, std::size_t n);
   // The balls the reference was recorded for (x, y, z hold their positions, but on a distributed
   // run's rank that held the balls' ids, types and radii alone: then they are empty).
   std::size_t balls() const { return count_; }

@@ -485,6 +485,77 @@ void run_both(const std::string& deck, TempDir& serial, TempDir& ranks, int stat
 }
 }  // namespace
 
+TEST_CASE("distributed: DELETE between CYCLEs deletes the balls on the ranks' parts, nothing gathered: serial's bits",
+          "[mpi][system]") {
+  // Balls settled onto a floor, a sphere of them deleted between CYCLEs, then a layer and a range
+  // of ids after another CYCLE (with a history of the platen balls some of which go), on 3 ranks:
+  // each rank reads the range on its own balls, the deleted balls' places go to every rank, and
+  // each takes them out of its part and its whole model's light arrays, numbering the rest again
+  // in their order (BrickStep::delete_balls); the next step searches afresh, as serial's does
+  // after remove_balls. The contacts printed right after (their results kept for the pairs left),
+  // the histories, the balls, contacts and save at the end: serial's bytes; nothing gathered (each
+  // DELETE gathered the whole model to rank 0 and the next CYCLE split it again). A periodic cell
+  // alike; a bonded block's DELETE runs on rank 0's whole model, the parts' state given to it
+  // first, as before (its bonds are not deleted on the parts yet).
+  if (!can_run_mpi()) TRUBAL_SKIP(kNoMpi);
+  const std::string floor = R"(start box 0 0.02 0 0.02 0 0.04
+prop kn 1e5 ks 1e5 mu 0.5 dens 2650
+wall id 1 plane 0 0 0 0 0 1
+gen porosity 0.5 0.0006 0.001 seed 3 range z 0 0.03
+grav 0 0 -9.81
+damp local 0.7
+hist unbal contacts every 10 file h.csv
+cycle 1000
+hist platen every 10 file p.csv range z 0 0.003
+delete range sphere 0.01 0.01 0.01 0.004
+print counters file c1.txt
+print contacts file c1.csv
+cycle 200
+delete range z 0.015 0.02
+delete range id 30 60 not z 0.0015 0.03
+print counters file c2.txt
+cycle 100
+save s.sav
+)";
+  const std::string cell = std::string(kSqueezedCell) + "cycle 700\ndelete range sphere 0.0035 0.0035 0.0035 0.0015\n"
+                           "print counters file c1.txt\nprint contacts file c1.csv\ncycle 300\ndelete range id 1 40\n"
+                           "print counters file c2.txt\ncycle 200\nsave s.sav\n";
+  const std::string bonded = std::string("start box -3 8 -3 8 -3 8\nprop kn 1e8 ks 5e7 mu 0.5 dens 2000\nlattice fcc 1 5 5 7\n") +
+                             "bond gap 1e-6 kn 2e8 ks 1e8 ten 2e5 coh 4e5 fa 30\ngrav 0 0 -9.81\nfix vel spin range z -1 0.1\n"
+                             "cycle 100\ndelete range z 4 5\nprint counters file c1.txt\nprint contacts file c1.csv\ncycle 100\n"
+                             "print counters file c2.txt\nsave s.sav\n";
+  for (const auto& [name, deck] : {std::pair{"floor", floor}, std::pair{"cell", cell}, std::pair{"bonded", bonded}}) {
+    INFO(name);
+    TempDir serial, ranks;
+    run_both(deck + kOutputs, serial, ranks);
+    const std::string out = slurp(ranks.path() / "out.txt"), serial_out = slurp(serial.path() / "out.txt");
+    INFO(out);
+    for (const char* file : {"c1.csv", "s.sav", "balls.csv", "contacts.csv", "h.csv", "p.csv"}) {
+      INFO(file);
+      if (std::string(file).find(".csv") != std::string::npos && file[0] != 'c' && file[0] != 'b' && name != std::string("floor"))
+        continue;
+      CHECK(slurp(ranks.path() / file) == slurp(serial.path() / file));
+    }
+    CHECK(lines_of(slurp(serial.path() / "c1.csv")).size() > 20);
+    auto deleted = [](const std::string& text) {
+      std::string lines;
+      for (const std::string& line : lines_of(text))
+        if (line.find(" deleted") != std::string::npos) lines += line + '\n';
+      return lines;
+    };
+    CHECK(!deleted(serial_out).empty());
+    CHECK(deleted(out) == deleted(serial_out));
+    const Counters first = read_counters(ranks.path() / "c1.txt"), second = read_counters(ranks.path() / "c2.txt");
+    const bool on_parts = name != std::string("bonded");
+    CHECK(counter(first, "parts_kept") == (on_parts ? 1 : 0));
+    if (on_parts) {
+      CHECK(counter(first, "whole_gathers") == 0);
+      CHECK(counter(second, "whole_gathers") == 0);
+      CHECK(counter(second, "decompositions") == 1);   // (the first CYCLE's split alone)
+    }
+  }
+}
+
 TEST_CASE("distributed: SOLVE keeps the ranks' parts between its checks and sums the ratio on them: serial's bits", "[mpi][system]") {
   // A squeezed periodic cell let go, SOLVEd on 3 ranks: each of SOLVE's CYCLEs of 100 keeps the
   // parts (no rank handed the whole model, nor the model split again), its last step's results
