@@ -125,6 +125,10 @@ void Pipeline::brick_step(Model& model, const StepKernels& kernels, StepSums& su
   bool whole = !parts_go_on(model);
   times_.detect += seconds_since(t0);
   if (whole) {
+    // A distributed run's parts made afresh (a new balance, a rebuild they could not make): their
+    // state to rank 0 alone, the others left with the light arrays until rank 0 sends each its new
+    // part (split_parts' scatter), rather than every rank handed the whole model.
+    if (distributed() && comm_ranks_ > 1 && bricks().live_for(model)) release_parts(model);
     if (bricks().live() || !prepared_for(model)) prepare(model);   // syncs and drops the parts first
     if (!distributed() && !threads_in_space(model)) {   // the new list is better shared by numbers
       mode_ = StepMode::Numbers;
