@@ -722,9 +722,9 @@ CycleResult Session::cycle(std::int64_t n, const std::function<void(std::int64_t
   if (histories && comm::size() > 1) control.share_output = [this, marks] { history_->share_rows(*marks); };
   // Histories of sums alone and dumps, where the ranks keep their parts: every rank records the
   // histories from the sums merged over the parts, and the dumps' rows come to rank 0 from the parts
-  // in order (dump_from_parts): rank 0 is not handed the whole model for them. A bonded model's
-  // dumps read it whole: their steps go by after_step, which records the rows on rank 0 (share_rows
-  // hands them on).
+  // in order (dump_from_parts): rank 0 is not handed the whole model for them. Dumps beside a
+  // history that reads the whole model go by after_step, which records the rows on rank 0
+  // (share_rows hands them on).
   const bool on_parts = control.keep_parts && pipeline_->distributed() && (!histories || history_->recorded_on_parts());
   const bool dumps_on_parts = dumps && on_parts;
   if (histories && dumps && !dumps_on_parts) control.reads_whole = [dumps](std::int64_t cycle) { return dumps->due(cycle); };
@@ -815,12 +815,21 @@ void Session::dump_from_parts(VtkSeries& dumps, const Model& model) {
   const bool bonded = !bonds_agreed_empty();
   Balls& b = model_.balls;
   const bool centres_held = b.x.size() == b.size();   // (rank 0's hollow model holds none)
-  if (bonded) pipeline_->bonds_and_centres_to_root(model_);
+  // (Let go whatever happens: a hollow model holds no centres, Pipeline::hollow.)
+  auto let_go = [&] {
+    if (bonded && !centres_held)
+      for (auto* v : {&b.x, &b.y, &b.z}) std::vector<double>().swap(*v);
+  };
   PartRows rows(model, *pipeline_);
-  // (Every pass runs on every rank whatever failed: a failure, rank 0's writing, is every rank's.)
-  comm::together([&] { dumps.write(model, &rows); }, "writing the dump");
-  if (bonded && !centres_held)
-    for (auto* v : {&b.x, &b.y, &b.z}) std::vector<double>().swap(*v);
+  try {
+    if (bonded) pipeline_->bonds_and_centres_to_root(model_);
+    // (Every pass runs on every rank whatever failed: a failure, rank 0's writing, is every rank's.)
+    comm::together([&] { dumps.write(model, &rows); }, "writing the dump");
+  } catch (...) {
+    let_go();
+    throw;
+  }
+  let_go();
 }
 
 bool Session::bonds_agreed_empty() const {
@@ -1069,10 +1078,9 @@ void Session::save(const std::string& path) const {
   // holds them all, and the parts keep them for what reads them next.)
   if (pipeline_->serving()) {
     pipeline_->request_results_onto_parts(model_);
-    // Rank 0's whole model hollow: the parts' state streamed into the file, a chunk at a time (but
-    // a bonded model's, whose bonds' state the parts hold: gathered whole first).
+    // Rank 0's whole model hollow: the parts' state streamed into the file, a chunk at a time (a
+    // bonded model's bonds from rank 0's table, their state gathered into it first).
     if (pipeline_->whole_hollow(model_)) {
-      // (A bonded model's bonds from rank 0's table, their state gathered into it first.)
       if (!model_.bonds.empty()) pipeline_->request_bonds(model_);
       PartState state(model_, *pipeline_);
       try {

@@ -17,16 +17,6 @@ namespace {
 
 constexpr std::uint32_t kGone = std::numeric_limits<std::uint32_t>::max();
 
-// The arrays `visit` gives that are `n` long keep the rows `kept` names, in that order.
-template <class Visit> void keep_rows(Visit&& visit, const std::vector<std::uint32_t>& kept, std::size_t n) {
-  visit([&](auto& v) {
-    if (v.size() != n) return;
-    std::decay_t<decltype(v)> out(kept.size());
-    for (std::size_t k = 0; k < kept.size(); ++k) out[k] = v[kept[k]];
-    v.swap(out);
-  });
-}
-
 // A list of indices, those gone dropped and the rest numbered by `next` (ascending stays ascending).
 void renumber_kept(std::vector<std::uint32_t>& list, const std::vector<std::uint32_t>& next) {
   std::size_t w = 0;

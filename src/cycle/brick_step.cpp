@@ -3,12 +3,12 @@
 #include "cycle/brick_step.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <bit>
 #include <chrono>
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <utility>
 
@@ -380,11 +380,12 @@ BondCounts BrickStep::own_bond_counts() {
   return c;
 }
 
-MembraneCentres BrickStep::own_membrane_centres(const Membrane& m) {
+MembraneFollow BrickStep::follow_membrane(const Membrane& m) {
   if (!live_ || team_->shares_whole()) throw std::logic_error("internal error: the membrane followed on parts where none is live");
+  std::vector<std::pair<std::int64_t, std::size_t>> at;
   std::vector<double> mine, all;
   together([&] {
-    const auto at = membrane_places(m);
+    at = membrane_places(m);
     const Balls& b = part_.balls;
     for (std::uint32_t k : owned_)
       if (const std::int64_t q = membrane_place(at, b.id[k]); q >= 0)
@@ -404,12 +405,8 @@ MembraneCentres BrickStep::own_membrane_centres(const Membrane& m) {
     c.z[q] = all[r + 3];
     c.present[q] = 1;
   }
-  return c;
-}
-
-void BrickStep::set_membrane_loads(const Membrane& m, const MembraneFollow& loads) {
+  MembraneFollow loads = follow_loads(m, c);
   together([&] {
-    const auto at = membrane_places(m);
     Balls& b = part_.balls;
     for (std::size_t k = 0; k < b.size(); ++k)
       if (const std::int64_t q = membrane_place(at, b.id[k]); q >= 0) {
@@ -417,6 +414,7 @@ void BrickStep::set_membrane_loads(const Membrane& m, const MembraneFollow& load
         b.ay[k] = loads.ay[static_cast<std::size_t>(q)];
       }
   }, "following the membrane");
+  return loads;
 }
 
 void BrickStep::take_settings(const Model& full) {

@@ -249,10 +249,11 @@ class BrickStep {
   // The balls of these ids where the parts are live (a collective call): every member's own, their
   // heights and unbalanced forces to every member in the whole model's order (HIST's platens).
   PlatenBalls own_platen_balls(const std::vector<std::int64_t>& ids);
-  // MEMBRANE follow on the live parts (collective calls): the loaded balls' centres by their place
-  // in the membrane's ids, every member's own to every member; then their x and y loads set on
-  // the part's balls (its own and its copies).
-  MembraneCentres own_membrane_centres(const Membrane& m);
+  // MEMBRANE follow on the live parts (a collective call): the loaded balls' centres by their place
+  // in the membrane's ids, every member's own to every member, the loads made from them as serial
+  // makes them (physics/membrane.hpp follow_loads) and set on the part's balls (its own and its
+  // copies); returned for the whole model's arrays.
+  MembraneFollow follow_membrane(const Membrane& m);
   // The bonds' counts where the parts are live (a collective call): every member's own bonds (its
   // ball i's) by their fates now, summed over the members, with the bonds no part holds (HIST bonds).
   BondCounts own_bond_counts();
@@ -267,7 +268,6 @@ class BrickStep {
   // every rank holds, the rest numbered again in their order (cycle/brick_delete.cpp). Returns how
   // many, every member's.
   std::size_t delete_balls(Model& full, const Range& range);
-  void set_membrane_loads(const Membrane& m, const MembraneFollow& loads);
   // Rank 0's whole model lets go of the state the parts step (hollow_whole: the balls' motion and
   // unbalanced forces, the pair list with its history and results, the wall contacts), keeping what
   // a CYCLE and the light commands read there (the balls' ids, types, fixities, radii, masses and

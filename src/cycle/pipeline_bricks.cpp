@@ -83,8 +83,7 @@ std::size_t Pipeline::delete_on_parts(Model& model, const Range& range) {
 bool Pipeline::follow_membrane_on_parts(Model& model) {
   if (!distributed() || comm_ranks_ < 2 || !bricks().live_for(model)) return false;
   Membrane& m = model.membrane;
-  const MembraneFollow loads = follow_loads(m, bricks().own_membrane_centres(m));
-  bricks().set_membrane_loads(m, loads);
+  const MembraneFollow loads = bricks().follow_membrane(m);
   Balls& b = model.balls;
   if (b.ax.size() == b.size() && b.ay.size() == b.size())   // (rank 0's hollow arrays; any whole model)
     for (std::size_t q = 0; q < m.ids.size(); ++q)

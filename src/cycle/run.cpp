@@ -17,9 +17,7 @@
 #include "cycle/kernels.hpp"
 #include "cycle/pipeline.hpp"
 #include "model/edit.hpp"
-#include "physics/bridge.hpp"
 #include "physics/cell.hpp"
-#include "physics/measure.hpp"
 #include "physics/membrane.hpp"
 #include "physics/scene.hpp"
 #include "physics/timestep.hpp"
@@ -234,14 +232,21 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   // (The parts' settings, materials and masses first: what follows reads them, a rebuild of their
   // lists too.)
   if (pipeline.parts_live(model)) pipeline.parts_take_settings(model);
-  // (A step estimated afresh reads the pairs touching now: the parts' list made current first.)
-  // The first step's sort before it, as serial's sorts before its list is prepared (a wrap of a
-  // ball across a periodic face among it: the sort reads the centres before that wrap).
-  if (pipeline.parts_live(model) && !(model.critical_dt > 0) && sort_due(model) && !pipeline.results_deferred(model)) {
+  // The first step's sort (Model::order) before the run's first search; not where a step a CYCLE
+  // deferred is to be taken again first (make_results: it is of the order before), which the first
+  // step then sorts after.
+  auto sort_at_start = [&] {
+    if (sorted_at_start_ || !sort_due(model) || pipeline.results_deferred(model)) return;
     if (!presorted) sort_balls();
     sorted_at_start_ = true;
+  };
+  // (A step estimated afresh reads the pairs touching now: the parts' list made current first,
+  // after the sort, as serial's sorts before its list is prepared: a wrap of a ball across a
+  // periodic face in it would move a centre the sort reads.)
+  if (pipeline.parts_live(model) && !(model.critical_dt > 0)) {
+    sort_at_start();
+    if (!pipeline.parts_go_on(model)) pipeline.share_whole(model);
   }
-  if (pipeline.parts_live(model) && !(model.critical_dt > 0) && !pipeline.parts_go_on(model)) pipeline.share_whole(model);
   // The ranks other than 0 may hold no more of the model than its balls' ids, types and radii, and
   // no part (after a command rank 0 alone ran: Pipeline::others_hollow): rank 0 then checks, sorts
   // and decides alone, and sends each rank its part at the split.
@@ -261,13 +266,7 @@ CycleRun::CycleRun(Model& model, Pipeline& pipeline, std::int64_t n, const Cycle
   };
   if (from_root) comm::on_root(check_masses, "checking the balls' masses");
   else if (!from_parts) check_masses();
-  // The first step's sort (Model::order) before the run's first search; not where a step a CYCLE
-  // deferred is to be taken again first (make_results: it is of the order before), which the first
-  // step then sorts after.
-  if (sort_due(model) && !pipeline.results_deferred(model) && !sorted_at_start_) {
-    if (!presorted) sort_balls();
-    sorted_at_start_ = true;
-  }
+  sort_at_start();
   // The history parts the laws of this run use, zero where a law is new since the pairs were found.
   model.contacts.use_history(laws_with_history(model));
   kernels_ = from_parts || from_root ? make_kernels(model, features_from_root(model, pipeline)) : make_kernels(model);

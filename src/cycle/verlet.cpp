@@ -1,5 +1,6 @@
 #include "cycle/verlet.hpp"
 
+#include "model/edit.hpp"
 #include "model/periodic_cell.hpp"
 
 #include <algorithm>
@@ -55,22 +56,12 @@ void VerletReference::record(const Model& model, double skin) {
   ++rebuilds_;
 }
 
-void VerletReference::reorder(const std::vector<std::uint32_t>& order) {
-  for (auto* v : {&x, &y, &z, &rad_}) {
-    if (v->size() != order.size()) continue;
-    std::vector<double> out(order.size());
-    for (std::size_t k = 0; k < order.size(); ++k) out[k] = (*v)[order[k]];
-    v->swap(out);
-  }
-}
+void VerletReference::reorder(const std::vector<std::uint32_t>& order) { keep_rows(order, order.size()); }
 
 void VerletReference::keep_rows(const std::vector<std::uint32_t>& rows, std::size_t n) {
-  for (auto* v : {&x, &y, &z, &rad_}) {
-    if (v->size() != n) continue;
-    std::vector<double> out(rows.size());
-    for (std::size_t k = 0; k < rows.size(); ++k) out[k] = (*v)[rows[k]];
-    v->swap(out);
-  }
+  trubal::keep_rows([&](auto&& f) {
+    for (auto* v : {&x, &y, &z, &rad_}) f(*v);
+  }, rows, n);
   if (count_ == n) count_ = rows.size();
 }
 

@@ -41,16 +41,20 @@ std::int64_t find_ball(const Model& model, std::int64_t id);
 // same) and the wall contacts. Ids, groups and the membrane's balls are by id and stay.
 void reorder_balls(Model& model, const std::vector<std::size_t>& order);
 
-// Puts every array `visit` lists (visit(f) calls f on each) in the order `order` (new position k
-// holds old element order[k]); arrays of another length (results not kept, a hollow model's
-// arrays let go) are left alone.
-template <class Visit, class Index> void permute_arrays(Visit&& visit, const std::vector<Index>& order) {
+// Of every array `visit` lists (visit(f) calls f on each) that is `n` long, the rows `rows` names
+// kept, in that order (new position k holds old element rows[k]); arrays of another length
+// (results not kept, a hollow model's arrays let go) are left alone.
+template <class Visit, class Index> void keep_rows(Visit&& visit, const std::vector<Index>& rows, std::size_t n) {
   visit([&](auto& v) {
-    if (v.size() != order.size()) return;
-    std::decay_t<decltype(v)> out(v.size());
-    for (std::size_t k = 0; k < order.size(); ++k) out[k] = v[order[k]];
+    if (v.size() != n) return;
+    std::decay_t<decltype(v)> out(rows.size());
+    for (std::size_t k = 0; k < rows.size(); ++k) out[k] = v[rows[k]];
     v.swap(out);
   });
+}
+// The arrays put in the order `order`, a permutation (keep_rows of every row).
+template <class Visit, class Index> void permute_arrays(Visit&& visit, const std::vector<Index>& order) {
+  keep_rows(visit, order, order.size());
 }
 
 // The space order's parts (sort_in_space), for a run whose balls are kept apart (a distributed
